@@ -1,0 +1,3 @@
+//! SDRS — shape-differentiable robot simulation.
+//!
+//! See the README for the pipeline and `shared/paper` for the method.
