@@ -1,3 +1,16 @@
 //! SDRS — shape-differentiable robot simulation.
 //!
-//! See the README for the pipeline and `shared/paper` for the method.
+//! Pipeline stages, one folder each: [`scene`] (files → model), [`model`]
+//! (links, hulls, joints), [`kinematics`] (poses and derivatives), [`energy`]
+//! (terms of the step objective), [`sim`] (Newton per step), [`control`]
+//! (target signals), [`output`] (trajectory CSV, summary JSON).
+//!
+//! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
+
+pub mod control;
+pub mod energy;
+pub mod kinematics;
+pub mod math;
+pub mod model;
+pub mod scene;
+pub mod sim;

@@ -1,0 +1,236 @@
+//! Target signals of one coordinate.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+
+/// Problems with a signal's parameters.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SignalError {
+    #[error("`times` and `values` must have the same length (got {0} and {1})")]
+    LengthMismatch(usize, usize),
+    #[error("needs at least {min} knots, got {got}")]
+    TooFewKnots { min: usize, got: usize },
+    #[error("`times` must be strictly increasing (at index {0})")]
+    NotIncreasing(usize),
+    #[error("a parameter is not finite")]
+    NonFinite,
+}
+
+/// One sine term `A sin(2π f t + φ)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SineTerm {
+    /// Amplitude (rad or m).
+    pub amplitude: f64,
+    /// Frequency (Hz).
+    pub frequency: f64,
+    /// Phase (rad). Default 0.
+    #[serde(default)]
+    pub phase: f64,
+}
+
+/// A target signal. Its velocity target is its exact time derivative.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Signal {
+    /// `θ* = value`, `θ̇* = 0`.
+    Constant { value: f64 },
+    /// `θ* = offset + Σ A_j sin(2π f_j t + φ_j)` (the paper's spider gait).
+    Sine {
+        #[serde(default)]
+        offset: f64,
+        terms: Vec<SineTerm>,
+    },
+    /// Natural cubic spline through `(times, values)`, held constant (with
+    /// zero velocity) outside the knot range (the paper's chain controller
+    /// uses 4 knots).
+    Spline { times: Vec<f64>, values: Vec<f64> },
+    /// Piecewise-linear interpolation of a table, held outside its range.
+    Table { times: Vec<f64>, values: Vec<f64> },
+}
+
+impl Signal {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), SignalError> {
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        match self {
+            Signal::Constant { value } => finite(&[*value])
+                .then_some(())
+                .ok_or(SignalError::NonFinite),
+            Signal::Sine { offset, terms } => {
+                let ok = offset.is_finite()
+                    && terms
+                        .iter()
+                        .all(|t| finite(&[t.amplitude, t.frequency, t.phase]));
+                ok.then_some(()).ok_or(SignalError::NonFinite)
+            }
+            Signal::Spline { times, values } | Signal::Table { times, values } => {
+                let min = if matches!(self, Signal::Spline { .. }) {
+                    2
+                } else {
+                    1
+                };
+                if times.len() != values.len() {
+                    return Err(SignalError::LengthMismatch(times.len(), values.len()));
+                }
+                if times.len() < min {
+                    return Err(SignalError::TooFewKnots {
+                        min,
+                        got: times.len(),
+                    });
+                }
+                if !finite(times) || !finite(values) {
+                    return Err(SignalError::NonFinite);
+                }
+                if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
+                    return Err(SignalError::NotIncreasing(i + 1));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// `(θ*(t), θ̇*(t))`.
+    pub fn eval(&self, t: f64) -> (f64, f64) {
+        match self {
+            Signal::Constant { value } => (*value, 0.0),
+            Signal::Sine { offset, terms } => terms.iter().fold((*offset, 0.0), |(v, d), term| {
+                let w = TAU * term.frequency;
+                let arg = w * t + term.phase;
+                (
+                    v + term.amplitude * arg.sin(),
+                    d + term.amplitude * w * arg.cos(),
+                )
+            }),
+            Signal::Table { times, values } => {
+                if times.len() == 1 || t <= times[0] {
+                    return (values[0], 0.0);
+                }
+                let last = times.len() - 1;
+                if t >= times[last] {
+                    return (values[last], 0.0);
+                }
+                let i = times.partition_point(|&x| x <= t) - 1;
+                let slope = (values[i + 1] - values[i]) / (times[i + 1] - times[i]);
+                (values[i] + slope * (t - times[i]), slope)
+            }
+            Signal::Spline { times, values } => natural_spline_eval(times, values, t),
+        }
+    }
+}
+
+/// Second derivatives `M_i` of the natural cubic spline through the knots
+/// (tridiagonal solve, `M_0 = M_n = 0`).
+fn natural_spline_moments(x: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut m = vec![0.0; n];
+    if n < 3 {
+        return m;
+    }
+    let mut c = vec![0.0; n];
+    let mut d = vec![0.0; n];
+    for i in 1..n - 1 {
+        let h0 = x[i] - x[i - 1];
+        let h1 = x[i + 1] - x[i];
+        let a = h0 / 6.0;
+        let b = (h0 + h1) / 3.0;
+        let cc = h1 / 6.0;
+        let rhs = (y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0;
+        let denom = b - a * c[i - 1];
+        c[i] = cc / denom;
+        d[i] = (rhs - a * d[i - 1]) / denom;
+    }
+    for i in (1..n - 1).rev() {
+        m[i] = d[i] - c[i] * m[i + 1];
+    }
+    m
+}
+
+fn natural_spline_eval(x: &[f64], y: &[f64], t: f64) -> (f64, f64) {
+    let n = x.len();
+    if t <= x[0] {
+        return (y[0], 0.0);
+    }
+    if t >= x[n - 1] {
+        return (y[n - 1], 0.0);
+    }
+    let m = natural_spline_moments(x, y);
+    let i = x.partition_point(|&v| v <= t) - 1;
+    let h = x[i + 1] - x[i];
+    let a = (x[i + 1] - t) / h;
+    let b = (t - x[i]) / h;
+    let v = a * y[i]
+        + b * y[i + 1]
+        + ((a * a * a - a) * m[i] + (b * b * b - b) * m[i + 1]) * h * h / 6.0;
+    let dv = (y[i + 1] - y[i]) / h
+        + (-(3.0 * a * a - 1.0) * m[i] + (3.0 * b * b - 1.0) * m[i + 1]) * h / 6.0;
+    (v, dv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fd_check(s: &Signal, ts: &[f64]) {
+        for &t in ts {
+            let h = 1e-6;
+            let fd = (s.eval(t + h).0 - s.eval(t - h).0) / (2.0 * h);
+            assert!(
+                (fd - s.eval(t).1).abs() < 1e-6,
+                "{s:?} at {t}: fd {fd} vs {}",
+                s.eval(t).1
+            );
+        }
+    }
+
+    #[test]
+    fn velocity_targets_are_time_derivatives() {
+        let sine = Signal::Sine {
+            offset: 0.1,
+            terms: vec![SineTerm {
+                amplitude: 0.5,
+                frequency: 2.0,
+                phase: 0.3,
+            }],
+        };
+        fd_check(&sine, &[0.0, 0.13, 0.77]);
+        let spline = Signal::Spline {
+            times: vec![0.0, 1.0, 2.0, 3.0],
+            values: vec![0.0, 1.0, -0.5, 0.2],
+        };
+        spline.validate().unwrap();
+        fd_check(&spline, &[0.2, 0.9, 1.5, 2.7]);
+        let table = Signal::Table {
+            times: vec![0.0, 1.0],
+            values: vec![1.0, 3.0],
+        };
+        fd_check(&table, &[0.5]);
+    }
+
+    #[test]
+    fn spline_interpolates_knots() {
+        let times = vec![0.0, 0.5, 1.7, 3.0];
+        let values = vec![0.3, -1.0, 2.0, 0.5];
+        let s = Signal::Spline {
+            times: times.clone(),
+            values: values.clone(),
+        };
+        for (t, v) in times.iter().zip(&values) {
+            assert!((s.eval(*t).0 - v).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn bad_signals_are_rejected() {
+        let s = Signal::Spline {
+            times: vec![0.0, 0.0],
+            values: vec![1.0, 2.0],
+        };
+        assert_eq!(s.validate(), Err(SignalError::NotIncreasing(1)));
+        let s = Signal::Table {
+            times: vec![0.0],
+            values: vec![],
+        };
+        assert_eq!(s.validate(), Err(SignalError::LengthMismatch(1, 0)));
+    }
+}

@@ -1,0 +1,57 @@
+//! Inertia term of position-level dynamics (paper, `pbad.tex`):
+//! `I = Σ_i Σ_m ρ_m/(2Δt²) ‖X_m^{t+1} − 2X_m^t + X_m^{t−1}‖²` (J).
+//!
+//! With `X = A x̃` and `D_i = A_i^{t+1} − 2A_i^t + A_i^{t−1}` (3×4), the sum over a
+//! link's vertices collapses to `tr(D_i M_i D_iᵀ)/(2Δt²)` with the 4×4 second
+//! moment `M_i = Σ_m ρ_m x̃_m x̃_mᵀ`; its gradient is `∂I/∂A_i = D_i M_i/Δt²`
+//! and its pose Hessian is `(M_i ⊗ I₃)/Δt²`. In generalized coordinates that
+//! Hessian is the mass matrix over Δt², which keeps Newton convex for small Δt.
+
+use super::{Energy, EnergyAccumulator, EnergyError, Need, PoseHessian, StepContext};
+use crate::kinematics::Kinematics;
+use nalgebra::DVector;
+
+/// The inertia term (no parameters: masses come from the hulls).
+#[derive(Default, Clone, Debug)]
+pub struct Inertia;
+
+impl Energy for Inertia {
+    fn name(&self) -> &'static str {
+        "inertia"
+    }
+
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt2 = 1.0 / (ctx.dt * ctx.dt);
+        for (i, m) in ctx.model.second_moment.iter().enumerate() {
+            if m[(3, 3)] == 0.0 {
+                continue; // massless link
+            }
+            let d = kin.pose[i] - 2.0 * ctx.poses_prev[i] + ctx.poses_prev2[i];
+            let dm = d * m;
+            acc.value += 0.5 * inv_dt2 * d.component_mul(&dm).sum();
+            if need >= Need::Gradient {
+                acc.link_grad[i] += dm * inv_dt2;
+            }
+            if need >= Need::Hessian {
+                let mut h = PoseHessian::zeros();
+                for c in 0..4 {
+                    for c2 in 0..4 {
+                        let v = m[(c, c2)] * inv_dt2;
+                        for r in 0..3 {
+                            h[(c * 3 + r, c2 * 3 + r)] = v;
+                        }
+                    }
+                }
+                acc.add_link_hess(i, &h);
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,149 @@
+//! Terms of the per-step objective `O(θ^{t+1})` (paper, eq. `SDRS`).
+//!
+//! Every term implements [`Energy`]. Terms that depend on link poses write
+//! their value, gradient `∂E/∂A_i` (3×4) and pose Hessian blocks (12×12)
+//! into an [`EnergyAccumulator`]; terms that depend on the coordinates
+//! directly (the PD controller) write `∂E/∂θ` and `∂²E/∂θ²`. The assembler
+//! (`sim::assemble`) contracts the pose quantities with the kinematic
+//! derivatives, so a term never sees the kinematic tree.
+//!
+//! Inertia, gravity and PD are here; contact, friction and calibration
+//! effects plug in the same way.
+
+pub mod gravity;
+pub mod inertia;
+pub mod pd;
+
+pub use gravity::Gravity;
+pub use inertia::Inertia;
+pub use pd::{PdController, PdTarget};
+
+use crate::kinematics::Kinematics;
+use crate::math::Pose;
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector, Matrix3x4, SMatrix, Vector3};
+
+/// 12×12 Hessian block over `vec(A_i)`.
+pub type PoseHessian = SMatrix<f64, 12, 12>;
+
+/// Which derivatives an evaluation must produce.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Need {
+    Value,
+    Gradient,
+    Hessian,
+}
+
+/// Error from an energy term (a term never panics on bad numbers).
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum EnergyError {
+    #[error("{term}: {msg}")]
+    Failed { term: &'static str, msg: String },
+}
+
+/// Everything a term may read about the time step being solved.
+pub struct StepContext<'a> {
+    pub model: &'a Model,
+    /// Time step Δt (s).
+    pub dt: f64,
+    /// Time at the end of the step, `t^{t+1}` (s).
+    pub time: f64,
+    /// Gravity (m/s²), world frame.
+    pub gravity: Vector3<f64>,
+    /// Link poses at `t` (`A^t`).
+    pub poses_prev: &'a [Pose],
+    /// Link poses at `t−1` (`A^{t−1}`).
+    pub poses_prev2: &'a [Pose],
+    /// Coordinates at `t` (`θ^t`).
+    pub q_prev: &'a DVector<f64>,
+    /// PD targets for this step (`u^t`).
+    pub targets: &'a [PdTarget],
+}
+
+/// Output buffers for the terms; reused across evaluations.
+#[derive(Clone, Debug)]
+pub struct EnergyAccumulator {
+    pub value: f64,
+    /// `∂E/∂A_i` per link.
+    pub link_grad: Vec<Matrix3x4<f64>>,
+    /// Diagonal pose Hessian blocks `∂²E/∂A_i²`.
+    pub link_hess: Vec<PoseHessian>,
+    /// Whether `link_hess[i]` was written since the last reset.
+    pub link_hess_set: Vec<bool>,
+    /// Off-diagonal pose Hessian blocks `∂²E/∂A_i∂A_j` (`i ≠ j`, each
+    /// unordered pair once; the assembler adds the transpose).
+    pub pair_hess: Vec<(usize, usize, PoseHessian)>,
+    /// `∂E/∂θ` from terms written directly in coordinates.
+    pub dof_grad: DVector<f64>,
+    /// `∂²E/∂θ²` from terms written directly in coordinates.
+    pub dof_hess: DMatrix<f64>,
+}
+
+impl EnergyAccumulator {
+    pub fn new(model: &Model) -> Self {
+        let n = model.links.len();
+        let m = model.ndof();
+        EnergyAccumulator {
+            value: 0.0,
+            link_grad: vec![Matrix3x4::zeros(); n],
+            link_hess: vec![PoseHessian::zeros(); n],
+            link_hess_set: vec![false; n],
+            pair_hess: Vec::new(),
+            dof_grad: DVector::zeros(m),
+            dof_hess: DMatrix::zeros(m, m),
+        }
+    }
+
+    /// Clears the buffers for an evaluation with the given needs.
+    pub fn reset(&mut self, need: Need) {
+        self.value = 0.0;
+        if need >= Need::Gradient {
+            self.link_grad.iter_mut().for_each(|g| g.fill(0.0));
+            self.dof_grad.fill(0.0);
+        }
+        if need >= Need::Hessian {
+            for (h, set) in self.link_hess.iter_mut().zip(self.link_hess_set.iter_mut()) {
+                if *set {
+                    h.fill(0.0);
+                    *set = false;
+                }
+            }
+            self.pair_hess.clear();
+            self.dof_hess.fill(0.0);
+        }
+    }
+
+    /// Adds to the diagonal pose Hessian block of link `i`.
+    pub fn add_link_hess(&mut self, i: usize, h: &PoseHessian) {
+        self.link_hess[i] += h;
+        self.link_hess_set[i] = true;
+    }
+}
+
+/// One term of the step objective.
+pub trait Energy: Send + Sync {
+    /// Short name used in errors and stage timers.
+    fn name(&self) -> &'static str;
+
+    /// Called once per time step before the Newton solve (lagged quantities,
+    /// warm starts).
+    fn begin_step(
+        &mut self,
+        _ctx: &StepContext,
+        _kin_prev: &Kinematics,
+    ) -> Result<(), EnergyError> {
+        Ok(())
+    }
+
+    /// Adds the term's value and requested derivatives at `θ^{t+1} = q`
+    /// (kinematics `kin` already evaluated at `q`). A value of `+∞` marks an
+    /// infeasible configuration; derivatives may then be left unset.
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError>;
+}

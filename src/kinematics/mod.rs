@@ -1,0 +1,174 @@
+//! Forward kinematics `A_i(d, θ)` and its derivatives.
+//!
+//! Recursion (paper, `pbad.tex`): `A_i = A_λ(i) · C_i · J_i(q_i)`. We call
+//! `P_i = A_λ(i) C_i` the *pre-joint* frame. Every derivative of a link pose is
+//! a world-frame matrix applied on the left:
+//!
+//! - `∂A_i/∂θ_k = S_k Ã_i` for every coordinate `k` of an ancestor-or-self
+//!   joint `a`, with `S_k = (P_a ∂J_a/∂q_k) Ã_a⁻¹` (a twist: `[ω]× | v`);
+//! - `∂²A_i/∂θ_k∂θ_l = S_k S_l Ã_i` when `k`'s joint is a proper ancestor of
+//!   `l`'s joint (order matters), and `= S_kl Ã_i` with
+//!   `S_kl = (P_a ∂²J_a/∂q_k∂q_l) Ã_a⁻¹` when both belong to the same joint;
+//! - `∂A_i/∂t_c = [0 | R_λ(c) e]` for the attachment point `t_c` of an
+//!   ancestor-or-self link `c` (a world translation of the whole subtree);
+//! - `∂x_world/∂x_local = R_i` for a hull vertex of link `i`.
+//!
+//! This lets the assembler reduce every per-link quantity to 3×4 matrices and
+//! never build dense per-vertex Jacobians.
+
+use crate::math::{Pose, compose, pose_from, rot, trans, twist_apply};
+use crate::model::{JointDerivatives, Model};
+use nalgebra::{DVector, Matrix3, Matrix3x4, Vector3};
+
+/// How much of the kinematics to compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum KinOrder {
+    /// Poses only.
+    Pose,
+    /// Poses and first-derivative twists `S_k`.
+    First,
+    /// Also the same-joint second-derivative matrices `S_kl`.
+    Second,
+}
+
+/// Kinematic quantities of one configuration (reused between evaluations:
+/// allocate once with [`Kinematics::new`]).
+#[derive(Clone, Debug)]
+pub struct Kinematics {
+    /// World pose `A_i` of every link.
+    pub pose: Vec<Pose>,
+    /// Pre-joint frame `P_i = A_λ(i) C_i`.
+    pub pre: Vec<Pose>,
+    /// Local joint transforms and their coordinate derivatives.
+    pub local: Vec<JointDerivatives>,
+    /// World twist `S_k` of every coordinate.
+    pub twist: Vec<Matrix3x4<f64>>,
+    /// Same-joint second-derivative matrices `S_kl`, per link, row-major
+    /// `ndof × ndof` starting at `twist2_offset[i]`.
+    pub twist2: Vec<Matrix3x4<f64>>,
+    pub twist2_offset: Vec<usize>,
+    pub order: KinOrder,
+}
+
+/// `[dR Rᵀ | dt − dR Rᵀ t]`: the world matrix `S` with `D = S Ã` for a
+/// pose-derivative `D = [dR | dt]` of the pose `A = [R | t]`.
+fn right_divide(d: &Pose, a: &Pose) -> Matrix3x4<f64> {
+    let drrt = d.fixed_view::<3, 3>(0, 0) * rot(a).transpose();
+    let col = d.column(3) - drrt * trans(a);
+    let mut s = Matrix3x4::zeros();
+    s.fixed_view_mut::<3, 3>(0, 0).copy_from(&drrt);
+    s.set_column(3, &col);
+    s
+}
+
+/// `P ∘ D` for a pose `P` and a pose-derivative `D` (no translation added).
+fn apply_linear(p: &Pose, d: &Pose) -> Pose {
+    p.fixed_view::<3, 3>(0, 0) * d
+}
+
+impl Kinematics {
+    pub fn new(model: &Model) -> Self {
+        let n = model.links.len();
+        let mut twist2_offset = Vec::with_capacity(n);
+        let mut total = 0;
+        for l in &model.links {
+            twist2_offset.push(total);
+            total += l.ndof() * l.ndof();
+        }
+        Kinematics {
+            pose: vec![Pose::identity(); n],
+            pre: vec![Pose::identity(); n],
+            local: vec![JointDerivatives::default(); n],
+            twist: vec![Matrix3x4::zeros(); model.ndof()],
+            twist2: vec![Matrix3x4::zeros(); total],
+            twist2_offset,
+            order: KinOrder::Pose,
+        }
+    }
+
+    /// Evaluates the kinematics at coordinates `q` with chart centres `charts`.
+    pub fn update(
+        &mut self,
+        model: &Model,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+        order: KinOrder,
+    ) {
+        self.order = order;
+        for (i, link) in model.links.iter().enumerate() {
+            let pre = match link.parent {
+                Some(p) => compose(&self.pose[p], &link.attach),
+                None => link.attach,
+            };
+            let chart = link
+                .chart
+                .map(|c| charts[c])
+                .unwrap_or_else(Matrix3::identity);
+            let n = link.ndof();
+            let qi = q.rows(link.dof_offset, n);
+            let local = &mut self.local[i];
+            if order == KinOrder::Pose || n == 0 {
+                local.value = link.joint.transform(&chart, qi.as_slice());
+            } else {
+                link.joint
+                    .transform_derivatives(&chart, qi.as_slice(), local);
+            }
+            let pose = compose(&pre, &local.value);
+            if order >= KinOrder::First {
+                for k in 0..n {
+                    self.twist[link.dof_offset + k] =
+                        right_divide(&apply_linear(&pre, &local.d1[k]), &pose);
+                }
+            }
+            if order >= KinOrder::Second {
+                let off = self.twist2_offset[i];
+                for k in 0..n {
+                    for l in 0..n {
+                        self.twist2[off + k * n + l] =
+                            right_divide(&apply_linear(&pre, &local.d2[k][l]), &pose);
+                    }
+                }
+            }
+            self.pre[i] = pre;
+            self.pose[i] = pose;
+        }
+    }
+
+    /// `∂A_i/∂θ_k` (zero when `k` does not move link `i`).
+    pub fn dpose(&self, model: &Model, link: usize, k: usize) -> Pose {
+        if model.ancestor_dofs[link].binary_search(&k).is_ok() {
+            twist_apply(&self.twist[k], &self.pose[link])
+        } else {
+            Pose::zeros()
+        }
+    }
+
+    /// Same-joint second twist `S_kl` for coordinates `k, l` of link `j`'s joint.
+    pub fn twist2(&self, model: &Model, j: usize, k: usize, l: usize) -> &Matrix3x4<f64> {
+        let n = model.links[j].ndof();
+        let o = model.links[j].dof_offset;
+        &self.twist2[self.twist2_offset[j] + (k - o) * n + (l - o)]
+    }
+
+    /// `∂A_i/∂t_c[e]`: derivative of link `i`'s pose w.r.t. component `e` of
+    /// the attachment point of link `c` (zero unless `c` is an ancestor or
+    /// `i` itself). The attachment point is expressed in `c`'s parent frame.
+    pub fn dpose_attachment(&self, model: &Model, link: usize, c: usize, e: usize) -> Pose {
+        if !model.is_ancestor_or_self(c, link) {
+            return Pose::zeros();
+        }
+        let r_parent = match model.links[c].parent {
+            Some(p) => rot(&self.pose[p]),
+            None => Matrix3::identity(),
+        };
+        let dir: Vector3<f64> = r_parent.column(e).into_owned();
+        pose_from(&Matrix3::zeros(), &dir)
+    }
+}
+
+/// Poses only, for callers that do not need derivatives.
+pub fn link_poses(model: &Model, q: &DVector<f64>, charts: &[Matrix3<f64>]) -> Vec<Pose> {
+    let mut k = Kinematics::new(model);
+    k.update(model, q, charts, KinOrder::Pose);
+    k.pose
+}

@@ -1,0 +1,192 @@
+//! The robot model: links made of convex hulls, joints, the kinematic tree.
+//!
+//! All robots and objects of a scene are flattened into one [`Model`] whose
+//! links are in topological order (a parent always precedes its children), and
+//! whose generalized coordinates `θ` are the concatenation of the joints'
+//! coordinates in link order.
+
+pub mod hull;
+pub mod joint;
+
+pub use hull::{Hull, HullError};
+pub use joint::{JointDerivatives, JointKind, MAX_JOINT_DOF};
+
+use crate::math::Pose;
+use nalgebra::{Matrix4, Vector4};
+
+/// One rigid link.
+#[derive(Clone, Debug)]
+pub struct Link {
+    /// Link name (unique within its robot).
+    pub name: String,
+    /// Index of the robot this link belongs to.
+    pub robot: usize,
+    /// Parent link index in [`Model::links`], `None` for a root (attached to
+    /// the world through its robot's base pose).
+    pub parent: Option<usize>,
+    /// Name of the joint connecting the link to its parent.
+    pub joint_name: String,
+    /// Joint kind.
+    pub joint: JointKind,
+    /// Attachment transform `C_i = [R_i^d | t_i^d]` in the parent frame (for a
+    /// root: in the world frame). `t_i^d` is the attachment point, a design
+    /// variable.
+    pub attach: Pose,
+    /// The link's hulls, in the link frame.
+    pub hulls: Vec<Hull>,
+    /// Index of the joint's first coordinate in `θ`.
+    pub dof_offset: usize,
+    /// Index into the state's chart list for spherical/free joints.
+    pub chart: Option<usize>,
+    /// Whether the link takes part in contact (objects and robot links do;
+    /// massless helper links may not). Reserved for the contact stage.
+    pub collides: bool,
+}
+
+impl Link {
+    /// Number of joint coordinates.
+    pub fn ndof(&self) -> usize {
+        self.joint.ndof()
+    }
+
+    /// Sum over hulls of `Σ ρ x̃ x̃ᵀ` and `Σ ρ x̃` (see [`Hull::moments`]).
+    pub fn moments(&self) -> (Matrix4<f64>, Vector4<f64>) {
+        self.hulls
+            .iter()
+            .fold((Matrix4::zeros(), Vector4::zeros()), |(a, b), h| {
+                let (m2, m1) = h.moments();
+                (a + m2, b + m1)
+            })
+    }
+
+    /// Total mass (kg).
+    pub fn mass(&self) -> f64 {
+        self.hulls.iter().map(Hull::mass).sum()
+    }
+}
+
+/// A robot (or free object) as a contiguous range of links.
+#[derive(Clone, Debug)]
+pub struct RobotInfo {
+    pub name: String,
+    /// Links `first..end` of [`Model::links`].
+    pub links: std::ops::Range<usize>,
+}
+
+/// What each generalized coordinate is.
+#[derive(Clone, Debug)]
+pub struct DofInfo {
+    /// Link whose joint owns the coordinate.
+    pub link: usize,
+    /// Index within the joint's coordinates.
+    pub local: usize,
+    /// Column name used in trajectory files.
+    pub name: String,
+}
+
+/// Flattened articulated model of a whole scene.
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub links: Vec<Link>,
+    pub robots: Vec<RobotInfo>,
+    pub dofs: Vec<DofInfo>,
+    /// Coordinates that affect each link's pose (its ancestors' and its own
+    /// joint's), ascending.
+    pub ancestor_dofs: Vec<Vec<usize>>,
+    /// Number of spherical/free joints (charts in the state).
+    pub nchart: usize,
+    /// Per link: `Σ ρ x̃ x̃ᵀ` (kg m², 4×4), cached from the hulls.
+    pub second_moment: Vec<Matrix4<f64>>,
+    /// Per link: `Σ ρ x̃` (kg m, kg), cached from the hulls.
+    pub first_moment: Vec<Vector4<f64>>,
+}
+
+impl Model {
+    /// Builds the derived tables from links that are already in topological
+    /// order with `robot` and `parent` set. Assigns `dof_offset` and `chart`.
+    pub fn new(mut links: Vec<Link>, robots: Vec<RobotInfo>) -> Model {
+        let mut dofs = Vec::new();
+        let mut nchart = 0;
+        let multi_robot = robots.len() > 1;
+        for (i, link) in links.iter_mut().enumerate() {
+            link.dof_offset = dofs.len();
+            link.chart = if link.joint.has_chart() {
+                nchart += 1;
+                Some(nchart - 1)
+            } else {
+                None
+            };
+            let prefix = if multi_robot {
+                format!("{}/{}", robots[link.robot].name, link.joint_name)
+            } else {
+                link.joint_name.clone()
+            };
+            for (local, label) in link.joint.dof_labels().iter().enumerate() {
+                let name = if label.is_empty() {
+                    prefix.clone()
+                } else {
+                    format!("{prefix}:{label}")
+                };
+                dofs.push(DofInfo {
+                    link: i,
+                    local,
+                    name,
+                });
+            }
+        }
+        let mut ancestor_dofs: Vec<Vec<usize>> = Vec::with_capacity(links.len());
+        for (i, link) in links.iter().enumerate() {
+            let mut a = match link.parent {
+                Some(p) => {
+                    assert!(p < i, "links must be in topological order");
+                    ancestor_dofs[p].clone()
+                }
+                None => Vec::new(),
+            };
+            a.extend(link.dof_offset..link.dof_offset + link.ndof());
+            ancestor_dofs.push(a);
+        }
+        let (second_moment, first_moment) = links.iter().map(Link::moments).unzip();
+        Model {
+            links,
+            robots,
+            dofs,
+            ancestor_dofs,
+            nchart,
+            second_moment,
+            first_moment,
+        }
+    }
+
+    /// Number of generalized coordinates `|θ|`.
+    pub fn ndof(&self) -> usize {
+        self.dofs.len()
+    }
+
+    /// Recomputes the cached mass moments after hull vertices changed.
+    pub fn refresh_moments(&mut self) {
+        for (i, l) in self.links.iter().enumerate() {
+            let (m2, m1) = l.moments();
+            self.second_moment[i] = m2;
+            self.first_moment[i] = m1;
+        }
+    }
+
+    /// Whether link `a` is an ancestor of (or equal to) link `b`.
+    pub fn is_ancestor_or_self(&self, a: usize, mut b: usize) -> bool {
+        loop {
+            if a == b {
+                return true;
+            }
+            match self.links[b].parent {
+                Some(p) if p >= a => b = p,
+                _ => return false,
+            }
+        }
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.links.iter().map(Link::mass).sum()
+    }
+}

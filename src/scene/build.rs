@@ -1,0 +1,479 @@
+//! Validation of a parsed scene and construction of the model.
+
+use super::schema::*;
+use super::{Invalid, Scene, chain};
+use crate::control::{ControlChannel, Controller};
+use crate::math::{pose_from, rpy_to_matrix, so3};
+use crate::model::{Hull, JointKind, Link, Model, RobotInfo};
+use crate::sim::SimSettings;
+use nalgebra::{DVector, Matrix3, Vector3};
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+fn check_finite(element: &str, what: &str, v: &[f64]) -> Result<(), Invalid> {
+    if finite(v) {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            element,
+            format!("`{what}` must be finite, got {v:?}"),
+        ))
+    }
+}
+
+/// Builds a scene from its specification.
+pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
+    if spec.version != 1 {
+        return Err(Invalid::new(
+            "version",
+            format!(
+                "unsupported schema version {} (this build reads version 1)",
+                spec.version
+            ),
+        ));
+    }
+    if !(spec.dt > 0.0 && spec.dt.is_finite()) {
+        return Err(Invalid::new(
+            "dt",
+            format!("the time step must be positive and finite, got {}", spec.dt),
+        ));
+    }
+    check_finite("gravity", "gravity", &spec.gravity)?;
+    let s = &spec.solver;
+    if !(s.tol > 0.0 && s.tol.is_finite()) {
+        return Err(Invalid::new(
+            "solver.tol",
+            format!("must be positive, got {}", s.tol),
+        ));
+    }
+    if !(s.eig_clamp > 0.0 && s.eig_clamp.is_finite()) {
+        return Err(Invalid::new(
+            "solver.eig_clamp",
+            format!("must be positive, got {}", s.eig_clamp),
+        ));
+    }
+    if s.max_iters == 0 {
+        return Err(Invalid::new("solver.max_iters", "must be at least 1"));
+    }
+    if spec.robots.is_empty() {
+        return Err(Invalid::new("robots", "the scene has no robots"));
+    }
+    let mut seen = HashMap::new();
+    for (i, r) in spec.robots.iter().enumerate() {
+        if let Some(j) = seen.insert(r.name.clone(), i) {
+            return Err(Invalid::new(
+                format!("robots[{i}]"),
+                format!("robot name \"{}\" is already used by robots[{j}]", r.name),
+            ));
+        }
+    }
+
+    let mut links = Vec::new();
+    let mut robots = Vec::new();
+    for (ri, r) in spec.robots.iter().enumerate() {
+        let first = links.len();
+        build_robot(ri, r, &mut links)?;
+        robots.push(RobotInfo {
+            name: r.name.clone(),
+            links: first..links.len(),
+        });
+    }
+    let model = Model::new(links, robots);
+
+    // Controller and initial state, by joint name per robot.
+    let n = model.ndof();
+    let mut q0 = DVector::zeros(n);
+    let mut qdot0 = DVector::zeros(n);
+    let mut charts = vec![Matrix3::identity(); model.nchart];
+    let mut controller = Controller::default();
+    for (ri, r) in spec.robots.iter().enumerate() {
+        let info = &model.robots[ri];
+        let joints: BTreeMap<&str, usize> = info
+            .links
+            .clone()
+            .map(|l| (model.links[l].joint_name.as_str(), l))
+            .collect();
+        let el = |what: &str, joint: &str| format!("robot \"{}\": {what}.{joint}", r.name);
+        let find = |what: &str, joint: &str| -> Result<usize, Invalid> {
+            joints.get(joint).copied().ok_or_else(|| {
+                let known: Vec<&str> = joints.keys().copied().collect();
+                Invalid::new(
+                    el(what, joint),
+                    format!("no joint named \"{joint}\" (joints: {})", known.join(", ")),
+                )
+            })
+        };
+        let c = &r.controller;
+        check_finite(
+            &format!("robot \"{}\": controller", r.name),
+            "kp/kd",
+            &[c.kp, c.kd],
+        )?;
+        for joint in c.gains.keys() {
+            find("controller.gains", joint)?;
+        }
+        for (joint, signals) in &c.targets {
+            let l = find("controller.targets", joint)?;
+            let link = &model.links[l];
+            if link.joint.has_chart() {
+                return Err(Invalid::new(
+                    el("controller.targets", joint),
+                    format!(
+                        "PD targets are not supported on {} joints",
+                        link.joint.type_name()
+                    ),
+                ));
+            }
+            let sigs = signals.as_slice();
+            if sigs.len() != link.ndof() {
+                return Err(Invalid::new(
+                    el("controller.targets", joint),
+                    format!(
+                        "joint has {} coordinate(s) but {} signal(s) were given",
+                        link.ndof(),
+                        sigs.len()
+                    ),
+                ));
+            }
+            let g = c.gains.get(joint).cloned().unwrap_or_default();
+            let (kp, kd) = (g.kp.unwrap_or(c.kp), g.kd.unwrap_or(c.kd));
+            if !(kp >= 0.0 && kd >= 0.0 && kp.is_finite() && kd.is_finite()) {
+                return Err(Invalid::new(
+                    el("controller.gains", joint),
+                    format!("gains must be finite and ≥ 0, got kp={kp}, kd={kd}"),
+                ));
+            }
+            for (k, s) in sigs.iter().enumerate() {
+                s.validate().map_err(|e| {
+                    Invalid::new(
+                        format!("{}[{k}]", el("controller.targets", joint)),
+                        e.to_string(),
+                    )
+                })?;
+                controller.channels.push(ControlChannel {
+                    dof: link.dof_offset + k,
+                    kp,
+                    kd,
+                    signal: s.clone(),
+                });
+            }
+        }
+        for (joint, init) in &r.initial {
+            let l = find("initial", joint)?;
+            let link = &model.links[l];
+            let nd = link.ndof();
+            for (what, v) in [("q", &init.q), ("qdot", &init.qdot)] {
+                if !v.is_empty() && v.len() != nd {
+                    return Err(Invalid::new(
+                        format!("{}.{what}", el("initial", joint)),
+                        format!("joint has {nd} coordinate(s), got {} value(s)", v.len()),
+                    ));
+                }
+                check_finite(&el("initial", joint), what, v)?;
+            }
+            let o = link.dof_offset;
+            for (k, v) in init.q.iter().enumerate() {
+                q0[o + k] = *v;
+            }
+            for (k, v) in init.qdot.iter().enumerate() {
+                qdot0[o + k] = *v;
+            }
+            // Charted joints: the initial rotation goes into the chart, φ⁰ = 0.
+            if let (Some(c), false) = (link.chart, init.q.is_empty()) {
+                let co = o + link.joint.chart_offset();
+                let phi = Vector3::new(q0[co], q0[co + 1], q0[co + 2]);
+                charts[c] = so3::exp(&phi);
+                q0.rows_mut(co, 3).fill(0.0);
+            }
+        }
+    }
+    let settings = SimSettings {
+        dt: spec.dt,
+        gravity: Vector3::from(spec.gravity),
+        newton: spec.solver.clone(),
+    };
+    Ok(Scene {
+        source: path.to_path_buf(),
+        model,
+        settings,
+        controller,
+        q0,
+        qdot0,
+        charts,
+        steps: spec.steps,
+        spec,
+    })
+}
+
+fn unit(element: &str, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Invalid> {
+    let a = Vector3::from(v);
+    if !finite(&v) || a.norm() < 1e-12 {
+        return Err(Invalid::new(
+            element,
+            format!("`{field}` must be a finite non-zero vector, got {v:?}"),
+        ));
+    }
+    Ok(a.normalize())
+}
+
+fn joint_kind(element: &str, j: &JointSpec) -> Result<JointKind, Invalid> {
+    let needs_axis = matches!(j.kind, JointType::Revolute | JointType::Prismatic);
+    if j.axis.is_some() && !needs_axis {
+        return Err(Invalid::new(
+            element,
+            format!(
+                "`axis` is not used by a {:?} joint (use `axes` for ball joints)",
+                j.kind
+            )
+            .to_lowercase(),
+        ));
+    }
+    if j.axes.is_some() && j.kind != JointType::Ball {
+        return Err(Invalid::new(element, "`axes` is only used by ball joints"));
+    }
+    Ok(match j.kind {
+        JointType::Fixed => JointKind::Fixed,
+        JointType::Spherical => JointKind::Spherical,
+        JointType::Free => JointKind::Free,
+        JointType::Revolute | JointType::Prismatic => {
+            let axis = unit(
+                element,
+                "axis",
+                j.axis
+                    .ok_or_else(|| Invalid::new(element, "this joint type needs an `axis`"))?,
+            )?;
+            if j.kind == JointType::Revolute {
+                JointKind::Revolute { axis }
+            } else {
+                JointKind::Prismatic { axis }
+            }
+        }
+        JointType::Ball => {
+            let [a, b] = j.axes.unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+            let (a, b) = (unit(element, "axes[0]", a)?, unit(element, "axes[1]", b)?);
+            if a.dot(&b).abs() > 1e-9 {
+                return Err(Invalid::new(
+                    element,
+                    format!(
+                        "ball joint axes must be orthogonal (cos = {:.3e})",
+                        a.dot(&b)
+                    ),
+                ));
+            }
+            JointKind::Ball { axes: [a, b] }
+        }
+    })
+}
+
+/// Orders `links` so parents precede children (stable otherwise); reports
+/// unknown parents and kinematic cycles.
+fn topo_order(robot: &str, links: &[LinkSpec]) -> Result<Vec<usize>, Invalid> {
+    let mut index = HashMap::new();
+    for (i, l) in links.iter().enumerate() {
+        if let Some(j) = index.insert(l.name.as_str(), i) {
+            return Err(Invalid::new(
+                format!("robot \"{robot}\": links[{i}]"),
+                format!("link name \"{}\" is already used by links[{j}]", l.name),
+            ));
+        }
+    }
+    let mut parent = vec![None; links.len()];
+    for (i, l) in links.iter().enumerate() {
+        if let Some(p) = &l.parent {
+            let pi = *index.get(p.as_str()).ok_or_else(|| {
+                Invalid::new(
+                    format!("robot \"{robot}\": link \"{}\".parent", l.name),
+                    format!("no link named \"{p}\""),
+                )
+            })?;
+            parent[i] = Some(pi);
+        }
+    }
+    // Cycle detection: follow parents; a walk longer than the link count loops.
+    for start in 0..links.len() {
+        let mut path = vec![start];
+        let mut cur = start;
+        while let Some(p) = parent[cur] {
+            if let Some(pos) = path.iter().position(|&x| x == p) {
+                let names: Vec<&str> = path[pos..]
+                    .iter()
+                    .rev()
+                    .map(|&k| links[k].name.as_str())
+                    .collect();
+                return Err(Invalid::new(
+                    format!("robot \"{robot}\": link \"{}\"", links[start].name),
+                    format!("kinematic cycle: {} → {}", names.join(" → "), links[p].name),
+                ));
+            }
+            path.push(p);
+            cur = p;
+        }
+    }
+    let mut order = Vec::with_capacity(links.len());
+    let mut placed = vec![false; links.len()];
+    while order.len() < links.len() {
+        for i in 0..links.len() {
+            if !placed[i] && parent[i].is_none_or(|p| placed[p]) {
+                placed[i] = true;
+                order.push(i);
+            }
+        }
+    }
+    Ok(order)
+}
+
+fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Invalid> {
+    let el = format!("robot \"{}\"", r.name);
+    let generated;
+    let specs: &[LinkSpec] = match (&r.chain, r.links.is_empty()) {
+        (Some(_), false) => {
+            return Err(Invalid::new(el, "give either `links` or `chain`, not both"));
+        }
+        (Some(c), true) => {
+            if c.links == 0 || !(c.link_length > 0.0 && c.link_width > 0.0 && c.link_mass > 0.0) {
+                return Err(Invalid::new(
+                    format!("{el}: chain"),
+                    "links must be ≥ 1 and length, width, mass positive",
+                ));
+            }
+            if !matches!(c.joint, JointType::Ball | JointType::Revolute) {
+                return Err(Invalid::new(
+                    format!("{el}: chain.joint"),
+                    "chain joints must be `ball` or `revolute`",
+                ));
+            }
+            generated = chain::expand(c);
+            &generated
+        }
+        (None, true) => return Err(Invalid::new(el, "the robot has no links")),
+        (None, false) => &r.links,
+    };
+    check_finite(
+        &format!("{el}: base"),
+        "xyz/rpy",
+        &[r.base.xyz, r.base.rpy].concat(),
+    )?;
+    let base = pose_from(&rpy_to_matrix(&r.base.rpy), &Vector3::from(r.base.xyz));
+    let order = topo_order(&r.name, specs)?;
+    let first = out.len();
+    let mut new_index = vec![0; specs.len()];
+    let mut joint_names = HashMap::new();
+    for &si in &order {
+        let l = &specs[si];
+        let lel = format!("{el}: link \"{}\"", l.name);
+        let joint_name = l.joint.name.clone().unwrap_or_else(|| l.name.clone());
+        if let Some(other) = joint_names.insert(joint_name.clone(), l.name.clone()) {
+            return Err(Invalid::new(
+                format!("{lel}.joint.name"),
+                format!("joint name \"{joint_name}\" is already used by link \"{other}\""),
+            ));
+        }
+        let kind = joint_kind(&format!("{lel}.joint"), &l.joint)?;
+        let o = &l.joint.origin;
+        check_finite(
+            &format!("{lel}.joint.origin"),
+            "xyz/rpy",
+            &[o.xyz, o.rpy].concat(),
+        )?;
+        let attach_local = pose_from(&rpy_to_matrix(&o.rpy), &Vector3::from(o.xyz));
+        let parent = l.parent.as_ref().map(|_| {
+            new_index[specs
+                .iter()
+                .position(|s| Some(&s.name) == l.parent.as_ref())
+                .unwrap()]
+        });
+        let attach = if parent.is_some() {
+            attach_local
+        } else {
+            crate::math::compose(&base, &attach_local)
+        };
+        if l.hulls.is_empty() {
+            return Err(Invalid::new(
+                format!("{lel}.hulls"),
+                "a link needs at least one hull",
+            ));
+        }
+        let nvert: usize = l
+            .hulls
+            .iter()
+            .map(|h| match h {
+                HullSpec::Vertices(v) => v.len(),
+                HullSpec::Box { .. } => 8,
+            })
+            .sum();
+        let vertex_mass = match (l.mass, l.vertex_mass) {
+            (Some(_), Some(_)) => {
+                return Err(Invalid::new(
+                    lel,
+                    "give either `mass` or `vertex_mass`, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(Invalid::new(
+                    lel,
+                    "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)",
+                ));
+            }
+            (Some(m), None) => {
+                if !(m > 0.0 && m.is_finite()) {
+                    return Err(Invalid::new(
+                        format!("{lel}.mass"),
+                        format!("must be positive and finite, got {m}"),
+                    ));
+                }
+                m / nvert as f64
+            }
+            (None, Some(m)) => {
+                if !(m > 0.0 && m.is_finite()) {
+                    return Err(Invalid::new(
+                        format!("{lel}.vertex_mass"),
+                        format!("must be positive and finite, got {m}"),
+                    ));
+                }
+                m
+            }
+        };
+        let mut hulls = Vec::with_capacity(l.hulls.len());
+        for (hi, h) in l.hulls.iter().enumerate() {
+            let hel = format!("{lel}.hulls[{hi}]");
+            let verts = match h {
+                HullSpec::Vertices(v) => v.iter().map(|p| Vector3::from(*p)).collect(),
+                HullSpec::Box { size, center } => {
+                    check_finite(&hel, "box", &[*size, *center].concat())?;
+                    if size.iter().any(|s| *s <= 0.0) {
+                        return Err(Invalid::new(
+                            hel,
+                            format!("box size must be positive, got {size:?}"),
+                        ));
+                    }
+                    Hull::cuboid(Vector3::from(*size), Vector3::from(*center))
+                }
+            };
+            hulls
+                .push(Hull::new(verts, vertex_mass).map_err(|e| Invalid::new(hel, e.to_string()))?);
+        }
+        new_index[si] = out.len();
+        out.push(Link {
+            name: l.name.clone(),
+            robot: ri,
+            parent,
+            joint_name,
+            joint: kind,
+            attach,
+            hulls,
+            dof_offset: 0,
+            chart: None,
+            collides: true,
+        });
+    }
+    debug_assert!(
+        out[first..]
+            .iter()
+            .all(|l| l.parent.is_none_or(|p| p >= first))
+    );
+    Ok(())
+}

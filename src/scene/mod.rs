@@ -1,0 +1,120 @@
+//! Scene files → a ready-to-run [`Scene`] (model, settings, controller,
+//! initial state). Schema: [`schema`]. Every problem is reported as a
+//! [`SceneError`] naming the file and the element.
+
+pub mod build;
+pub mod chain;
+pub mod schema;
+
+pub use schema::SceneSpec;
+
+use crate::control::Controller;
+use crate::model::Model;
+use crate::sim::{SimSettings, SimState, Simulator};
+use nalgebra::{DVector, Matrix3};
+use std::path::{Path, PathBuf};
+
+/// A problem with a scene file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{}: cannot read the file: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: malformed scene: {msg}", path.display())]
+    Parse { path: PathBuf, msg: String },
+    #[error("{}: {element}: {msg}", path.display())]
+    Invalid {
+        path: PathBuf,
+        element: String,
+        msg: String,
+    },
+}
+
+/// A validation problem before the file name is attached.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Invalid {
+    pub element: String,
+    pub msg: String,
+}
+
+impl Invalid {
+    pub fn new(element: impl Into<String>, msg: impl Into<String>) -> Self {
+        Invalid {
+            element: element.into(),
+            msg: msg.into(),
+        }
+    }
+    fn at(self, path: &Path) -> SceneError {
+        SceneError::Invalid {
+            path: path.to_path_buf(),
+            element: self.element,
+            msg: self.msg,
+        }
+    }
+}
+
+/// A loaded scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// File the scene came from (for messages).
+    pub source: PathBuf,
+    pub model: Model,
+    pub settings: SimSettings,
+    pub controller: Controller,
+    /// `θ^0`.
+    pub q0: DVector<f64>,
+    /// `θ̇^0`.
+    pub qdot0: DVector<f64>,
+    /// Initial chart centres.
+    pub charts: Vec<Matrix3<f64>>,
+    /// Default number of steps.
+    pub steps: usize,
+    /// The parsed specification (kept for writing designs back).
+    pub spec: SceneSpec,
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_str(&text, path)
+    }
+
+    /// Parses and validates scene text; `path` is used in messages only.
+    pub fn from_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let spec: SceneSpec = serde_yaml::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_path_buf(),
+            msg: e.to_string(),
+        })?;
+        Self::from_spec(spec, path)
+    }
+
+    /// Validates a parsed specification.
+    pub fn from_spec(spec: SceneSpec, path: &Path) -> Result<Scene, SceneError> {
+        build::build_scene(spec, path).map_err(|e| e.at(path))
+    }
+
+    /// A simulator at the scene's initial state.
+    pub fn simulator(&self) -> Simulator {
+        let state = SimState::new(
+            &self.model,
+            self.q0.clone(),
+            &self.qdot0,
+            self.charts.clone(),
+            self.settings.dt,
+        );
+        Simulator::new(
+            self.model.clone(),
+            self.settings.clone(),
+            self.controller.clone(),
+            state,
+        )
+    }
+}

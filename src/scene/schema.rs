@@ -1,0 +1,287 @@
+//! Scene file schema (YAML, version 1). Every field documents its default;
+//! unknown fields are errors (typos must not be silently ignored).
+//!
+//! ```yaml
+//! version: 1                 # schema version (required to be 1 if given)
+//! dt: 0.001                  # time step Δt in s (> 0, required)
+//! steps: 1000                # number of steps (default 1000; CLI --steps overrides)
+//! gravity: [0, 0, -9.81]     # m/s², world frame, z up (default shown)
+//! solver:                    # Newton options (defaults: paper values)
+//!   tol: 1.0e-4              #   stop when ‖∇O‖∞ < tol
+//!   max_iters: 100
+//!   eig_clamp: 1.0e-3        #   Hessian eigenvalue floor
+//!   max_backtracks: 60
+//! robots:
+//!   - name: arm
+//!     base: {xyz: [0, 0, 1], rpy: [0, 0, 0]}   # world pose of the root attachment (default identity)
+//!     links:                 # parents before or after children, any order; no cycles
+//!       - name: upper
+//!         parent: ~          # omitted/null: attached to the base
+//!         joint:
+//!           name: shoulder   # default: the link name
+//!           type: revolute   # fixed | revolute | prismatic | ball | spherical | free
+//!           axis: [0, 1, 0]  # revolute/prismatic: unit axis in the joint frame
+//!           # axes: [[1,0,0],[0,1,0]]   # ball: two orthogonal hinge axes
+//!           origin: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # attachment in the parent frame;
+//!                            # xyz is the design-dependent attachment point
+//!         mass: 1.0          # kg, divided equally over all hull vertices …
+//!         # vertex_mass: 0.125   # … or kg per vertex (the paper's ρ); exactly one of the two
+//!         hulls:
+//!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
+//!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
+//!     # chain: {links: 8, ...}   # generates `links` instead (see ChainSpec)
+//!     controller:
+//!       kp: 100              # default gains for every target (J/rad²; default 0)
+//!       kd: 1                # J s²/rad² (default 0)
+//!       gains: {shoulder: {kp: 200, kd: 2}}          # per-joint overrides
+//!       targets:             # per joint: one signal per coordinate (list) or one signal
+//!         shoulder: {type: sine, offset: 0, terms: [{amplitude: 0.5, frequency: 1, phase: 0}]}
+//!     initial:               # per joint (default zeros)
+//!       shoulder: {q: [0.1], qdot: [0.0]}
+//! ```
+
+use crate::control::Signal;
+use crate::sim::NewtonOptions;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+fn default_steps() -> usize {
+    1000
+}
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+fn default_version() -> u32 {
+    1
+}
+
+/// A whole scene.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    #[serde(default = "default_version")]
+    pub version: u32,
+    /// Δt (s).
+    pub dt: f64,
+    #[serde(default = "default_steps")]
+    pub steps: usize,
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    #[serde(default)]
+    pub solver: NewtonOptions,
+    pub robots: Vec<RobotSpec>,
+}
+
+/// A pose given as translation and roll–pitch–yaw (URDF convention).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Origin {
+    #[serde(default)]
+    pub xyz: [f64; 3],
+    #[serde(default)]
+    pub rpy: [f64; 3],
+}
+
+/// One robot or free object.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    pub name: String,
+    #[serde(default)]
+    pub base: Origin,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub links: Vec<LinkSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chain: Option<ChainSpec>,
+    #[serde(default)]
+    pub controller: ControllerSpec,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub initial: BTreeMap<String, InitialSpec>,
+    /// Design-space description (ties, bounds); read by `sdrs optimize`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design: Option<DesignSpec>,
+}
+
+/// One link.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSpec {
+    pub name: String,
+    #[serde(default)]
+    pub parent: Option<String>,
+    pub joint: JointSpec,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex_mass: Option<f64>,
+    pub hulls: Vec<HullSpec>,
+}
+
+/// Joint types accepted in scene files.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum JointType {
+    Fixed,
+    Revolute,
+    Prismatic,
+    Ball,
+    Spherical,
+    Free,
+}
+
+/// The joint connecting a link to its parent.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct JointSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(rename = "type")]
+    pub kind: JointType,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<[[f64; 3]; 2]>,
+    #[serde(default)]
+    pub origin: Origin,
+}
+
+/// A hull: explicit vertices or a box primitive (8 vertices).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum HullSpec {
+    Vertices(Vec<[f64; 3]>),
+    Box {
+        size: [f64; 3],
+        #[serde(default)]
+        center: [f64; 3],
+    },
+}
+
+/// Generator for the paper's rotating chains: `links` box links hanging
+/// along −z, each attached at the far end of its parent.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ChainSpec {
+    /// Number of links (≥ 1).
+    pub links: usize,
+    /// Link length (m). Default 0.5.
+    #[serde(default = "ChainSpec::default_length")]
+    pub link_length: f64,
+    /// Link cross-section width (m). Default 0.1.
+    #[serde(default = "ChainSpec::default_width")]
+    pub link_width: f64,
+    /// Mass per link (kg). Default 0.1.
+    #[serde(default = "ChainSpec::default_mass")]
+    pub link_mass: f64,
+    /// Joint type of every link: `ball` (default, two hinges about x and y)
+    /// or `revolute` (about y).
+    #[serde(default = "ChainSpec::default_joint")]
+    pub joint: JointType,
+}
+
+impl ChainSpec {
+    fn default_length() -> f64 {
+        0.5
+    }
+    fn default_width() -> f64 {
+        0.1
+    }
+    fn default_mass() -> f64 {
+        0.1
+    }
+    fn default_joint() -> JointType {
+        JointType::Ball
+    }
+}
+
+/// PD gains.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Gains {
+    #[serde(default)]
+    pub kp: Option<f64>,
+    #[serde(default)]
+    pub kd: Option<f64>,
+}
+
+/// One signal, or one per coordinate of a multi-coordinate joint.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum SignalList {
+    One(Signal),
+    Many(Vec<Signal>),
+}
+
+impl SignalList {
+    pub fn as_slice(&self) -> &[Signal] {
+        match self {
+            SignalList::One(s) => std::slice::from_ref(s),
+            SignalList::Many(v) => v,
+        }
+    }
+}
+
+/// Open-loop stable-PD controller.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// Default `k_p` (J/rad²). Default 0.
+    #[serde(default)]
+    pub kp: f64,
+    /// Default `k_d` (J s²/rad²). Default 0.
+    #[serde(default)]
+    pub kd: f64,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub gains: BTreeMap<String, Gains>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub targets: BTreeMap<String, SignalList>,
+}
+
+/// Initial coordinates and velocities of one joint (default zeros).
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    #[serde(default)]
+    pub q: Vec<f64>,
+    #[serde(default)]
+    pub qdot: Vec<f64>,
+}
+
+/// A hull vertex of a link.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[serde(deny_unknown_fields)]
+pub struct VertexRef {
+    pub link: String,
+    pub hull: usize,
+    pub vertex: usize,
+}
+
+/// A joint's attachment point tied to a vertex of a parent hull and a vertex
+/// of a child hull (paper, `shape.tex`, Fig. `attachment`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AttachmentTie {
+    /// Child link whose joint origin is the attachment point.
+    pub link: String,
+    pub parent_vertex: VertexRef,
+    pub child_vertex: VertexRef,
+}
+
+/// Design space description (paper, `shape.tex`): which links are designable,
+/// connectivity ties and box bounds.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DesignSpec {
+    /// Designable links (default: all).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub designable: Option<Vec<String>>,
+    /// Groups of vertices that are one design variable (shared vertices of
+    /// overlapping hulls of one link).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ties: Vec<Vec<VertexRef>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub attachments: Vec<AttachmentTie>,
+    /// Box bound half-width around each initial vertex position (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bound: Option<f64>,
+}

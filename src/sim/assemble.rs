@@ -1,0 +1,155 @@
+//! Contraction of pose-space energy derivatives into generalized coordinates.
+//!
+//! With `G_i = ∂E/∂A_i` and the kinematic rules of [`crate::kinematics`]:
+//!
+//! - gradient: `∂E/∂θ_k = Σ_{i ∈ subtree(a)} ⟨G_i, S_k Ã_i⟩ = ⟨S_k, Q_a⟩` with
+//!   `Q_a = Σ_{i ∈ subtree(a)} G_i Ã_iᵀ` (one pass from the leaves up: O(links));
+//! - Hessian, first-order part: `Σ_i J_iᵀ H_ii J_i + Σ_{i≠j} J_iᵀ H_ij J_j`
+//!   where column `k` of `J_i` is `vec(S_k Ã_i)`;
+//! - Hessian, second-order part: `⟨Q_b, S_k S_l⟩` when `k`'s joint is a proper
+//!   ancestor of `l`'s joint `b`, and `⟨Q_a, S_kl⟩` within one joint `a`.
+
+use crate::energy::{EnergyAccumulator, Need, PoseHessian};
+use crate::kinematics::Kinematics;
+use crate::math::{frob, twist_apply, twist_mul};
+use crate::model::Model;
+use nalgebra::{DMatrix, DVector, Matrix3x4, SMatrix};
+
+/// Scratch buffers of the assembler (allocated once).
+#[derive(Clone, Debug, Default)]
+pub struct AssembleScratch {
+    q_sub: Vec<Matrix3x4<f64>>,
+    jac: Vec<SMatrix<f64, 12, 1>>,
+    jac2: Vec<SMatrix<f64, 12, 1>>,
+    hj: Vec<SMatrix<f64, 12, 1>>,
+}
+
+/// `G Ãᵀ = [G_R Rᵀ + g_t tᵀ | g_t]` for `G = [G_R | g_t]`, `A = [R | t]`.
+fn g_atr(g: &Matrix3x4<f64>, a: &Matrix3x4<f64>) -> Matrix3x4<f64> {
+    let gt = g.column(3).into_owned();
+    let t = a.column(3).into_owned();
+    let block =
+        g.fixed_view::<3, 3>(0, 0) * a.fixed_view::<3, 3>(0, 0).transpose() + gt * t.transpose();
+    let mut out = Matrix3x4::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&block);
+    out.set_column(3, &gt);
+    out
+}
+
+/// Adds the pose-space derivatives in `acc` (plus its direct coordinate
+/// terms) into `grad` and `hess` (overwritten), as required by `need`.
+pub fn assemble(
+    model: &Model,
+    kin: &Kinematics,
+    acc: &EnergyAccumulator,
+    need: Need,
+    grad: &mut DVector<f64>,
+    hess: &mut DMatrix<f64>,
+    scratch: &mut AssembleScratch,
+) {
+    let nlink = model.links.len();
+    if need < Need::Gradient {
+        return;
+    }
+    grad.copy_from(&acc.dof_grad);
+    // Subtree sums Q_a, from the leaves up (links are topologically ordered).
+    scratch.q_sub.clear();
+    scratch
+        .q_sub
+        .extend((0..nlink).map(|i| g_atr(&acc.link_grad[i], &kin.pose[i])));
+    for i in (0..nlink).rev() {
+        if let Some(p) = model.links[i].parent {
+            let qi = scratch.q_sub[i];
+            scratch.q_sub[p] += qi;
+        }
+    }
+    for (i, link) in model.links.iter().enumerate() {
+        for k in link.dof_offset..link.dof_offset + link.ndof() {
+            grad[k] += frob(&kin.twist[k], &scratch.q_sub[i]);
+        }
+    }
+    if need < Need::Hessian {
+        return;
+    }
+    hess.copy_from(&acc.dof_hess);
+    // First-order part, diagonal link blocks.
+    for i in 0..nlink {
+        if !acc.link_hess_set[i] {
+            continue;
+        }
+        let anc = &model.ancestor_dofs[i];
+        fill_jacobian(kin, i, anc, &mut scratch.jac);
+        let h = &acc.link_hess[i];
+        scratch.hj.clear();
+        scratch.hj.extend(scratch.jac.iter().map(|c| h * c));
+        for (a, &k) in anc.iter().enumerate() {
+            for (b, &l) in anc.iter().enumerate().skip(a) {
+                let v = scratch.jac[a].dot(&scratch.hj[b]);
+                hess[(k, l)] += v;
+                if k != l {
+                    hess[(l, k)] += v;
+                }
+            }
+        }
+    }
+    // First-order part, coupling blocks between links.
+    for (i, j, h) in &acc.pair_hess {
+        add_pair_block(model, kin, *i, *j, h, hess, scratch);
+    }
+    // Second-order kinematic part.
+    for (b, link) in model.links.iter().enumerate() {
+        let nb = link.ndof();
+        if nb == 0 {
+            continue;
+        }
+        let qb = &scratch.q_sub[b];
+        let ob = link.dof_offset;
+        for l in ob..ob + nb {
+            // Same joint.
+            for k in ob..ob + nb {
+                hess[(k, l)] += frob(kin.twist2(model, b, k, l), qb);
+            }
+            // Proper-ancestor coordinates k of joint b.
+            for &k in &model.ancestor_dofs[b] {
+                if k >= ob {
+                    break;
+                }
+                let v = frob(&twist_mul(&kin.twist[k], &kin.twist[l]), qb);
+                hess[(k, l)] += v;
+                hess[(l, k)] += v;
+            }
+        }
+    }
+}
+
+fn fill_jacobian(kin: &Kinematics, link: usize, anc: &[usize], out: &mut Vec<SMatrix<f64, 12, 1>>) {
+    out.clear();
+    out.extend(anc.iter().map(|&k| {
+        let d = twist_apply(&kin.twist[k], &kin.pose[link]);
+        SMatrix::<f64, 12, 1>::from_column_slice(d.as_slice())
+    }));
+}
+
+fn add_pair_block(
+    model: &Model,
+    kin: &Kinematics,
+    i: usize,
+    j: usize,
+    h: &PoseHessian,
+    hess: &mut DMatrix<f64>,
+    scratch: &mut AssembleScratch,
+) {
+    let anc_i = &model.ancestor_dofs[i];
+    let anc_j = &model.ancestor_dofs[j];
+    fill_jacobian(kin, i, anc_i, &mut scratch.jac);
+    fill_jacobian(kin, j, anc_j, &mut scratch.jac2);
+    scratch.hj.clear();
+    scratch.hj.extend(scratch.jac2.iter().map(|c| h * c));
+    for (a, &k) in anc_i.iter().enumerate() {
+        for (b, &l) in anc_j.iter().enumerate() {
+            let v = scratch.jac[a].dot(&scratch.hj[b]);
+            hess[(k, l)] += v;
+            hess[(l, k)] += v;
+        }
+    }
+}

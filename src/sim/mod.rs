@@ -1,0 +1,296 @@
+//! The time step. Each step is an ordered list of named, timed stages:
+//!
+//! 1. `controller` — PD targets `u^t` at `t^{t+1}`;
+//! 2. `begin_step` — lagged per-term data (warm starts, friction frames);
+//! 3. Newton iterations, each timing `kinematics`, one stage per energy term
+//!    (`inertia`, `gravity`, `pd`, …), `assembly`, `linear_solve`, and the
+//!    `line_search` as a whole;
+//! 4. `accept` — rotate the state, re-centre charts, diagnostics.
+
+pub mod assemble;
+pub mod counters;
+pub mod newton;
+pub mod state;
+
+pub use counters::{StageTime, StageTimers};
+pub use newton::{NewtonError, NewtonOptions, NewtonReport};
+pub use state::SimState;
+
+use crate::control::Controller;
+use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, PdTarget, StepContext};
+use crate::kinematics::{KinOrder, Kinematics};
+use crate::math::Pose;
+use crate::model::Model;
+use assemble::AssembleScratch;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use newton::{NewtonScratch, Objective};
+use std::time::Instant;
+
+/// A step that could not be completed.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("step {step} (t = {time:.6} s): {source}")]
+pub struct StepError {
+    /// Index of the step being solved (1-based: the step producing `θ^{step}`).
+    pub step: usize,
+    pub time: f64,
+    #[source]
+    pub source: NewtonError,
+}
+
+/// Global settings of a simulation.
+#[derive(Clone, Debug)]
+pub struct SimSettings {
+    /// Time step Δt (s).
+    pub dt: f64,
+    /// Gravity (m/s²).
+    pub gravity: Vector3<f64>,
+    pub newton: NewtonOptions,
+}
+
+/// Diagnostics of one completed step.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct StepDiagnostics {
+    pub newton: NewtonReport,
+    /// `½ Σ ρ ‖(X^{t+1} − X^t)/Δt‖²` (J).
+    pub kinetic: f64,
+    /// `−Σ ρ g·X^{t+1}` (J).
+    pub potential: f64,
+    /// `Σ ρ (X^{t+1} − X^t)/Δt` (kg m/s).
+    pub momentum: [f64; 3],
+}
+
+/// A simulator: model, energy terms, controller and state.
+pub struct Simulator {
+    pub model: Model,
+    pub settings: SimSettings,
+    pub controller: Controller,
+    pub energies: Vec<Box<dyn Energy>>,
+    pub state: SimState,
+    pub timers: StageTimers,
+    scratch: StepScratch,
+}
+
+/// Per-step scratch, apart from persistent state.
+struct StepScratch {
+    kin: Kinematics,
+    acc: EnergyAccumulator,
+    assemble: AssembleScratch,
+    newton: NewtonScratch,
+    targets: Vec<PdTarget>,
+}
+
+/// The step objective `O(θ^{t+1})` as seen by Newton.
+struct StepObjective<'a> {
+    ctx: StepContext<'a>,
+    charts: &'a [Matrix3<f64>],
+    energies: &'a mut [Box<dyn Energy>],
+    kin: &'a mut Kinematics,
+    acc: &'a mut EnergyAccumulator,
+    assemble: &'a mut AssembleScratch,
+}
+
+impl Objective for StepObjective<'_> {
+    fn eval(
+        &mut self,
+        q: &DVector<f64>,
+        need: Need,
+        grad: &mut DVector<f64>,
+        hess: &mut DMatrix<f64>,
+        timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        let order = match need {
+            Need::Value => KinOrder::Pose,
+            Need::Gradient => KinOrder::First,
+            Need::Hessian => KinOrder::Second,
+        };
+        let model = self.ctx.model;
+        timers.time("kinematics", || {
+            self.kin.update(model, q, self.charts, order)
+        });
+        self.acc.reset(need);
+        for e in self.energies.iter_mut() {
+            let t0 = Instant::now();
+            e.accumulate(&self.ctx, q, self.kin, need, self.acc)?;
+            timers.add(e.name(), t0.elapsed());
+            if !self.acc.value.is_finite() {
+                return Ok(self.acc.value);
+            }
+        }
+        if need >= Need::Gradient {
+            timers.time("assembly", || {
+                assemble::assemble(model, self.kin, self.acc, need, grad, hess, self.assemble)
+            });
+        }
+        Ok(self.acc.value)
+    }
+}
+
+impl Simulator {
+    /// A simulator with the standard terms (inertia, gravity, PD).
+    pub fn new(
+        model: Model,
+        settings: SimSettings,
+        controller: Controller,
+        state: SimState,
+    ) -> Self {
+        let energies: Vec<Box<dyn Energy>> = vec![
+            Box::new(crate::energy::Inertia),
+            Box::new(crate::energy::Gravity),
+            Box::new(crate::energy::PdController),
+        ];
+        let scratch = StepScratch {
+            kin: Kinematics::new(&model),
+            acc: EnergyAccumulator::new(&model),
+            assemble: AssembleScratch::default(),
+            newton: NewtonScratch::default(),
+            targets: Vec::new(),
+        };
+        Simulator {
+            model,
+            settings,
+            controller,
+            energies,
+            state,
+            timers: StageTimers::default(),
+            scratch,
+        }
+    }
+
+    /// Evaluates the step objective for the *next* step at `q` (no state
+    /// change): value, gradient and Hessian. Used by tests and the adjoint.
+    pub fn objective(
+        &mut self,
+        q: &DVector<f64>,
+        need: Need,
+    ) -> Result<(f64, DVector<f64>, DMatrix<f64>), EnergyError> {
+        let n = self.model.ndof();
+        let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
+        let t_next = self.state.time + self.settings.dt;
+        self.controller
+            .targets_at(t_next, &mut self.scratch.targets);
+        let ctx = make_context(
+            &self.model,
+            &self.settings,
+            &self.state,
+            &self.scratch.targets,
+            t_next,
+        );
+        let mut obj = StepObjective {
+            ctx,
+            charts: &self.state.charts,
+            energies: &mut self.energies,
+            kin: &mut self.scratch.kin,
+            acc: &mut self.scratch.acc,
+            assemble: &mut self.scratch.assemble,
+        };
+        let v = obj.eval(q, need, &mut g, &mut h, &mut self.timers)?;
+        Ok((v, g, h))
+    }
+
+    /// Advances one step: `θ^{t+1} = argmin O(θ; θ^t, θ^{t−1}, u^t)`.
+    pub fn step(&mut self) -> Result<StepDiagnostics, StepError> {
+        let t_next = self.state.time + self.settings.dt;
+        let step_index = self.state.step + 1;
+        let fail = |source: NewtonError| StepError {
+            step: step_index,
+            time: t_next,
+            source,
+        };
+        let t0 = Instant::now();
+        self.controller
+            .targets_at(t_next, &mut self.scratch.targets);
+        self.timers.add("controller", t0.elapsed());
+
+        let mut q = self.state.q.clone();
+        let report = {
+            let ctx = make_context(
+                &self.model,
+                &self.settings,
+                &self.state,
+                &self.scratch.targets,
+                t_next,
+            );
+            let t0 = Instant::now();
+            self.scratch.kin.update(
+                &self.model,
+                &self.state.q,
+                &self.state.charts,
+                KinOrder::Pose,
+            );
+            for e in self.energies.iter_mut() {
+                e.begin_step(&ctx, &self.scratch.kin)
+                    .map_err(|e| fail(e.into()))?;
+            }
+            self.timers.add("begin_step", t0.elapsed());
+            let mut obj = StepObjective {
+                ctx,
+                charts: &self.state.charts,
+                energies: &mut self.energies,
+                kin: &mut self.scratch.kin,
+                acc: &mut self.scratch.acc,
+                assemble: &mut self.scratch.assemble,
+            };
+            newton::minimize(
+                &mut obj,
+                &mut q,
+                &self.settings.newton,
+                &mut self.scratch.newton,
+                &mut self.timers,
+            )
+            .map_err(fail)?
+        };
+
+        let t0 = Instant::now();
+        self.scratch
+            .kin
+            .update(&self.model, &q, &self.state.charts, KinOrder::Pose);
+        let new_poses = self.scratch.kin.pose.clone();
+        let diag = self.diagnostics(&new_poses, report);
+        let st = &mut self.state;
+        st.q_prev = std::mem::replace(&mut st.q, q);
+        st.poses_prev = std::mem::replace(&mut st.poses, new_poses);
+        st.step = step_index;
+        st.time = t_next;
+        st.recenter_charts(&self.model);
+        self.timers.add("accept", t0.elapsed());
+        Ok(diag)
+    }
+
+    fn diagnostics(&self, new_poses: &[Pose], newton: NewtonReport) -> StepDiagnostics {
+        let dt = self.settings.dt;
+        let mut d = StepDiagnostics {
+            newton,
+            ..Default::default()
+        };
+        let mut p = Vector3::zeros();
+        for i in 0..self.model.links.len() {
+            let v = new_poses[i] - self.state.poses[i];
+            let m2 = &self.model.second_moment[i];
+            let m1 = &self.model.first_moment[i];
+            d.kinetic += 0.5 * v.component_mul(&(v * m2)).sum() / (dt * dt);
+            d.potential -= self.settings.gravity.dot(&(new_poses[i] * m1));
+            p += v * m1 / dt;
+        }
+        d.momentum = [p.x, p.y, p.z];
+        d
+    }
+}
+
+fn make_context<'a>(
+    model: &'a Model,
+    settings: &SimSettings,
+    state: &'a SimState,
+    targets: &'a [PdTarget],
+    time: f64,
+) -> StepContext<'a> {
+    StepContext {
+        model,
+        dt: settings.dt,
+        time,
+        gravity: settings.gravity,
+        poses_prev: &state.poses,
+        poses_prev2: &state.poses_prev,
+        q_prev: &state.q,
+        targets,
+    }
+}

@@ -1,0 +1,95 @@
+//! Persistent simulation state: the two most recent configurations (the
+//! position-level scheme is a two-step method) and the rotation charts.
+
+use crate::kinematics::link_poses;
+use crate::math::{Pose, so3};
+use crate::model::Model;
+use nalgebra::{DVector, Matrix3, Vector3};
+
+/// Rotation-vector charts are re-centred when `‖φ‖` exceeds this (rad),
+/// keeping `exp` far from its singular set `‖φ‖ = 2π`.
+pub const CHART_RECENTER: f64 = 1.0;
+
+/// State after step `t`.
+#[derive(Clone, Debug)]
+pub struct SimState {
+    /// Number of completed steps.
+    pub step: usize,
+    /// Time `t·Δt` (s).
+    pub time: f64,
+    /// `θ^t`.
+    pub q: DVector<f64>,
+    /// `θ^{t−1}` (in the same charts as `q`).
+    pub q_prev: DVector<f64>,
+    /// Chart centres `R_c` of spherical/free joints.
+    pub charts: Vec<Matrix3<f64>>,
+    /// `A^t`.
+    pub poses: Vec<Pose>,
+    /// `A^{t−1}`.
+    pub poses_prev: Vec<Pose>,
+}
+
+impl SimState {
+    /// Initial state from `θ^0`, `θ̇^0`: `θ^{−1} = θ^0 − Δt θ̇^0` (first-order
+    /// start; a body in free fall then lags the analytic parabola by
+    /// `g t Δt / 2`). For charted joints `θ̇` of the rotation coordinates is
+    /// the body-frame angular velocity (chart centred on the initial
+    /// orientation, so `φ^0 = 0`).
+    pub fn new(
+        model: &Model,
+        q0: DVector<f64>,
+        qdot0: &DVector<f64>,
+        charts: Vec<Matrix3<f64>>,
+        dt: f64,
+    ) -> Self {
+        let q_prev = &q0 - qdot0 * dt;
+        let poses = link_poses(model, &q0, &charts);
+        let poses_prev = link_poses(model, &q_prev, &charts);
+        SimState {
+            step: 0,
+            time: 0.0,
+            q: q0,
+            q_prev,
+            charts,
+            poses,
+            poses_prev,
+        }
+    }
+
+    /// Moves a chart centre onto the current orientation when its rotation
+    /// vector grew past [`CHART_RECENTER`]: `R_c ← R_c exp(φ^t)`, `φ^t ← 0`,
+    /// `φ^{t−1} ← log(R_c'ᵀ R_c exp(φ^{t−1}))`. Poses are unchanged.
+    pub fn recenter_charts(&mut self, model: &Model) {
+        for link in &model.links {
+            let Some(c) = link.chart else { continue };
+            let o = link.dof_offset + link.joint.chart_offset();
+            let phi = Vector3::new(self.q[o], self.q[o + 1], self.q[o + 2]);
+            if phi.norm() <= CHART_RECENTER {
+                continue;
+            }
+            let old = self.charts[c];
+            let new = old * so3::exp(&phi);
+            let phi_prev = Vector3::new(self.q_prev[o], self.q_prev[o + 1], self.q_prev[o + 2]);
+            let phi_prev_new = so3::log(&(new.transpose() * old * so3::exp(&phi_prev)));
+            for e in 0..3 {
+                self.q[o + e] = 0.0;
+                self.q_prev[o + e] = phi_prev_new[e];
+            }
+            self.charts[c] = new;
+        }
+    }
+
+    /// The coordinates reported to users: charted rotation coordinates are
+    /// replaced by the absolute rotation vector `log(R_c exp(φ))`.
+    pub fn reported_q(&self, model: &Model) -> DVector<f64> {
+        let mut out = self.q.clone();
+        for link in &model.links {
+            let Some(c) = link.chart else { continue };
+            let o = link.dof_offset + link.joint.chart_offset();
+            let phi = Vector3::new(self.q[o], self.q[o + 1], self.q[o + 2]);
+            let abs = so3::log(&(self.charts[c] * so3::exp(&phi)));
+            out.rows_mut(o, 3).copy_from(&abs);
+        }
+        out
+    }
+}
