@@ -12,5 +12,6 @@ pub mod energy;
 pub mod kinematics;
 pub mod math;
 pub mod model;
+pub mod output;
 pub mod scene;
 pub mod sim;

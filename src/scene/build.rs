@@ -400,10 +400,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
         let nvert: usize = l
             .hulls
             .iter()
-            .map(|h| match h {
-                HullSpec::Vertices(v) => v.len(),
-                HullSpec::Box { .. } => 8,
-            })
+            .map(|h| h.vertices.as_ref().map_or(8, Vec::len))
             .sum();
         let vertex_mass = match (l.mass, l.vertex_mass) {
             (Some(_), Some(_)) => {
@@ -440,9 +437,16 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
         let mut hulls = Vec::with_capacity(l.hulls.len());
         for (hi, h) in l.hulls.iter().enumerate() {
             let hel = format!("{lel}.hulls[{hi}]");
-            let verts = match h {
-                HullSpec::Vertices(v) => v.iter().map(|p| Vector3::from(*p)).collect(),
-                HullSpec::Box { size, center } => {
+            let verts = match (&h.vertices, &h.cuboid) {
+                (Some(_), Some(_)) => {
+                    return Err(Invalid::new(
+                        hel,
+                        "give either `vertices` or `box`, not both",
+                    ));
+                }
+                (None, None) => return Err(Invalid::new(hel, "a hull needs `vertices` or `box`")),
+                (Some(v), None) => v.iter().map(|p| Vector3::from(*p)).collect(),
+                (None, Some(BoxSpec { size, center })) => {
                     check_finite(&hel, "box", &[*size, *center].concat())?;
                     if size.iter().any(|s| *s <= 0.0) {
                         return Err(Invalid::new(

@@ -145,16 +145,42 @@ pub struct JointSpec {
     pub origin: Origin,
 }
 
-/// A hull: explicit vertices or a box primitive (8 vertices).
+/// A hull: explicit `vertices` or a `box` primitive (8 vertices); exactly one.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HullSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<[f64; 3]>>,
+    #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
+    pub cuboid: Option<BoxSpec>,
+}
+
+/// Axis-aligned box primitive in the link frame.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum HullSpec {
-    Vertices(Vec<[f64; 3]>),
-    Box {
-        size: [f64; 3],
-        #[serde(default)]
-        center: [f64; 3],
-    },
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Full edge lengths (m).
+    pub size: [f64; 3],
+    /// Centre in the link frame (m). Default origin.
+    #[serde(default)]
+    pub center: [f64; 3],
+}
+
+impl HullSpec {
+    /// A hull from explicit vertices.
+    pub fn from_vertices(v: Vec<[f64; 3]>) -> Self {
+        HullSpec {
+            vertices: Some(v),
+            cuboid: None,
+        }
+    }
+    /// A box hull.
+    pub fn cuboid(size: [f64; 3], center: [f64; 3]) -> Self {
+        HullSpec {
+            vertices: None,
+            cuboid: Some(BoxSpec { size, center }),
+        }
+    }
 }
 
 /// Generator for the paper's rotating chains: `links` box links hanging

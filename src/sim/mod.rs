@@ -10,6 +10,7 @@
 pub mod assemble;
 pub mod counters;
 pub mod newton;
+pub mod run;
 pub mod state;
 
 pub use counters::{StageTime, StageTimers};
@@ -165,7 +166,7 @@ impl Simulator {
     ) -> Result<(f64, DVector<f64>, DMatrix<f64>), EnergyError> {
         let n = self.model.ndof();
         let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
-        let t_next = self.state.time + self.settings.dt;
+        let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         self.controller
             .targets_at(t_next, &mut self.scratch.targets);
         let ctx = make_context(
@@ -189,7 +190,7 @@ impl Simulator {
 
     /// Advances one step: `θ^{t+1} = argmin O(θ; θ^t, θ^{t−1}, u^t)`.
     pub fn step(&mut self) -> Result<StepDiagnostics, StepError> {
-        let t_next = self.state.time + self.settings.dt;
+        let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         let step_index = self.state.step + 1;
         let fail = |source: NewtonError| StepError {
             step: step_index,
@@ -250,7 +251,7 @@ impl Simulator {
         st.q_prev = std::mem::replace(&mut st.q, q);
         st.poses_prev = std::mem::replace(&mut st.poses, new_poses);
         st.step = step_index;
-        st.time = t_next;
+        st.time = step_index as f64 * self.settings.dt;
         st.recenter_charts(&self.model);
         self.timers.add("accept", t0.elapsed());
         Ok(diag)
