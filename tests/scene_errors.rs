@@ -1,0 +1,110 @@
+//! Bad scene input gets an error naming the file and the element, never a
+//! panic. One test per kind of mistake.
+
+use sdrs::scene::{Scene, SceneError};
+use std::path::PathBuf;
+
+const GOOD_LINK: &str = r#"
+      - name: arm
+        joint: {name: hinge, type: revolute, axis: [0, 1, 0]}
+        mass: 1.0
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]"#;
+
+/// Writes `text` to a unique temporary file and loads it.
+fn load(name: &str, text: &str) -> (PathBuf, String) {
+    let dir = std::env::temp_dir().join(format!("sdrs-scene-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    let err = Scene::load(&path).expect_err("the scene must be rejected");
+    (path, err.to_string())
+}
+
+fn assert_names(msg: &str, path: &PathBuf, parts: &[&str]) {
+    assert!(msg.contains(&path.display().to_string()), "message does not name the file: {msg}");
+    for p in parts {
+        assert!(msg.contains(p), "message does not mention {p:?}: {msg}");
+    }
+}
+
+#[test]
+fn malformed_yaml_is_reported_with_file_and_line() {
+    let text = format!("dt: 0.01\nrobots:\n  - name: r\n    links: [{GOOD_LINK}\n");
+    let (path, msg) = load("malformed.yaml", &text);
+    assert_names(&msg, &path, &["malformed scene", "line"]);
+}
+
+#[test]
+fn unknown_joint_type_is_reported_with_the_element() {
+    let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: arm\n        joint: {type: hinge, axis: [0, 1, 0]}\n        mass: 1\n        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]\n";
+    let (path, msg) = load("unknown_joint.yaml", text);
+    assert_names(&msg, &path, &["robots[0].links[0].joint", "hinge", "revolute", "line 6"]);
+}
+
+#[test]
+fn hull_with_coplanar_vertices_is_rejected() {
+    let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: plate\n        joint: {type: fixed}\n        mass: 1\n        hulls:\n          - box: {size: [0.1, 0.1, 0.1]}\n          - vertices: [[0,0,0],[1,0,0],[0,1,0],[1,1,0],[0.5,0.5,0]]\n";
+    let (path, msg) = load("coplanar.yaml", text);
+    assert_names(&msg, &path, &["robot \"r\"", "link \"plate\"", "hulls[1]", "coplanar"]);
+}
+
+#[test]
+fn hull_with_too_few_vertices_is_rejected() {
+    let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: tri\n        joint: {type: fixed}\n        mass: 1\n        hulls: [{vertices: [[0,0,0],[1,0,0],[0,1,0]]}]\n";
+    let (path, msg) = load("three_vertices.yaml", text);
+    assert_names(&msg, &path, &["link \"tri\"", "hulls[0]", "at least 4 vertices"]);
+}
+
+#[test]
+fn kinematic_cycle_is_rejected_naming_the_links() {
+    let text = r#"dt: 0.01
+robots:
+  - name: loop
+    links:
+      - name: a
+        parent: c
+        joint: {type: revolute, axis: [0, 0, 1]}
+        mass: 1
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+      - name: b
+        parent: a
+        joint: {type: revolute, axis: [0, 0, 1]}
+        mass: 1
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+      - name: c
+        parent: b
+        joint: {type: revolute, axis: [0, 0, 1]}
+        mass: 1
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+"#;
+    let (path, msg) = load("cycle.yaml", text);
+    assert_names(&msg, &path, &["robot \"loop\"", "kinematic cycle", "a", "b", "c"]);
+}
+
+#[test]
+fn non_positive_time_step_is_rejected() {
+    for (i, dt) in ["0", "-0.001", ".nan"].iter().enumerate() {
+        let text = format!("dt: {dt}\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n");
+        let (path, msg) = load(&format!("dt{i}.yaml"), &text);
+        assert_names(&msg, &path, &["dt", "positive"]);
+    }
+}
+
+#[test]
+fn unknown_parent_and_bad_target_are_rejected() {
+    let text = format!("dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n        parent: nowhere\n");
+    let (path, msg) = load("parent.yaml", &text);
+    assert_names(&msg, &path, &["link \"arm\".parent", "nowhere"]);
+    let text = format!(
+        "dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n    controller:\n      targets: {{elbow: {{type: constant, value: 1}}}}\n"
+    );
+    let (path, msg) = load("target.yaml", &text);
+    assert_names(&msg, &path, &["controller.targets.elbow", "no joint named", "hinge"]);
+}
+
+#[test]
+fn missing_file_is_an_io_error_naming_the_path() {
+    let err = Scene::load("/nonexistent/scene.yaml").unwrap_err();
+    assert!(matches!(err, SceneError::Io { .. }));
+    assert!(err.to_string().contains("/nonexistent/scene.yaml"));
+}
