@@ -6,7 +6,9 @@ use sdrs::sim::run::run;
 use std::path::Path;
 
 fn robots(name: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("robots").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("robots")
+        .join(name)
 }
 
 /// Upward zero crossings of `x(t)`, linearly interpolated.
@@ -97,7 +99,10 @@ fn free_floating_articulated_body_conserves_linear_momentum() {
     }
     // The body rotates (charts were re-centred) and the joints move.
     let rot = traj.states.last().unwrap().rows(3, 3).norm();
-    eprintln!("momentum |p| = {:.6}, worst relative change {worst:.2e}, final |rotation vector| {rot:.3}", p0.norm());
+    eprintln!(
+        "momentum |p| = {:.6}, worst relative change {worst:.2e}, final |rotation vector| {rot:.3}",
+        p0.norm()
+    );
     assert!(worst < 1e-9, "relative momentum change {worst:e}");
 }
 
@@ -135,6 +140,9 @@ robots:
     }
     let rel = (theta - th).abs() / th;
     eprintln!("PD steady state θ = {theta:.6}, predicted {th:.6}, relative error {rel:.2e}");
-    assert!(th > 0.05, "the offset must be significant for the test to mean something");
+    assert!(
+        th > 0.05,
+        "the offset must be significant for the test to mean something"
+    );
     assert!(rel < 0.01);
 }

@@ -14,7 +14,9 @@ fn scratch_dir(name: &str) -> PathBuf {
 }
 
 fn robots(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("robots").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("robots")
+        .join(name)
 }
 
 #[test]
@@ -53,10 +55,18 @@ fn simulate_writes_csv_with_joint_columns_and_summary_json() {
     let mut lines = text.lines();
     assert_eq!(lines.next().unwrap(), "t,j1,j2,j3");
     assert_eq!(lines.count(), 51);
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(summary["steps"], 50);
     assert_eq!(summary["dt"], 0.001);
-    for key in ["wall_seconds", "newton", "final_state", "energy", "linear_momentum", "stages"] {
+    for key in [
+        "wall_seconds",
+        "newton",
+        "final_state",
+        "energy",
+        "linear_momentum",
+        "stages",
+    ] {
         assert!(!summary[key].is_null(), "summary lacks {key}");
     }
     assert!(summary["newton"]["max_iterations"].as_u64().unwrap() >= 1);
@@ -80,7 +90,12 @@ fn simulate_refuses_to_overwrite_its_input() {
     let scene = dir.join("scene.yaml");
     std::fs::copy(robots("pendulum.yaml"), &scene).unwrap();
     let before = std::fs::read(&scene).unwrap();
-    let out = sdrs().args(["simulate", "-q", "--steps", "5", "--out"]).arg(&scene).arg(&scene).output().unwrap();
+    let out = sdrs()
+        .args(["simulate", "-q", "--steps", "5", "--out"])
+        .arg(&scene)
+        .arg(&scene)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert_eq!(std::fs::read(&scene).unwrap(), before);
 }

@@ -115,12 +115,21 @@ fn step_objective_gradient_and_hessian_match_finite_differences_for_every_joint_
             h_fd.set_column(k, &((gp - gm) / (2.0 * step)));
         }
         let (eg, eh) = (rel_err_vec(&g, &g_fd), rel_err_mat(&h, &h_fd));
-        assert!((&h - h.transpose()).amax() <= 1e-12 * h.amax(), "Hessian not symmetric");
-        assert!(eg <= 1e-6, "trial {trial}: gradient relative error {eg:.3e}");
+        assert!(
+            (&h - h.transpose()).amax() <= 1e-12 * h.amax(),
+            "Hessian not symmetric"
+        );
+        assert!(
+            eg <= 1e-6,
+            "trial {trial}: gradient relative error {eg:.3e}"
+        );
         assert!(eh <= 1e-6, "trial {trial}: Hessian relative error {eh:.3e}");
         worst = (worst.0.max(eg), worst.1.max(eh));
     }
-    eprintln!("worst relative errors: gradient {:.2e}, Hessian {:.2e}", worst.0, worst.1);
+    eprintln!(
+        "worst relative errors: gradient {:.2e}, Hessian {:.2e}",
+        worst.0, worst.1
+    );
 }
 
 #[test]

@@ -20,8 +20,11 @@ fn load(name: &str, text: &str) -> (PathBuf, String) {
     (path, err.to_string())
 }
 
-fn assert_names(msg: &str, path: &PathBuf, parts: &[&str]) {
-    assert!(msg.contains(&path.display().to_string()), "message does not name the file: {msg}");
+fn assert_names(msg: &str, path: &std::path::Path, parts: &[&str]) {
+    assert!(
+        msg.contains(&path.display().to_string()),
+        "message does not name the file: {msg}"
+    );
     for p in parts {
         assert!(msg.contains(p), "message does not mention {p:?}: {msg}");
     }
@@ -38,21 +41,33 @@ fn malformed_yaml_is_reported_with_file_and_line() {
 fn unknown_joint_type_is_reported_with_the_element() {
     let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: arm\n        joint: {type: hinge, axis: [0, 1, 0]}\n        mass: 1\n        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]\n";
     let (path, msg) = load("unknown_joint.yaml", text);
-    assert_names(&msg, &path, &["robots[0].links[0].joint", "hinge", "revolute", "line 6"]);
+    assert_names(
+        &msg,
+        &path,
+        &["robots[0].links[0].joint", "hinge", "revolute", "line 6"],
+    );
 }
 
 #[test]
 fn hull_with_coplanar_vertices_is_rejected() {
     let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: plate\n        joint: {type: fixed}\n        mass: 1\n        hulls:\n          - box: {size: [0.1, 0.1, 0.1]}\n          - vertices: [[0,0,0],[1,0,0],[0,1,0],[1,1,0],[0.5,0.5,0]]\n";
     let (path, msg) = load("coplanar.yaml", text);
-    assert_names(&msg, &path, &["robot \"r\"", "link \"plate\"", "hulls[1]", "coplanar"]);
+    assert_names(
+        &msg,
+        &path,
+        &["robot \"r\"", "link \"plate\"", "hulls[1]", "coplanar"],
+    );
 }
 
 #[test]
 fn hull_with_too_few_vertices_is_rejected() {
     let text = "dt: 0.01\nrobots:\n  - name: r\n    links:\n      - name: tri\n        joint: {type: fixed}\n        mass: 1\n        hulls: [{vertices: [[0,0,0],[1,0,0],[0,1,0]]}]\n";
     let (path, msg) = load("three_vertices.yaml", text);
-    assert_names(&msg, &path, &["link \"tri\"", "hulls[0]", "at least 4 vertices"]);
+    assert_names(
+        &msg,
+        &path,
+        &["link \"tri\"", "hulls[0]", "at least 4 vertices"],
+    );
 }
 
 #[test]
@@ -78,7 +93,11 @@ robots:
         hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
 "#;
     let (path, msg) = load("cycle.yaml", text);
-    assert_names(&msg, &path, &["robot \"loop\"", "kinematic cycle", "a", "b", "c"]);
+    assert_names(
+        &msg,
+        &path,
+        &["robot \"loop\"", "kinematic cycle", "a", "b", "c"],
+    );
 }
 
 #[test]
@@ -92,14 +111,19 @@ fn non_positive_time_step_is_rejected() {
 
 #[test]
 fn unknown_parent_and_bad_target_are_rejected() {
-    let text = format!("dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n        parent: nowhere\n");
+    let text =
+        format!("dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n        parent: nowhere\n");
     let (path, msg) = load("parent.yaml", &text);
     assert_names(&msg, &path, &["link \"arm\".parent", "nowhere"]);
     let text = format!(
         "dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n    controller:\n      targets: {{elbow: {{type: constant, value: 1}}}}\n"
     );
     let (path, msg) = load("target.yaml", &text);
-    assert_names(&msg, &path, &["controller.targets.elbow", "no joint named", "hinge"]);
+    assert_names(
+        &msg,
+        &path,
+        &["controller.targets.elbow", "no joint named", "hinge"],
+    );
 }
 
 #[test]

@@ -70,7 +70,7 @@ impl Hull {
         }
         let eig = scatter.symmetric_eigenvalues();
         let (lo, hi) = (eig.min().max(0.0).sqrt(), eig.max().max(0.0).sqrt());
-        if !(lo > 1e-9 * hi) || hi == 0.0 {
+        if lo.partial_cmp(&(1e-9 * hi)) != Some(std::cmp::Ordering::Greater) || hi == 0.0 {
             return Err(HullError::Degenerate {
                 thickness: lo,
                 extent: hi,

@@ -29,13 +29,12 @@ use std::time::Instant;
 
 /// A step that could not be completed.
 #[derive(Debug, Clone, thiserror::Error)]
-#[error("step {step} (t = {time:.6} s): {source}")]
+#[error("step {step} (t = {time:.6} s): {cause}")]
 pub struct StepError {
     /// Index of the step being solved (1-based: the step producing `θ^{step}`).
     pub step: usize,
     pub time: f64,
-    #[source]
-    pub source: NewtonError,
+    pub cause: NewtonError,
 }
 
 /// Global settings of a simulation.
@@ -192,10 +191,10 @@ impl Simulator {
     pub fn step(&mut self) -> Result<StepDiagnostics, StepError> {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         let step_index = self.state.step + 1;
-        let fail = |source: NewtonError| StepError {
+        let fail = |cause: NewtonError| StepError {
             step: step_index,
             time: t_next,
-            source,
+            cause,
         };
         let t0 = Instant::now();
         self.controller
@@ -264,12 +263,12 @@ impl Simulator {
             ..Default::default()
         };
         let mut p = Vector3::zeros();
-        for i in 0..self.model.links.len() {
-            let v = new_poses[i] - self.state.poses[i];
+        for (i, (new, old)) in new_poses.iter().zip(&self.state.poses).enumerate() {
+            let v = new - old;
             let m2 = &self.model.second_moment[i];
             let m1 = &self.model.first_moment[i];
             d.kinetic += 0.5 * v.component_mul(&(v * m2)).sum() / (dt * dt);
-            d.potential -= self.settings.gravity.dot(&(new_poses[i] * m1));
+            d.potential -= self.settings.gravity.dot(&(new * m1));
             p += v * m1 / dt;
         }
         d.momentum = [p.x, p.y, p.z];
