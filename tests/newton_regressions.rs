@@ -10,7 +10,8 @@ use std::path::Path;
 #[test]
 fn newton_converges_when_value_roundoff_hides_the_remaining_decrease() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/four_chains.yaml");
-    let mut spec: SceneSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let mut spec: SceneSpec =
+        serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     for r in &mut spec.robots {
         r.chain.as_mut().unwrap().links = 32;
     }
@@ -22,5 +23,8 @@ fn newton_converges_when_value_roundoff_hides_the_remaining_decrease() {
         assert!(d.newton.grad_inf < scene.settings.newton.tol);
         merit_steps += d.newton.gradient_merit_steps;
     }
-    assert!(merit_steps > 0, "the scenario no longer exercises the round-off fallback");
+    assert!(
+        merit_steps > 0,
+        "the scenario no longer exercises the round-off fallback"
+    );
 }

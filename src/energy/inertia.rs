@@ -4,10 +4,11 @@
 //! With `X = A x̃` and `D_i = A_i^{t+1} − 2A_i^t + A_i^{t−1}` (3×4), the sum over a
 //! link's vertices collapses to `tr(D_i M_i D_iᵀ)/(2Δt²)` with the 4×4 second
 //! moment `M_i = Σ_m ρ_m x̃_m x̃_mᵀ`; its gradient is `∂I/∂A_i = D_i M_i/Δt²`
-//! and its pose Hessian is `(M_i ⊗ I₃)/Δt²`. In generalized coordinates that
+//! and its pose Hessian is `(M_i ⊗ I₃)/Δt²` (written as the structured block
+//! `link_moment`). In generalized coordinates that
 //! Hessian is the mass matrix over Δt², which keeps Newton convex for small Δt.
 
-use super::{Energy, EnergyAccumulator, EnergyError, Need, PoseHessian, StepContext};
+use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;
 
@@ -40,16 +41,8 @@ impl Energy for Inertia {
                 acc.link_grad[i] += dm * inv_dt2;
             }
             if need >= Need::Hessian {
-                let mut h = PoseHessian::zeros();
-                for c in 0..4 {
-                    for c2 in 0..4 {
-                        let v = m[(c, c2)] * inv_dt2;
-                        for r in 0..3 {
-                            h[(c * 3 + r, c2 * 3 + r)] = v;
-                        }
-                    }
-                }
-                acc.add_link_hess(i, &h);
+                acc.link_moment[i] += m * inv_dt2;
+                acc.link_moment_set = true;
             }
         }
         Ok(())

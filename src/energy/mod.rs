@@ -21,7 +21,7 @@ pub use pd::{PdController, PdTarget};
 use crate::kinematics::Kinematics;
 use crate::math::Pose;
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3x4, SMatrix, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix, Vector3};
 
 /// 12×12 Hessian block over `vec(A_i)`.
 pub type PoseHessian = SMatrix<f64, 12, 12>;
@@ -70,6 +70,13 @@ pub struct EnergyAccumulator {
     pub link_hess: Vec<PoseHessian>,
     /// Whether `link_hess[i]` was written since the last reset.
     pub link_hess_set: Vec<bool>,
+    /// Structured diagonal pose Hessian blocks `W_i ⊗ I₃` (`W_i` 4×4
+    /// symmetric, link-local homogeneous coordinates): the form of every
+    /// term that is a sum of isotropic vertex quadratics (inertia). The
+    /// assembler contracts these in O(|θ|²) through subtree composites.
+    pub link_moment: Vec<Matrix4<f64>>,
+    /// Whether any `link_moment` was written since the last reset.
+    pub link_moment_set: bool,
     /// Off-diagonal pose Hessian blocks `∂²E/∂A_i∂A_j` (`i ≠ j`, each
     /// unordered pair once; the assembler adds the transpose).
     pub pair_hess: Vec<(usize, usize, PoseHessian)>,
@@ -88,6 +95,8 @@ impl EnergyAccumulator {
             link_grad: vec![Matrix3x4::zeros(); n],
             link_hess: vec![PoseHessian::zeros(); n],
             link_hess_set: vec![false; n],
+            link_moment: vec![Matrix4::zeros(); n],
+            link_moment_set: false,
             pair_hess: Vec::new(),
             dof_grad: DVector::zeros(m),
             dof_hess: DMatrix::zeros(m, m),
@@ -107,6 +116,10 @@ impl EnergyAccumulator {
                     h.fill(0.0);
                     *set = false;
                 }
+            }
+            if self.link_moment_set {
+                self.link_moment.iter_mut().for_each(|m| m.fill(0.0));
+                self.link_moment_set = false;
             }
             self.pair_hess.clear();
             self.dof_hess.fill(0.0);

@@ -5,20 +5,25 @@
 //! - gradient: `∂E/∂θ_k = Σ_{i ∈ subtree(a)} ⟨G_i, S_k Ã_i⟩ = ⟨S_k, Q_a⟩` with
 //!   `Q_a = Σ_{i ∈ subtree(a)} G_i Ã_iᵀ` (one pass from the leaves up: O(links));
 //! - Hessian, first-order part: `Σ_i J_iᵀ H_ii J_i + Σ_{i≠j} J_iᵀ H_ij J_j`
-//!   where column `k` of `J_i` is `vec(S_k Ã_i)`;
+//!   where column `k` of `J_i` is `vec(S_k Ã_i)`; for structured blocks
+//!   `H_ii = W_i ⊗ I₃` (inertia) this is `⟨S_k, S_l C_b⟩` with the subtree
+//!   composite `C_b = Σ_{i ∈ subtree(b)} Ã_i W_i Ã_iᵀ` of the deeper joint `b`
+//!   (composite-rigid-body style, O(|θ|²));
 //! - Hessian, second-order part: `⟨Q_b, S_k S_l⟩` when `k`'s joint is a proper
 //!   ancestor of `l`'s joint `b`, and `⟨Q_a, S_kl⟩` within one joint `a`.
 
 use crate::energy::{EnergyAccumulator, Need, PoseHessian};
 use crate::kinematics::Kinematics;
+use crate::math::homogeneous;
 use crate::math::{frob, twist_apply, twist_mul};
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3x4, SMatrix};
+use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix};
 
 /// Scratch buffers of the assembler (allocated once).
 #[derive(Clone, Debug, Default)]
 pub struct AssembleScratch {
     q_sub: Vec<Matrix3x4<f64>>,
+    composite: Vec<Matrix4<f64>>,
     jac: Vec<SMatrix<f64, 12, 1>>,
     jac2: Vec<SMatrix<f64, 12, 1>>,
     hj: Vec<SMatrix<f64, 12, 1>>,
@@ -88,6 +93,36 @@ pub fn assemble(
                 hess[(k, l)] += v;
                 if k != l {
                     hess[(l, k)] += v;
+                }
+            }
+        }
+    }
+    // First-order part, structured blocks W_i ⊗ I₃ via subtree composites.
+    if acc.link_moment_set {
+        scratch.composite.clear();
+        scratch.composite.extend((0..nlink).map(|i| {
+            let a = homogeneous(&kin.pose[i]);
+            a * acc.link_moment[i] * a.transpose()
+        }));
+        for i in (0..nlink).rev() {
+            if let Some(p) = model.links[i].parent {
+                let c = scratch.composite[i];
+                scratch.composite[p] += c;
+            }
+        }
+        for (b, link) in model.links.iter().enumerate() {
+            let ob = link.dof_offset;
+            for l in ob..ob + link.ndof() {
+                let y = kin.twist[l] * scratch.composite[b];
+                for &k in &model.ancestor_dofs[b] {
+                    if k > l {
+                        break; // same-joint pairs once (k ≤ l)
+                    }
+                    let v = frob(&kin.twist[k], &y);
+                    hess[(k, l)] += v;
+                    if k != l {
+                        hess[(l, k)] += v;
+                    }
                 }
             }
         }

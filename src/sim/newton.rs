@@ -147,32 +147,36 @@ pub fn minimize(
                 &mut scratch.comp,
             )
         });
-        // Backtracking line search on the objective value: accept a finite
-        // value that decreases.
+        // Predicted decrease of the quadratic model, −gᵀΔ > 0.
+        let predicted = -scratch.grad.dot(&scratch.dir);
+        // Below ~1e-9 of the objective's magnitude the value cannot rank
+        // trial points: its round-off (world coordinates of metres carry
+        // ~1e-15 m of noise, times stiffness) is larger than the decrease.
+        let resolvable = predicted > 1e-9 * value.abs();
         let t0 = std::time::Instant::now();
         let mut accepted = false;
-        let mut alpha = 1.0;
-        for _ in 0..=opts.max_backtracks {
-            scratch.trial.clone_from(q);
-            scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-            let v = obj.eval(
-                &scratch.trial,
-                Need::Value,
-                &mut scratch.trial_grad,
-                &mut scratch.hess,
-                timers,
-            )?;
-            if v.is_finite() && v < value {
-                accepted = true;
-                break;
+        if resolvable {
+            // Backtracking with Armijo sufficient decrease on a finite value.
+            let mut alpha = 1.0;
+            for _ in 0..=opts.max_backtracks {
+                scratch.trial.clone_from(q);
+                scratch.trial.axpy(alpha, &scratch.dir, 1.0);
+                let v = obj.eval(
+                    &scratch.trial,
+                    Need::Value,
+                    &mut scratch.trial_grad,
+                    &mut scratch.hess,
+                    timers,
+                )?;
+                if v.is_finite() && v <= value - 1e-4 * alpha * predicted {
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+                report.backtracks += 1;
             }
-            alpha *= 0.5;
-            report.backtracks += 1;
         }
-        // Near convergence in stiff directions the predicted decrease
-        // ½ gᵀĤ⁻¹g can fall below the objective's round-off (world coordinates
-        // of metres carry ~1e-15 m of noise, times stiffness). Then the value
-        // cannot rank trial points and the gradient norm is the merit
+        // Otherwise (or if that failed) the gradient norm is the merit
         // function: accept a finite trial point whose value is not larger
         // beyond noise and whose ‖∇O‖∞ is smaller.
         if !accepted {
