@@ -9,6 +9,7 @@
 
 pub mod control;
 pub mod energy;
+pub mod geometry;
 pub mod kinematics;
 pub mod math;
 pub mod model;

@@ -1,7 +1,7 @@
 //! Validation of a parsed scene and construction of the model.
 
 use super::schema::*;
-use super::{Invalid, Scene, chain};
+use super::{Invalid, Scene, chain, environment};
 use crate::control::{ControlChannel, Controller};
 use crate::math::{pose_from, rpy_to_matrix, so3};
 use crate::model::{Hull, JointKind, Link, Model, RobotInfo};
@@ -14,7 +14,7 @@ fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-fn check_finite(element: &str, what: &str, v: &[f64]) -> Result<(), Invalid> {
+pub(super) fn check_finite(element: &str, what: &str, v: &[f64]) -> Result<(), Invalid> {
     if finite(v) {
         Ok(())
     } else {
@@ -59,11 +59,15 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
     if s.max_iters == 0 {
         return Err(Invalid::new("solver.max_iters", "must be at least 1"));
     }
-    if spec.robots.is_empty() {
-        return Err(Invalid::new("robots", "the scene has no robots"));
+    if spec.robots.is_empty() && spec.objects.is_empty() {
+        return Err(Invalid::new(
+            "robots",
+            "the scene has no robots and no objects",
+        ));
     }
+    let all_robots = environment::expand_bodies(&spec)?;
     let mut seen = HashMap::new();
-    for (i, r) in spec.robots.iter().enumerate() {
+    for (i, r) in all_robots.iter().enumerate() {
         if let Some(j) = seen.insert(r.name.clone(), i) {
             return Err(Invalid::new(
                 format!("robots[{i}]"),
@@ -74,7 +78,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
 
     let mut links = Vec::new();
     let mut robots = Vec::new();
-    for (ri, r) in spec.robots.iter().enumerate() {
+    for (ri, r) in all_robots.iter().enumerate() {
         let first = links.len();
         build_robot(ri, r, &mut links)?;
         robots.push(RobotInfo {
@@ -90,7 +94,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
     let mut qdot0 = DVector::zeros(n);
     let mut charts = vec![Matrix3::identity(); model.nchart];
     let mut controller = Controller::default();
-    for (ri, r) in spec.robots.iter().enumerate() {
+    for (ri, r) in all_robots.iter().enumerate() {
         let info = &model.robots[ri];
         let joints: BTreeMap<&str, usize> = info
             .links
@@ -191,6 +195,11 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
             }
         }
     }
+    let contact = spec
+        .contact
+        .as_ref()
+        .map(|c| environment::contact_settings(c, &model))
+        .transpose()?;
     let settings = SimSettings {
         dt: spec.dt,
         gravity: Vector3::from(spec.gravity),
@@ -205,11 +214,12 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         qdot0,
         charts,
         steps: spec.steps,
+        contact,
         spec,
     })
 }
 
-fn unit(element: &str, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Invalid> {
+pub(super) fn unit(element: &str, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Invalid> {
     let a = Vector3::from(v);
     if !finite(&v) || a.norm() < 1e-12 {
         return Err(Invalid::new(

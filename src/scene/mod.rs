@@ -4,6 +4,7 @@
 
 pub mod build;
 pub mod chain;
+pub mod environment;
 pub mod schema;
 
 pub use schema::SceneSpec;
@@ -72,8 +73,25 @@ pub struct Scene {
     pub charts: Vec<Matrix3<f64>>,
     /// Default number of steps.
     pub steps: usize,
+    /// Contact settings, when the scene enables contact.
+    pub contact: Option<ContactSettings>,
     /// The parsed specification (kept for writing designs back).
     pub spec: SceneSpec,
+}
+
+/// Validated contact parameters (see [`schema::ContactSpec`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactSettings {
+    /// Barrier support `s`.
+    pub s: f64,
+    /// Barrier stiffness `κ`.
+    pub kappa: f64,
+    /// Friction coefficient `μ`.
+    pub mu: f64,
+    /// Friction smoothing `ε`.
+    pub eps: f64,
+    /// Link pairs `(i, j)`, `i < j`, that never interact.
+    pub excluded: std::collections::BTreeSet<(usize, usize)>,
 }
 
 impl Scene {

@@ -69,7 +69,137 @@ pub struct SceneSpec {
     pub gravity: [f64; 3],
     #[serde(default)]
     pub solver: NewtonOptions,
+    #[serde(default)]
     pub robots: Vec<RobotSpec>,
+    /// Free rigid objects (6-DOF bodies made of hulls).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectSpec>,
+    /// A static ground half-space (as a large box hull).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<GroundSpec>,
+    /// Static convex obstacles.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Contact and friction parameters; contact is off when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSpec>,
+}
+
+/// A free rigid object: one link on a 6-DOF free joint named after the
+/// object (coordinates `[x, y, z, rx, ry, rz]`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex_mass: Option<f64>,
+    pub hulls: Vec<HullSpec>,
+    /// Initial pose `[x, y, z, rx, ry, rz]` (m, rotation vector) and velocity
+    /// `[vx, vy, vz, ωx, ωy, ωz]` (world linear, body angular). Default zero.
+    #[serde(default)]
+    pub initial: InitialSpec,
+}
+
+/// Static ground: the half-space below a plane through `height` whose
+/// normal is +z tilted by `slope_deg` about `slope_axis`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GroundSpec {
+    /// Height of the plane at the origin (m). Default 0.
+    #[serde(default)]
+    pub height: f64,
+    /// Tilt (degrees). Default 0.
+    #[serde(default)]
+    pub slope_deg: f64,
+    /// Tilt axis (world, unit). Default `[0, 1, 0]`: the ground descends
+    /// towards +x for a positive slope.
+    #[serde(default = "GroundSpec::default_axis")]
+    pub slope_axis: [f64; 3],
+    /// Half-extent of the ground box (m). Default 50.
+    #[serde(default = "GroundSpec::default_size")]
+    pub half_size: f64,
+    /// Thickness of the ground box (m). Default 1.
+    #[serde(default = "GroundSpec::default_thickness")]
+    pub thickness: f64,
+}
+
+impl GroundSpec {
+    fn default_axis() -> [f64; 3] {
+        [0.0, 1.0, 0.0]
+    }
+    fn default_size() -> f64 {
+        50.0
+    }
+    fn default_thickness() -> f64 {
+        1.0
+    }
+}
+
+/// A static obstacle: hulls at a fixed world pose.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    pub name: String,
+    #[serde(default)]
+    pub origin: Origin,
+    pub hulls: Vec<HullSpec>,
+}
+
+/// Contact and friction parameters (paper, `contact.tex`, `friction.tex`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Barrier support `s` (m, and the bound on `1 − ‖n‖`; `0 < s < 1`).
+    /// Hulls interact within `2s/(1−s)`. Default 0.01.
+    #[serde(default = "ContactSpec::default_s")]
+    pub s: f64,
+    /// Barrier stiffness `κ` multiplying every `U_c` (J·m). Default 1.
+    /// (The paper writes it as "μ" in eq. `SDRS`; it is not the friction
+    /// coefficient.)
+    #[serde(default = "ContactSpec::default_kappa")]
+    pub kappa: f64,
+    /// Friction coefficient `μ`. Default 0 (frictionless).
+    #[serde(default)]
+    pub mu: f64,
+    /// Friction smoothing `ε` ((m/s)²). Default 1e-6.
+    #[serde(default = "ContactSpec::default_eps")]
+    pub eps: f64,
+    /// Skip pairs of a link and its parent. Default true.
+    #[serde(default = "ContactSpec::default_true")]
+    pub exclude_adjacent: bool,
+    /// Further excluded link pairs, as `robot/link` names.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub exclude: Vec<[String; 2]>,
+}
+
+impl ContactSpec {
+    fn default_s() -> f64 {
+        0.01
+    }
+    fn default_kappa() -> f64 {
+        1.0
+    }
+    fn default_eps() -> f64 {
+        1e-6
+    }
+    fn default_true() -> bool {
+        true
+    }
+}
+
+impl Default for ContactSpec {
+    fn default() -> Self {
+        ContactSpec {
+            s: Self::default_s(),
+            kappa: Self::default_kappa(),
+            mu: 0.0,
+            eps: Self::default_eps(),
+            exclude_adjacent: true,
+            exclude: Vec::new(),
+        }
+    }
 }
 
 /// A pose given as translation and roll–pitch–yaw (URDF convention).

@@ -1,0 +1,8 @@
+//! Geometry stages shared by contact terms: world-space hull vertices and the
+//! broad phase.
+
+pub mod broad_phase;
+pub mod hulls;
+
+pub use broad_phase::BroadPhase;
+pub use hulls::{HullId, WorldHulls};
