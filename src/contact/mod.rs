@@ -23,6 +23,8 @@ pub mod friction;
 mod plane;
 pub mod potential;
 #[cfg(test)]
+mod friction_tests;
+#[cfg(test)]
 mod potential_tests;
 mod separation;
 #[cfg(test)]
@@ -30,6 +32,10 @@ mod test_util;
 
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
+pub use friction::{
+    FrictionFrame, FrictionNeed, FrictionPair, FrictionParams, FrictionScratch, FrictionVertices,
+    LaggedContact, friction_pair, friction_vertices, tangent_basis,
+};
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
     VertexOutcome, contact_pair, contact_vertices,
