@@ -1,12 +1,15 @@
 //! SDRS — shape-differentiable robot simulation.
 //!
 //! Pipeline stages, one folder each: [`scene`] (files → model), [`model`]
-//! (links, hulls, joints), [`kinematics`] (poses and derivatives), [`energy`]
-//! (terms of the step objective), [`sim`] (Newton per step), [`control`]
-//! (target signals), [`output`] (trajectory CSV, summary JSON).
+//! (links, hulls, joints), [`kinematics`] (poses and derivatives),
+//! [`geometry`] (world hulls, broad phase), [`contact`] (separating-plane
+//! contact and friction potentials of one hull pair), [`energy`] (terms of
+//! the step objective), [`sim`] (Newton per step), [`control`] (target
+//! signals), [`output`] (trajectory CSV, summary JSON).
 //!
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
+pub mod contact;
 pub mod control;
 pub mod energy;
 pub mod geometry;

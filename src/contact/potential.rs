@@ -1,0 +1,651 @@
+//! The contact potential `U_c` of a pair of convex hulls and its derivatives (paper
+//! §"Contact Mechanics for Convex Polyhedrons"; proofs in Appendix "Well-defined Contact
+//! Potential", `sec:ContactProof`).
+//!
+//! ```text
+//! U_c(X) = min_p U*(X, p),
+//! U*(X, p) = P_s(1 − ‖n‖) + Σ_{m∈a} P_s(−(n·X_a^m + o)) + Σ_{m∈b} P_s(n·X_b^m + o)
+//! ```
+//!
+//! # Derivatives (envelope theorem and implicit function theorem, paper Eqs. `derivative`,
+//! `derivative2`)
+//!
+//! With `y_m = σ_m (n·X_m + o)` (`σ = −1` on `a`, `+1` on `b`) and `x̃ = [X; 1]`:
+//!
+//! ```text
+//! ∂U_c/∂X_m        = σ_m P'(y_m) n                                (at p*)
+//! U*_{X_m X_m}     = P''(y_m) n nᵀ             (no coupling between different vertices)
+//! U*_{X_m p}       = P''(y_m) n x̃_mᵀ + σ_m P'(y_m) [I₃ 0]        (3×4)
+//! ∂²U_c/∂X²        = U*_XX − U*_Xp (U*_pp)⁻¹ U*_pX
+//! ```
+//!
+//! The per-vertex normal force is `f_⊥^m = −∂U_c/∂X_m = −σ_m P'(y_m) n*`; its magnitude is
+//! `|P'(y_m)| ‖n*‖` (note `‖n*‖ < 1`).
+//!
+//! # Pose contraction
+//!
+//! A vertex of a link is `X = A x̃` with `A = [R | t]` (3×4) and `x̃ = [x_local; 1]`, so
+//! `∂X/∂vec(A) = x̃ᵀ ⊗ I₃` (column-major `vec`, index `c·3 + r`). Per hull `h`, with the
+//! accumulators `k_h = Σ_m σ P'_m x̃_m` and `S_h = Σ_m P''_m x̃_m x̃_mᵀ` (local `x̃`):
+//!
+//! ```text
+//! ∂U_c/∂A_h                  = n k_hᵀ                                  (3×4)
+//! Σ_m (x̃x̃ᵀ) ⊗ (P''_m n nᵀ)  = S_h ⊗ (n nᵀ)                            (12×12 block)
+//! B_h[(c,r), j]             = n_r (S_h T_hᵀ)[c, j] + δ_rj k_h[c]      (12×4, j < 3)
+//! ∂²U_c/∂A²                 = blockdiag(S_a ⊗ nnᵀ, S_b ⊗ nnᵀ) − B (U*_pp)⁻¹ Bᵀ
+//! ```
+//!
+//! where `T_h = [A_h; 0 0 0 1]` maps local to (shifted) world homogeneous coordinates, so that
+//! `Σ_m P''_m x̃_local x̃_worldᵀ = S_h T_hᵀ`. The cost is one pass over the vertices with
+//! ~30 flops each plus a fixed 24×24 assembly; no (3M)×(3M) matrix is ever formed.
+//!
+//! # Support (Lemma `contactBasic` iii)
+//!
+//! If `dist(a, b) ≥ 2s/(1−s)` then `U_c = 0` exactly: take the mid-plane between the closest
+//! points `x_a, x_b` with `n = (1−s)(x_b − x_a)/‖x_b − x_a‖` and `o = −n·(x_a + x_b)/2`. Then
+//! `P_s(1 − ‖n‖) = P_s(s) = 0`, and every vertex lies at distance ≥ `dist/2 ≥ s/(1−s)` from that
+//! plane on its own side (the closest-point bisector of two convex sets separates them), so
+//! every barrier argument is `≥ (1−s) · s/(1−s) = s` and contributes 0. Since `U* ≥ 0`, this
+//! plane is a minimiser. (The paper's proof has two typos: the denominator must be
+//! `‖x_b − x_a‖` and `o` carries no second `(1−s)` factor.) Conversely, if
+//! `dist < 2s/(1−s)` then `U_c > 0`: a zero value would need `‖n‖ ≤ 1 − s` and all vertices at
+//! distance `≥ s/‖n‖ ≥ s/(1−s)` from the plane on both sides.
+//!
+//! This module uses the *certified* gap `min_b d·X_b − max_a d·X_a` along GJK's direction `d`
+//! (a lower bound on the distance, see [`separation`](super::separation)): when it is `≥ 2s/(1−s)`
+//! the construction above applies verbatim with the two support planes and the outcome is
+//! [`PairOutcome::OutOfRange`] with `U_c = 0` exactly.
+
+use nalgebra::{DMatrix, Matrix3x4, Matrix4, SMatrix, Vector3, Vector4};
+use parry3d_f64::query::gjk::VoronoiSimplex;
+
+use super::barrier::barrier_d2;
+use super::error::{ContactError, Hull};
+use super::plane::{self, PlaneSolution, PlaneSolveSettings};
+use super::separation::{Separation, separate, supports_along};
+
+/// Parameters of the contact potential.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactParams {
+    /// Barrier width `s ∈ (0, 1)`, a length in scene units. It is also the bound on
+    /// `1 − ‖n‖`, so scenes must be scaled such that `s < 1` is meaningful (e.g. metres with
+    /// `s` of a few millimetres to centimetres). The potential is non-zero only when two hulls
+    /// are closer than `2s/(1−s)`. Default `1e-2` (1 cm in metre-scaled scenes).
+    pub s: f64,
+    /// Absolute tolerance on `‖∇_p U*‖` of the inner plane solve. Default `1e-8`.
+    /// It is honoured whenever it is above the rounding-noise floor of the gradient (see
+    /// [`plane`](super::plane) docs).
+    pub inner_tol: f64,
+    /// Relative tolerance on `‖∇_p U*‖`, relative to the total magnitude of the barrier forces
+    /// acting on the plane. It takes over when the potential is tiny (near the edge of the
+    /// support), where the absolute tolerance would stop too early. Default `1e-10`.
+    pub inner_rtol: f64,
+    /// Iteration cap of the inner Newton solve. Default `100` (typically 3–15 are used).
+    pub inner_max_iters: usize,
+}
+
+impl Default for ContactParams {
+    fn default() -> Self {
+        Self {
+            s: 1e-2,
+            inner_tol: 1e-8,
+            inner_rtol: 1e-10,
+            inner_max_iters: 100,
+        }
+    }
+}
+
+impl ContactParams {
+    /// Parameters with barrier width `s` and default solver settings.
+    pub fn with_width(s: f64) -> Self {
+        Self {
+            s,
+            ..Self::default()
+        }
+    }
+
+    /// `2s/(1−s)`: pairs at least this far apart have `U_c = 0` exactly. Inflate broad-phase
+    /// boxes by this distance.
+    pub fn support_distance(&self) -> f64 {
+        2.0 * self.s / (1.0 - self.s)
+    }
+
+    /// Checks `0 < s < 1` and the solver settings.
+    pub fn validate(&self) -> Result<(), ContactError> {
+        if !(self.s > 0.0 && self.s < 1.0) {
+            return Err(ContactError::InvalidWidth { s: self.s });
+        }
+        if !(self.inner_tol >= 0.0 && self.inner_tol.is_finite())
+            || !(self.inner_rtol >= 0.0 && self.inner_rtol.is_finite())
+            || self.inner_max_iters == 0
+        {
+            return Err(ContactError::InvalidSolverSettings {
+                tol: self.inner_tol,
+                rtol: self.inner_rtol,
+                max_iters: self.inner_max_iters,
+            });
+        }
+        Ok(())
+    }
+
+    fn settings(&self) -> PlaneSolveSettings {
+        PlaneSolveSettings {
+            s: self.s,
+            tol: self.inner_tol,
+            rtol: self.inner_rtol,
+            max_iters: self.inner_max_iters,
+        }
+    }
+}
+
+/// A hull placed in the world: `X = pose · [x_local; 1]`.
+#[derive(Clone, Copy, Debug)]
+pub struct HullPose<'a> {
+    /// Link pose `A = [R | t]` (3×4); any affine map is accepted.
+    pub pose: &'a Matrix3x4<f64>,
+    /// Link-local vertices (V-representation: the body is their convex hull).
+    pub x_local: &'a [Vector3<f64>],
+}
+
+/// Which derivatives to compute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Need {
+    /// Value only (line searches).
+    Value,
+    /// Value and gradient.
+    Gradient,
+    /// Value, gradient and Hessian.
+    Hessian,
+}
+
+/// Reusable per-pair buffers (world vertices of both hulls and GJK storage). Create one per
+/// thread and pass it to every call; it grows to the largest hull seen and never shrinks.
+#[derive(Clone, Debug, Default)]
+pub struct ContactScratch {
+    xa: Vec<Vector3<f64>>,
+    xb: Vec<Vector3<f64>>,
+    simplex: Option<VoronoiSimplex>,
+}
+
+impl ContactScratch {
+    /// Empty scratch.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Result of evaluating a separated pair within range.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactPair {
+    /// `U_c` (unscaled: the simulator multiplies by the stiffness κ).
+    pub value: f64,
+    /// Optimal plane `p* = (n*, o*)` in world coordinates: `n*·X + o* < 0` on hull `a`,
+    /// `> 0` on hull `b`, `‖n*‖ < 1`. Pass it back as the warm start of the next call.
+    pub plane: Vector4<f64>,
+    /// GJK distance estimate between the hulls.
+    pub distance: f64,
+    /// Inner Newton iterations used.
+    pub iterations: usize,
+    /// `∂U_c/∂A_a` (zero unless [`Need::Gradient`] or more was asked).
+    pub grad_a: Matrix3x4<f64>,
+    /// `∂U_c/∂A_b` (zero unless [`Need::Gradient`] or more was asked).
+    pub grad_b: Matrix3x4<f64>,
+    /// `∂²U_c/∂[vec A_a; vec A_b]²` when [`Need::Hessian`] was asked.
+    pub hessian: Option<SMatrix<f64, 24, 24>>,
+}
+
+/// Outcome of [`contact_pair`].
+#[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // returned by value, never stored in bulk; avoids a heap box
+pub enum PairOutcome {
+    /// Touching or overlapping (or closer than GJK resolves): the caller treats this as
+    /// `U_c = +∞` (e.g. rejects the line-search trial point).
+    Intersecting,
+    /// Certified gap `≥ 2s/(1−s)`: `U_c = 0` and all derivatives vanish exactly.
+    OutOfRange {
+        /// GJK distance estimate.
+        distance: f64,
+    },
+    /// Separated and within range: value, plane and derivatives.
+    Separated(ContactPair),
+}
+
+impl PairOutcome {
+    /// `U_c` with `+∞` for intersecting pairs.
+    pub fn value(&self) -> f64 {
+        match self {
+            PairOutcome::Intersecting => f64::INFINITY,
+            PairOutcome::OutOfRange { .. } => 0.0,
+            PairOutcome::Separated(c) => c.value,
+        }
+    }
+}
+
+impl ContactPair {
+    /// Unnormalised plane normal `n*` (`‖n*‖ < 1`), pointing from `a` to `b`.
+    pub fn normal(&self) -> Vector3<f64> {
+        self.plane.fixed_rows::<3>(0).into_owned()
+    }
+
+    /// Per-vertex normal forces `f_⊥^m = −∂U_c/∂X^m = −σ_m P_s'(y_m) n*` (unscaled, world
+    /// frame) written into the caller's buffers (cleared first; no allocation once they have
+    /// grown). Hull `a` is pushed towards `−n*`, hull `b` towards `+n*`.
+    pub fn normal_forces_into(
+        &self,
+        a: HullPose<'_>,
+        b: HullPose<'_>,
+        s: f64,
+        out_a: &mut Vec<Vector3<f64>>,
+        out_b: &mut Vec<Vector3<f64>>,
+    ) {
+        let n = self.normal();
+        let o = self.plane.w;
+        for (h, sigma, out) in [(a, -1.0, out_a), (b, 1.0, out_b)] {
+            out.clear();
+            for x in h.x_local {
+                let xw = h.pose.fixed_columns::<3>(0) * x + h.pose.column(3);
+                let y = sigma * (n.dot(&xw) + o);
+                let (_, d1, _) = barrier_d2(y, s);
+                out.push(-sigma * d1 * n);
+            }
+        }
+    }
+}
+
+/// What the inner solve produced, in the shifted frame.
+enum Core {
+    Intersecting,
+    OutOfRange { distance: f64 },
+    Separated { sol: PlaneSolution, distance: f64 },
+}
+
+/// Separation test, initial plane choice and inner Newton on shifted vertex buffers.
+fn solve_core(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    c0: &Vector3<f64>,
+    params: &ContactParams,
+    warm_plane: Option<Vector4<f64>>,
+    simplex: &mut VoronoiSimplex,
+) -> Result<Core, ContactError> {
+    let s = params.s;
+    let hint = warm_plane.map(|p| Vector3::new(p.x, p.y, p.z));
+    // A strictly feasible warm plane (shifted into the local frame:
+    // n·X + o = n·(X − c0) + (o + n·c0)) is itself a certificate of separation.
+    let warm = warm_plane
+        .map(|w| Vector4::new(w.x, w.y, w.z, w.w + Vector3::new(w.x, w.y, w.z).dot(c0)))
+        .filter(|w| w.iter().all(|v| v.is_finite()))
+        .map(|w| (w, plane::value(xa, xb, &w, s)))
+        .filter(|(_, v)| v.is_finite());
+    let (cold, distance) = match separate(xa, xb, hint, simplex)? {
+        Separation::Separated {
+            dir,
+            max_a,
+            min_b,
+            distance,
+        } => {
+            if min_b - max_a >= params.support_distance() {
+                return Ok(Core::OutOfRange { distance });
+            }
+            // Cold start: the mid-plane of the certified slab with ‖n‖ = 1 − s (strictly
+            // feasible: every barrier argument is ≥ (1 − s)(min_b − max_a)/2 > 0).
+            let n = dir * (1.0 - s);
+            let p = Vector4::new(n.x, n.y, n.z, -(1.0 - s) * 0.5 * (max_a + min_b));
+            (Some((p, plane::value(xa, xb, &p, s))), distance)
+        }
+        Separation::Intersecting => match warm {
+            // GJK cannot resolve gaps below ~1e-8 × hull size, but the warm plane proves
+            // separation; report the gap along its normal as the distance.
+            Some((w, _)) => {
+                let d = Vector3::new(w.x, w.y, w.z).normalize();
+                let (max_a, min_b) = supports_along(xa, xb, &d);
+                (None, min_b - max_a)
+            }
+            None => return Ok(Core::Intersecting),
+        },
+    };
+    // Start from the better of the cold plane and the (strictly feasible) warm plane.
+    let start = match (cold, warm) {
+        (Some((c, vc)), Some((w, vw))) => {
+            if vw <= vc {
+                w
+            } else {
+                c
+            }
+        }
+        (Some((c, _)), None) => c,
+        (None, Some((w, _))) => w,
+        (None, None) => unreachable!("handled above"),
+    };
+    let sol = plane::solve(xa, xb, start, &params.settings())?;
+    Ok(Core::Separated { sol, distance })
+}
+
+/// Inverse of the (symmetric positive semi-definite) plane Hessian `U*_pp`: Cholesky when it
+/// is numerically definite, otherwise an eigenvalue pseudo-inverse. The latter only happens
+/// when the potential is numerically zero (all `P''` vanish or underflow), where the Schur
+/// term it multiplies vanishes as well (paper Lemma `contactHessianVanish`).
+fn plane_hessian_inverse(h: &Matrix4<f64>) -> Matrix4<f64> {
+    if let Some(ch) = h.cholesky() {
+        let inv = ch.inverse();
+        if inv.iter().all(|v| v.is_finite()) {
+            return inv;
+        }
+    }
+    let eig = h.symmetric_eigen();
+    let maxe = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut inv = Matrix4::zeros();
+    for i in 0..4 {
+        let l = eig.eigenvalues[i];
+        if l > 1e-13 * maxe && l > 0.0 {
+            let v = eig.eigenvectors.column(i);
+            inv += v * v.transpose() / l;
+        }
+    }
+    inv
+}
+
+fn check_finite(x: &[Vector3<f64>], hull: Hull) -> Result<(), ContactError> {
+    for (index, v) in x.iter().enumerate() {
+        if !v.iter().all(|c| c.is_finite()) {
+            return Err(ContactError::NonFiniteVertex {
+                hull,
+                index,
+                value: [v.x, v.y, v.z],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Fills the scratch with world vertices shifted by the midpoint of the two centroids and
+/// returns that origin.
+fn fill_shifted<'s>(
+    scratch: &'s mut ContactScratch,
+    a: impl Iterator<Item = Vector3<f64>>,
+    b: impl Iterator<Item = Vector3<f64>>,
+) -> Result<Vector3<f64>, ContactError> {
+    scratch.xa.clear();
+    scratch.xa.extend(a);
+    scratch.xb.clear();
+    scratch.xb.extend(b);
+    if scratch.xa.is_empty() {
+        return Err(ContactError::EmptyHull { hull: Hull::A });
+    }
+    if scratch.xb.is_empty() {
+        return Err(ContactError::EmptyHull { hull: Hull::B });
+    }
+    check_finite(&scratch.xa, Hull::A)?;
+    check_finite(&scratch.xb, Hull::B)?;
+    let ca = scratch.xa.iter().sum::<Vector3<f64>>() / scratch.xa.len() as f64;
+    let cb = scratch.xb.iter().sum::<Vector3<f64>>() / scratch.xb.len() as f64;
+    let c0 = 0.5 * (ca + cb);
+    for x in scratch.xa.iter_mut().chain(scratch.xb.iter_mut()) {
+        *x -= c0;
+    }
+    Ok(c0)
+}
+
+/// World positions `R x + t` of a posed hull.
+pub(crate) fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
+    let r = h.pose.fixed_columns::<3>(0).into_owned();
+    let t: Vector3<f64> = h.pose.column(3).into_owned();
+    h.x_local.iter().map(move |x| r * x + t)
+}
+
+/// World plane from the shifted one.
+fn world_plane(p: &Vector4<f64>, c0: &Vector3<f64>) -> Vector4<f64> {
+    let n = Vector3::new(p.x, p.y, p.z);
+    Vector4::new(p.x, p.y, p.z, p.w - n.dot(c0))
+}
+
+/// Contact potential `U_c` of hull `a` (negative side) and hull `b` (positive side) with
+/// derivatives w.r.t. the two poses.
+///
+/// Steps: exact separation test (GJK + certified gap), then either [`PairOutcome::Intersecting`],
+/// [`PairOutcome::OutOfRange`] (certified gap `≥ 2s/(1−s)`, `U_c = 0`), or an inner Newton
+/// solve for `p*` from the mid-plane of the certified slab scaled to `‖n‖ = 1 − s`, or from
+/// `warm_plane` (world coordinates) when that plane is strictly feasible and not worse.
+/// Derivatives follow from the envelope and implicit-function theorems (module docs).
+///
+/// Errors: invalid parameters, empty hulls, non-finite vertices, GJK failure, or inner
+/// non-convergence — never a panic or NaN.
+pub fn contact_pair(
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    params: &ContactParams,
+    warm_plane: Option<Vector4<f64>>,
+    need: Need,
+    scratch: &mut ContactScratch,
+) -> Result<PairOutcome, ContactError> {
+    params.validate()?;
+    let c0 = fill_shifted(scratch, world_iter(a), world_iter(b))?;
+    let simplex = scratch.simplex.get_or_insert_with(VoronoiSimplex::new);
+    let core = solve_core(&scratch.xa, &scratch.xb, &c0, params, warm_plane, simplex)?;
+    let (sol, distance) = match core {
+        Core::Intersecting => return Ok(PairOutcome::Intersecting),
+        Core::OutOfRange { distance } => return Ok(PairOutcome::OutOfRange { distance }),
+        Core::Separated { sol, distance } => (sol, distance),
+    };
+    let mut out = ContactPair {
+        value: sol.eval.value,
+        plane: world_plane(&sol.p, &c0),
+        distance,
+        iterations: sol.iterations,
+        grad_a: Matrix3x4::zeros(),
+        grad_b: Matrix3x4::zeros(),
+        hessian: None,
+    };
+    if need == Need::Value {
+        return Ok(PairOutcome::Separated(out));
+    }
+    let s = params.s;
+    let n = Vector3::new(sol.p.x, sol.p.y, sol.p.z);
+    let o = sol.p.w;
+    // Per hull: k = Σ σ P' x̃, S = Σ P'' x̃ x̃ᵀ (local homogeneous coordinates).
+    let mut k = [Vector4::<f64>::zeros(); 2];
+    let mut sm = [Matrix4::<f64>::zeros(); 2];
+    for (hi, (h, xs, sigma)) in [(a, &scratch.xa, -1.0), (b, &scratch.xb, 1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        let (mut k0, mut k1, mut k2, mut k3) = (0.0, 0.0, 0.0, 0.0);
+        let mut su = [0.0f64; 10];
+        for (xl, xw) in h.x_local.iter().zip(xs.iter()) {
+            let y = sigma * (n.dot(xw) + o);
+            if y >= s {
+                continue;
+            }
+            let (_, d1, d2) = barrier_d2(y, s);
+            let g = sigma * d1;
+            k0 += g * xl.x;
+            k1 += g * xl.y;
+            k2 += g * xl.z;
+            k3 += g;
+            if need == Need::Hessian {
+                let (wx, wy, wz) = (d2 * xl.x, d2 * xl.y, d2 * xl.z);
+                su[0] += wx * xl.x;
+                su[1] += wx * xl.y;
+                su[2] += wx * xl.z;
+                su[3] += wx;
+                su[4] += wy * xl.y;
+                su[5] += wy * xl.z;
+                su[6] += wy;
+                su[7] += wz * xl.z;
+                su[8] += wz;
+                su[9] += d2;
+            }
+        }
+        k[hi] = Vector4::new(k0, k1, k2, k3);
+        sm[hi] = Matrix4::new(
+            su[0], su[1], su[2], su[3], //
+            su[1], su[4], su[5], su[6], //
+            su[2], su[5], su[7], su[8], //
+            su[3], su[6], su[8], su[9],
+        );
+    }
+    out.grad_a = n * k[0].transpose();
+    out.grad_b = n * k[1].transpose();
+    if need == Need::Hessian {
+        let mut hess = SMatrix::<f64, 24, 24>::zeros();
+        let mut bmat = SMatrix::<f64, 24, 4>::zeros();
+        let nnt = n * n.transpose();
+        for (hi, h) in [a, b].into_iter().enumerate() {
+            let off = 12 * hi;
+            // T_h = [A_h with translation shifted by −c0; 0 0 0 1].
+            let mut t = Matrix4::<f64>::identity();
+            t.fixed_view_mut::<3, 4>(0, 0).copy_from(h.pose);
+            for r in 0..3 {
+                t[(r, 3)] -= c0[r];
+            }
+            let kk = sm[hi] * t.transpose(); // Σ P'' x̃_local x̃_worldᵀ
+            for c in 0..4 {
+                for r in 0..3 {
+                    let row = off + 3 * c + r;
+                    for j in 0..4 {
+                        bmat[(row, j)] = n[r] * kk[(c, j)];
+                    }
+                    bmat[(row, r)] += k[hi][c];
+                    for c2 in 0..4 {
+                        for r2 in 0..3 {
+                            hess[(row, off + 3 * c2 + r2)] = sm[hi][(c, c2)] * nnt[(r, r2)];
+                        }
+                    }
+                }
+            }
+        }
+        let hinv = plane_hessian_inverse(&sol.eval.hess);
+        let w = hinv * bmat.transpose(); // 4×24
+        hess -= bmat * w;
+        out.hessian = Some((hess + hess.transpose()) * 0.5);
+    }
+    Ok(PairOutcome::Separated(out))
+}
+
+/// Result of [`contact_vertices`] for a separated pair within range.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexContact {
+    /// `U_c`.
+    pub value: f64,
+    /// Optimal plane in world coordinates.
+    pub plane: Vector4<f64>,
+    /// GJK distance estimate.
+    pub distance: f64,
+    /// Inner Newton iterations used.
+    pub iterations: usize,
+    /// `∂U_c/∂X_a^m` per vertex of `a` (world frame).
+    pub grad_a: Vec<Vector3<f64>>,
+    /// `∂U_c/∂X_b^m` per vertex of `b` (world frame).
+    pub grad_b: Vec<Vector3<f64>>,
+    /// Plane in the internal shifted frame and the shift (for [`VertexContact::dense_hessian`]).
+    plane_local: Vector4<f64>,
+    c0: Vector3<f64>,
+    hpp: Matrix4<f64>,
+    s: f64,
+}
+
+/// Outcome of [`contact_vertices`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum VertexOutcome {
+    /// See [`PairOutcome::Intersecting`].
+    Intersecting,
+    /// See [`PairOutcome::OutOfRange`].
+    OutOfRange {
+        /// GJK distance estimate.
+        distance: f64,
+    },
+    /// Separated and within range.
+    Separated(VertexContact),
+}
+
+impl VertexOutcome {
+    /// `U_c` with `+∞` for intersecting pairs.
+    pub fn value(&self) -> f64 {
+        match self {
+            VertexOutcome::Intersecting => f64::INFINITY,
+            VertexOutcome::OutOfRange { .. } => 0.0,
+            VertexOutcome::Separated(c) => c.value,
+        }
+    }
+}
+
+/// [`contact_pair`] for vertices already in world coordinates, with the gradient per vertex.
+/// Allocates its result vectors: meant for tests, diagnostics and callers that assemble
+/// vertex-level derivatives themselves.
+pub fn contact_vertices(
+    xa_world: &[Vector3<f64>],
+    xb_world: &[Vector3<f64>],
+    params: &ContactParams,
+    warm_plane: Option<Vector4<f64>>,
+    scratch: &mut ContactScratch,
+) -> Result<VertexOutcome, ContactError> {
+    params.validate()?;
+    let c0 = fill_shifted(scratch, xa_world.iter().copied(), xb_world.iter().copied())?;
+    let simplex = scratch.simplex.get_or_insert_with(VoronoiSimplex::new);
+    let core = solve_core(&scratch.xa, &scratch.xb, &c0, params, warm_plane, simplex)?;
+    let (sol, distance) = match core {
+        Core::Intersecting => return Ok(VertexOutcome::Intersecting),
+        Core::OutOfRange { distance } => return Ok(VertexOutcome::OutOfRange { distance }),
+        Core::Separated { sol, distance } => (sol, distance),
+    };
+    let n = Vector3::new(sol.p.x, sol.p.y, sol.p.z);
+    let grad = |xs: &[Vector3<f64>], sigma: f64| -> Vec<Vector3<f64>> {
+        xs.iter()
+            .map(|x| {
+                let y = sigma * (n.dot(x) + sol.p.w);
+                let (_, d1, _) = barrier_d2(y, params.s);
+                sigma * d1 * n
+            })
+            .collect()
+    };
+    Ok(VertexOutcome::Separated(VertexContact {
+        value: sol.eval.value,
+        plane: world_plane(&sol.p, &c0),
+        distance,
+        iterations: sol.iterations,
+        grad_a: grad(&scratch.xa, -1.0),
+        grad_b: grad(&scratch.xb, 1.0),
+        plane_local: sol.p,
+        c0,
+        hpp: sol.eval.hess,
+        s: params.s,
+    }))
+}
+
+impl VertexContact {
+    /// Dense `∂²U_c/∂X²` over `[X_a^1 … X_a^Ma, X_b^1 … X_b^Mb]` (3 rows per vertex), formed as
+    /// `U*_XX − U*_Xp (U*_pp)⁻¹ U*_pX`. `O(M²)` memory: for tests and diagnostics only. The
+    /// vertices must be the ones passed to [`contact_vertices`].
+    pub fn dense_hessian(
+        &self,
+        xa_world: &[Vector3<f64>],
+        xb_world: &[Vector3<f64>],
+    ) -> DMatrix<f64> {
+        let nv = xa_world.len() + xb_world.len();
+        let n = Vector3::new(self.plane_local.x, self.plane_local.y, self.plane_local.z);
+        let o = self.plane_local.w;
+        let mut h = DMatrix::zeros(3 * nv, 3 * nv);
+        let mut c = DMatrix::zeros(3 * nv, 4);
+        let verts = xa_world
+            .iter()
+            .map(|x| (x, -1.0))
+            .chain(xb_world.iter().map(|x| (x, 1.0)));
+        for (m, (xw, sigma)) in verts.enumerate() {
+            let x = xw - self.c0;
+            let y = sigma * (n.dot(&x) + o);
+            let (_, d1, d2) = barrier_d2(y, self.s);
+            let xt = Vector4::new(x.x, x.y, x.z, 1.0);
+            let block = n * n.transpose() * d2;
+            h.view_mut((3 * m, 3 * m), (3, 3)).copy_from(&block);
+            let mut cm = n * xt.transpose() * d2;
+            for r in 0..3 {
+                cm[(r, r)] += sigma * d1;
+            }
+            c.view_mut((3 * m, 0), (3, 4)).copy_from(&cm);
+        }
+        let hinv = plane_hessian_inverse(&self.hpp);
+        let hinv = DMatrix::from_iterator(4, 4, hinv.iter().copied());
+        h -= &c * hinv * c.transpose();
+        h
+    }
+}
