@@ -41,6 +41,11 @@ struct SimulateArgs {
     /// energy and momentum diagnostics, stage breakdown).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also write every hull (link frame, `hulls.json`) and every link pose
+    /// per step (`poses.csv`) into this directory, for viewers and
+    /// independent checks (`tools/check_separation.py`).
+    #[arg(long)]
+    export: Option<PathBuf>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -106,8 +111,10 @@ fn simulate(a: SimulateArgs) -> Result<()> {
     let mut sim = scene.simulator();
     let pb = progress(steps, a.quiet);
     let t0 = Instant::now();
-    let traj = sdrs::sim::run::run(&mut sim, steps, |k| pb.set_position(k as u64))
-        .with_context(|| format!("simulating {}", a.scene.display()))?;
+    let traj = sdrs::sim::run::run_recording(&mut sim, steps, a.export.is_some(), |k| {
+        pb.set_position(k as u64)
+    })
+    .with_context(|| format!("simulating {}", a.scene.display()))?;
     let wall = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     let summary = Summary::new(
@@ -123,15 +130,38 @@ fn simulate(a: SimulateArgs) -> Result<()> {
     if let Some(js) = &a.json {
         write_atomic(js, serde_json::to_string_pretty(&summary)?.as_bytes())?;
     }
+    if let Some(dir) = &a.export {
+        let excluded = scene
+            .contact
+            .as_ref()
+            .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
+            .unwrap_or_default();
+        let hulls = sdrs::output::HullExport::new(&scene.model, excluded);
+        write_atomic(
+            &dir.join("hulls.json"),
+            serde_json::to_string(&hulls)?.as_bytes(),
+        )?;
+        write_atomic(
+            &dir.join("poses.csv"),
+            sdrs::output::poses_csv(&traj).as_bytes(),
+        )?;
+    }
     eprintln!(
-        "{}: {} steps of {} s in {:.3} s ({:.3} ms/step), Newton iterations mean {:.2} max {}",
+        "{}: {} steps of {} s in {:.3} s ({:.3} ms/step), Newton iterations mean {:.2} max {}{}",
         a.scene.display(),
         steps,
         scene.settings.dt,
         wall,
         1e3 * summary.seconds_per_step,
         summary.newton.mean_iterations,
-        summary.newton.max_iterations
+        summary.newton.max_iterations,
+        match summary.contact.min_distance {
+            Some(d) => format!(
+                ", contact in {} steps (max {} pairs), min distance {:.3e} m",
+                summary.contact.steps_in_contact, summary.contact.max_active_pairs, d
+            ),
+            None => String::new(),
+        }
     );
     Ok(())
 }

@@ -10,10 +10,15 @@
 //! Inertia, gravity and PD are here; contact, friction and calibration
 //! effects plug in the same way.
 
+pub mod contact;
+pub mod friction;
 pub mod gravity;
 pub mod inertia;
+pub mod pairs;
 pub mod pd;
 
+pub use contact::ContactEnergy;
+pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
 pub use pd::{PdController, PdTarget};
@@ -146,6 +151,15 @@ pub trait Energy: Send + Sync {
         _kin_prev: &Kinematics,
     ) -> Result<(), EnergyError> {
         Ok(())
+    }
+
+    /// After an accepted step: adds the term's statistics at the accepted
+    /// state (its last evaluation) and sub-stage times.
+    fn report(
+        &mut self,
+        _d: &mut crate::sim::StepDiagnostics,
+        _timers: &mut crate::sim::StageTimers,
+    ) {
     }
 
     /// Adds the term's value and requested derivatives at `θ^{t+1} = q`

@@ -58,6 +58,8 @@ pub struct Trajectory {
     pub states: Vec<DVector<f64>>,
     /// Diagnostics per completed step (one fewer than `states`).
     pub diagnostics: Vec<StepDiagnostics>,
+    /// Link poses per recorded time, when recording was asked for.
+    pub poses: Vec<Vec<crate::math::Pose>>,
 }
 
 impl Trajectory {
@@ -132,7 +134,20 @@ pub struct Summary {
     pub final_state: BTreeMap<String, f64>,
     pub energy: Option<EnergyStats>,
     pub linear_momentum: Option<MomentumStats>,
+    pub contact: ContactStats,
     pub stages: Vec<StageTime>,
+}
+
+/// Contact diagnostics over the run.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactStats {
+    /// Steps with at least one hull pair inside the barrier's range.
+    pub steps_in_contact: usize,
+    /// Largest number of active hull pairs in one step.
+    pub max_active_pairs: usize,
+    /// Smallest GJK distance between candidate hull pairs over all accepted
+    /// states (m); `null` when no pair was ever a candidate.
+    pub min_distance: Option<f64>,
 }
 
 impl Summary {
@@ -189,6 +204,15 @@ impl Summary {
                 })
                 .fold(0.0, f64::max),
         });
+        let min_d = d
+            .iter()
+            .map(|x| x.min_distance)
+            .fold(f64::INFINITY, f64::min);
+        let contact = ContactStats {
+            steps_in_contact: d.iter().filter(|x| x.contact_pairs > 0).count(),
+            max_active_pairs: d.iter().map(|x| x.contact_pairs).max().unwrap_or(0),
+            min_distance: min_d.is_finite().then_some(min_d),
+        };
         Summary {
             scene: scene.to_string(),
             steps,
@@ -204,7 +228,62 @@ impl Summary {
             final_state,
             energy,
             linear_momentum,
+            contact,
             stages,
         }
     }
+}
+
+/// Hull geometry for external tools: every link's hulls in its frame, and
+/// which link pairs interact.
+#[derive(Clone, Debug, Serialize)]
+pub struct HullExport {
+    pub links: Vec<LinkExport>,
+    /// Link index pairs that never interact (parent–child, excluded, static).
+    pub excluded_pairs: Vec<(usize, usize)>,
+}
+
+/// One link of a [`HullExport`].
+#[derive(Clone, Debug, Serialize)]
+pub struct LinkExport {
+    pub robot: String,
+    pub name: String,
+    pub hulls: Vec<Vec<[f64; 3]>>,
+}
+
+impl HullExport {
+    pub fn new(model: &Model, excluded: impl IntoIterator<Item = (usize, usize)>) -> Self {
+        HullExport {
+            links: model
+                .links
+                .iter()
+                .map(|l| LinkExport {
+                    robot: model.robots[l.robot].name.clone(),
+                    name: l.name.clone(),
+                    hulls: l
+                        .hulls
+                        .iter()
+                        .map(|h| h.x_local.iter().map(|x| [x.x, x.y, x.z]).collect())
+                        .collect(),
+                })
+                .collect(),
+            excluded_pairs: excluded.into_iter().collect(),
+        }
+    }
+}
+
+/// Link poses as CSV: `step,t,link,a00,a10,a20,a01,…,a23` (column-major
+/// `[R | t]`, shortest round-trip numbers).
+pub fn poses_csv(traj: &Trajectory) -> String {
+    let mut s = String::from("step,t,link,a00,a10,a20,a01,a11,a21,a02,a12,a22,t0,t1,t2\n");
+    for (k, (t, poses)) in traj.times.iter().zip(&traj.poses).enumerate() {
+        for (i, a) in poses.iter().enumerate() {
+            s.push_str(&format!("{k},{t},{i}"));
+            for v in a.as_slice() {
+                s.push_str(&format!(",{v}"));
+            }
+            s.push('\n');
+        }
+    }
+    s
 }

@@ -182,6 +182,7 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         kappa: c.kappa,
         mu: c.mu,
         eps: c.eps,
+        eps_force: c.eps_force,
         excluded,
     })
 }

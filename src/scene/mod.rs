@@ -88,8 +88,10 @@ pub struct ContactSettings {
     pub kappa: f64,
     /// Friction coefficient `μ`.
     pub mu: f64,
-    /// Friction smoothing `ε`.
+    /// Friction velocity smoothing `ε` ((m/s)²).
     pub eps: f64,
+    /// Normal-force smoothing `ε_f` (N²).
+    pub eps_force: f64,
     /// Link pairs `(i, j)`, `i < j`, that never interact.
     pub excluded: std::collections::BTreeSet<(usize, usize)>,
 }
@@ -128,11 +130,24 @@ impl Scene {
             self.charts.clone(),
             self.settings.dt,
         );
-        Simulator::new(
+        let mut sim = Simulator::new(
             self.model.clone(),
             self.settings.clone(),
             self.controller.clone(),
             state,
-        )
+        );
+        if let Some(c) = &self.contact {
+            sim.energies
+                .push(Box::new(crate::energy::ContactEnergy::new(
+                    &self.model,
+                    c.clone(),
+                )));
+            if c.mu > 0.0 {
+                let friction =
+                    crate::energy::FrictionEnergy::new(&self.model, c.clone(), self.settings.dt);
+                sim.energies.push(Box::new(friction));
+            }
+        }
+        sim
     }
 }

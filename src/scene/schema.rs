@@ -163,9 +163,14 @@ pub struct ContactSpec {
     /// Friction coefficient `μ`. Default 0 (frictionless).
     #[serde(default)]
     pub mu: f64,
-    /// Friction smoothing `ε` ((m/s)²). Default 1e-6.
+    /// Friction velocity smoothing `ε` ((m/s)²): below relative speeds of
+    /// about `√ε` friction acts as viscous damping. Default 1e-6.
     #[serde(default = "ContactSpec::default_eps")]
     pub eps: f64,
+    /// Normal-force smoothing of `A_ε(f) = √(f² + ε_f) − √ε_f` (N²). The
+    /// paper uses one `ε` for both roles; their units differ. Default 1e-6.
+    #[serde(default = "ContactSpec::default_eps")]
+    pub eps_force: f64,
     /// Skip pairs of a link and its parent. Default true.
     #[serde(default = "ContactSpec::default_true")]
     pub exclude_adjacent: bool,
@@ -196,6 +201,7 @@ impl Default for ContactSpec {
             kappa: Self::default_kappa(),
             mu: 0.0,
             eps: Self::default_eps(),
+            eps_force: Self::default_eps(),
             exclude_adjacent: true,
             exclude: Vec::new(),
         }

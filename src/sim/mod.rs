@@ -14,6 +14,8 @@ pub mod run;
 pub mod state;
 
 pub use counters::{StageTime, StageTimers};
+
+/// Stages of a step, in order, as named in the timers.
 pub use newton::{NewtonError, NewtonOptions, NewtonReport};
 pub use state::SimState;
 
@@ -57,6 +59,11 @@ pub struct StepDiagnostics {
     pub potential: f64,
     /// `Σ ρ (X^{t+1} − X^t)/Δt` (kg m/s).
     pub momentum: [f64; 3],
+    /// Hull pairs with non-zero contact potential at `θ^{t+1}`.
+    pub contact_pairs: usize,
+    /// Smallest GJK distance among broad-phase candidate pairs at `θ^{t+1}`
+    /// (m; `+∞` when no pair is a candidate).
+    pub min_distance: f64,
 }
 
 /// A simulator: model, energy terms, controller and state.
@@ -245,7 +252,11 @@ impl Simulator {
             .kin
             .update(&self.model, &q, &self.state.charts, KinOrder::Pose);
         let new_poses = self.scratch.kin.pose.clone();
-        let diag = self.diagnostics(&new_poses, report);
+        let mut diag = self.diagnostics(&new_poses, report);
+        diag.min_distance = f64::INFINITY;
+        for e in self.energies.iter_mut() {
+            e.report(&mut diag, &mut self.timers);
+        }
         let st = &mut self.state;
         st.q_prev = std::mem::replace(&mut st.q, q);
         st.poses_prev = std::mem::replace(&mut st.poses, new_poses);

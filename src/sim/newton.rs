@@ -57,7 +57,9 @@ pub enum NewtonError {
         grad_inf: f64,
         tol: f64,
     },
-    #[error("the objective is not finite at the starting point (value {value})")]
+    #[error(
+        "the objective is not finite at the starting point (value {value}): hulls intersect in the current state"
+    )]
     InfeasibleStart { value: f64 },
     #[error("non-finite gradient or Hessian at Newton iteration {iter}")]
     NonFinite { iter: usize },

@@ -1,0 +1,168 @@
+//! Separating-plane contact term `κ Σ_{pairs} U_c` (paper, eq. `SDRS` and
+//! `contact.tex`) over every hull pair on different, non-excluded links.
+//!
+//! Stages per evaluation: world vertices → broad phase (boxes inflated by
+//! `2s/(1−s)`) → narrow phase, one [`contact_pair`] per candidate, in
+//! parallel (rayon), results reduced in pair order (deterministic for any
+//! thread count) → scatter into pose space. An intersecting pair makes the
+//! energy `+∞`, so Newton's line search rejects the trial point and an
+//! interpenetrating state is never accepted. Each pair's optimal plane warm
+//! starts its next solve (used only when still strictly feasible).
+
+use super::pairs::scatter_pair;
+use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::contact::{self, ContactParams, ContactScratch, HullPose, PairOutcome};
+use crate::geometry::{BroadPhase, WorldHulls};
+use crate::kinematics::Kinematics;
+use crate::model::Model;
+use crate::scene::ContactSettings;
+use crate::sim::StepDiagnostics;
+use nalgebra::{DVector, Vector4};
+use rayon::prelude::*;
+use std::collections::{BTreeMap, HashMap};
+use std::time::{Duration, Instant};
+
+/// The contact term.
+pub struct ContactEnergy {
+    pub settings: ContactSettings,
+    pub params: ContactParams,
+    hulls: WorldHulls,
+    broad: BroadPhase,
+    pairs: Vec<(usize, usize)>,
+    results: Vec<Result<PairOutcome, contact::ContactError>>,
+    warm: HashMap<(usize, usize), Vector4<f64>>,
+    pair_slots: BTreeMap<(usize, usize), usize>,
+    /// Time spent in the broad phase since the last [`ContactEnergy::take_broad_phase_time`].
+    broad_time: Duration,
+    /// Statistics of the last evaluation.
+    last_active: usize,
+    last_min_distance: f64,
+}
+
+impl ContactEnergy {
+    pub fn new(model: &Model, settings: ContactSettings) -> Self {
+        ContactEnergy {
+            params: ContactParams::with_width(settings.s),
+            settings,
+            hulls: WorldHulls::new(model),
+            broad: BroadPhase::default(),
+            pairs: Vec::new(),
+            results: Vec::new(),
+            warm: HashMap::new(),
+            pair_slots: BTreeMap::new(),
+            broad_time: Duration::ZERO,
+            last_active: 0,
+            last_min_distance: f64::INFINITY,
+        }
+    }
+
+    fn describe(&self, model: &Model, h: usize) -> String {
+        let id = self.hulls.ids[h];
+        let l = &model.links[id.link];
+        format!("{}/{} hull {}", model.robots[l.robot].name, l.name, id.hull)
+    }
+}
+
+impl Energy for ContactEnergy {
+    fn name(&self) -> &'static str {
+        "contact"
+    }
+
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError> {
+        let model = ctx.model;
+        let t0 = Instant::now();
+        self.hulls.update(model, &kin.pose);
+        self.broad.candidate_pairs(
+            &self.hulls,
+            self.params.support_distance(),
+            &self.settings.excluded,
+            &mut self.pairs,
+        );
+        self.broad_time += t0.elapsed();
+
+        let cneed = match need {
+            Need::Value => contact::Need::Value,
+            Need::Gradient => contact::Need::Gradient,
+            Need::Hessian => contact::Need::Hessian,
+        };
+        let (hulls, params, warm) = (&self.hulls, &self.params, &self.warm);
+        let pose = |h: usize| {
+            let id = hulls.ids[h];
+            HullPose {
+                pose: &kin.pose[id.link],
+                x_local: &model.links[id.link].hulls[id.hull].x_local,
+            }
+        };
+        self.pairs
+            .par_iter()
+            .map_init(ContactScratch::new, |scratch, &(a, b)| {
+                contact::contact_pair(
+                    pose(a),
+                    pose(b),
+                    params,
+                    warm.get(&(a, b)).copied(),
+                    cneed,
+                    scratch,
+                )
+            })
+            .collect_into_vec(&mut self.results);
+
+        self.pair_slots.clear();
+        let (mut active, mut min_d) = (0, f64::INFINITY);
+        for (k, res) in self.results.iter().enumerate() {
+            let (a, b) = self.pairs[k];
+            let outcome = res.as_ref().map_err(|e| EnergyError::Failed {
+                term: "contact",
+                msg: format!(
+                    "{} vs {}: {e}",
+                    self.describe(model, a),
+                    self.describe(model, b)
+                ),
+            })?;
+            match outcome {
+                PairOutcome::Intersecting => {
+                    acc.value = f64::INFINITY;
+                    return Ok(());
+                }
+                PairOutcome::OutOfRange { distance } => {
+                    min_d = min_d.min(*distance);
+                    self.warm.remove(&(a, b));
+                }
+                PairOutcome::Separated(c) => {
+                    active += 1;
+                    min_d = min_d.min(c.distance);
+                    self.warm.insert((a, b), c.plane);
+                    let kappa = self.settings.kappa;
+                    acc.value += kappa * c.value;
+                    let links = (self.hulls.ids[a].link, self.hulls.ids[b].link);
+                    scatter_pair(
+                        model,
+                        acc,
+                        &mut self.pair_slots,
+                        need,
+                        links,
+                        kappa,
+                        (&c.grad_a, &c.grad_b),
+                        c.hessian.as_ref(),
+                    );
+                }
+            }
+        }
+        self.last_active = active;
+        self.last_min_distance = min_d;
+        Ok(())
+    }
+
+    fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
+        d.contact_pairs = self.last_active;
+        d.min_distance = d.min_distance.min(self.last_min_distance);
+        timers.add("broad_phase", std::mem::take(&mut self.broad_time));
+    }
+}

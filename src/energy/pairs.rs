@@ -1,0 +1,61 @@
+//! Scattering of hull-pair derivatives (pose space of two links) into the
+//! accumulator, shared by the contact and friction terms.
+
+use super::{EnergyAccumulator, Need, PoseHessian};
+use crate::model::Model;
+use nalgebra::{Matrix3x4, SMatrix};
+use std::collections::BTreeMap;
+
+/// Adds `scale·E` of a pair of links `(la, lb)` with `∂E/∂A_a`, `∂E/∂A_b`
+/// and the 24×24 Hessian over `[vec A_a; vec A_b]`. Links without
+/// coordinates (static obstacles) receive nothing. Off-diagonal blocks of
+/// the same link pair are merged through `pair_slots`.
+#[allow(clippy::too_many_arguments)]
+pub fn scatter_pair(
+    model: &Model,
+    acc: &mut EnergyAccumulator,
+    pair_slots: &mut BTreeMap<(usize, usize), usize>,
+    need: Need,
+    (la, lb): (usize, usize),
+    scale: f64,
+    (grad_a, grad_b): (&Matrix3x4<f64>, &Matrix3x4<f64>),
+    hess: Option<&SMatrix<f64, 24, 24>>,
+) {
+    let moves_a = !model.ancestor_dofs[la].is_empty();
+    let moves_b = !model.ancestor_dofs[lb].is_empty();
+    if need >= Need::Gradient {
+        if moves_a {
+            acc.link_grad[la] += grad_a * scale;
+        }
+        if moves_b {
+            acc.link_grad[lb] += grad_b * scale;
+        }
+    }
+    if need < Need::Hessian {
+        return;
+    }
+    let Some(h) = hess else { return };
+    if moves_a {
+        let block: PoseHessian = h.fixed_view::<12, 12>(0, 0) * scale;
+        acc.add_link_hess(la, &block);
+    }
+    if moves_b {
+        let block: PoseHessian = h.fixed_view::<12, 12>(12, 12) * scale;
+        acc.add_link_hess(lb, &block);
+    }
+    if moves_a && moves_b {
+        // Stored as ∂²E/∂A_i∂A_j with i < j.
+        let (i, j, block): (usize, usize, PoseHessian) = if la < lb {
+            (la, lb, h.fixed_view::<12, 12>(0, 12) * scale)
+        } else {
+            (lb, la, h.fixed_view::<12, 12>(12, 0) * scale)
+        };
+        match pair_slots.get(&(i, j)) {
+            Some(&k) => acc.pair_hess[k].2 += block,
+            None => {
+                pair_slots.insert((i, j), acc.pair_hess.len());
+                acc.pair_hess.push((i, j, block));
+            }
+        }
+    }
+}

@@ -1,0 +1,41 @@
+//! Helpers shared by integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Repository root.
+pub fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A bundled scene.
+pub fn robots(name: &str) -> PathBuf {
+    root().join("robots").join(name)
+}
+
+/// A fresh scratch directory for one test.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sdrs-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The project's Python (`.venv`, made by `tools/setup_python.sh`). Panics
+/// with the setup command when it is missing: these checks must not be
+/// skipped silently.
+pub fn python() -> Command {
+    let py = root().join(".venv/bin/python");
+    assert!(
+        py.exists(),
+        "{} is missing: run `bash tools/setup_python.sh` (tools/test.sh does it)",
+        py.display()
+    );
+    Command::new(py)
+}
+
+/// The `sdrs` binary.
+pub fn sdrs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sdrs"))
+}
