@@ -117,7 +117,11 @@ impl Default for FrictionParams {
 impl FrictionParams {
     /// Parameters with the given `μ` and `Δt` and default smoothing and solver settings.
     pub fn new(mu: f64, dt: f64) -> Self {
-        Self { mu, dt, ..Self::default() }
+        Self {
+            mu,
+            dt,
+            ..Self::default()
+        }
     }
 
     /// Checks the parameters.
@@ -158,9 +162,16 @@ impl FrictionParams {
 /// (`b₁ × b₂ = n`).
 pub fn tangent_basis(n: &Vector3<f64>) -> Matrix3x2<f64> {
     // Cross with the world axis least aligned with n.
-    let a = n.iter().map(|v| v.abs()).enumerate().fold((0, f64::INFINITY), |m, (i, v)| {
-        if v < m.1 { (i, v) } else { m }
-    });
+    let a = n
+        .iter()
+        .map(|v| v.abs())
+        .enumerate()
+        .fold(
+            (0, f64::INFINITY),
+            |m, (i, v)| {
+                if v < m.1 { (i, v) } else { m }
+            },
+        );
     let mut e = Vector3::zeros();
     e[a.0] = 1.0;
     let b1 = e.cross(n).normalize();
@@ -189,7 +200,9 @@ impl FrictionFrame<'_> {
     fn validate(&self) -> Result<(), FrictionError> {
         let n = self.normal;
         if !n.iter().all(|v| v.is_finite()) || (n.norm() - 1.0).abs() > 1e-9 {
-            return Err(FrictionError::InvalidFrame { reason: "normal is not a finite unit vector" });
+            return Err(FrictionError::InvalidFrame {
+                reason: "normal is not a finite unit vector",
+            });
         }
         let btb = self.basis.transpose() * self.basis;
         if !self.basis.iter().all(|v| v.is_finite())
@@ -213,7 +226,9 @@ impl FrictionFrame<'_> {
                 });
             }
             if !x.iter().all(|v| v.iter().all(|c| c.is_finite())) {
-                return Err(FrictionError::InvalidFrame { reason: "non-finite X^t" });
+                return Err(FrictionError::InvalidFrame {
+                    reason: "non-finite X^t",
+                });
             }
             if !f.iter().all(|v| v.is_finite() && *v >= 0.0) {
                 return Err(FrictionError::InvalidFrame {
@@ -270,7 +285,14 @@ impl LaggedContact {
         };
         let (x_prev_a, normal_force_a) = build(a, -1.0);
         let (x_prev_b, normal_force_b) = build(b, 1.0);
-        Self { normal, basis: tangent_basis(&normal), x_prev_a, x_prev_b, normal_force_a, normal_force_b }
+        Self {
+            normal,
+            basis: tangent_basis(&normal),
+            x_prev_a,
+            x_prev_b,
+            normal_force_a,
+            normal_force_b,
+        }
     }
 
     /// Borrowed view for [`friction_pair`] / [`friction_vertices`].
@@ -339,7 +361,11 @@ struct Core {
 
 /// Per-vertex quantities at `q`.
 #[inline(always)]
-fn vertex_terms(a: &Active, q: &Vector3<f64>, eps: f64) -> (Vector2<f64>, f64, Vector2<f64>, Matrix2<f64>) {
+fn vertex_terms(
+    a: &Active,
+    q: &Vector3<f64>,
+    eps: f64,
+) -> (Vector2<f64>, f64, Vector2<f64>, Matrix2<f64>) {
     let r = a.v - Vector2::new(q.x, q.y) - a.g * q.z;
     let phi = (r.norm_squared() + eps).sqrt();
     let rho = r / phi;
@@ -421,7 +447,10 @@ fn inner_direction(h: &Matrix3<f64>, g: &Vector3<f64>, spin_free: bool) -> Vecto
             return d;
         }
     }
-    let maxdiag = (0..3).map(|i| h[(i, i)].abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let maxdiag = (0..3)
+        .map(|i| h[(i, i)].abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
     let mut lambda = 1e-12 * maxdiag;
     for _ in 0..40 {
         if let Some(c) = (h + Matrix3::identity() * lambda).cholesky() {
@@ -498,12 +527,15 @@ fn prepare(
         }
     }
     act.clear();
-    if !(wsum > 0.0) {
+    if wsum.is_nan() || wsum <= 0.0 {
         // No normal force anywhere: U_f ≡ 0. Still check the t+1 vertices.
         for (h, it) in next.into_iter().enumerate() {
             for (index, x) in it.enumerate() {
                 if !x.iter().all(|v| v.is_finite()) {
-                    return Err(FrictionError::NonFiniteVertex { hull: [Hull::A, Hull::B][h], index });
+                    return Err(FrictionError::NonFiniteVertex {
+                        hull: [Hull::A, Hull::B][h],
+                        index,
+                    });
                 }
             }
         }
@@ -516,7 +548,10 @@ fn prepare(
     for (h, it) in next.into_iter().enumerate() {
         for (index, xn) in it.enumerate() {
             if !xn.iter().all(|v| v.is_finite()) {
-                return Err(FrictionError::NonFiniteVertex { hull: [Hull::A, Hull::B][h], index });
+                return Err(FrictionError::NonFiniteVertex {
+                    hull: [Hull::A, Hull::B][h],
+                    index,
+                });
             }
             let a = params.smoothed_force(forces[h][index]);
             if a > 0.0 {
@@ -538,11 +573,21 @@ fn prepare(
     Ok(lever_in_plane <= 1e-20 * lever_full)
 }
 
-fn solve_inner(act: &[Active], spin_free: bool, params: &FrictionParams) -> Result<Core, FrictionError> {
+fn solve_inner(
+    act: &[Active],
+    spin_free: bool,
+    params: &FrictionParams,
+) -> Result<Core, FrictionError> {
     let eps = params.eps_velocity;
     let wsum: f64 = act.iter().map(|a| a.w).sum();
-    if act.is_empty() || !(wsum > 0.0) {
-        return Ok(Core { q: Vector3::zeros(), spin_free: true, value: 0.0, hinv: Matrix3::zeros(), iterations: 0 });
+    if act.is_empty() || wsum.is_nan() || wsum <= 0.0 {
+        return Ok(Core {
+            q: Vector3::zeros(),
+            spin_free: true,
+            value: 0.0,
+            hinv: Matrix3::zeros(),
+            iterations: 0,
+        });
     }
     // Start from the weighted mean tangential velocity, no spin.
     let ubar = act.iter().map(|a| a.w * a.v).sum::<Vector2<f64>>() / wsum;
@@ -551,7 +596,9 @@ fn solve_inner(act: &[Active], spin_free: bool, params: &FrictionParams) -> Resu
     let mut iterations = 0;
     loop {
         let gnorm = ev.grad.norm();
-        let tol = ev.noise.max(params.inner_tol.min(params.inner_rtol * ev.scale));
+        let tol = ev
+            .noise
+            .max(params.inner_tol.min(params.inner_rtol * ev.scale));
         if gnorm <= tol {
             return Ok(Core {
                 q,
@@ -562,12 +609,16 @@ fn solve_inner(act: &[Active], spin_free: bool, params: &FrictionParams) -> Resu
             });
         }
         if iterations >= params.inner_max_iters {
-            return Err(FrictionError::NotConverged { iterations, grad_norm: gnorm, tolerance: tol });
+            return Err(FrictionError::NotConverged {
+                iterations,
+                grad_norm: gnorm,
+                tolerance: tol,
+            });
         }
         iterations += 1;
         let mut dir = inner_direction(&ev.hess, &ev.grad, spin_free);
         let mut slope = ev.grad.dot(&dir);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }
@@ -595,7 +646,11 @@ fn solve_inner(act: &[Active], spin_free: bool, params: &FrictionParams) -> Resu
                 ev = nev;
             }
             None => {
-                return Err(FrictionError::NotConverged { iterations, grad_norm: gnorm, tolerance: tol });
+                return Err(FrictionError::NotConverged {
+                    iterations,
+                    grad_norm: gnorm,
+                    tolerance: tol,
+                });
             }
         }
     }
@@ -686,16 +741,14 @@ pub fn friction_pair(
             tacc[act.hull][0] += outer * (act.w * bp[(0, 0)]);
             tacc[act.hull][1] += outer * (act.w * bp[(0, 1)]);
             tacc[act.hull][2] += outer * (act.w * bp[(1, 1)]);
-            let g = if core.spin_free { Vector2::zeros() } else { act.g };
+            let g = if core.spin_free {
+                Vector2::zeros()
+            } else {
+                act.g
+            };
             let pg = bp * g;
-            let pm = Matrix3x2::new(
-                bp[(0, 0)],
-                bp[(0, 1)],
-                bp[(1, 0)],
-                bp[(1, 1)],
-                pg.x,
-                pg.y,
-            ) * act.w;
+            let pm =
+                Matrix3x2::new(bp[(0, 0)], bp[(0, 1)], bp[(1, 0)], bp[(1, 1)], pg.x, pg.y) * act.w;
             for c in 0..4 {
                 pacc[act.hull][c] += pm * xt[c];
             }
@@ -712,7 +765,11 @@ pub fn friction_pair(
     // b_i b_jᵀ for (ij) = 00, 01 (+10), 11.
     let b0 = bm.column(0).into_owned();
     let b1 = bm.column(1).into_owned();
-    let bb = [b0 * b0.transpose(), b0 * b1.transpose() + b1 * b0.transpose(), b1 * b1.transpose()];
+    let bb = [
+        b0 * b0.transpose(),
+        b0 * b1.transpose() + b1 * b0.transpose(),
+        b1 * b1.transpose(),
+    ];
     for h in 0..2 {
         let off = 12 * h;
         for c in 0..4 {
@@ -721,7 +778,8 @@ pub fn friction_pair(
                     + bb[1] * tacc[h][1][(c, c2)]
                     + bb[2] * tacc[h][2][(c, c2)])
                     / (dt * dt);
-                hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2).copy_from(&block);
+                hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2)
+                    .copy_from(&block);
             }
             // C rows (c, ·) = −(1/Δt) B P_cᵀ.
             let crow = -(bm * pacc[h][c].transpose()) / dt;
@@ -746,11 +804,11 @@ pub fn friction_pair(
         // U*_{qX} in pose columns (h, c, r): P_c BᵀQ − e₃ (B R[c])ᵀ [n̂]×.
         let btq = bm.transpose() * qm;
         let mut qx = SMatrix::<f64, 3, 24>::zeros();
-        for h in 0..2 {
-            for c in 0..4 {
-                let mut blk = pacc[h][c] * btq;
+        for (h, (pacc_h, racc_h)) in pacc.iter().zip(&racc).enumerate() {
+            for (c, pacc_hc) in pacc_h.iter().enumerate() {
+                let mut blk = pacc_hc * btq;
                 if !core.spin_free {
-                    let brc = bm * racc[h].row(c).transpose();
+                    let brc = bm * racc_h.row(c).transpose();
                     let row = brc.transpose() * nx;
                     for r in 0..3 {
                         blk[(2, r)] -= row[r];
@@ -803,7 +861,13 @@ pub fn friction_vertices(
 ) -> Result<FrictionVertices, FrictionError> {
     let mut ia = xa_next.iter().copied();
     let mut ib = xb_next.iter().copied();
-    let spin_free = prepare(frame, [&mut ia, &mut ib], [xa_next.len(), xb_next.len()], params, &mut scratch.act)?;
+    let spin_free = prepare(
+        frame,
+        [&mut ia, &mut ib],
+        [xa_next.len(), xb_next.len()],
+        params,
+        &mut scratch.act,
+    )?;
     let core = solve_inner(&scratch.act, spin_free, params)?;
     let mut grad_a = vec![Vector3::zeros(); xa_next.len()];
     let mut grad_b = vec![Vector3::zeros(); xb_next.len()];
@@ -816,7 +880,11 @@ pub fn friction_vertices(
         } else {
             grad_b[act.index] = g;
         }
-        let global = if act.hull == 0 { act.index } else { xa_next.len() + act.index };
+        let global = if act.hull == 0 {
+            act.index
+        } else {
+            xa_next.len() + act.index
+        };
         terms.push((global, *act));
     }
     Ok(FrictionVertices {
@@ -837,13 +905,16 @@ pub fn friction_vertices(
     })
 }
 
+/// Per active vertex: global index, `M_m`, `C_m = U*_{X'_m q}`, `U*_{q X_m}`.
+type VertexBlocks = (usize, Matrix3<f64>, Matrix3<f64>, Matrix3<f64>);
+
 impl FrictionVertices {
     fn q(&self) -> Vector3<f64> {
         Vector3::new(self.u.x, self.u.y, self.omega)
     }
 
     /// Per active vertex: (global index, M_m = (w/Δt²)BΦBᵀ, C_m = −(w/Δt)BΦJ, U*_{qX,m}).
-    fn blocks(&self) -> Vec<(usize, Matrix3<f64>, Matrix3<f64>, Matrix3<f64>)> {
+    fn blocks(&self) -> Vec<VertexBlocks> {
         let q = self.q();
         let (b, dt) = (self.basis, self.dt);
         let nx = cross_matrix(&self.normal);
@@ -852,7 +923,11 @@ impl FrictionVertices {
             .iter()
             .map(|(gi, act)| {
                 let (_, _, rho, bp) = vertex_terms(act, &q, self.eps);
-                let g = if self.spin_free { Vector2::zeros() } else { act.g };
+                let g = if self.spin_free {
+                    Vector2::zeros()
+                } else {
+                    act.g
+                };
                 let mut jm = SMatrix::<f64, 2, 3>::zeros();
                 jm[(0, 0)] = 1.0;
                 jm[(1, 1)] = 1.0;

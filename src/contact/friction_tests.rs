@@ -13,18 +13,38 @@ const S: f64 = 0.05;
 const KAPPA: f64 = 10.0;
 
 fn fparams() -> FrictionParams {
-    FrictionParams { eps_velocity: 1e-4, eps_force: 1e-6, ..FrictionParams::new(0.4, 0.01) }
+    FrictionParams {
+        eps_velocity: 1e-4,
+        eps_force: 1e-6,
+        ..FrictionParams::new(0.4, 0.01)
+    }
 }
 
 /// A step-t contact (deliberate near-contact, real contact solve) and its lagged data.
-fn lagged(kind: Features, seed: u64) -> (Vec<Vector3<f64>>, Matrix3x4<f64>, Vec<Vector3<f64>>, Matrix3x4<f64>, LaggedContact) {
+type Lagged = (
+    Vec<Vector3<f64>>,
+    Matrix3x4<f64>,
+    Vec<Vector3<f64>>,
+    Matrix3x4<f64>,
+    LaggedContact,
+);
+
+fn lagged(kind: Features, seed: u64) -> Lagged {
     let cp = ContactParams::with_width(S);
     let mut r = rng(seed);
     let (la, pa, lb, pb) = configuration(kind, 0.3 * cp.support_distance(), &mut r);
-    let ha = HullPose { pose: &pa, x_local: &la };
-    let hb = HullPose { pose: &pb, x_local: &lb };
+    let ha = HullPose {
+        pose: &pa,
+        x_local: &la,
+    };
+    let hb = HullPose {
+        pose: &pb,
+        x_local: &lb,
+    };
     let mut sc = ContactScratch::new();
-    let PairOutcome::Separated(c) = contact_pair(ha, hb, &cp, None, Need::Gradient, &mut sc).unwrap() else {
+    let PairOutcome::Separated(c) =
+        contact_pair(ha, hb, &cp, None, Need::Gradient, &mut sc).unwrap()
+    else {
         panic!("expected a separated pair")
     };
     let lag = LaggedContact::from_contact(&c, ha, hb, &cp, KAPPA);
@@ -33,9 +53,17 @@ fn lagged(kind: Features, seed: u64) -> (Vec<Vector3<f64>>, Matrix3x4<f64>, Vec<
 
 /// A small random rigid motion applied to a pose (step t → t+1).
 fn moved(pose: &Matrix3x4<f64>, r: &mut rand_chacha::ChaCha8Rng, scale: f64) -> Matrix3x4<f64> {
-    let axis = Unit::new_normalize(Vector3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)));
+    let axis = Unit::new_normalize(Vector3::new(
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+    ));
     let rot = Rotation3::from_axis_angle(&axis, scale * r.random_range(-1.0..1.0));
-    let t = Vector3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)) * scale;
+    let t = Vector3::new(
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+    ) * scale;
     compose(rot.matrix(), &t, pose)
 }
 
@@ -50,7 +78,12 @@ fn col(v: &DVector<f64>) -> DMatrix<f64> {
 }
 
 /// FD of gradient, Hessian and mixed derivative w.r.t. world vertices at one configuration.
-fn fd_vertices(fr: &FrictionFrame<'_>, xa: &[Vector3<f64>], xb: &[Vector3<f64>], check_mixed: bool) -> (f64, f64, f64) {
+fn fd_vertices(
+    fr: &FrictionFrame<'_>,
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    check_mixed: bool,
+) -> (f64, f64, f64) {
     let na = xa.len();
     let x0 = flatten(&[xa.to_vec(), xb.to_vec()].concat());
     let split = |x: &DVector<f64>| {
@@ -64,14 +97,23 @@ fn fd_vertices(fr: &FrictionFrame<'_>, xa: &[Vector3<f64>], xb: &[Vector3<f64>],
     let g_fd = fd_gradient(
         &mut |x| {
             let (a, b) = split(x);
-            friction_vertices(fr, &a, &b, &fparams(), &mut sc).unwrap().value
+            friction_vertices(fr, &a, &b, &fparams(), &mut sc)
+                .unwrap()
+                .value
         },
         &x0,
         h,
     );
     let eg = rel_err(&col(&g), &col(&g_fd), 1e-300);
     let hd = f.dense_hessian();
-    let h_fd = fd_jacobian(&mut |x| { let (a, b) = split(x); vgrad(fr, &a, &b) }, &x0, h);
+    let h_fd = fd_jacobian(
+        &mut |x| {
+            let (a, b) = split(x);
+            vgrad(fr, &a, &b)
+        },
+        &x0,
+        h,
+    );
     let eh = rel_err(&hd, &h_fd, 1e-300);
     assert!((&hd - hd.transpose()).norm() <= 1e-10 * hd.norm());
     let mut em = 0.0;
@@ -82,7 +124,11 @@ fn fd_vertices(fr: &FrictionFrame<'_>, xa: &[Vector3<f64>], xb: &[Vector3<f64>],
         let m_fd = fd_jacobian(
             &mut |xp| {
                 let all = unflatten(xp);
-                let frame = FrictionFrame { x_prev_a: &all[..na], x_prev_b: &all[na..], ..*fr };
+                let frame = FrictionFrame {
+                    x_prev_a: &all[..na],
+                    x_prev_b: &all[na..],
+                    ..*fr
+                };
                 vgrad(&frame, xa, xb)
             },
             &xp0,
@@ -96,14 +142,20 @@ fn fd_vertices(fr: &FrictionFrame<'_>, xa: &[Vector3<f64>], xb: &[Vector3<f64>],
 #[test]
 fn friction_vertex_derivatives_match_fd() {
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
-    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace].into_iter().enumerate() {
+    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace]
+        .into_iter()
+        .enumerate()
+    {
         let (la, pa, lb, pb, lag) = lagged(kind, 30 + i as u64);
         let mut r = rng(40 + i as u64);
         for motion in [1e-3, 1e-2] {
             let xa = world(&moved(&pa, &mut r, motion), &la);
             let xb = world(&moved(&pb, &mut r, motion), &lb);
             let (eg, eh, em) = fd_vertices(&lag.frame(), &xa, &xb, true);
-            assert!(eg <= 1e-5 && eh <= 1e-5 && em <= 1e-5, "{kind:?} motion {motion}: grad {eg:e} hess {eh:e} mixed {em:e}");
+            assert!(
+                eg <= 1e-5 && eh <= 1e-5 && em <= 1e-5,
+                "{kind:?} motion {motion}: grad {eg:e} hess {eh:e} mixed {em:e}"
+            );
             worst = (worst.0.max(eg), worst.1.max(eh), worst.2.max(em));
         }
     }
@@ -115,21 +167,45 @@ fn friction_vertex_derivatives_match_fd() {
 #[test]
 fn friction_pose_derivatives_match_fd() {
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
-    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace].into_iter().enumerate() {
+    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace]
+        .into_iter()
+        .enumerate()
+    {
         let (la, pa, lb, pb, lag) = lagged(kind, 50 + i as u64);
         let mut r = rng(60 + i as u64);
         let pa1 = moved(&pa, &mut r, 5e-3);
         let pb1 = moved(&pb, &mut r, 5e-3);
         let eval = |a1: &Matrix3x4<f64>, b1: &Matrix3x4<f64>, frame: &FrictionFrame<'_>, need| {
             let mut sc = FrictionScratch::new();
-            friction_pair(frame, HullPose { pose: a1, x_local: &la }, HullPose { pose: b1, x_local: &lb }, &fparams(), need, &mut sc).unwrap()
+            friction_pair(
+                frame,
+                HullPose {
+                    pose: a1,
+                    x_local: &la,
+                },
+                HullPose {
+                    pose: b1,
+                    x_local: &lb,
+                },
+                &fparams(),
+                need,
+                &mut sc,
+            )
+            .unwrap()
         };
         let fr = lag.frame();
         let out = eval(&pa1, &pb1, &fr, FrictionNeed::HessianAndMixed);
         let p0 = pose_params(&pa1, &pb1);
         let h = 1e-8;
         let g = pose_params(&out.grad_a, &out.grad_b);
-        let g_fd = fd_gradient(&mut |p| { let (a, b) = poses_from_params(p); eval(&a, &b, &fr, FrictionNeed::Value).value }, &p0, h);
+        let g_fd = fd_gradient(
+            &mut |p| {
+                let (a, b) = poses_from_params(p);
+                eval(&a, &b, &fr, FrictionNeed::Value).value
+            },
+            &p0,
+            h,
+        );
         let hm = DMatrix::from_iterator(24, 24, out.hessian.unwrap().iter().copied());
         let h_fd = fd_jacobian(
             &mut |p| {
@@ -147,7 +223,11 @@ fn friction_pose_derivatives_match_fd() {
             &mut |p| {
                 let (a0, b0) = poses_from_params(p);
                 let (xa0, xb0) = (world(&a0, &la), world(&b0, &lb));
-                let frame = FrictionFrame { x_prev_a: &xa0, x_prev_b: &xb0, ..fr };
+                let frame = FrictionFrame {
+                    x_prev_a: &xa0,
+                    x_prev_b: &xb0,
+                    ..fr
+                };
                 let o = eval(&pa1, &pb1, &frame, FrictionNeed::Gradient);
                 pose_params(&o.grad_a, &o.grad_b)
             },
@@ -157,7 +237,10 @@ fn friction_pose_derivatives_match_fd() {
         let eg = rel_err(&col(&g), &col(&g_fd), 1e-300);
         let eh = rel_err(&hm, &h_fd, 1e-300);
         let em = rel_err(&mm, &m_fd, 1e-300);
-        assert!(eg <= 1e-5 && eh <= 1e-5 && em <= 1e-5, "{kind:?}: grad {eg:e} hess {eh:e} mixed {em:e}");
+        assert!(
+            eg <= 1e-5 && eh <= 1e-5 && em <= 1e-5,
+            "{kind:?}: grad {eg:e} hess {eh:e} mixed {em:e}"
+        );
         assert!(!out.spin_free);
         worst = (worst.0.max(eg), worst.1.max(eh), worst.2.max(em));
     }
@@ -168,7 +251,9 @@ fn friction_pose_derivatives_match_fd() {
 
 /// Two tetrahedra tip to tip: the only vertices with normal force are the two tips, on one
 /// line along the normal, so U* is flat in ω.
-fn tip_to_tip() -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<f64>, Vec<f64>) {
+type TipToTip = (Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<f64>, Vec<f64>);
+
+fn tip_to_tip() -> TipToTip {
     let xa = vec![
         Vector3::new(0.1, 0.2, 0.0),
         Vector3::new(0.5, 0.2, -0.5),
@@ -199,21 +284,62 @@ fn friction_single_contact_point_is_spin_free_and_matches_fd() {
     let mut r = rng(70);
     let mut worst = (0.0f64, 0.0f64);
     for _ in 0..3 {
-        let xa1: Vec<_> = xa.iter().map(|x| x + Vector3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)) * 2e-3).collect();
-        let xb1: Vec<_> = xb.iter().map(|x| x + Vector3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)) * 2e-3).collect();
+        let xa1: Vec<_> = xa
+            .iter()
+            .map(|x| {
+                x + Vector3::new(
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                ) * 2e-3
+            })
+            .collect();
+        let xb1: Vec<_> = xb
+            .iter()
+            .map(|x| {
+                x + Vector3::new(
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                ) * 2e-3
+            })
+            .collect();
         let mut sc = FrictionScratch::new();
         let f = friction_vertices(&frame, &xa1, &xb1, &fparams(), &mut sc).unwrap();
         assert!(f.spin_free && f.omega == 0.0);
-        assert!(f.value.is_finite() && f.grad_a.iter().chain(&f.grad_b).all(|g| g.iter().all(|v| v.is_finite())));
+        assert!(
+            f.value.is_finite()
+                && f.grad_a
+                    .iter()
+                    .chain(&f.grad_b)
+                    .all(|g| g.iter().all(|v| v.is_finite()))
+        );
         let (eg, eh, _) = fd_vertices(&frame, &xa1, &xb1, false);
-        assert!(eg <= 1e-5 && eh <= 1e-5, "tip-to-tip: grad {eg:e} hess {eh:e}");
+        assert!(
+            eg <= 1e-5 && eh <= 1e-5,
+            "tip-to-tip: grad {eg:e} hess {eh:e}"
+        );
         // The mixed derivative of the ω = 0 branch is finite (U_f is discontinuous in X^t at
         // this configuration, so it is not FD-checkable; see the module docs).
         assert!(f.dense_mixed().iter().all(|v| v.is_finite()));
         worst = (worst.0.max(eg), worst.1.max(eh));
         // Pose level: also finite and spin-free.
         let ident = Matrix3x4::identity();
-        let out = friction_pair(&frame, HullPose { pose: &ident, x_local: &xa1 }, HullPose { pose: &ident, x_local: &xb1 }, &fparams(), FrictionNeed::HessianAndMixed, &mut sc).unwrap();
+        let out = friction_pair(
+            &frame,
+            HullPose {
+                pose: &ident,
+                x_local: &xa1,
+            },
+            HullPose {
+                pose: &ident,
+                x_local: &xb1,
+            },
+            &fparams(),
+            FrictionNeed::HessianAndMixed,
+            &mut sc,
+        )
+        .unwrap();
         assert!(out.spin_free && out.mixed.unwrap().iter().all(|v| v.is_finite()));
     }
     report("friction tip-to-tip grad", worst.0);
@@ -222,13 +348,23 @@ fn friction_single_contact_point_is_spin_free_and_matches_fd() {
     // Only one vertex in total carries force: the plane follows it, U_f = μΔt A_ε(f) √ε_v is
     // constant and every derivative (including the mixed one, FD-checked) vanishes.
     let fb0 = vec![0.0; 4];
-    let frame1 = FrictionFrame { normal_force_b: &fb0, ..frame };
-    let xa1: Vec<_> = xa.iter().map(|x| x + Vector3::new(1e-3, -2e-3, 5e-4)).collect();
+    let frame1 = FrictionFrame {
+        normal_force_b: &fb0,
+        ..frame
+    };
+    let xa1: Vec<_> = xa
+        .iter()
+        .map(|x| x + Vector3::new(1e-3, -2e-3, 5e-4))
+        .collect();
     let mut sc = FrictionScratch::new();
     let f = friction_vertices(&frame1, &xa1, &xb, &fparams(), &mut sc).unwrap();
     let p = fparams();
     let expect = p.mu * p.dt * p.smoothed_force(3.0) * p.eps_velocity.sqrt();
-    assert!((f.value - expect).abs() <= 1e-12 * expect, "{} vs {expect}", f.value);
+    assert!(
+        (f.value - expect).abs() <= 1e-12 * expect,
+        "{} vs {expect}",
+        f.value
+    );
     let gnorm: f64 = f.grad_a.iter().chain(&f.grad_b).map(|g| g.norm()).sum();
     assert!(gnorm <= 1e-12, "{gnorm}");
     let (_, _, em) = fd_vertices(&frame1, &xa1, &xb, true);
@@ -238,7 +374,10 @@ fn friction_single_contact_point_is_spin_free_and_matches_fd() {
 #[test]
 fn friction_forces_and_in_plane_torque_balance() {
     let mut worst = 0.0f64;
-    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace].into_iter().enumerate() {
+    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace]
+        .into_iter()
+        .enumerate()
+    {
         let (la, pa, lb, pb, lag) = lagged(kind, 80 + i as u64);
         let mut r = rng(90 + i as u64);
         for motion in [1e-4, 1e-3, 2e-2] {
@@ -247,7 +386,12 @@ fn friction_forces_and_in_plane_torque_balance() {
             let mut sc = FrictionScratch::new();
             let f = friction_vertices(&lag.frame(), &xa, &xb, &fparams(), &mut sc).unwrap();
             let (mut sum, mut tau, mut fs, mut ts) = (Vector3::zeros(), 0.0, 0.0, 0.0);
-            for (x, g) in lag.x_prev_a.iter().zip(&f.grad_a).chain(lag.x_prev_b.iter().zip(&f.grad_b)) {
+            for (x, g) in lag
+                .x_prev_a
+                .iter()
+                .zip(&f.grad_a)
+                .chain(lag.x_prev_b.iter().zip(&f.grad_b))
+            {
                 let force = -g;
                 sum += force;
                 tau += lag.normal.dot(&x.cross(&force));
@@ -256,9 +400,17 @@ fn friction_forces_and_in_plane_torque_balance() {
             }
             let ef = sum.norm() / fs;
             let et = tau.abs() / ts;
-            assert!(ef <= 1e-9 && et <= 1e-9, "{kind:?} motion {motion}: force {ef:e} torque {et:e}");
+            assert!(
+                ef <= 1e-9 && et <= 1e-9,
+                "{kind:?} motion {motion}: force {ef:e} torque {et:e}"
+            );
             // Friction forces are tangential.
-            assert!(f.grad_a.iter().chain(&f.grad_b).all(|g| g.dot(&lag.normal).abs() <= 1e-12 * fs));
+            assert!(
+                f.grad_a
+                    .iter()
+                    .chain(&f.grad_b)
+                    .all(|g| g.dot(&lag.normal).abs() <= 1e-12 * fs)
+            );
             worst = worst.max(ef).max(et);
         }
     }
@@ -276,18 +428,42 @@ fn friction_sliding_hull_feels_coulomb_force() {
     let mut pb1 = pb;
     pb1.set_column(3, &(pb.column(3) + dir * speed * p.dt));
     let mut sc = FrictionScratch::new();
-    let out = friction_pair(&lag.frame(), HullPose { pose: &pa, x_local: &la }, HullPose { pose: &pb1, x_local: &lb }, &p, FrictionNeed::Gradient, &mut sc).unwrap();
+    let out = friction_pair(
+        &lag.frame(),
+        HullPose {
+            pose: &pa,
+            x_local: &la,
+        },
+        HullPose {
+            pose: &pb1,
+            x_local: &lb,
+        },
+        &p,
+        FrictionNeed::Gradient,
+        &mut sc,
+    )
+    .unwrap();
     // Net force on a rigid hull = −(translation column of ∂U/∂A).
     let force_b = -out.grad_b.column(3).into_owned();
     let force_a = -out.grad_a.column(3).into_owned();
     let normal_b: f64 = lag.normal_force_b.iter().sum();
     let normal_a: f64 = lag.normal_force_a.iter().sum();
-    assert!(normal_b > 100.0 * p.eps_force.sqrt(), "forces too small for the Coulomb limit: {normal_b}");
+    assert!(
+        normal_b > 100.0 * p.eps_force.sqrt(),
+        "forces too small for the Coulomb limit: {normal_b}"
+    );
     assert!(((normal_a - normal_b) / normal_b).abs() < 1e-9);
     let expect = p.mu * normal_b;
     let rel = (force_b.norm() - expect).abs() / expect;
-    assert!(rel < 1e-3, "|f| = {} vs μΣ‖f⊥‖ = {expect} (rel {rel:e})", force_b.norm());
-    assert!(force_b.normalize().dot(&dir) < -0.9999, "not opposing the motion: {force_b:?}");
+    assert!(
+        rel < 1e-3,
+        "|f| = {} vs μΣ‖f⊥‖ = {expect} (rel {rel:e})",
+        force_b.norm()
+    );
+    assert!(
+        force_b.normalize().dot(&dir) < -0.9999,
+        "not opposing the motion: {force_b:?}"
+    );
     assert!((force_a + force_b).norm() <= 1e-9 * expect);
     report("friction Coulomb limit rel err", rel);
 }
@@ -298,7 +474,21 @@ fn friction_vanishes_at_zero_relative_velocity() {
     let mut sc = FrictionScratch::new();
     let p = fparams();
     // Both at rest.
-    let rest = friction_pair(&lag.frame(), HullPose { pose: &pa, x_local: &la }, HullPose { pose: &pb, x_local: &lb }, &p, FrictionNeed::Hessian, &mut sc).unwrap();
+    let rest = friction_pair(
+        &lag.frame(),
+        HullPose {
+            pose: &pa,
+            x_local: &la,
+        },
+        HullPose {
+            pose: &pb,
+            x_local: &lb,
+        },
+        &p,
+        FrictionNeed::Hessian,
+        &mut sc,
+    )
+    .unwrap();
     assert_eq!(rest.grad_a, Matrix3x4::zeros());
     assert_eq!(rest.grad_b, Matrix3x4::zeros());
     assert!(rest.hessian.unwrap().iter().all(|v| v.is_finite()));
@@ -307,9 +497,29 @@ fn friction_vanishes_at_zero_relative_velocity() {
     let (mut pa1, mut pb1) = (pa, pb);
     pa1.set_column(3, &(pa.column(3) + v * p.dt));
     pb1.set_column(3, &(pb.column(3) + v * p.dt));
-    let out = friction_pair(&lag.frame(), HullPose { pose: &pa1, x_local: &la }, HullPose { pose: &pb1, x_local: &lb }, &p, FrictionNeed::Gradient, &mut sc).unwrap();
-    let scale: f64 = p.mu * (lag.normal_force_a.iter().sum::<f64>() + lag.normal_force_b.iter().sum::<f64>());
-    assert!(out.grad_a.norm() + out.grad_b.norm() <= 1e-9 * scale, "{} {}", out.grad_a.norm(), out.grad_b.norm());
+    let out = friction_pair(
+        &lag.frame(),
+        HullPose {
+            pose: &pa1,
+            x_local: &la,
+        },
+        HullPose {
+            pose: &pb1,
+            x_local: &lb,
+        },
+        &p,
+        FrictionNeed::Gradient,
+        &mut sc,
+    )
+    .unwrap();
+    let scale: f64 =
+        p.mu * (lag.normal_force_a.iter().sum::<f64>() + lag.normal_force_b.iter().sum::<f64>());
+    assert!(
+        out.grad_a.norm() + out.grad_b.norm() <= 1e-9 * scale,
+        "{} {}",
+        out.grad_a.norm(),
+        out.grad_b.norm()
+    );
     assert!((out.u - nalgebra::Vector2::new(0.3, -0.7)).norm() <= 1e-9);
 }
 
@@ -317,42 +527,110 @@ fn friction_vanishes_at_zero_relative_velocity() {
 fn friction_rejects_bad_input_with_typed_errors() {
     let (xa, xb, fa, fb) = tip_to_tip();
     let n = Vector3::z();
-    let frame = FrictionFrame { normal: n, basis: tangent_basis(&n), x_prev_a: &xa, x_prev_b: &xb, normal_force_a: &fa, normal_force_b: &fb };
+    let frame = FrictionFrame {
+        normal: n,
+        basis: tangent_basis(&n),
+        x_prev_a: &xa,
+        x_prev_b: &xb,
+        normal_force_a: &fa,
+        normal_force_b: &fb,
+    };
     let mut sc = FrictionScratch::new();
     for p in [
-        FrictionParams { dt: 0.0, ..fparams() },
-        FrictionParams { mu: -1.0, ..fparams() },
-        FrictionParams { eps_velocity: 0.0, ..fparams() },
-        FrictionParams { eps_force: f64::NAN, ..fparams() },
+        FrictionParams {
+            dt: 0.0,
+            ..fparams()
+        },
+        FrictionParams {
+            mu: -1.0,
+            ..fparams()
+        },
+        FrictionParams {
+            eps_velocity: 0.0,
+            ..fparams()
+        },
+        FrictionParams {
+            eps_force: f64::NAN,
+            ..fparams()
+        },
     ] {
-        assert!(matches!(friction_vertices(&frame, &xa, &xb, &p, &mut sc), Err(FrictionError::InvalidParams { .. })));
+        assert!(matches!(
+            friction_vertices(&frame, &xa, &xb, &p, &mut sc),
+            Err(FrictionError::InvalidParams { .. })
+        ));
     }
-    let bad_n = FrictionFrame { normal: Vector3::new(0.0, 0.0, 2.0), ..frame };
-    assert!(matches!(friction_vertices(&bad_n, &xa, &xb, &fparams(), &mut sc), Err(FrictionError::InvalidFrame { .. })));
+    let bad_n = FrictionFrame {
+        normal: Vector3::new(0.0, 0.0, 2.0),
+        ..frame
+    };
+    assert!(matches!(
+        friction_vertices(&bad_n, &xa, &xb, &fparams(), &mut sc),
+        Err(FrictionError::InvalidFrame { .. })
+    ));
     assert!(matches!(
         friction_vertices(&frame, &xa[..3], &xb, &fparams(), &mut sc),
-        Err(FrictionError::LengthMismatch { hull: Hull::A, expected: 4, got: 3, .. })
+        Err(FrictionError::LengthMismatch {
+            hull: Hull::A,
+            expected: 4,
+            got: 3,
+            ..
+        })
     ));
     let short = [1.0];
-    let bad_f = FrictionFrame { normal_force_b: &short, ..frame };
-    assert!(matches!(friction_vertices(&bad_f, &xa, &xb, &fparams(), &mut sc), Err(FrictionError::LengthMismatch { hull: Hull::B, .. })));
+    let bad_f = FrictionFrame {
+        normal_force_b: &short,
+        ..frame
+    };
+    assert!(matches!(
+        friction_vertices(&bad_f, &xa, &xb, &fparams(), &mut sc),
+        Err(FrictionError::LengthMismatch { hull: Hull::B, .. })
+    ));
     let mut xnan = xb.clone();
     xnan[2].x = f64::NAN;
     assert_eq!(
         friction_vertices(&frame, &xa, &xnan, &fparams(), &mut sc),
-        Err(FrictionError::NonFiniteVertex { hull: Hull::B, index: 2 })
+        Err(FrictionError::NonFiniteVertex {
+            hull: Hull::B,
+            index: 2
+        })
     );
-    let p = FrictionParams { inner_max_iters: 1, inner_tol: 0.0, inner_rtol: 0.0, ..fparams() };
+    let p = FrictionParams {
+        inner_max_iters: 1,
+        inner_tol: 0.0,
+        inner_rtol: 0.0,
+        ..fparams()
+    };
     let (la, pa, lb, pb, lag) = lagged(Features::FaceFace, 120);
     let mut rr = rng(121);
     let pb1 = moved(&pb, &mut rr, 1e-2);
-    match friction_pair(&lag.frame(), HullPose { pose: &pa, x_local: &la }, HullPose { pose: &pb1, x_local: &lb }, &p, FrictionNeed::Value, &mut sc) {
-        Err(FrictionError::NotConverged { iterations: 1, grad_norm, .. }) => assert!(grad_norm.is_finite()),
+    match friction_pair(
+        &lag.frame(),
+        HullPose {
+            pose: &pa,
+            x_local: &la,
+        },
+        HullPose {
+            pose: &pb1,
+            x_local: &lb,
+        },
+        &p,
+        FrictionNeed::Value,
+        &mut sc,
+    ) {
+        Err(FrictionError::NotConverged {
+            iterations: 1,
+            grad_norm,
+            ..
+        }) => assert!(grad_norm.is_finite()),
         other => panic!("{other:?}"),
     }
     // No normal force at all: U_f ≡ 0.
     let zeros = [0.0; 4];
-    let free = FrictionFrame { normal_force_a: &zeros, normal_force_b: &zeros, ..frame };
+    let free = FrictionFrame {
+        normal_force_a: &zeros,
+        normal_force_b: &zeros,
+        ..frame
+    };
     let f = friction_vertices(&free, &xa, &xb, &fparams(), &mut sc).unwrap();
     assert_eq!(f.value, 0.0);
     assert!(f.dense_hessian().iter().all(|v| *v == 0.0));

@@ -20,10 +20,10 @@
 pub mod barrier;
 mod error;
 pub mod friction;
-mod plane;
-pub mod potential;
 #[cfg(test)]
 mod friction_tests;
+mod plane;
+pub mod potential;
 #[cfg(test)]
 mod potential_tests;
 mod separation;

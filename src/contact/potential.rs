@@ -115,10 +115,8 @@ impl ContactParams {
         if !(self.s > 0.0 && self.s < 1.0) {
             return Err(ContactError::InvalidWidth { s: self.s });
         }
-        if !(self.inner_tol >= 0.0 && self.inner_tol.is_finite())
-            || !(self.inner_rtol >= 0.0 && self.inner_rtol.is_finite())
-            || self.inner_max_iters == 0
-        {
+        let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+        if !nonneg(self.inner_tol) || !nonneg(self.inner_rtol) || self.inner_max_iters == 0 {
             return Err(ContactError::InvalidSolverSettings {
                 tol: self.inner_tol,
                 rtol: self.inner_rtol,
@@ -253,6 +251,7 @@ impl ContactPair {
 }
 
 /// What the inner solve produced, in the shifted frame.
+#[allow(clippy::large_enum_variant)] // short-lived stack value
 enum Core {
     Intersecting,
     OutOfRange { distance: f64 },
@@ -360,8 +359,8 @@ fn check_finite(x: &[Vector3<f64>], hull: Hull) -> Result<(), ContactError> {
 
 /// Fills the scratch with world vertices shifted by the midpoint of the two centroids and
 /// returns that origin.
-fn fill_shifted<'s>(
-    scratch: &'s mut ContactScratch,
+fn fill_shifted(
+    scratch: &mut ContactScratch,
     a: impl Iterator<Item = Vector3<f64>>,
     b: impl Iterator<Item = Vector3<f64>>,
 ) -> Result<Vector3<f64>, ContactError> {
@@ -546,6 +545,7 @@ pub struct VertexContact {
 
 /// Outcome of [`contact_vertices`].
 #[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // returned by value, never stored in bulk
 pub enum VertexOutcome {
     /// See [`PairOutcome::Intersecting`].
     Intersecting,
