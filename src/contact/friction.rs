@@ -573,6 +573,30 @@ fn prepare(
     Ok(lever_in_plane <= 1e-20 * lever_full)
 }
 
+/// Majorize–minimize (Weiszfeld / iteratively reweighted least squares) step from `q`:
+/// since `√(t + ε)` is concave in `t = ‖r‖²`, `U* ≤ Σ w (‖r‖² + ε + φ₀²)/(2φ₀)` with `φ₀` taken
+/// at `q`, with equality at `q`; minimising this quadratic majorant (a 3×3 weighted least-squares
+/// problem) therefore never increases `U*`. Linear convergence, but globally robust.
+fn mm_step(act: &[Active], q: &Vector3<f64>, eps: f64, spin_free: bool) -> Option<Vector3<f64>> {
+    let mut a = Matrix3::zeros();
+    let mut b = Vector3::zeros();
+    for t in act {
+        let r = t.v - Vector2::new(q.x, q.y) - t.g * q.z;
+        let c = t.w / (r.norm_squared() + eps).sqrt();
+        let g = if spin_free { Vector2::zeros() } else { t.g };
+        let jtj = Matrix3::new(1.0, 0.0, g.x, 0.0, 1.0, g.y, g.x, g.y, g.norm_squared());
+        a += jtj * c;
+        b += Vector3::new(t.v.x, t.v.y, g.dot(&t.v)) * c;
+    }
+    if spin_free {
+        let a2 = a.fixed_view::<2, 2>(0, 0).into_owned();
+        let x = a2.cholesky()?.solve(&Vector2::new(b.x, b.y));
+        return Some(Vector3::new(x.x, x.y, 0.0));
+    }
+    let x = a.cholesky()?.solve(&b);
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
 fn solve_inner(
     act: &[Active],
     spin_free: bool,
@@ -622,24 +646,40 @@ fn solve_inner(
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }
+        // Newton with a short backtracking line search; when it needs a small step (far from
+        // the solution, where the radial curvature ε_v/φ³ of √(‖r‖² + ε_v) makes Newton
+        // overshoot), also try the majorize–minimize step below and keep the better point.
         let mut alpha = 1.0;
         let mut next = None;
-        while alpha > 1e-18 {
+        while alpha >= 1.0 / 4096.0 {
             let trial = q + dir * alpha;
             let vt = inner_value(act, &trial, eps);
             if vt <= ev.value + 1e-4 * alpha * slope {
-                next = Some((trial, inner_eval(act, &trial, eps, spin_free)));
+                next = Some((trial, vt));
                 break;
             }
             if (alpha * slope).abs() <= ev.value_noise && vt <= ev.value + ev.value_noise {
                 let et = inner_eval(act, &trial, eps, spin_free);
                 if et.grad.norm() < gnorm {
-                    next = Some((trial, et));
+                    next = Some((trial, vt));
                     break;
                 }
             }
             alpha *= 0.5;
         }
+        if alpha < 0.125 {
+            if let Some(qm) = mm_step(act, &q, eps, spin_free) {
+                let vm = inner_value(act, &qm, eps);
+                let better = match next {
+                    Some((_, vn)) => vm < vn,
+                    None => vm <= ev.value + ev.value_noise,
+                };
+                if better {
+                    next = Some((qm, vm));
+                }
+            }
+        }
+        let next = next.map(|(nq, _)| (nq, inner_eval(act, &nq, eps, spin_free)));
         match next {
             Some((nq, nev)) => {
                 q = nq;
