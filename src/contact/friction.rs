@@ -68,6 +68,23 @@
 //! Pose contraction uses, per hull, the accumulators `Σ x̃ w ρᵀ` (4×2), `Σ x̃ x̃ᵀ w Φ_ij`
 //! (three 4×4) and `Σ x̃ ⊗ w J_mᵀΦ_m` (4×3×2) over the vertices with a non-zero normal force
 //! only; vertices without normal force do not enter `U_f` at all.
+//!
+//! # Inner solve
+//!
+//! Newton's method on `q` from `u = Σ w ẋ / Σ w`, `ω = 0`, with an Armijo backtracking line
+//! search. Far from the solution, where relative speeds are many times `√ε_v`, the radial
+//! curvature `ε_v/φ³` is tiny and Newton overshoots; whenever the line search needs a step
+//! below 1/8, the majorize–minimize (Weiszfeld/IRLS) step, which never increases `U*`, is
+//! tried as well and the better point is kept. Stopping rule as for the contact plane:
+//! `‖∇_q U*‖ ≤ max(noise, min(tol, rtol · Σ w |ρ| (1 + ‖g‖)))`. Typical iteration counts are
+//! 3–12; relative speeds of 10⁵–10⁶ `√ε_v` need up to ~75 (see the robustness test).
+//!
+//! # Not covered
+//!
+//! Derivatives through the lagged data (how `n̂`, `B` and the normal forces depend on the
+//! step-`t` state) are not computed here: the mixed derivative is for fixed lagged data, as
+//! specified. A full adjoint through `θ^t` also needs `∂f_⊥/∂X^t` (from the contact Hessian
+//! machinery) and `∂n*/∂X^t` (from `∂p*/∂X`, paper Eq. `planeDerivative`).
 
 use nalgebra::{
     DMatrix, Matrix2, Matrix3, Matrix3x2, Matrix3x4, Matrix4, SMatrix, Vector2, Vector3, Vector4,

@@ -52,7 +52,7 @@
 //! distance `≥ s/‖n‖ ≥ s/(1−s)` from the plane on both sides.
 //!
 //! This module uses the *certified* gap `min_b d·X_b − max_a d·X_a` along GJK's direction `d`
-//! (a lower bound on the distance, see [`separation`](super::separation)): when it is `≥ 2s/(1−s)`
+//! (a lower bound on the distance, see the `separation` module): when it is `≥ 2s/(1−s)`
 //! the construction above applies verbatim with the two support planes and the outcome is
 //! [`PairOutcome::OutOfRange`] with `U_c = 0` exactly.
 
@@ -74,7 +74,7 @@ pub struct ContactParams {
     pub s: f64,
     /// Absolute tolerance on `‖∇_p U*‖` of the inner plane solve. Default `1e-8`.
     /// It is honoured whenever it is above the rounding-noise floor of the gradient (see
-    /// [`plane`](super::plane) docs).
+    /// `plane` module docs).
     pub inner_tol: f64,
     /// Relative tolerance on `‖∇_p U*‖`, relative to the total magnitude of the barrier forces
     /// acting on the plane. It takes over when the potential is tiny (near the edge of the
@@ -314,7 +314,9 @@ fn solve_core(
         }
         (Some((c, _)), None) => c,
         (None, Some((w, _))) => w,
-        (None, None) => unreachable!("handled above"),
+        // Not reachable (an intersecting pair without a feasible warm plane returned above);
+        // kept total so that this function cannot panic.
+        (None, None) => return Ok(Core::Intersecting),
     };
     let sol = plane::solve(xa, xb, start, &params.settings())?;
     Ok(Core::Separated { sol, distance })
