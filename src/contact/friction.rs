@@ -684,16 +684,16 @@ fn solve_inner(
             }
             alpha *= 0.5;
         }
-        if alpha < 0.125 {
-            if let Some(qm) = mm_step(act, &q, eps, spin_free) {
-                let vm = inner_value(act, &qm, eps);
-                let better = match next {
-                    Some((_, vn)) => vm < vn,
-                    None => vm <= ev.value + ev.value_noise,
-                };
-                if better {
-                    next = Some((qm, vm));
-                }
+        if alpha < 0.125
+            && let Some(qm) = mm_step(act, &q, eps, spin_free)
+        {
+            let vm = inner_value(act, &qm, eps);
+            let better = match next {
+                Some((_, vn)) => vm < vn,
+                None => vm <= ev.value + ev.value_noise,
+            };
+            if better {
+                next = Some((qm, vm));
             }
         }
         let next = next.map(|(nq, _)| (nq, inner_eval(act, &nq, eps, spin_free)));
