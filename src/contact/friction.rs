@@ -92,7 +92,7 @@ use nalgebra::{
 
 use super::barrier::barrier_d2;
 use super::error::{FrictionError, Hull};
-use super::potential::{ContactPair, ContactParams, HullPose, world_iter};
+use super::potential::{ContactPair, ContactParams, HullPose};
 
 /// Parameters of the friction potential.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -511,10 +511,13 @@ fn inner_hessian_inverse(h: &Matrix3<f64>, spin_free: bool) -> Matrix3<f64> {
     out
 }
 
-/// Fills the active-vertex list and returns whether the problem is spin-free.
+/// Fills the active-vertex list (vertices with a non-zero normal force) and returns whether
+/// the problem is spin-free. `next(h, m)` gives the step-`t+1` world position of vertex `m` of
+/// hull `h`; it is only called for active vertices, whose positions are checked for finiteness
+/// (vertices without normal force do not enter `U_f`).
 fn prepare(
     frame: &FrictionFrame<'_>,
-    next: [&mut dyn Iterator<Item = Vector3<f64>>; 2],
+    next: &dyn Fn(usize, usize) -> Vector3<f64>,
     counts: [usize; 2],
     params: &FrictionParams,
     act: &mut Vec<Active>,
@@ -538,53 +541,49 @@ fn prepare(
     let mut c = Vector3::zeros();
     for h in 0..2 {
         for (x, f) in prev[h].iter().zip(forces[h]) {
-            let a = params.smoothed_force(*f);
-            wsum += a;
-            c += a * x;
+            if *f > 0.0 {
+                let a = params.smoothed_force(*f);
+                wsum += a;
+                c += a * x;
+            }
         }
     }
     act.clear();
     if wsum.is_nan() || wsum <= 0.0 {
-        // No normal force anywhere: U_f ≡ 0. Still check the t+1 vertices.
-        for (h, it) in next.into_iter().enumerate() {
-            for (index, x) in it.enumerate() {
-                if !x.iter().all(|v| v.is_finite()) {
-                    return Err(FrictionError::NonFiniteVertex {
-                        hull: [Hull::A, Hull::B][h],
-                        index,
-                    });
-                }
-            }
-        }
+        // No normal force anywhere: U_f ≡ 0.
         return Ok(true);
     }
     c /= wsum;
     let bt = frame.basis.transpose();
     let n = frame.normal;
     let (mut lever_in_plane, mut lever_full) = (0.0, 0.0);
-    for (h, it) in next.into_iter().enumerate() {
-        for (index, xn) in it.enumerate() {
+    for h in 0..2 {
+        for (index, (xp, f)) in prev[h].iter().zip(forces[h]).enumerate() {
+            if *f <= 0.0 {
+                continue;
+            }
+            let a = params.smoothed_force(*f);
+            if a <= 0.0 {
+                continue; // underflow of f²
+            }
+            let xn = next(h, index);
             if !xn.iter().all(|v| v.is_finite()) {
                 return Err(FrictionError::NonFiniteVertex {
                     hull: [Hull::A, Hull::B][h],
                     index,
                 });
             }
-            let a = params.smoothed_force(forces[h][index]);
-            if a > 0.0 {
-                let xp = prev[h][index];
-                let d = xp - c;
-                let g = bt * n.cross(&d);
-                lever_in_plane += a * g.norm_squared();
-                lever_full += a * d.norm_squared();
-                act.push(Active {
-                    hull: h,
-                    index,
-                    w: params.mu * params.dt * a,
-                    v: bt * (xn - xp) / params.dt,
-                    g,
-                });
-            }
+            let d = xp - c;
+            let g = bt * n.cross(&d);
+            lever_in_plane += a * g.norm_squared();
+            lever_full += a * d.norm_squared();
+            act.push(Active {
+                hull: h,
+                index,
+                w: params.mu * params.dt * a,
+                v: bt * (xn - xp) / params.dt,
+                g,
+            });
         }
     }
     Ok(lever_in_plane <= 1e-20 * lever_full)
@@ -746,6 +745,11 @@ fn cross_matrix(n: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Frictional-damping potential of a hull pair at the step-`t+1` poses `a`, `b` (the local
 /// vertices must be the ones whose step-`t` world positions are in `frame`).
+///
+/// Cost: one pass over the normal forces plus work proportional to the number of vertices
+/// with a non-zero normal force (only those are transformed and checked for finiteness; the
+/// others do not enter `U_f`). Errors: invalid parameters or frame, length mismatches,
+/// non-finite step-`t+1` positions of force-carrying vertices, inner non-convergence.
 pub fn friction_pair(
     frame: &FrictionFrame<'_>,
     a: HullPose<'_>,
@@ -754,11 +758,15 @@ pub fn friction_pair(
     need: FrictionNeed,
     scratch: &mut FrictionScratch,
 ) -> Result<FrictionPair, FrictionError> {
-    let mut ia = world_iter(a);
-    let mut ib = world_iter(b);
+    let poses = [a.pose, b.pose];
+    let locals = [a.x_local, b.x_local];
+    let next = |h: usize, m: usize| {
+        let p = poses[h];
+        p.fixed_columns::<3>(0) * locals[h][m] + p.column(3)
+    };
     let spin_free = prepare(
         frame,
-        [&mut ia, &mut ib],
+        &next,
         [a.x_local.len(), b.x_local.len()],
         params,
         &mut scratch.act,
@@ -916,11 +924,16 @@ pub fn friction_vertices(
     params: &FrictionParams,
     scratch: &mut FrictionScratch,
 ) -> Result<FrictionVertices, FrictionError> {
-    let mut ia = xa_next.iter().copied();
-    let mut ib = xb_next.iter().copied();
+    for (hull, xs) in [(Hull::A, xa_next), (Hull::B, xb_next)] {
+        if let Some(index) = xs.iter().position(|x| !x.iter().all(|v| v.is_finite())) {
+            return Err(FrictionError::NonFiniteVertex { hull, index });
+        }
+    }
+    let sides = [xa_next, xb_next];
+    let next = |h: usize, m: usize| sides[h][m];
     let spin_free = prepare(
         frame,
-        [&mut ia, &mut ib],
+        &next,
         [xa_next.len(), xb_next.len()],
         params,
         &mut scratch.act,

@@ -388,7 +388,7 @@ fn fill_shifted(
 }
 
 /// World positions `R x + t` of a posed hull.
-pub(crate) fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
+fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
     let r = h.pose.fixed_columns::<3>(0).into_owned();
     let t: Vector3<f64> = h.pose.column(3).into_owned();
     h.x_local.iter().map(move |x| r * x + t)
