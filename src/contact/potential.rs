@@ -409,6 +409,14 @@ fn world_plane(p: &Vector4<f64>, c0: &Vector3<f64>) -> Vector4<f64> {
 /// `warm_plane` (world coordinates) when that plane is strictly feasible and not worse.
 /// Derivatives follow from the envelope and implicit-function theorems (module docs).
 ///
+/// "Touching" includes gaps below GJK's resolution (about `1e-8 ×` hull size): those pairs are
+/// [`PairOutcome::Intersecting`] unless `warm_plane` is strictly feasible, which proves
+/// separation; then the solve proceeds from it.
+///
+/// Any number of vertices `≥ 1` per hull is accepted (the body is their convex hull; four
+/// non-coplanar points are not required by the algorithm). Cost: `O(M)` per GJK iteration and
+/// per Newton iteration (typically 5–10), plus a fixed 24×24 assembly for the Hessian.
+///
 /// Errors: invalid parameters, empty hulls, non-finite vertices, GJK failure, or inner
 /// non-convergence — never a panic or NaN.
 pub fn contact_pair(

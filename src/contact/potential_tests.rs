@@ -691,7 +691,6 @@ fn contact_single_points_and_degenerate_hulls_work() {
         panic!("{out:?}")
     };
     assert!(c.value > 0.0 && c.value.is_finite());
-    let _ = Vector4::<f64>::zeros();
 }
 
 #[test]
