@@ -68,6 +68,23 @@
 //! Pose contraction uses, per hull, the accumulators `Σ x̃ w ρᵀ` (4×2), `Σ x̃ x̃ᵀ w Φ_ij`
 //! (three 4×4) and `Σ x̃ ⊗ w J_mᵀΦ_m` (4×3×2) over the vertices with a non-zero normal force
 //! only; vertices without normal force do not enter `U_f` at all.
+//!
+//! # Inner solve
+//!
+//! Newton's method on `q` from `u = Σ w ẋ / Σ w`, `ω = 0`, with an Armijo backtracking line
+//! search. Far from the solution, where relative speeds are many times `√ε_v`, the radial
+//! curvature `ε_v/φ³` is tiny and Newton overshoots; whenever the line search needs a step
+//! below 1/8, the majorize–minimize (Weiszfeld/IRLS) step, which never increases `U*`, is
+//! tried as well and the better point is kept. Stopping rule as for the contact plane:
+//! `‖∇_q U*‖ ≤ max(noise, min(tol, rtol · Σ w |ρ| (1 + ‖g‖)))`. Typical iteration counts are
+//! 3–12; relative speeds of 10⁵–10⁶ `√ε_v` need up to ~75 (see the robustness test).
+//!
+//! # Not covered
+//!
+//! Derivatives through the lagged data (how `n̂`, `B` and the normal forces depend on the
+//! step-`t` state) are not computed here: the mixed derivative is for fixed lagged data, as
+//! specified. A full adjoint through `θ^t` also needs `∂f_⊥/∂X^t` (from the contact Hessian
+//! machinery) and `∂n*/∂X^t` (from `∂p*/∂X`, paper Eq. `planeDerivative`).
 
 use nalgebra::{
     DMatrix, Matrix2, Matrix3, Matrix3x2, Matrix3x4, Matrix4, SMatrix, Vector2, Vector3, Vector4,
@@ -75,7 +92,7 @@ use nalgebra::{
 
 use super::barrier::barrier_d2;
 use super::error::{FrictionError, Hull};
-use super::potential::{ContactPair, ContactParams, HullPose, world_iter};
+use super::potential::{ContactPair, ContactParams, HullPose};
 
 /// Parameters of the friction potential.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -494,10 +511,13 @@ fn inner_hessian_inverse(h: &Matrix3<f64>, spin_free: bool) -> Matrix3<f64> {
     out
 }
 
-/// Fills the active-vertex list and returns whether the problem is spin-free.
+/// Fills the active-vertex list (vertices with a non-zero normal force) and returns whether
+/// the problem is spin-free. `next(h, m)` gives the step-`t+1` world position of vertex `m` of
+/// hull `h`; it is only called for active vertices, whose positions are checked for finiteness
+/// (vertices without normal force do not enter `U_f`).
 fn prepare(
     frame: &FrictionFrame<'_>,
-    next: [&mut dyn Iterator<Item = Vector3<f64>>; 2],
+    next: &dyn Fn(usize, usize) -> Vector3<f64>,
     counts: [usize; 2],
     params: &FrictionParams,
     act: &mut Vec<Active>,
@@ -521,56 +541,76 @@ fn prepare(
     let mut c = Vector3::zeros();
     for h in 0..2 {
         for (x, f) in prev[h].iter().zip(forces[h]) {
-            let a = params.smoothed_force(*f);
-            wsum += a;
-            c += a * x;
+            if *f > 0.0 {
+                let a = params.smoothed_force(*f);
+                wsum += a;
+                c += a * x;
+            }
         }
     }
     act.clear();
-    if !(wsum > 0.0) {
-        // No normal force anywhere: U_f ≡ 0. Still check the t+1 vertices.
-        for (h, it) in next.into_iter().enumerate() {
-            for (index, x) in it.enumerate() {
-                if !x.iter().all(|v| v.is_finite()) {
-                    return Err(FrictionError::NonFiniteVertex {
-                        hull: [Hull::A, Hull::B][h],
-                        index,
-                    });
-                }
-            }
-        }
+    if wsum.is_nan() || wsum <= 0.0 {
+        // No normal force anywhere: U_f ≡ 0.
         return Ok(true);
     }
     c /= wsum;
     let bt = frame.basis.transpose();
     let n = frame.normal;
     let (mut lever_in_plane, mut lever_full) = (0.0, 0.0);
-    for (h, it) in next.into_iter().enumerate() {
-        for (index, xn) in it.enumerate() {
+    for h in 0..2 {
+        for (index, (xp, f)) in prev[h].iter().zip(forces[h]).enumerate() {
+            if *f <= 0.0 {
+                continue;
+            }
+            let a = params.smoothed_force(*f);
+            if a <= 0.0 {
+                continue; // underflow of f²
+            }
+            let xn = next(h, index);
             if !xn.iter().all(|v| v.is_finite()) {
                 return Err(FrictionError::NonFiniteVertex {
                     hull: [Hull::A, Hull::B][h],
                     index,
                 });
             }
-            let a = params.smoothed_force(forces[h][index]);
-            if a > 0.0 {
-                let xp = prev[h][index];
-                let d = xp - c;
-                let g = bt * n.cross(&d);
-                lever_in_plane += a * g.norm_squared();
-                lever_full += a * d.norm_squared();
-                act.push(Active {
-                    hull: h,
-                    index,
-                    w: params.mu * params.dt * a,
-                    v: bt * (xn - xp) / params.dt,
-                    g,
-                });
-            }
+            let d = xp - c;
+            let g = bt * n.cross(&d);
+            lever_in_plane += a * g.norm_squared();
+            lever_full += a * d.norm_squared();
+            act.push(Active {
+                hull: h,
+                index,
+                w: params.mu * params.dt * a,
+                v: bt * (xn - xp) / params.dt,
+                g,
+            });
         }
     }
     Ok(lever_in_plane <= 1e-20 * lever_full)
+}
+
+/// Majorize–minimize (Weiszfeld / iteratively reweighted least squares) step from `q`:
+/// since `√(t + ε)` is concave in `t = ‖r‖²`, `U* ≤ Σ w (‖r‖² + ε + φ₀²)/(2φ₀)` with `φ₀` taken
+/// at `q`, with equality at `q`; minimising this quadratic majorant (a 3×3 weighted least-squares
+/// problem) therefore never increases `U*`. Linear convergence, but globally robust.
+fn mm_step(act: &[Active], q: &Vector3<f64>, eps: f64, spin_free: bool) -> Option<Vector3<f64>> {
+    let mut a = Matrix3::zeros();
+    let mut b = Vector3::zeros();
+    for t in act {
+        let r = t.v - Vector2::new(q.x, q.y) - t.g * q.z;
+        let c = t.w / (r.norm_squared() + eps).sqrt();
+        let g = if spin_free { Vector2::zeros() } else { t.g };
+        let jtj = Matrix3::new(1.0, 0.0, g.x, 0.0, 1.0, g.y, g.x, g.y, g.norm_squared());
+        a += jtj * c;
+        b += Vector3::new(t.v.x, t.v.y, g.dot(&t.v)) * c;
+    }
+    if spin_free {
+        let a2 = a.fixed_view::<2, 2>(0, 0).into_owned();
+        let x = a2.cholesky()?.solve(&Vector2::new(b.x, b.y));
+        return Some(Vector3::new(x.x, x.y, 0.0));
+    }
+    let x = a.cholesky()?.solve(&b);
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 fn solve_inner(
@@ -580,7 +620,7 @@ fn solve_inner(
 ) -> Result<Core, FrictionError> {
     let eps = params.eps_velocity;
     let wsum: f64 = act.iter().map(|a| a.w).sum();
-    if act.is_empty() || !(wsum > 0.0) {
+    if act.is_empty() || wsum.is_nan() || wsum <= 0.0 {
         return Ok(Core {
             q: Vector3::zeros(),
             spin_free: true,
@@ -618,28 +658,44 @@ fn solve_inner(
         iterations += 1;
         let mut dir = inner_direction(&ev.hess, &ev.grad, spin_free);
         let mut slope = ev.grad.dot(&dir);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }
+        // Newton with a short backtracking line search; when it needs a small step (far from
+        // the solution, where the radial curvature ε_v/φ³ of √(‖r‖² + ε_v) makes Newton
+        // overshoot), also try the majorize–minimize step below and keep the better point.
         let mut alpha = 1.0;
         let mut next = None;
-        while alpha > 1e-18 {
+        while alpha >= 1.0 / 4096.0 {
             let trial = q + dir * alpha;
             let vt = inner_value(act, &trial, eps);
             if vt <= ev.value + 1e-4 * alpha * slope {
-                next = Some((trial, inner_eval(act, &trial, eps, spin_free)));
+                next = Some((trial, vt));
                 break;
             }
             if (alpha * slope).abs() <= ev.value_noise && vt <= ev.value + ev.value_noise {
                 let et = inner_eval(act, &trial, eps, spin_free);
                 if et.grad.norm() < gnorm {
-                    next = Some((trial, et));
+                    next = Some((trial, vt));
                     break;
                 }
             }
             alpha *= 0.5;
         }
+        if alpha < 0.125
+            && let Some(qm) = mm_step(act, &q, eps, spin_free)
+        {
+            let vm = inner_value(act, &qm, eps);
+            let better = match next {
+                Some((_, vn)) => vm < vn,
+                None => vm <= ev.value + ev.value_noise,
+            };
+            if better {
+                next = Some((qm, vm));
+            }
+        }
+        let next = next.map(|(nq, _)| (nq, inner_eval(act, &nq, eps, spin_free)));
         match next {
             Some((nq, nev)) => {
                 q = nq;
@@ -689,6 +745,11 @@ fn cross_matrix(n: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Frictional-damping potential of a hull pair at the step-`t+1` poses `a`, `b` (the local
 /// vertices must be the ones whose step-`t` world positions are in `frame`).
+///
+/// Cost: one pass over the normal forces plus work proportional to the number of vertices
+/// with a non-zero normal force (only those are transformed and checked for finiteness; the
+/// others do not enter `U_f`). Errors: invalid parameters or frame, length mismatches,
+/// non-finite step-`t+1` positions of force-carrying vertices, inner non-convergence.
 pub fn friction_pair(
     frame: &FrictionFrame<'_>,
     a: HullPose<'_>,
@@ -697,11 +758,15 @@ pub fn friction_pair(
     need: FrictionNeed,
     scratch: &mut FrictionScratch,
 ) -> Result<FrictionPair, FrictionError> {
-    let mut ia = world_iter(a);
-    let mut ib = world_iter(b);
+    let poses = [a.pose, b.pose];
+    let locals = [a.x_local, b.x_local];
+    let next = |h: usize, m: usize| {
+        let p = poses[h];
+        p.fixed_columns::<3>(0) * locals[h][m] + p.column(3)
+    };
     let spin_free = prepare(
         frame,
-        [&mut ia, &mut ib],
+        &next,
         [a.x_local.len(), b.x_local.len()],
         params,
         &mut scratch.act,
@@ -804,11 +869,11 @@ pub fn friction_pair(
         // U*_{qX} in pose columns (h, c, r): P_c BᵀQ − e₃ (B R[c])ᵀ [n̂]×.
         let btq = bm.transpose() * qm;
         let mut qx = SMatrix::<f64, 3, 24>::zeros();
-        for h in 0..2 {
-            for c in 0..4 {
-                let mut blk = pacc[h][c] * btq;
+        for (h, (pacc_h, racc_h)) in pacc.iter().zip(&racc).enumerate() {
+            for (c, pacc_hc) in pacc_h.iter().enumerate() {
+                let mut blk = pacc_hc * btq;
                 if !core.spin_free {
-                    let brc = bm * racc[h].row(c).transpose();
+                    let brc = bm * racc_h.row(c).transpose();
                     let row = brc.transpose() * nx;
                     for r in 0..3 {
                         blk[(2, r)] -= row[r];
@@ -859,11 +924,16 @@ pub fn friction_vertices(
     params: &FrictionParams,
     scratch: &mut FrictionScratch,
 ) -> Result<FrictionVertices, FrictionError> {
-    let mut ia = xa_next.iter().copied();
-    let mut ib = xb_next.iter().copied();
+    for (hull, xs) in [(Hull::A, xa_next), (Hull::B, xb_next)] {
+        if let Some(index) = xs.iter().position(|x| !x.iter().all(|v| v.is_finite())) {
+            return Err(FrictionError::NonFiniteVertex { hull, index });
+        }
+    }
+    let sides = [xa_next, xb_next];
+    let next = |h: usize, m: usize| sides[h][m];
     let spin_free = prepare(
         frame,
-        [&mut ia, &mut ib],
+        &next,
         [xa_next.len(), xb_next.len()],
         params,
         &mut scratch.act,
@@ -905,13 +975,16 @@ pub fn friction_vertices(
     })
 }
 
+/// Per active vertex: global index, `M_m`, `C_m = U*_{X'_m q}`, `U*_{q X_m}`.
+type VertexBlocks = (usize, Matrix3<f64>, Matrix3<f64>, Matrix3<f64>);
+
 impl FrictionVertices {
     fn q(&self) -> Vector3<f64> {
         Vector3::new(self.u.x, self.u.y, self.omega)
     }
 
     /// Per active vertex: (global index, M_m = (w/Δt²)BΦBᵀ, C_m = −(w/Δt)BΦJ, U*_{qX,m}).
-    fn blocks(&self) -> Vec<(usize, Matrix3<f64>, Matrix3<f64>, Matrix3<f64>)> {
+    fn blocks(&self) -> Vec<VertexBlocks> {
         let q = self.q();
         let (b, dt) = (self.basis, self.dt);
         let nx = cross_matrix(&self.normal);

@@ -3,19 +3,41 @@
 //! appendices "Well-defined Contact Potential" and "Well-defined Frictional Damping
 //! Potential").
 //!
-//! - [`barrier`]: the locally supported barrier `P_s` and its first three derivatives.
+//! - [`barrier`](mod@barrier): the locally supported barrier `P_s` and its first three derivatives.
 //! - [`potential`]: the contact potential `U_c = min_p U*(p)` of a hull pair, its gradient and
 //!   Hessian w.r.t. the two link poses (and w.r.t. world vertices for tests).
 //! - [`friction`]: the lagged frictional-damping potential `U_f = min_{u,ω} Σ D_m`, its
-//!   gradient, Hessian and mixed derivative w.r.t. the step-`t` positions.
+//!   gradient and Hessian w.r.t. the step-`t+1` poses, and the mixed derivative w.r.t. the
+//!   step-`t+1` and step-`t` poses.
 //!
 //! Conventions: a link pose is `A = [R | t]` (`Matrix3x4`), a world point is `X = A [x; 1]`,
 //! pose parameters are `vec(A)` in column-major order (index `c·3 + r`), so
 //! `∂X/∂vec(A) = x̃ᵀ ⊗ I₃`. Pose gradients are returned as `Matrix3x4` (`∂U/∂A`), pose
 //! Hessians as `SMatrix<f64, 24, 24>` over `[vec(A_a); vec(A_b)]`. Hull `a` lies on the
 //! negative side of the plane, hull `b` on the positive side; the plane normal points from
-//! `a` to `b`. Potentials are unscaled: the simulator multiplies them by the stiffness κ
-//! (which the paper, Eq. `SDRS`, confusingly also calls μ).
+//! `a` to `b`.
+//!
+//! Scaling: `U_c` is unscaled; the simulator multiplies it by the stiffness κ (which the paper,
+//! Eq. `SDRS`, confusingly also calls μ). `U_f` takes the normal forces already multiplied by
+//! κ, so it is already an energy in physical units and must *not* be multiplied by κ again
+//! (the paper's Eq. `SDRS` puts κ in front of `U_c + U_f` with unscaled forces inside `U_f`;
+//! the two agree up to the smoothing `A_ε`, and this form keeps the Coulomb limit
+//! `μ κ ‖f_⊥‖` exact).
+//!
+//! # Design notes
+//!
+//! - Separation is decided by GJK (parry) on the raw vertex slices and then *certified*
+//!   exactly along GJK's direction; the certified gap also decides the out-of-range case, so
+//!   `U_c = 0` is returned exactly, not approximately. GJK cannot resolve gaps below about
+//!   `1e-8 ×` hull size: such pairs are reported as intersecting unless the caller's warm
+//!   plane is strictly feasible, which is itself a proof of separation.
+//! - Inner solves stop on `max(noise, min(tol, rtol · force scale))`: the absolute tolerance
+//!   of the brief where it is attainable, a relative one where the potential is tiny (near
+//!   the support edge), and a rounding-noise floor where the barrier is astronomically stiff
+//!   (near contact, `P_s' ~ y⁻⁶`).
+//! - Per-vertex normal forces are not stored in the contact outcome (that would allocate per
+//!   call); [`ContactPair::normal_forces_into`] and [`LaggedContact::from_contact`] compute
+//!   them from `p*` in one pass.
 
 pub mod barrier;
 mod error;

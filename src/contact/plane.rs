@@ -265,6 +265,7 @@ pub fn newton_direction(h: &Matrix4<f64>, g: &Vector4<f64>) -> Vector4<f64> {
 }
 
 /// Result of one line search.
+#[allow(clippy::large_enum_variant)] // short-lived stack value
 enum LineSearch {
     /// New iterate and its full evaluation.
     Accepted(Vector4<f64>, PlaneEval),
@@ -338,7 +339,7 @@ pub fn solve(
         iterations += 1;
         let mut dir = newton_direction(&ev.hess, &ev.grad);
         let mut slope = ev.grad.dot(&dir);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }

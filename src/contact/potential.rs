@@ -52,7 +52,7 @@
 //! distance `≥ s/‖n‖ ≥ s/(1−s)` from the plane on both sides.
 //!
 //! This module uses the *certified* gap `min_b d·X_b − max_a d·X_a` along GJK's direction `d`
-//! (a lower bound on the distance, see [`separation`](super::separation)): when it is `≥ 2s/(1−s)`
+//! (a lower bound on the distance, see the `separation` module): when it is `≥ 2s/(1−s)`
 //! the construction above applies verbatim with the two support planes and the outcome is
 //! [`PairOutcome::OutOfRange`] with `U_c = 0` exactly.
 
@@ -74,7 +74,7 @@ pub struct ContactParams {
     pub s: f64,
     /// Absolute tolerance on `‖∇_p U*‖` of the inner plane solve. Default `1e-8`.
     /// It is honoured whenever it is above the rounding-noise floor of the gradient (see
-    /// [`plane`](super::plane) docs).
+    /// `plane` module docs).
     pub inner_tol: f64,
     /// Relative tolerance on `‖∇_p U*‖`, relative to the total magnitude of the barrier forces
     /// acting on the plane. It takes over when the potential is tiny (near the edge of the
@@ -115,10 +115,8 @@ impl ContactParams {
         if !(self.s > 0.0 && self.s < 1.0) {
             return Err(ContactError::InvalidWidth { s: self.s });
         }
-        if !(self.inner_tol >= 0.0 && self.inner_tol.is_finite())
-            || !(self.inner_rtol >= 0.0 && self.inner_rtol.is_finite())
-            || self.inner_max_iters == 0
-        {
+        let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+        if !nonneg(self.inner_tol) || !nonneg(self.inner_rtol) || self.inner_max_iters == 0 {
             return Err(ContactError::InvalidSolverSettings {
                 tol: self.inner_tol,
                 rtol: self.inner_rtol,
@@ -253,6 +251,7 @@ impl ContactPair {
 }
 
 /// What the inner solve produced, in the shifted frame.
+#[allow(clippy::large_enum_variant)] // short-lived stack value
 enum Core {
     Intersecting,
     OutOfRange { distance: f64 },
@@ -315,7 +314,9 @@ fn solve_core(
         }
         (Some((c, _)), None) => c,
         (None, Some((w, _))) => w,
-        (None, None) => unreachable!("handled above"),
+        // Not reachable (an intersecting pair without a feasible warm plane returned above);
+        // kept total so that this function cannot panic.
+        (None, None) => return Ok(Core::Intersecting),
     };
     let sol = plane::solve(xa, xb, start, &params.settings())?;
     Ok(Core::Separated { sol, distance })
@@ -360,8 +361,8 @@ fn check_finite(x: &[Vector3<f64>], hull: Hull) -> Result<(), ContactError> {
 
 /// Fills the scratch with world vertices shifted by the midpoint of the two centroids and
 /// returns that origin.
-fn fill_shifted<'s>(
-    scratch: &'s mut ContactScratch,
+fn fill_shifted(
+    scratch: &mut ContactScratch,
     a: impl Iterator<Item = Vector3<f64>>,
     b: impl Iterator<Item = Vector3<f64>>,
 ) -> Result<Vector3<f64>, ContactError> {
@@ -387,7 +388,7 @@ fn fill_shifted<'s>(
 }
 
 /// World positions `R x + t` of a posed hull.
-pub(crate) fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
+fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
     let r = h.pose.fixed_columns::<3>(0).into_owned();
     let t: Vector3<f64> = h.pose.column(3).into_owned();
     h.x_local.iter().map(move |x| r * x + t)
@@ -407,6 +408,14 @@ fn world_plane(p: &Vector4<f64>, c0: &Vector3<f64>) -> Vector4<f64> {
 /// solve for `p*` from the mid-plane of the certified slab scaled to `‖n‖ = 1 − s`, or from
 /// `warm_plane` (world coordinates) when that plane is strictly feasible and not worse.
 /// Derivatives follow from the envelope and implicit-function theorems (module docs).
+///
+/// "Touching" includes gaps below GJK's resolution (about `1e-8 ×` hull size): those pairs are
+/// [`PairOutcome::Intersecting`] unless `warm_plane` is strictly feasible, which proves
+/// separation; then the solve proceeds from it.
+///
+/// Any number of vertices `≥ 1` per hull is accepted (the body is their convex hull; four
+/// non-coplanar points are not required by the algorithm). Cost: `O(M)` per GJK iteration and
+/// per Newton iteration (typically 5–10), plus a fixed 24×24 assembly for the Hessian.
 ///
 /// Errors: invalid parameters, empty hulls, non-finite vertices, GJK failure, or inner
 /// non-convergence — never a panic or NaN.
@@ -546,6 +555,7 @@ pub struct VertexContact {
 
 /// Outcome of [`contact_vertices`].
 #[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // returned by value, never stored in bulk
 pub enum VertexOutcome {
     /// See [`PairOutcome::Intersecting`].
     Intersecting,

@@ -131,7 +131,7 @@ pub fn separate(
         GJKResult::ClosestPoints(pa, pb, _) => {
             let delta = from_p(pb) - from_p(pa);
             let dist = delta.norm();
-            if !(dist > 0.0) || !dist.is_finite() {
+            if !dist.is_finite() || dist <= 0.0 {
                 return Ok(Separation::Intersecting);
             }
             Ok(certify(delta / dist, Some(dist)).unwrap_or(Separation::Intersecting))
@@ -139,10 +139,10 @@ pub fn separate(
         GJKResult::Proximity(_) | GJKResult::NoIntersection(_) => {
             // Only reachable when GJK hit its iteration cap (max_dist is infinite and exact
             // distances are requested). Try the centroid direction before giving up.
-            if fallback.norm_squared() > 0.0 {
-                if let Some(sep) = certify(fallback.normalize(), None) {
-                    return Ok(sep);
-                }
+            if fallback.norm_squared() > 0.0
+                && let Some(sep) = certify(fallback.normalize(), None)
+            {
+                return Ok(sep);
             }
             Err(ContactError::GjkFailed {
                 len_a: xa.len(),

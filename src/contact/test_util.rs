@@ -74,6 +74,14 @@ pub fn world(a: &Matrix3x4<f64>, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// `(local_a, pose_a, local_b, pose_b)`.
+pub type PosedPair = (
+    Vec<Vector3<f64>>,
+    Matrix3x4<f64>,
+    Vec<Vector3<f64>>,
+    Matrix3x4<f64>,
+);
+
 /// Kind of closest features in a deliberate near-contact configuration.
 #[derive(Clone, Copy, Debug)]
 pub enum Features {
@@ -84,16 +92,7 @@ pub enum Features {
 
 /// A hull pair at gap `d` along +z (in a frame then moved by a random rigid transform):
 /// `(local_a, pose_a, local_b, pose_b)`. The closest features are of the requested kind.
-pub fn configuration(
-    kind: Features,
-    d: f64,
-    rng: &mut ChaCha8Rng,
-) -> (
-    Vec<Vector3<f64>>,
-    Matrix3x4<f64>,
-    Vec<Vector3<f64>>,
-    Matrix3x4<f64>,
-) {
+pub fn configuration(kind: Features, d: f64, rng: &mut ChaCha8Rng) -> PosedPair {
     let yaw = |a: f64| *Rotation3::from_axis_angle(&Vector3::z_axis(), a).matrix();
     let (la, ra, ta, lb, rb, tb) = match kind {
         Features::FaceFace => {
