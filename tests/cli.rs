@@ -39,6 +39,27 @@ fn determinism_same_scene_twice_gives_byte_identical_csv() {
 }
 
 #[test]
+fn determinism_holds_across_rayon_thread_counts() {
+    // Pair results are reduced in pair order, so the thread count cannot
+    // change a single bit of the trajectory.
+    let dir = scratch_dir("threads");
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.join(format!("t{threads}.csv"));
+        let status = sdrs()
+            .env("RAYON_NUM_THREADS", threads)
+            .args(["simulate", "--steps", "400", "-q", "--out"])
+            .arg(&out)
+            .arg(robots("four_chains.yaml"))
+            .status()
+            .unwrap();
+        assert!(status.success());
+        outputs.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(outputs[0], outputs[1]);
+}
+
+#[test]
 fn simulate_writes_csv_with_joint_columns_and_summary_json() {
     let dir = scratch_dir("outputs");
     let (csv, json) = (dir.join("traj.csv"), dir.join("summary.json"));

@@ -233,3 +233,37 @@ fn intersecting_initial_state_is_a_clear_error() {
     let err = sim.step().unwrap_err().to_string();
     assert!(err.contains("step 1") && err.contains("intersect"), "{err}");
 }
+
+#[test]
+fn stack_of_ten_boxes_stays_stacked_without_interpenetration() {
+    let scene = Scene::load(robots("box_stack.yaml")).unwrap();
+    let s = scene.contact.as_ref().unwrap().s;
+    let mut sim = scene.simulator();
+    let traj = run(&mut sim, 1000, |_| {}).unwrap();
+    let top = traj.names.iter().position(|n| n == "box9/box9:z").unwrap();
+    let tx = traj.names.iter().position(|n| n == "box9/box9:x").unwrap();
+    let z0 = traj.states[0][top];
+    let sink = traj
+        .states
+        .iter()
+        .map(|q| z0 - q[top])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let slide = traj.states.iter().map(|q| q[tx].abs()).fold(0.0, f64::max);
+    let min_gap = traj
+        .diagnostics
+        .iter()
+        .map(|d| d.min_distance)
+        .fold(f64::INFINITY, f64::min);
+    let pairs = traj.diagnostics.last().unwrap().contact_pairs;
+    eprintln!(
+        "stack: top box sank {sink:.3e} m, slid {slide:.1e} m, min gap {min_gap:.4e} m, {pairs} contacts at the end"
+    );
+    assert!(min_gap > 0.0);
+    assert_eq!(
+        pairs, 10,
+        "every box rests on the one below (and the bottom one on the ground)"
+    );
+    // Ten barrier layers compress under the growing load, but by less than s each.
+    assert!(sink < 10.0 * s);
+    assert!(slide < 1e-9, "a symmetric stack must not slide sideways");
+}
