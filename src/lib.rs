@@ -11,6 +11,7 @@
 
 pub mod contact;
 pub mod control;
+pub mod diff;
 pub mod energy;
 pub mod geometry;
 pub mod kinematics;

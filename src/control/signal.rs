@@ -119,6 +119,92 @@ impl Signal {
     }
 }
 
+impl Signal {
+    /// Number of learnable parameters: constant `[value]`; sine `[offset,
+    /// (amplitude, frequency, phase) per term]`; spline and table: the knot
+    /// values (knot times are fixed).
+    pub fn nparams(&self) -> usize {
+        match self {
+            Signal::Constant { .. } => 1,
+            Signal::Sine { terms, .. } => 1 + 3 * terms.len(),
+            Signal::Spline { values, .. } | Signal::Table { values, .. } => values.len(),
+        }
+    }
+
+    /// The parameters, in the order of [`Signal::nparams`].
+    pub fn params(&self) -> Vec<f64> {
+        match self {
+            Signal::Constant { value } => vec![*value],
+            Signal::Sine { offset, terms } => {
+                let mut v = vec![*offset];
+                for t in terms {
+                    v.extend([t.amplitude, t.frequency, t.phase]);
+                }
+                v
+            }
+            Signal::Spline { values, .. } | Signal::Table { values, .. } => values.clone(),
+        }
+    }
+
+    /// Sets the parameters (same order and length as [`Signal::params`]).
+    pub fn set_params(&mut self, p: &[f64]) {
+        assert_eq!(p.len(), self.nparams(), "parameter count");
+        match self {
+            Signal::Constant { value } => *value = p[0],
+            Signal::Sine { offset, terms } => {
+                *offset = p[0];
+                for (k, t) in terms.iter_mut().enumerate() {
+                    t.amplitude = p[1 + 3 * k];
+                    t.frequency = p[2 + 3 * k];
+                    t.phase = p[3 + 3 * k];
+                }
+            }
+            Signal::Spline { values, .. } | Signal::Table { values, .. } => {
+                values.copy_from_slice(p)
+            }
+        }
+    }
+
+    /// `(∂θ*(t)/∂c, ∂θ̇*(t)/∂c)` for the parameters `c`.
+    pub fn param_grad(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
+        match self {
+            Signal::Constant { .. } => (vec![1.0], vec![0.0]),
+            Signal::Sine { terms, .. } => {
+                let (mut dv, mut dd) = (vec![1.0], vec![0.0]);
+                for term in terms {
+                    let w = TAU * term.frequency;
+                    let arg = w * t + term.phase;
+                    let (s, c) = arg.sin_cos();
+                    // value A sin(arg), derivative A w cos(arg)
+                    dv.extend([s, term.amplitude * c * TAU * t, term.amplitude * c]);
+                    dd.extend([
+                        w * c,
+                        term.amplitude * TAU * c - term.amplitude * w * s * TAU * t,
+                        -term.amplitude * w * s,
+                    ]);
+                }
+                (dv, dd)
+            }
+            // Both interpolants are linear in the knot values: evaluate the
+            // cardinal basis.
+            Signal::Spline { values, .. } | Signal::Table { values, .. } => {
+                let mut unit = self.clone();
+                let n = values.len();
+                let (mut dv, mut dd) = (vec![0.0; n], vec![0.0; n]);
+                for k in 0..n {
+                    let mut e = vec![0.0; n];
+                    e[k] = 1.0;
+                    unit.set_params(&e);
+                    let (v, d) = unit.eval(t);
+                    dv[k] = v;
+                    dd[k] = d;
+                }
+                (dv, dd)
+            }
+        }
+    }
+}
+
 /// Second derivatives `M_i` of the natural cubic spline through the knots
 /// (tridiagonal solve, `M_0 = M_n = 0`).
 fn natural_spline_moments(x: &[f64], y: &[f64]) -> Vec<f64> {
@@ -205,6 +291,59 @@ mod tests {
             values: vec![1.0, 3.0],
         };
         fd_check(&table, &[0.5]);
+    }
+
+    #[test]
+    fn signal_parameter_gradients_match_finite_differences() {
+        let signals = [
+            Signal::Constant { value: 0.3 },
+            Signal::Sine {
+                offset: 0.1,
+                terms: vec![
+                    SineTerm {
+                        amplitude: 0.5,
+                        frequency: 2.0,
+                        phase: 0.3,
+                    },
+                    SineTerm {
+                        amplitude: -0.2,
+                        frequency: 0.7,
+                        phase: 1.1,
+                    },
+                ],
+            },
+            Signal::Spline {
+                times: vec![0.0, 1.0, 2.0, 3.0],
+                values: vec![0.0, 1.0, -0.5, 0.2],
+            },
+            Signal::Table {
+                times: vec![0.0, 1.0, 2.5],
+                values: vec![1.0, 3.0, 2.0],
+            },
+        ];
+        for s in &signals {
+            for t in [0.37, 1.3, 2.2] {
+                let (dv, dd) = s.param_grad(t);
+                let p = s.params();
+                for k in 0..p.len() {
+                    let h = 1e-6;
+                    let (mut a, mut b) = (s.clone(), s.clone());
+                    let (mut pa, mut pb) = (p.clone(), p.clone());
+                    pa[k] += h;
+                    pb[k] -= h;
+                    a.set_params(&pa);
+                    b.set_params(&pb);
+                    let fv = (a.eval(t).0 - b.eval(t).0) / (2.0 * h);
+                    let fd = (a.eval(t).1 - b.eval(t).1) / (2.0 * h);
+                    assert!((fv - dv[k]).abs() < 1e-6, "{s:?} value param {k} at {t}");
+                    assert!(
+                        (fd - dd[k]).abs() < 1e-5,
+                        "{s:?} velocity param {k} at {t}: {fd} vs {}",
+                        dd[k]
+                    );
+                }
+            }
+        }
     }
 
     #[test]

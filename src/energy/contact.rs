@@ -160,6 +160,36 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
+    /// `∂Φ/∂A^t = κ H δA` (pose Hessian of the pairs); `∂Φ/∂κ = Φ/κ`.
+    /// Not yet available: vertex gradients (they need the world-vertex
+    /// Hessian of each pair) and `∂/∂s`.
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        kin: &Kinematics,
+        dir: &crate::diff::AdjointDirection,
+        out: &mut crate::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let mut tmp = EnergyAccumulator::new(ctx.model);
+        self.accumulate(ctx, q, kin, Need::Hessian, &mut tmp)?;
+        if !tmp.value.is_finite() {
+            return Err(EnergyError::Failed {
+                term: "contact",
+                msg: "intersecting state in the backward pass".into(),
+            });
+        }
+        super::pairs::hessian_times(&tmp, dir.dpose, &mut out.pose);
+        out.physical.kappa += super::pairs::directional(&tmp, dir.dpose) / self.settings.kappa;
+        if self.last_active > 0 {
+            out.unavailable.push("contact.s");
+            if out.want_vertices {
+                out.unavailable.push("contact.vertices");
+            }
+        }
+        Ok(())
+    }
+
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
         d.contact_pairs = self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);

@@ -180,4 +180,29 @@ impl Energy for FrictionEnergy {
         }
         Ok(())
     }
+
+    /// `∂Φ/∂A^t = H δA`, `∂Φ/∂μ = Φ/μ`. The dependence on the previous
+    /// state runs through the lagged plane, basis and normal forces as well
+    /// as `X^t`; until that derivative exists the term reports
+    /// `friction.previous_state` as unavailable (so no trajectory gradient
+    /// is produced through friction).
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        kin: &Kinematics,
+        dir: &crate::diff::AdjointDirection,
+        out: &mut crate::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let mut tmp = EnergyAccumulator::new(ctx.model);
+        self.accumulate(ctx, q, kin, Need::Hessian, &mut tmp)?;
+        super::pairs::hessian_times(&tmp, dir.dpose, &mut out.pose);
+        if self.settings.mu > 0.0 {
+            out.physical.mu += super::pairs::directional(&tmp, dir.dpose) / self.settings.mu;
+        }
+        if !self.lagged.is_empty() {
+            out.unavailable.push("friction.previous_state");
+        }
+        Ok(())
+    }
 }

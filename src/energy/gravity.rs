@@ -6,6 +6,7 @@
 //! `G = −Σ_i gᵀ(A_i − A_i^t)c_i`, `∂G/∂A_i = −g c_iᵀ`, no pose Hessian.
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;
 
@@ -38,6 +39,38 @@ impl Energy for Gravity {
             acc.value -= g.dot(&dx);
             if need >= Need::Gradient {
                 acc.link_grad[i] -= g * c.transpose();
+            }
+        }
+        Ok(())
+    }
+
+    /// `Φ = −Σ_i gᵀ δA_i c_i`: no pose dependence; `∂Φ/∂g = −Σ δA_i c_i`,
+    /// `∂Φ/∂x_m = −ρ_m [δA_iᵀ g]_{xyz}`; `Φ` is linear in the masses.
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        _kin: &Kinematics,
+        dir: &AdjointDirection,
+        out: &mut VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let g = ctx.gravity;
+        for (i, c) in ctx.model.first_moment.iter().enumerate() {
+            if c[3] == 0.0 {
+                continue;
+            }
+            let dac = dir.dpose[i] * c;
+            out.physical.mass_scale -= g.dot(&dac);
+            for e in 0..3 {
+                out.physical.gravity[e] -= dac[e];
+            }
+            if out.want_vertices {
+                let dg = dir.dpose[i].transpose() * g;
+                for (h, hull) in ctx.model.links[i].hulls.iter().enumerate() {
+                    for (k, rho) in hull.vertex_mass.iter().enumerate() {
+                        out.vertex[i][h][k] -= dg.fixed_rows::<3>(0) * *rho;
+                    }
+                }
             }
         }
         Ok(())

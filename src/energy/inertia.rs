@@ -9,8 +9,9 @@
 //! Hessian is the mass matrix over Δt², which keeps Newton convex for small Δt.
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
-use nalgebra::DVector;
+use nalgebra::{DVector, Vector4};
 
 /// The inertia term (no parameters: masses come from the hulls).
 #[derive(Default, Clone, Debug)]
@@ -43,6 +44,43 @@ impl Energy for Inertia {
             if need >= Need::Hessian {
                 acc.link_moment[i] += m * inv_dt2;
                 acc.link_moment_set = true;
+            }
+        }
+        Ok(())
+    }
+
+    /// `Φ_i = ⟨δA_i, D_i M_i⟩/Δt²`: `∂Φ/∂A^t = δA M/Δt²`, `∂Φ/∂A^{t−1} = −2δA M/Δt²`,
+    /// `∂Φ/∂A^{t−2} = δA M/Δt²`; with `W = D_iᵀδA_i/Δt²`, `Φ = ⟨W, M_i⟩` and
+    /// `∂Φ/∂x_m = ρ_m [(W + Wᵀ) x̃_m]_{xyz}`; `Φ` is linear in the masses.
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        kin: &Kinematics,
+        dir: &AdjointDirection,
+        out: &mut VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt2 = 1.0 / (ctx.dt * ctx.dt);
+        for (i, m) in ctx.model.second_moment.iter().enumerate() {
+            if m[(3, 3)] == 0.0 {
+                continue;
+            }
+            let da = &dir.dpose[i];
+            let dam = da * m * inv_dt2;
+            out.pose[i] += dam;
+            out.pose_prev[i] -= 2.0 * dam;
+            out.pose_prev2[i] += dam;
+            let d = kin.pose[i] - 2.0 * ctx.poses_prev[i] + ctx.poses_prev2[i];
+            out.physical.mass_scale += d.component_mul(&dam).sum();
+            if out.want_vertices {
+                let w = d.transpose() * da * inv_dt2;
+                let ws = w + w.transpose();
+                for (h, hull) in ctx.model.links[i].hulls.iter().enumerate() {
+                    for (k, (x, rho)) in hull.x_local.iter().zip(&hull.vertex_mass).enumerate() {
+                        let g = ws * Vector4::new(x.x, x.y, x.z, 1.0) * *rho;
+                        out.vertex[i][h][k] += g.fixed_rows::<3>(0);
+                    }
+                }
             }
         }
         Ok(())

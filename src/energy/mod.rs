@@ -162,6 +162,22 @@ pub trait Energy: Send + Sync {
     ) {
     }
 
+    /// Adjoint product: adds `∂Φ/∂x` for `Φ = Σ_i ⟨δA_i, ∂E/∂A_i⟩ + λᵀ∂E/∂θ`
+    /// (see [`crate::diff::vjp`]) at `θ^t = q`, with `begin_step` already run
+    /// for this step. Terms that cannot differentiate a quantity name it in
+    /// `out.unavailable`; the default supports nothing.
+    fn vjp(
+        &mut self,
+        _ctx: &StepContext,
+        _q: &DVector<f64>,
+        _kin: &Kinematics,
+        _dir: &crate::diff::AdjointDirection,
+        out: &mut crate::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        out.unavailable.push(self.name());
+        Ok(())
+    }
+
     /// Adds the term's value and requested derivatives at `θ^{t+1} = q`
     /// (kinematics `kin` already evaluated at `q`). A value of `+∞` marks an
     /// infeasible configuration; derivatives may then be left unset.

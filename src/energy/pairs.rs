@@ -59,3 +59,36 @@ pub fn scatter_pair(
         }
     }
 }
+
+/// `out_i += Σ_j ∂²E/∂A_i∂A_j δA_j` from the pose Hessian blocks written into
+/// `acc` (diagonal, structured and pair blocks): a pose-space
+/// Hessian–vector product.
+pub fn hessian_times(
+    acc: &EnergyAccumulator,
+    dpose: &[crate::math::Pose],
+    out: &mut [Matrix3x4<f64>],
+) {
+    let vec = |a: &Matrix3x4<f64>| SMatrix::<f64, 12, 1>::from_column_slice(a.as_slice());
+    let unvec = |v: SMatrix<f64, 12, 1>| Matrix3x4::from_column_slice(v.as_slice());
+    for i in 0..out.len() {
+        if acc.link_hess_set[i] {
+            out[i] += unvec(acc.link_hess[i] * vec(&dpose[i]));
+        }
+        if acc.link_moment_set {
+            out[i] += dpose[i] * acc.link_moment[i];
+        }
+    }
+    for (i, j, h) in &acc.pair_hess {
+        out[*i] += unvec(h * vec(&dpose[*j]));
+        out[*j] += unvec(h.transpose() * vec(&dpose[*i]));
+    }
+}
+
+/// `Σ_i ⟨δA_i, ∂E/∂A_i⟩` from the gradients written into `acc`.
+pub fn directional(acc: &EnergyAccumulator, dpose: &[crate::math::Pose]) -> f64 {
+    acc.link_grad
+        .iter()
+        .zip(dpose)
+        .map(|(g, d)| g.component_mul(d).sum())
+        .sum()
+}

@@ -6,6 +6,7 @@
 //! Units: `k_p` in J/rad² (or J/m²), `k_d` in J·s²/rad².
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;
 
@@ -51,6 +52,33 @@ impl Energy for PdController {
             if need >= Need::Hessian {
                 acc.dof_hess[(k, k)] += 2.0 * t.kp + 2.0 * t.kd * inv_dt * inv_dt;
             }
+        }
+        Ok(())
+    }
+
+    /// `Φ = Σ_k λ_k (−2k_p e_p − 2k_d e_v/Δt)` with `e_p = θ* − θ`,
+    /// `e_v = θ̇* − (θ − θ^{t−1})/Δt`. Channel gradients are ordered as the
+    /// controller's targets: `(∂/∂θ*, ∂/∂θ̇*, ∂/∂k_p, ∂/∂k_d)`.
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        _kin: &Kinematics,
+        dir: &AdjointDirection,
+        out: &mut VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt = 1.0 / ctx.dt;
+        for (ch, t) in ctx.targets.iter().enumerate() {
+            let k = t.dof;
+            let l = dir.lambda[k];
+            let ep = t.q - q[k];
+            let ev = t.qdot - (q[k] - ctx.q_prev[k]) * inv_dt;
+            out.q_prev[k] -= 2.0 * t.kd * l * inv_dt * inv_dt;
+            let c = &mut out.channels[ch];
+            c[0] -= 2.0 * t.kp * l;
+            c[1] -= 2.0 * t.kd * l * inv_dt;
+            c[2] -= 2.0 * ep * l;
+            c[3] -= 2.0 * ev * l * inv_dt;
         }
         Ok(())
     }

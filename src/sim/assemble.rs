@@ -57,22 +57,8 @@ pub fn assemble(
         return;
     }
     grad.copy_from(&acc.dof_grad);
-    // Subtree sums Q_a, from the leaves up (links are topologically ordered).
-    scratch.q_sub.clear();
-    scratch
-        .q_sub
-        .extend((0..nlink).map(|i| g_atr(&acc.link_grad[i], &kin.pose[i])));
-    for i in (0..nlink).rev() {
-        if let Some(p) = model.links[i].parent {
-            let qi = scratch.q_sub[i];
-            scratch.q_sub[p] += qi;
-        }
-    }
-    for (i, link) in model.links.iter().enumerate() {
-        for k in link.dof_offset..link.dof_offset + link.ndof() {
-            grad[k] += frob(&kin.twist[k], &scratch.q_sub[i]);
-        }
-    }
+    subtree_sums(model, kin, &acc.link_grad, &mut scratch.q_sub);
+    add_coordinate_gradient(model, kin, &scratch.q_sub, grad);
     if need < Need::Hessian {
         return;
     }
@@ -155,6 +141,50 @@ pub fn assemble(
             }
         }
     }
+}
+
+/// `Q_a = Σ_{i ∈ subtree(a)} G_i Ã_iᵀ` for every link `a` (leaves up).
+pub fn subtree_sums(
+    model: &Model,
+    kin: &Kinematics,
+    link_grad: &[Matrix3x4<f64>],
+    q_sub: &mut Vec<Matrix3x4<f64>>,
+) {
+    q_sub.clear();
+    q_sub.extend(link_grad.iter().zip(&kin.pose).map(|(g, a)| g_atr(g, a)));
+    for i in (0..model.links.len()).rev() {
+        if let Some(p) = model.links[i].parent {
+            let qi = q_sub[i];
+            q_sub[p] += qi;
+        }
+    }
+}
+
+/// `grad_k += ⟨S_k, Q_a⟩` for every coordinate `k` of joint `a`.
+pub fn add_coordinate_gradient(
+    model: &Model,
+    kin: &Kinematics,
+    q_sub: &[Matrix3x4<f64>],
+    grad: &mut DVector<f64>,
+) {
+    for (i, link) in model.links.iter().enumerate() {
+        for k in link.dof_offset..link.dof_offset + link.ndof() {
+            grad[k] += frob(&kin.twist[k], &q_sub[i]);
+        }
+    }
+}
+
+/// `Σ_i ⟨G_i, ∂A_i/∂θ⟩`: a pose-space gradient as a coordinate gradient.
+pub fn contract_gradient(
+    model: &Model,
+    kin: &Kinematics,
+    link_grad: &[Matrix3x4<f64>],
+) -> DVector<f64> {
+    let mut q_sub = Vec::new();
+    subtree_sums(model, kin, link_grad, &mut q_sub);
+    let mut g = DVector::zeros(model.ndof());
+    add_coordinate_gradient(model, kin, &q_sub, &mut g);
+    g
 }
 
 fn fill_jacobian(kin: &Kinematics, link: usize, anc: &[usize], out: &mut Vec<SMatrix<f64, 12, 1>>) {

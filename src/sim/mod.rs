@@ -194,6 +194,87 @@ impl Simulator {
         Ok((v, g, h))
     }
 
+    /// Re-creates the context of the step that follows `state` (targets,
+    /// lagged data) and returns the objective's gradient and Hessian at
+    /// `q`, with the kinematics and pose-space gradients left in
+    /// [`Simulator::kinematics`] / [`Simulator::pose_gradients`]. Used by the
+    /// backward pass; `state` becomes the simulator's state.
+    pub fn linearize(
+        &mut self,
+        state: &SimState,
+        q: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>), EnergyError> {
+        self.state = state.clone();
+        let t_next = (self.state.step + 1) as f64 * self.settings.dt;
+        self.controller
+            .targets_at(t_next, &mut self.scratch.targets);
+        let ctx = make_context(
+            &self.model,
+            &self.settings,
+            &self.state,
+            &self.scratch.targets,
+            t_next,
+        );
+        self.scratch.kin.update(
+            &self.model,
+            &self.state.q,
+            &self.state.charts,
+            KinOrder::Pose,
+        );
+        for e in self.energies.iter_mut() {
+            e.begin_step(&ctx, &self.scratch.kin)?;
+        }
+        let n = self.model.ndof();
+        let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
+        let mut obj = StepObjective {
+            ctx,
+            charts: &self.state.charts,
+            energies: &mut self.energies,
+            kin: &mut self.scratch.kin,
+            acc: &mut self.scratch.acc,
+            assemble: &mut self.scratch.assemble,
+        };
+        let v = obj.eval(q, Need::Hessian, &mut g, &mut h, &mut self.timers)?;
+        if !v.is_finite() {
+            return Err(EnergyError::Failed {
+                term: "objective",
+                msg: "not finite at the recorded solution".into(),
+            });
+        }
+        Ok((g, h))
+    }
+
+    /// Kinematics of the last [`Simulator::linearize`] point.
+    pub fn kinematics(&self) -> &Kinematics {
+        &self.scratch.kin
+    }
+
+    /// `∂O/∂A_i` of the last [`Simulator::linearize`] point.
+    pub fn pose_gradients(&self) -> &[crate::math::Pose] {
+        &self.scratch.acc.link_grad
+    }
+
+    /// Runs every term's adjoint product at the last linearization point.
+    pub fn vjp(
+        &mut self,
+        q: &DVector<f64>,
+        dir: &crate::diff::AdjointDirection,
+        out: &mut crate::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let t_next = (self.state.step + 1) as f64 * self.settings.dt;
+        let ctx = make_context(
+            &self.model,
+            &self.settings,
+            &self.state,
+            &self.scratch.targets,
+            t_next,
+        );
+        for e in self.energies.iter_mut() {
+            e.vjp(&ctx, q, &self.scratch.kin, dir, out)?;
+        }
+        Ok(())
+    }
+
     /// Advances one step: `θ^{t+1} = argmin O(θ; θ^t, θ^{t−1}, u^t)`.
     pub fn step(&mut self) -> Result<StepDiagnostics, StepError> {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;

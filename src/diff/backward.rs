@@ -1,0 +1,260 @@
+//! The backward (adjoint) pass over a recorded trajectory.
+
+use super::loss::{LevelGrad, Loss};
+use super::tape::Tape;
+use super::vjp::{AdjointDirection, PhysicalGrad, VjpAccumulator};
+use crate::energy::EnergyError;
+use crate::kinematics::{KinOrder, Kinematics};
+use crate::math::{Pose, rot, twist_apply};
+use crate::model::Model;
+use crate::sim::Simulator;
+use crate::sim::assemble::contract_gradient;
+use nalgebra::{DVector, Matrix3, Matrix3x4, Vector3};
+use std::time::Instant;
+
+/// Gradient of one controller channel.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ChannelGrad {
+    pub kp: f64,
+    pub kd: f64,
+    /// W.r.t. the signal's parameters ([`crate::control::Signal::params`]).
+    pub signal: Vec<f64>,
+}
+
+/// `dL/d·` for everything the trajectory depends on.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Gradients {
+    pub loss: f64,
+    /// `dL/dθ^0` (charted rotations: body-frame rotation vector at `θ^0`).
+    pub q0: DVector<f64>,
+    /// `dL/dθ̇^0`.
+    pub qdot0: DVector<f64>,
+    /// `dL/dt_c` for every link's attachment point (parent frame; world for
+    /// roots).
+    pub attachments: Vec<Vector3<f64>>,
+    /// `dL/dx_local` per link, hull, vertex (link frame).
+    pub vertices: Vec<Vec<Vec<Vector3<f64>>>>,
+    /// Per controller channel.
+    pub channels: Vec<ChannelGrad>,
+    pub physical: PhysicalGrad,
+    /// Quantities some term could not differentiate; gradients that depend
+    /// on them are incomplete (see [`super::vjp::VjpAccumulator::unavailable`]).
+    pub unavailable: Vec<&'static str>,
+    /// Wall time of the backward pass (s).
+    pub seconds: f64,
+}
+
+/// Why the backward pass failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BackwardError {
+    #[error("backward pass at step {step}: {source}")]
+    Energy {
+        step: usize,
+        #[source]
+        source: EnergyError,
+    },
+    #[error("backward pass at step {step}: the step Hessian is singular")]
+    Singular { step: usize },
+    #[error("no gradient through {what}: not yet differentiable")]
+    Unavailable { what: String },
+}
+
+/// Adds `sign · Σ_{i∈subtree(c)} R_λ(c)ᵀ P_i[:, 3]` to every attachment
+/// gradient: `∂A_i/∂t_c = [0 | R_λ(c) e] Ã_i` (a world translation).
+fn add_attachment(
+    model: &Model,
+    kin: &Kinematics,
+    p: &[Matrix3x4<f64>],
+    sign: f64,
+    out: &mut [Vector3<f64>],
+) {
+    let n = model.links.len();
+    let mut force: Vec<Vector3<f64>> = p.iter().map(|g| g.column(3).into_owned()).collect();
+    for i in (0..n).rev() {
+        if let Some(par) = model.links[i].parent {
+            let f = force[i];
+            force[par] += f;
+        }
+    }
+    for c in 0..n {
+        let r = model.links[c]
+            .parent
+            .map_or_else(Matrix3::identity, |par| rot(&kin.pose[par]));
+        out[c] += sign * r.transpose() * force[c];
+    }
+}
+
+/// Runs the adjoint pass for `loss` over `tape`, using `sim`'s model,
+/// controller and energy terms (the simulator's state is overwritten).
+pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradients, BackwardError> {
+    let t0 = Instant::now();
+    let model = sim.model.clone();
+    let n = model.ndof();
+    let nl = model.links.len();
+    let h = tape.len();
+    let nch = sim.controller.channels.len();
+    let zero_pose = || vec![Matrix3x4::<f64>::zeros(); nl];
+    let zero_vertex = || -> Vec<Vec<Vec<Vector3<f64>>>> {
+        model
+            .links
+            .iter()
+            .map(|l| {
+                l.hulls
+                    .iter()
+                    .map(|hh| vec![Vector3::zeros(); hh.x_local.len()])
+                    .collect()
+            })
+            .collect()
+    };
+    let mut g = Gradients {
+        q0: DVector::zeros(n),
+        qdot0: DVector::zeros(n),
+        attachments: vec![Vector3::zeros(); nl],
+        vertices: zero_vertex(),
+        channels: sim
+            .controller
+            .channels
+            .iter()
+            .map(|c| ChannelGrad {
+                kp: 0.0,
+                kd: 0.0,
+                signal: vec![0.0; c.signal.nparams()],
+            })
+            .collect(),
+        ..Default::default()
+    };
+    // Pending pose-space and coordinate gradients per time level −1 … H
+    // (index k + 1).
+    let mut pose_lvl: Vec<Vec<Pose>> = (0..h + 2).map(|_| zero_pose()).collect();
+    let mut q_lvl: Vec<DVector<f64>> = (0..h + 2).map(|_| DVector::zeros(n)).collect();
+    let mut kin_k = Kinematics::new(&model);
+
+    // Loss at every recorded level 0 … H.
+    for k in 0..=h {
+        let (q, charts) = tape.coords(k as isize);
+        kin_k.update(&model, q, charts, KinOrder::Pose);
+        let mut lg = LevelGrad {
+            pose: &mut pose_lvl[k + 1],
+            q: &mut q_lvl[k + 1],
+            vertex: &mut g.vertices,
+        };
+        g.loss += loss.eval_level(&model, k, h, &kin_k.pose, q, Some(&mut lg));
+    }
+
+    let mut acc = VjpAccumulator::new(&model, nch);
+    let mut dpose = zero_pose();
+    for t in (1..=h).rev() {
+        let rec = &tape.steps[t - 1];
+        let err = |source| BackwardError::Energy { step: t, source };
+        let (_, hess) = sim.linearize(&rec.before, &rec.q_new).map_err(err)?;
+        // ā_t and λ_t = H_t⁻¹ ā_t.
+        let kin = sim.kinematics().clone();
+        let abar = contract_gradient(&model, &kin, &pose_lvl[t + 1]) + &q_lvl[t + 1];
+        add_attachment(&model, &kin, &pose_lvl[t + 1], 1.0, &mut g.attachments);
+        let lambda = match hess.clone().cholesky() {
+            Some(ch) => ch.solve(&abar),
+            None => hess
+                .lu()
+                .solve(&abar)
+                .ok_or(BackwardError::Singular { step: t })?,
+        };
+        // δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i, accumulated down the tree.
+        let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); nl];
+        for (i, link) in model.links.iter().enumerate() {
+            let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| s_acc[p]);
+            for k in link.dof_offset..link.dof_offset + link.ndof() {
+                s += kin.twist[k] * lambda[k];
+            }
+            s_acc[i] = s;
+            dpose[i] = twist_apply(&s, &kin.pose[i]);
+        }
+        // Second-order kinematic part of the attachment gradient:
+        // −Σ_{k ∈ anc(parent(c))} λ_k R_pᵀ S_k[:, :3]ᵀ Σ_{i∈subtree(c)} G_i[:, 3].
+        {
+            let pose_grad = sim.pose_gradients();
+            let mut force: Vec<Vector3<f64>> = pose_grad
+                .iter()
+                .map(|gg| gg.column(3).into_owned())
+                .collect();
+            for i in (0..nl).rev() {
+                if let Some(par) = model.links[i].parent {
+                    let f = force[i];
+                    force[par] += f;
+                }
+            }
+            for c in 0..nl {
+                if let Some(par) = model.links[c].parent {
+                    let r = rot(&kin.pose[par]);
+                    let sl = s_acc[par].fixed_view::<3, 3>(0, 0).into_owned();
+                    g.attachments[c] -= r.transpose() * sl.transpose() * force[c];
+                }
+            }
+        }
+        acc.reset();
+        let dir = AdjointDirection {
+            lambda: &lambda,
+            dpose: &dpose,
+        };
+        sim.vjp(&rec.q_new, &dir, &mut acc).map_err(err)?;
+        for u in acc.unavailable.drain(..) {
+            if !g.unavailable.contains(&u) {
+                g.unavailable.push(u);
+            }
+        }
+        // Design and parameters: dL/dp −= ∂Φ/∂p.
+        add_attachment(&model, &kin, &acc.pose, -1.0, &mut g.attachments);
+        for (gl, al) in g
+            .vertices
+            .iter_mut()
+            .flatten()
+            .flatten()
+            .zip(acc.vertex.iter().flatten().flatten())
+        {
+            *gl -= al;
+        }
+        let time = t as f64 * tape.dt;
+        for (ch, (cg, a)) in g.channels.iter_mut().zip(&acc.channels).enumerate() {
+            cg.kp -= a[2];
+            cg.kd -= a[3];
+            let (dv, dd) = sim.controller.channels[ch].signal.param_grad(time);
+            for (k, sg) in cg.signal.iter_mut().enumerate() {
+                *sg -= a[0] * dv[k] + a[1] * dd[k];
+            }
+        }
+        g.physical.axpy(-1.0, &acc.physical);
+        // Earlier levels: ā_{t−1}, ā_{t−2} −= (∂g_t/∂θ^{t−1,t−2})ᵀ λ_t.
+        for (gl, al) in pose_lvl[t].iter_mut().zip(&acc.pose_prev) {
+            *gl -= al;
+        }
+        for (gl, al) in pose_lvl[t - 1].iter_mut().zip(&acc.pose_prev2) {
+            *gl -= al;
+        }
+        q_lvl[t] -= &acc.q_prev;
+    }
+    // Levels 0 and −1 map onto the initial state: θ^{−1} = θ^0 − Δt θ̇^0.
+    for k in [0isize, -1] {
+        let (q, charts) = tape.coords(k);
+        kin_k.update(&model, q, charts, KinOrder::First);
+        let lvl = (k + 1) as usize;
+        let abar = contract_gradient(&model, &kin_k, &pose_lvl[lvl]) + &q_lvl[lvl];
+        add_attachment(&model, &kin_k, &pose_lvl[lvl], 1.0, &mut g.attachments);
+        g.q0 += &abar;
+        if k == -1 {
+            g.qdot0 = -tape.dt * abar;
+        }
+    }
+    g.seconds = t0.elapsed().as_secs_f64();
+    Ok(g)
+}
+
+/// The loss of a recorded trajectory (forward only).
+pub fn loss_of(model: &Model, tape: &Tape, loss: &Loss) -> f64 {
+    let mut kin = Kinematics::new(model);
+    (0..=tape.len())
+        .map(|k| {
+            let (q, charts) = tape.coords(k as isize);
+            kin.update(model, q, charts, KinOrder::Pose);
+            loss.eval_level(model, k, tape.len(), &kin.pose, q, None)
+        })
+        .sum()
+}

@@ -1,0 +1,77 @@
+//! The forward pass with everything the backward pass needs.
+
+use crate::sim::{SimState, Simulator, StepError};
+use nalgebra::{DVector, Matrix3};
+
+/// One step: the state it started from and the solution `θ^{t}` in the
+/// charts of `before` (the chart it was solved in).
+#[derive(Clone, Debug)]
+pub struct StepRecord {
+    pub before: SimState,
+    pub q_new: DVector<f64>,
+}
+
+/// A recorded trajectory.
+#[derive(Clone, Debug)]
+pub struct Tape {
+    pub steps: Vec<StepRecord>,
+    pub dt: f64,
+}
+
+impl Tape {
+    /// Number of steps `H`.
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+
+    /// Coordinates and charts of `θ^k`, `k = −1 … H`.
+    pub fn coords(&self, k: isize) -> (&DVector<f64>, &[Matrix3<f64>]) {
+        match k {
+            -1 => (&self.steps[0].before.q_prev, &self.steps[0].before.charts),
+            0 => (&self.steps[0].before.q, &self.steps[0].before.charts),
+            k => {
+                let r = &self.steps[k as usize - 1];
+                (&r.q_new, &r.before.charts)
+            }
+        }
+    }
+}
+
+/// Runs `steps` steps from the simulator's current state, recording them.
+pub fn record(sim: &mut Simulator, steps: usize) -> Result<Tape, StepError> {
+    let mut tape = Tape {
+        steps: Vec::with_capacity(steps),
+        dt: sim.settings.dt,
+    };
+    for _ in 0..steps {
+        let before = sim.state.clone();
+        sim.step()?;
+        // The solution in the chart it was solved in: `sim.state.q` may have
+        // been re-centred after acceptance; poses are chart-independent, so
+        // recover the pre-re-centring coordinates from `before`'s charts.
+        let q_new = solution_in_chart(sim, &before);
+        tape.steps.push(StepRecord { before, q_new });
+    }
+    Ok(tape)
+}
+
+fn solution_in_chart(sim: &Simulator, before: &SimState) -> DVector<f64> {
+    let mut q = sim.state.q.clone();
+    for link in &sim.model.links {
+        let Some(c) = link.chart else { continue };
+        if sim.state.charts[c] == before.charts[c] {
+            continue;
+        }
+        // R = R_c' exp(φ') = R_c exp(φ)  ⇒  φ = log(R_cᵀ R_c' exp(φ')).
+        let o = link.dof_offset + link.joint.chart_offset();
+        let phi_new = nalgebra::Vector3::new(q[o], q[o + 1], q[o + 2]);
+        let r = sim.state.charts[c] * crate::math::so3::exp(&phi_new);
+        let phi = crate::math::so3::log(&(before.charts[c].transpose() * r));
+        q.rows_mut(o, 3).copy_from(&phi);
+    }
+    q
+}

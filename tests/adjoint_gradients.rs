@@ -1,0 +1,252 @@
+//! Whole-trajectory gradients by the adjoint method against central finite
+//! differences of the loss (re-simulating the whole trajectory).
+
+use nalgebra::{DVector, Matrix3, Vector3};
+use sdrs::control::Controller;
+use sdrs::diff::{Gradients, Loss, LossTerm, When, backward, loss_of, record};
+use sdrs::model::Model;
+use sdrs::scene::Scene;
+use sdrs::sim::{SimSettings, SimState, Simulator};
+use std::path::Path;
+
+/// Everything a trajectory depends on, so a test can perturb any of it.
+#[derive(Clone)]
+struct Setup {
+    scene: Scene,
+    model: Model,
+    settings: SimSettings,
+    controller: Controller,
+    q0: DVector<f64>,
+    qdot0: DVector<f64>,
+    charts: Vec<Matrix3<f64>>,
+    steps: usize,
+}
+
+impl Setup {
+    fn new(text: &str, steps: usize) -> Self {
+        let scene = Scene::from_str(text, Path::new("adjoint.yaml")).unwrap();
+        Setup {
+            model: scene.model.clone(),
+            settings: scene.settings.clone(),
+            controller: scene.controller.clone(),
+            q0: scene.q0.clone(),
+            qdot0: scene.qdot0.clone(),
+            charts: scene.charts.clone(),
+            steps,
+            scene,
+        }
+    }
+
+    fn simulator(&self) -> Simulator {
+        let mut sc = self.scene.clone();
+        sc.model = self.model.clone();
+        sc.settings = self.settings.clone();
+        sc.controller = self.controller.clone();
+        let mut sim = sc.simulator();
+        sim.state = SimState::new(
+            &self.model,
+            self.q0.clone(),
+            &self.qdot0,
+            self.charts.clone(),
+            self.settings.dt,
+        );
+        sim
+    }
+
+    fn loss(&self, loss: &Loss) -> f64 {
+        let mut sim = self.simulator();
+        let tape = record(&mut sim, self.steps).unwrap();
+        loss_of(&self.model, &tape, loss)
+    }
+
+    fn gradients(&self, loss: &Loss) -> Gradients {
+        let mut sim = self.simulator();
+        let tape = record(&mut sim, self.steps).unwrap();
+        backward(&mut sim, &tape, loss).unwrap()
+    }
+}
+
+/// Central difference of the loss under a perturbation `f(setup, ±h)`.
+fn fd(setup: &Setup, loss: &Loss, h: f64, f: impl Fn(&mut Setup, f64)) -> f64 {
+    let mut p = setup.clone();
+    f(&mut p, h);
+    let mut m = setup.clone();
+    f(&mut m, -h);
+    (p.loss(loss) - m.loss(loss)) / (2.0 * h)
+}
+
+fn check(name: &str, adjoint: f64, finite: f64, worst: &mut f64) {
+    let rel = (adjoint - finite).abs() / adjoint.abs().max(finite.abs()).max(1e-8);
+    eprintln!("{name:<28} adjoint {adjoint:+.9e}  fd {finite:+.9e}  rel {rel:.1e}");
+    *worst = worst.max(rel);
+    assert!(
+        rel <= 1e-4,
+        "{name}: adjoint {adjoint} vs finite difference {finite}"
+    );
+}
+
+const ARM: &str = r#"
+dt: 0.01
+gravity: [0.5, -0.3, -9.81]
+solver: {tol: 1.0e-10}
+robots:
+  - name: arm
+    links:
+      - name: base
+        joint: {name: root, type: free}
+        mass: 2.0
+        hulls: [{box: {size: [0.4, 0.3, 0.2]}}]
+      - name: upper
+        parent: base
+        joint: {name: shoulder, type: ball, origin: {xyz: [0.2, 0.0, 0.1]}}
+        mass: 0.6
+        hulls: [{box: {size: [0.4, 0.06, 0.06], center: [0.2, 0, 0]}}]
+      - name: fore
+        parent: upper
+        joint: {name: elbow, type: revolute, axis: [0, 0.6, 0.8], origin: {xyz: [0.4, 0, 0]}}
+        mass: 0.4
+        hulls: [{vertices: [[0,0,0],[0.3,0.02,0],[0.3,-0.02,0.03],[0.15,0,-0.04],[0.1,0.05,0.02]]}]
+      - name: slider
+        parent: fore
+        joint: {name: slide, type: prismatic, axis: [1, 0, 0], origin: {xyz: [0.3, 0, 0]}}
+        mass: 0.2
+        hulls: [{box: {size: [0.1, 0.05, 0.05], center: [0.05, 0, 0]}}]
+    controller:
+      kp: 4
+      kd: 0.02
+      targets:
+        shoulder: [{type: sine, offset: 0.1, terms: [{amplitude: 0.4, frequency: 1.5, phase: 0.2}]}, {type: spline, times: [0, 0.2, 0.4, 0.6], values: [0, 0.3, -0.2, 0.1]}]
+        elbow: {type: table, times: [0, 0.3, 0.6], values: [0.2, -0.4, 0.3]}
+        slide: {type: constant, value: 0.05}
+    initial:
+      root: {q: [0, 0, 1, 0.3, -0.2, 0.5], qdot: [0.2, 0.1, 0.5, 0.4, -0.3, 0.2]}
+      shoulder: {q: [0.2, -0.1], qdot: [0.5, 0.3]}
+      elbow: {q: [0.4], qdot: [-0.2]}
+"#;
+
+fn arm_loss(model: &Model) -> Loss {
+    let link = |n: &str| model.links.iter().position(|l| l.name == n).unwrap();
+    Loss {
+        terms: vec![
+            LossTerm::LinkPoint {
+                link: link("slider"),
+                point: Vector3::new(0.1, 0.02, 0.0),
+                target: Vector3::new(0.8, 0.3, 0.7),
+                weight: 1.0,
+                when: When::Final,
+            },
+            LossTerm::Joint {
+                dof: model.links[link("fore")].dof_offset,
+                target: 0.3,
+                weight: 0.5,
+                when: When::Running,
+            },
+            LossTerm::CenterOfMass {
+                links: (0..model.links.len()).collect(),
+                target: Vector3::new(0.1, 0.0, 0.9),
+                axes: Vector3::new(1.0, 1.0, 0.0),
+                weight: 2.0,
+                when: When::Final,
+            },
+        ],
+    }
+}
+
+#[test]
+fn trajectory_gradients_match_finite_differences_without_contact() {
+    let setup = Setup::new(ARM, 60);
+    let loss = arm_loss(&setup.model);
+    let g = setup.gradients(&loss);
+    assert!(g.unavailable.is_empty(), "{:?}", g.unavailable);
+    let mut worst = 0.0;
+    let h = 1e-5;
+    // Initial state.
+    for k in [0, 2, 4, 6, 7, 8, 9] {
+        let a = fd(&setup, &loss, h, |s, d| s.q0[k] += d);
+        check(&format!("q0[{k}]"), g.q0[k], a, &mut worst);
+        let b = fd(&setup, &loss, h, |s, d| s.qdot0[k] += d);
+        check(&format!("qdot0[{k}]"), g.qdot0[k], b, &mut worst);
+    }
+    // Attachment points and hull vertices.
+    for (c, e) in [(1, 0), (1, 2), (2, 0), (2, 1), (3, 0), (0, 2)] {
+        let a = fd(&setup, &loss, h, |s, d| {
+            s.model.links[c].attach[(e, 3)] += d
+        });
+        check(
+            &format!("attachment[{c}][{e}]"),
+            g.attachments[c][e],
+            a,
+            &mut worst,
+        );
+    }
+    for (l, hh, v, e) in [
+        (0, 0, 3, 1),
+        (1, 0, 5, 0),
+        (2, 0, 1, 2),
+        (2, 0, 4, 0),
+        (3, 0, 7, 1),
+    ] {
+        let a = fd(&setup, &loss, h, |s, d| {
+            s.model.links[l].hulls[hh].x_local[v][e] += d;
+            s.model.refresh_moments();
+        });
+        check(
+            &format!("vertex[{l}][{hh}][{v}][{e}]"),
+            g.vertices[l][hh][v][e],
+            a,
+            &mut worst,
+        );
+    }
+    // Controller parameters and gains.
+    for ch in 0..setup.controller.channels.len() {
+        let np = setup.controller.channels[ch].signal.nparams();
+        for k in 0..np {
+            let a = fd(&setup, &loss, h, |s, d| {
+                let sig = &mut s.controller.channels[ch].signal;
+                let mut p = sig.params();
+                p[k] += d;
+                sig.set_params(&p);
+            });
+            check(
+                &format!("channel[{ch}].signal[{k}]"),
+                g.channels[ch].signal[k],
+                a,
+                &mut worst,
+            );
+        }
+        let a = fd(&setup, &loss, h, |s, d| s.controller.channels[ch].kp += d);
+        check(
+            &format!("channel[{ch}].kp"),
+            g.channels[ch].kp,
+            a,
+            &mut worst,
+        );
+        let a = fd(&setup, &loss, h, |s, d| s.controller.channels[ch].kd += d);
+        check(
+            &format!("channel[{ch}].kd"),
+            g.channels[ch].kd,
+            a,
+            &mut worst,
+        );
+    }
+    // Physics.
+    for e in 0..3 {
+        let a = fd(&setup, &loss, h, |s, d| s.settings.gravity[e] += d);
+        check(
+            &format!("gravity[{e}]"),
+            g.physical.gravity[e],
+            a,
+            &mut worst,
+        );
+    }
+    let a = fd(&setup, &loss, h, |s, d| {
+        for l in &mut s.model.links {
+            for hull in &mut l.hulls {
+                hull.vertex_mass.iter_mut().for_each(|m| *m *= 1.0 + d);
+            }
+        }
+        s.model.refresh_moments();
+    });
+    check("mass scale", g.physical.mass_scale, a, &mut worst);
+    eprintln!("worst relative error {worst:.2e} (h = {h}, Newton tol 1e-10)");
+}
