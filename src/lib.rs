@@ -17,6 +17,7 @@ pub mod geometry;
 pub mod kinematics;
 pub mod math;
 pub mod model;
+pub mod optimize;
 pub mod output;
 pub mod scene;
 pub mod sim;

@@ -25,6 +25,30 @@ enum Command {
     Simulate(SimulateArgs),
     /// Benchmarks (release builds): per-step cost of the rotating-chain scene.
     Bench(BenchArgs),
+    /// Co-design: optimize shape and controller of a task with adjoint gradients.
+    Optimize(OptimizeArgs),
+}
+
+#[derive(clap::Args)]
+struct OptimizeArgs {
+    /// Task YAML (see README, "Co-design").
+    task: PathBuf,
+    /// Output directory: history.csv, convergence.svg, design.yaml,
+    /// meshes/<robot>_<link>.obj, summary.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Iterations (default: the task's `optimizer.iters`).
+    #[arg(long)]
+    iters: Option<usize>,
+    /// `off` optimizes the controller alone (for comparison).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    design: String,
+    /// Write into a non-empty output directory.
+    #[arg(long)]
+    force: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(clap::Args)]
@@ -72,6 +96,7 @@ fn main() {
     let res = match cli.command {
         Command::Simulate(a) => simulate(a),
         Command::Bench(a) => bench(a),
+        Command::Optimize(a) => optimize(a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");
@@ -210,5 +235,41 @@ fn bench(a: BenchArgs) -> Result<()> {
     if let Some(p) = &a.json {
         write_atomic(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;
     }
+    Ok(())
+}
+
+fn optimize(a: OptimizeArgs) -> Result<()> {
+    if a.out.exists() && std::fs::read_dir(&a.out).map(|mut d| d.next().is_some()).unwrap_or(true) && !a.force {
+        bail!("{}: the output directory is not empty (use --force to write into it)", a.out.display());
+    }
+    let problem = sdrs::optimize::Problem::load(&a.task, a.design == "on")?;
+    let iters = a.iters.unwrap_or(problem.task.optimizer.iters);
+    eprintln!(
+        "{}: {} design and {} controller variables, horizon {} steps, {} iterations",
+        a.task.display(),
+        problem.design.len(),
+        problem.controls.len(),
+        problem.horizon,
+        iters
+    );
+    let pb = progress(iters + 1, a.quiet);
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}")
+            .expect("static template"),
+    );
+    let outcome = sdrs::optimize::optimize(&problem, iters, |r| {
+        pb.set_position(r.iter as u64 + 1);
+        pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
+    })?;
+    pb.finish_and_clear();
+    sdrs::optimize::output::write_all(&a.out, &problem, &outcome, serde_json::json!({"design": a.design}))?;
+    eprintln!(
+        "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
+        outcome.initial_loss,
+        outcome.loss,
+        100.0 * (1.0 - outcome.loss / outcome.initial_loss),
+        iters,
+        a.out.display()
+    );
     Ok(())
 }

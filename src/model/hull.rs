@@ -13,7 +13,7 @@ pub enum HullError {
         "the vertices are coplanar or collinear (thickness {thickness:.3e} m vs extent {extent:.3e} m): a hull must enclose volume"
     )]
     Degenerate { thickness: f64, extent: f64 },
-    #[error("vertex mass must be positive and finite, got {0}")]
+    #[error("vertex mass must be finite and non-negative, got {0}")]
     BadMass(f64),
 }
 
@@ -39,7 +39,8 @@ impl Hull {
         Ok(hull)
     }
 
-    /// Checks: ≥ 4 finite vertices that enclose volume, positive masses.
+    /// Checks: ≥ 4 finite vertices that enclose volume, non-negative masses
+    /// (connectivity vertices added for design ties carry no mass).
     ///
     /// Volume test: the smallest principal extent of the centred vertex cloud
     /// (square root of the smallest eigenvalue of its scatter matrix) must
@@ -58,7 +59,7 @@ impl Hull {
             }
         }
         for &m in &self.vertex_mass {
-            if !(m > 0.0 && m.is_finite()) {
+            if !(m >= 0.0 && m.is_finite()) {
                 return Err(HullError::BadMass(m));
             }
         }

@@ -407,32 +407,24 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
                 "a link needs at least one hull",
             ));
         }
-        let nvert: usize = l
-            .hulls
-            .iter()
-            .map(|h| h.vertices.as_ref().map_or(8, Vec::len))
-            .sum();
+        let explicit = l.hulls.iter().all(|h| h.vertex_masses.is_some());
         let vertex_mass = match (l.mass, l.vertex_mass) {
-            (Some(_), Some(_)) => {
-                return Err(Invalid::new(
-                    lel,
-                    "give either `mass` or `vertex_mass`, not both",
-                ));
-            }
+            (Some(_), Some(_)) => return Err(Invalid::new(lel, "give either `mass` or `vertex_mass`, not both")),
+            (None, None) if explicit => 0.0,
             (None, None) => {
-                return Err(Invalid::new(
-                    lel,
-                    "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)",
-                ));
+                return Err(Invalid::new(lel, "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)"));
             }
             (Some(m), None) => {
                 if !(m > 0.0 && m.is_finite()) {
-                    return Err(Invalid::new(
-                        format!("{lel}.mass"),
-                        format!("must be positive and finite, got {m}"),
-                    ));
+                    return Err(Invalid::new(format!("{lel}.mass"), format!("must be positive and finite, got {m}")));
                 }
-                m / nvert as f64
+                let nimplicit: usize = l
+                    .hulls
+                    .iter()
+                    .filter(|h| h.vertex_masses.is_none())
+                    .map(|h| h.vertices.as_ref().map_or(8, Vec::len))
+                    .sum();
+                m / nimplicit.max(1) as f64
             }
             (None, Some(m)) => {
                 if !(m > 0.0 && m.is_finite()) {

@@ -287,6 +287,11 @@ pub struct JointSpec {
 pub struct HullSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertices: Option<Vec<[f64; 3]>>,
+    /// Mass of each vertex (kg), overriding the link's `mass`/`vertex_mass`
+    /// for this hull (written by `sdrs optimize`; connectivity vertices are
+    /// massless).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex_masses: Option<Vec<f64>>,
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     pub cuboid: Option<BoxSpec>,
 }
@@ -305,17 +310,11 @@ pub struct BoxSpec {
 impl HullSpec {
     /// A hull from explicit vertices.
     pub fn from_vertices(v: Vec<[f64; 3]>) -> Self {
-        HullSpec {
-            vertices: Some(v),
-            cuboid: None,
-        }
+        HullSpec { vertices: Some(v), cuboid: None, vertex_masses: None }
     }
     /// A box hull.
     pub fn cuboid(size: [f64; 3], center: [f64; 3]) -> Self {
-        HullSpec {
-            vertices: None,
-            cuboid: Some(BoxSpec { size, center }),
-        }
+        HullSpec { vertices: None, cuboid: Some(BoxSpec { size, center }), vertex_masses: None }
     }
 }
 

@@ -1,0 +1,287 @@
+//! Co-design: shape and controller optimization with adjoint gradients
+//! (paper, `problem.tex`: `min_{d∈D, c∈C} L(θ^H)` by projected gradient).
+
+pub mod controls;
+pub mod design;
+pub mod method;
+pub mod names;
+pub mod output;
+pub mod task;
+
+pub use controls::ControlSpace;
+pub use design::DesignSpace;
+pub use task::TaskSpec;
+
+use crate::control::Controller;
+use crate::diff::{Gradients, Loss, LossTerm, backward, record};
+use crate::model::Model;
+use crate::scene::Scene;
+use method::{Adam, trust_region_step};
+use nalgebra::{DVector, Vector3};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use task::{LossSpec, Method};
+
+/// A problem with a task file.
+#[derive(Debug, thiserror::Error)]
+pub enum TaskError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: malformed task: {msg}", path.display())]
+    Parse { path: PathBuf, msg: String },
+    #[error("{}: {element}: {msg}", path.display())]
+    Invalid { path: PathBuf, element: String, msg: String },
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+}
+
+/// A ready-to-run co-design problem.
+#[derive(Clone)]
+pub struct Problem {
+    pub task_path: PathBuf,
+    pub task: TaskSpec,
+    pub scene: Scene,
+    /// The model with connectivity vertices added.
+    pub model: Model,
+    pub controller: Controller,
+    pub loss: Loss,
+    pub design: DesignSpace,
+    pub controls: ControlSpace,
+    pub horizon: usize,
+}
+
+impl Problem {
+    /// Loads a task and its scene. `design = false` optimizes the controller only.
+    pub fn load(path: &Path, design: bool) -> Result<Problem, TaskError> {
+        let text = std::fs::read_to_string(path).map_err(|source| TaskError::Io { path: path.into(), source })?;
+        let task: TaskSpec =
+            serde_yaml::from_str(&text).map_err(|e| TaskError::Parse { path: path.into(), msg: e.to_string() })?;
+        let invalid = |element: &str, msg: String| TaskError::Invalid { path: path.into(), element: element.into(), msg };
+        if task.version != 1 {
+            return Err(invalid("version", format!("unsupported task version {}", task.version)));
+        }
+        let scene_path = path.parent().unwrap_or(Path::new(".")).join(&task.scene);
+        let scene = Scene::load(&scene_path)?;
+        let mut model = scene.model.clone();
+        let horizon = task.horizon.unwrap_or(scene.steps);
+        if horizon == 0 {
+            return Err(invalid("horizon", "must be at least 1".into()));
+        }
+        let o = &task.optimizer;
+        if !(o.step_design > 0.0 && o.step_controller > 0.0) {
+            return Err(invalid("optimizer", "steps must be positive".into()));
+        }
+        let (design_space, controls) = {
+            let ds = match (&task.design, design) {
+                (Some(d), true) => {
+                    if !(d.bound > 0.0) {
+                        return Err(invalid("design.bound", format!("must be positive, got {}", d.bound)));
+                    }
+                    DesignSpace::build(&mut model, &d.attachments, &d.vertices, d.bound)
+                        .map_err(|e| invalid("design", e.to_string()))?
+                }
+                _ => DesignSpace::default(),
+            };
+            let cs = ControlSpace::build(&model, &scene.controller, &task.controller.joints, task.controller.gains)
+                .map_err(|e| invalid("controller", e.to_string()))?;
+            (ds, cs)
+        };
+        if design_space.is_empty() && controls.is_empty() {
+            return Err(invalid("design/controller", "nothing to optimize".into()));
+        }
+        let mut loss = Loss::default();
+        for (i, l) in task.loss.iter().enumerate() {
+            let el = format!("loss[{i}]");
+            let bad = |e: names::NameError| invalid(&el, e.to_string());
+            loss.terms.push(match l {
+                LossSpec::LinkPoint { link, point, target, weight, when } => LossTerm::LinkPoint {
+                    link: names::link(&model, link).map_err(bad)?,
+                    point: Vector3::from(*point),
+                    target: Vector3::from(*target),
+                    weight: *weight,
+                    when: *when,
+                },
+                LossSpec::Joint { joint, index, target, weight, when } => {
+                    let li = names::joint(&model, joint).map_err(bad)?;
+                    if *index >= model.links[li].ndof() {
+                        return Err(invalid(&el, format!("joint {joint} has {} coordinate(s)", model.links[li].ndof())));
+                    }
+                    LossTerm::Joint { dof: model.links[li].dof_offset + index, target: *target, weight: *weight, when: *when }
+                }
+                LossSpec::Com { robot, target, axes, weight, when } => {
+                    let r = names::robot(&model, robot).map_err(bad)?;
+                    LossTerm::CenterOfMass {
+                        links: model.robots[r].links.clone().collect(),
+                        target: Vector3::from(*target),
+                        axes: Vector3::from(*axes),
+                        weight: *weight,
+                        when: *when,
+                    }
+                }
+                LossSpec::Relative { link, point, to_link, to_point, offset, weight, when } => LossTerm::Relative {
+                    link_a: names::link(&model, link).map_err(bad)?,
+                    point_a: Vector3::from(*point),
+                    link_b: names::link(&model, to_link).map_err(bad)?,
+                    point_b: Vector3::from(*to_point),
+                    offset: Vector3::from(*offset),
+                    weight: *weight,
+                    when: *when,
+                },
+            });
+        }
+        Ok(Problem {
+            task_path: path.into(),
+            controller: scene.controller.clone(),
+            task,
+            scene,
+            model,
+            loss,
+            design: design_space,
+            controls,
+            horizon,
+        })
+    }
+
+    /// Loss and gradients at design `d` and controller `c` (forward +
+    /// backward), with timings.
+    pub fn evaluate(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+        let mut model = self.model.clone();
+        self.design.apply(&mut model, d);
+        let mut controller = self.controller.clone();
+        self.controls.apply(&mut controller, c);
+        let mut scene = self.scene.clone();
+        scene.model = model.clone();
+        scene.controller = controller;
+        let mut sim = scene.simulator();
+        let t0 = Instant::now();
+        let tape = record(&mut sim, self.horizon)?;
+        let forward = t0.elapsed().as_secs_f64();
+        let grads = backward(&mut sim, &tape, &self.loss)?;
+        if !grads.unavailable.is_empty() {
+            anyhow::bail!(
+                "the gradient needs derivatives that are not available yet: {}",
+                grads.unavailable.join(", ")
+            );
+        }
+        let gd = self.design.gradient(&grads);
+        let gc = self.controls.gradient(&grads);
+        Ok(Evaluation { loss: grads.loss, grad_design: gd, grad_controller: gc, forward_seconds: forward, backward_seconds: grads.seconds, grads, model })
+    }
+}
+
+/// One forward + backward evaluation.
+pub struct Evaluation {
+    pub loss: f64,
+    pub grad_design: DVector<f64>,
+    pub grad_controller: DVector<f64>,
+    pub forward_seconds: f64,
+    pub backward_seconds: f64,
+    pub grads: Gradients,
+    /// The model the evaluation ran (design applied).
+    pub model: Model,
+}
+
+/// One row of `history.csv`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct IterRecord {
+    pub iter: usize,
+    pub loss: f64,
+    pub best_loss: f64,
+    pub grad_design_norm: f64,
+    pub grad_controller_norm: f64,
+    pub radius_design: f64,
+    pub radius_controller: f64,
+    pub accepted: bool,
+    pub forward_seconds: f64,
+    pub backward_seconds: f64,
+    pub wall_seconds: f64,
+}
+
+/// Result of an optimization.
+pub struct Outcome {
+    pub history: Vec<IterRecord>,
+    pub design: DVector<f64>,
+    pub controller: DVector<f64>,
+    pub initial_loss: f64,
+    pub loss: f64,
+}
+
+/// Runs the optimizer for `iters` iterations; `on_iter` sees each record.
+pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord)) -> anyhow::Result<Outcome> {
+    let t0 = Instant::now();
+    let o = &p.task.optimizer;
+    let (lo, hi) = (p.design.lower(), p.design.upper());
+    let mut d = p.design.values(&p.model);
+    let mut c = p.controls.values(&p.controller);
+    let mut ev = p.evaluate(&d, &c)?;
+    let initial_loss = ev.loss;
+    let (mut rd, mut rc) = (o.step_design, o.step_controller);
+    let mut adam = (Adam::new(d.len(), o.step_design), Adam::new(c.len(), o.step_controller));
+    let mut history = Vec::with_capacity(iters + 1);
+    let mut push = |history: &mut Vec<IterRecord>, it, ev: &Evaluation, best: f64, rd, rc, accepted| {
+        let r = IterRecord {
+            iter: it,
+            loss: ev.loss,
+            best_loss: best,
+            grad_design_norm: ev.grad_design.norm(),
+            grad_controller_norm: ev.grad_controller.norm(),
+            radius_design: rd,
+            radius_controller: rc,
+            accepted,
+            forward_seconds: ev.forward_seconds,
+            backward_seconds: ev.backward_seconds,
+            wall_seconds: t0.elapsed().as_secs_f64(),
+        };
+        on_iter(&r);
+        history.push(r);
+    };
+    push(&mut history, 0, &ev, ev.loss, rd, rc, true);
+    for it in 1..=iters {
+        let (dd, dc) = match o.method {
+            Method::TrustRegion => (
+                trust_region_step(&ev.grad_design, &d, &lo, &hi, rd),
+                if ev.grad_controller.norm() > 0.0 { -rc * &ev.grad_controller / ev.grad_controller.norm() } else { c.map(|_| 0.0) },
+            ),
+            Method::Adam => (adam.0.step(&ev.grad_design), adam.1.step(&ev.grad_controller)),
+        };
+        let mut d_new = &d + dd;
+        p.design.project(&mut d_new);
+        let c_new = &c + dc;
+        let trial = p.evaluate(&d_new, &c_new);
+        match (o.method, trial) {
+            (Method::Adam, Ok(e)) => {
+                d = d_new;
+                c = c_new;
+                ev = e;
+                let best = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+                push(&mut history, it, &ev, best, rd, rc, true);
+            }
+            (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
+                d = d_new;
+                c = c_new;
+                ev = e;
+                rd = (rd * 1.25).min(4.0 * o.step_design);
+                rc = (rc * 1.25).min(4.0 * o.step_controller);
+                push(&mut history, it, &ev, ev.loss, rd, rc, true);
+            }
+            (Method::TrustRegion, Ok(e)) => {
+                // Rejected: the row shows the trial's loss; the iterate stays.
+                rd *= 0.5;
+                rc *= 0.5;
+                push(&mut history, it, &e, ev.loss, rd, rc, false);
+            }
+            (Method::Adam, Err(e)) => return Err(e.context(format!("iteration {it}"))),
+            (Method::TrustRegion, Err(_)) => {
+                // A trial point that cannot be simulated is a rejected step.
+                rd *= 0.5;
+                rc *= 0.5;
+                push(&mut history, it, &ev, ev.loss, rd, rc, false);
+            }
+        }
+    }
+    Ok(Outcome { history, loss: ev.loss, design: d, controller: c, initial_loss })
+}

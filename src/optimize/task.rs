@@ -1,0 +1,168 @@
+//! Task files for `sdrs optimize` (YAML, version 1).
+//!
+//! ```yaml
+//! version: 1
+//! scene: chain_reach.yaml        # scene file, relative to this file
+//! horizon: 250                   # steps H (default: the scene's `steps`)
+//! loss:                          # sum of weighted squared errors
+//!   - {type: link_point, link: left/link7, point: [0, 0, -0.2], target: [1.5, 0, 4.0], weight: 1, when: final}
+//!   - {type: joint, joint: left/cart, index: 0, target: 0, weight: 0.01, when: running}
+//!   - {type: com, robot: box, target: [1, 0, 0], axes: [1, 1, 0], weight: 1, when: final}
+//!   - {type: relative, link: box/box, point: [0,0,0], to_link: hand/palm, to_point: [0,0,0], offset: [0,0,0.1], weight: 1, when: running}
+//! controller:
+//!   joints: [left/cart]          # joints whose target-signal parameters are optimized
+//!   gains: false                 # also each channel's k_p, k_d (default false)
+//! design:                        # omit (or `sdrs optimize --design off`) for controller-only
+//!   attachments: [left/link1, left/link2]   # attachment points as design variables
+//!   vertices: [left/link3]       # every hull vertex of these links as design variables
+//!   bound: 0.5                   # box half-width around each initial value (m; default 0.5)
+//! optimizer:
+//!   method: trust_region         # trust_region (paper) or adam
+//!   iters: 60
+//!   step_design: 0.05            # trust-region radius ᾱ_d (m) / Adam learning rate
+//!   step_controller: 0.2         # ᾱ_c / Adam learning rate
+//! ```
+//! `when` is `final` (at θ^H) or `running` (mean over θ^1 … θ^H).
+
+use crate::diff::When;
+use serde::{Deserialize, Serialize};
+
+fn one() -> f64 {
+    1.0
+}
+fn version() -> u32 {
+    1
+}
+fn final_time() -> When {
+    When::Final
+}
+
+/// A whole task.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSpec {
+    #[serde(default = "version")]
+    pub version: u32,
+    pub scene: String,
+    #[serde(default)]
+    pub horizon: Option<usize>,
+    pub loss: Vec<LossSpec>,
+    #[serde(default)]
+    pub controller: ControlSpec,
+    #[serde(default)]
+    pub design: Option<DesignTaskSpec>,
+    #[serde(default)]
+    pub optimizer: OptimizerSpec,
+}
+
+/// One loss term (see [`crate::diff::LossTerm`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LossSpec {
+    LinkPoint {
+        link: String,
+        #[serde(default)]
+        point: [f64; 3],
+        target: [f64; 3],
+        #[serde(default = "one")]
+        weight: f64,
+        #[serde(default = "final_time")]
+        when: When,
+    },
+    Joint {
+        joint: String,
+        #[serde(default)]
+        index: usize,
+        target: f64,
+        #[serde(default = "one")]
+        weight: f64,
+        #[serde(default = "final_time")]
+        when: When,
+    },
+    Com {
+        robot: String,
+        target: [f64; 3],
+        #[serde(default = "ones")]
+        axes: [f64; 3],
+        #[serde(default = "one")]
+        weight: f64,
+        #[serde(default = "final_time")]
+        when: When,
+    },
+    Relative {
+        link: String,
+        #[serde(default)]
+        point: [f64; 3],
+        to_link: String,
+        #[serde(default)]
+        to_point: [f64; 3],
+        #[serde(default)]
+        offset: [f64; 3],
+        #[serde(default = "one")]
+        weight: f64,
+        #[serde(default = "final_time")]
+        when: When,
+    },
+}
+
+fn ones() -> [f64; 3] {
+    [1.0; 3]
+}
+
+/// Which controller parameters are optimized.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ControlSpec {
+    #[serde(default)]
+    pub joints: Vec<String>,
+    #[serde(default)]
+    pub gains: bool,
+}
+
+/// Which design parameters are optimized.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DesignTaskSpec {
+    #[serde(default)]
+    pub attachments: Vec<String>,
+    #[serde(default)]
+    pub vertices: Vec<String>,
+    #[serde(default = "DesignTaskSpec::default_bound")]
+    pub bound: f64,
+}
+
+impl DesignTaskSpec {
+    fn default_bound() -> f64 {
+        0.5
+    }
+}
+
+/// Optimizer choice.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// The paper's trust-region projected gradient step.
+    TrustRegion,
+    /// Adam (Kingma & Ba) with projection onto the bounds.
+    Adam,
+}
+
+/// Optimizer settings (defaults documented on each field).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OptimizerSpec {
+    /// Default `trust_region`.
+    pub method: Method,
+    /// Iterations (forward + backward each). Default 60.
+    pub iters: usize,
+    /// Trust-region radius for the design (m) / Adam learning rate. Default 0.05.
+    pub step_design: f64,
+    /// Trust-region radius for the controller / Adam learning rate. Default 0.2.
+    pub step_controller: f64,
+}
+
+impl Default for OptimizerSpec {
+    fn default() -> Self {
+        OptimizerSpec { method: Method::TrustRegion, iters: 60, step_design: 0.05, step_controller: 0.2 }
+    }
+}
