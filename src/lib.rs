@@ -8,6 +8,7 @@
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
 pub mod control;
+pub mod import;
 pub mod energy;
 pub mod kinematics;
 pub mod math;
