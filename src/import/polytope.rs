@@ -4,7 +4,6 @@
 //! parry3d's quickhull.
 
 use nalgebra::Vector3;
-use parry3d_f64::math::Vector as PVec;
 
 /// A convex polytope.
 #[derive(Clone, Debug)]
@@ -34,42 +33,135 @@ pub fn convex_hull(points: &[Vector3<f64>]) -> Result<Polytope, String> {
     if !(diag > 0.0) {
         return Err("all points coincide".into());
     }
-    let pts: Vec<PVec> = points.iter().map(|p| PVec::new(p.x, p.y, p.z)).collect();
-    let (verts, tris) = parry3d_f64::transformation::try_convex_hull(&pts)
-        .map_err(|e| format!("convex hull failed: {e:?}"))?;
-    // Compact: keep only vertices used by triangles.
-    let mut map = vec![usize::MAX; verts.len()];
-    let mut vertices = Vec::new();
-    let mut triangles = Vec::with_capacity(tris.len());
-    for t in &tris {
-        let mut out = [0usize; 3];
-        for (k, &i) in t.iter().enumerate() {
-            let i = i as usize;
-            if map[i] == usize::MAX {
-                map[i] = vertices.len();
-                let v = verts[i];
-                vertices.push(Vector3::new(v.x, v.y, v.z));
-            }
-            out[k] = map[i];
-        }
-        triangles.push(out);
-    }
-    let mut poly = Polytope {
+    let (vertices, triangles) = hull3d(points, 1e-12 * diag)?;
+    let planes = planes_of(&vertices, &triangles, diag);
+    let poly = Polytope {
         vertices,
         triangles,
-        planes: Vec::new(),
+        planes,
     };
-    if poly.triangles.len() < 4 || poly.vertices.len() < 4 {
-        return Err("the points are coplanar: the hull encloses no volume".into());
-    }
     let vol = poly.volume();
     if !(vol > 1e-12 * diag.powi(3)) {
         return Err(format!(
             "the points are (nearly) coplanar: hull volume {vol:.3e} for extent {diag:.3e}"
         ));
     }
-    poly.planes = planes_of(&poly.vertices, &poly.triangles, diag);
     Ok(poly)
+}
+
+/// Incremental 3-D convex hull. Points within `eps` of the current hull
+/// (coplanar with a face, or inside) are not added, so every returned
+/// triangle is a supporting plane to within `eps` and the surface is closed
+/// and consistently oriented even for the many coplanar points of voxel
+/// hulls (parry's quickhull can return overlapping triangles there).
+#[allow(clippy::type_complexity)]
+fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usize; 3]>), String> {
+    struct Face {
+        v: [usize; 3],
+        n: Vector3<f64>,
+        b: f64,
+        alive: bool,
+    }
+    let make = |v: [usize; 3]| -> Face {
+        let n = (pts[v[1]] - pts[v[0]]).cross(&(pts[v[2]] - pts[v[0]]));
+        let n = n / n.norm().max(f64::MIN_POSITIVE);
+        Face {
+            v,
+            n,
+            b: n.dot(&pts[v[0]]),
+            alive: true,
+        }
+    };
+    // Initial tetrahedron from extreme points.
+    let i0 = (0..pts.len()).min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x)).unwrap();
+    let i1 = (0..pts.len())
+        .max_by(|&a, &b| (pts[a] - pts[i0]).norm().total_cmp(&(pts[b] - pts[i0]).norm()))
+        .unwrap();
+    let d01 = (pts[i1] - pts[i0]).normalize();
+    let line = |k: usize| {
+        let w = pts[k] - pts[i0];
+        (w - d01 * d01.dot(&w)).norm()
+    };
+    let i2 = (0..pts.len()).max_by(|&a, &b| line(a).total_cmp(&line(b))).unwrap();
+    if line(i2) <= eps {
+        return Err("the points are collinear".into());
+    }
+    let nrm = (pts[i1] - pts[i0]).cross(&(pts[i2] - pts[i0])).normalize();
+    let off = |k: usize| nrm.dot(&(pts[k] - pts[i0]));
+    let i3 = (0..pts.len()).max_by(|&a, &b| off(a).abs().total_cmp(&off(b).abs())).unwrap();
+    if off(i3).abs() <= eps {
+        return Err("the points are coplanar: the hull encloses no volume".into());
+    }
+    let centre = (pts[i0] + pts[i1] + pts[i2] + pts[i3]) / 4.0;
+    let mut faces: Vec<Face> = Vec::new();
+    let mut edge: std::collections::HashMap<(usize, usize), usize> = std::collections::HashMap::new();
+    let add = |faces: &mut Vec<Face>, edge: &mut std::collections::HashMap<(usize, usize), usize>, mut v: [usize; 3]| {
+        let mut f = make(v);
+        if f.n.dot(&centre) > f.b {
+            v.swap(1, 2);
+            f = make(v);
+        }
+        for k in 0..3 {
+            edge.insert((v[k], v[(k + 1) % 3]), faces.len());
+        }
+        faces.push(f);
+    };
+    for v in [[i0, i1, i2], [i0, i1, i3], [i0, i2, i3], [i1, i2, i3]] {
+        add(&mut faces, &mut edge, v);
+    }
+    let initial = [i0, i1, i2, i3];
+    for p in 0..pts.len() {
+        if initial.contains(&p) {
+            continue;
+        }
+        let x = pts[p];
+        let visible: Vec<usize> = (0..faces.len())
+            .filter(|&f| faces[f].alive && faces[f].n.dot(&x) - faces[f].b > eps)
+            .collect();
+        if visible.is_empty() {
+            continue;
+        }
+        let mut horizon = Vec::new();
+        for &f in &visible {
+            let v = faces[f].v;
+            for k in 0..3 {
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                let opp = edge.get(&(b, a)).copied();
+                match opp {
+                    Some(o) if faces[o].alive && faces[o].n.dot(&x) - faces[o].b > eps => {}
+                    Some(_) => horizon.push((a, b)),
+                    None => return Err("convex hull failed: open surface".into()),
+                }
+            }
+        }
+        for &f in &visible {
+            faces[f].alive = false;
+            let v = faces[f].v;
+            for k in 0..3 {
+                edge.remove(&(v[k], v[(k + 1) % 3]));
+            }
+        }
+        for (a, b) in horizon {
+            let f = make([a, b, p]);
+            for (u, w) in [(a, b), (b, p), (p, a)] {
+                edge.insert((u, w), faces.len());
+            }
+            faces.push(f);
+        }
+    }
+    let mut map = vec![usize::MAX; pts.len()];
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for f in faces.iter().filter(|f| f.alive) {
+        triangles.push(f.v.map(|i| {
+            if map[i] == usize::MAX {
+                map[i] = vertices.len();
+                vertices.push(pts[i]);
+            }
+            map[i]
+        }));
+    }
+    Ok((vertices, triangles))
 }
 
 /// Unit outward planes of the triangles, merging (nearly) identical planes.
@@ -86,7 +178,7 @@ fn planes_of(v: &[Vector3<f64>], tris: &[[usize; 3]], diag: f64) -> Vec<(Vector3
         let b = t.iter().map(|&i| n.dot(&v[i])).fold(f64::NEG_INFINITY, f64::max);
         if planes
             .iter()
-            .any(|(m, c)| (m - n).norm() < 1e-12 && (c - b).abs() < 1e-12 * diag)
+            .any(|(m, c)| (m - n).norm() < 1e-9 && (c - b).abs() < 1e-9 * diag)
         {
             continue;
         }
