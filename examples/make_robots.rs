@@ -42,12 +42,6 @@ impl Mesh {
         }
         self
     }
-    /// Adds another closed component (allowed to overlap).
-    fn append(&mut self, o: &Mesh) {
-        let b = self.v.len();
-        self.v.extend_from_slice(&o.v);
-        self.f.extend(o.f.iter().map(|t| t.map(|i| i + b)));
-    }
 }
 
 fn fmt(x: f64) -> String {

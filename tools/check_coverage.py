@@ -102,9 +102,17 @@ def urdf_sources(urdf):
     return out
 
 
+class _Loader(yaml.SafeLoader):
+    """Reads the scene's tagged hulls (`!vertices [...]`, `!box {...}`)."""
+
+
+_Loader.add_constructor("!vertices", lambda l, n: {"vertices": l.construct_sequence(n, deep=True)})
+_Loader.add_constructor("!box", lambda l, n: {"box": l.construct_mapping(n, deep=True)})
+
+
 def design_hulls(design):
     with open(design) as f:
-        scene = yaml.safe_load(f)
+        scene = yaml.load(f, Loader=_Loader)
     hulls = {}
     for robot in scene["robots"]:
         for link in robot["links"]:

@@ -188,28 +188,13 @@ fn commit(staged: &[(PathBuf, PathBuf)]) -> Result<(), ImportError> {
 
 /// Scene → YAML: block mappings in field order, sequences of scalars in flow
 /// style (`[x, y, z]`), floats always with a `.` (readable by YAML 1.1
-/// parsers such as PyYAML too).
+/// parsers such as PyYAML too), hulls as `!vertices` / `!box` tagged nodes
+/// (the enum form serde_yaml 0.9 deserializes).
 pub fn to_yaml<T: serde::Serialize>(value: &T) -> String {
-    let v = untag(serde_yaml::to_value(value).expect("scene serializes"));
+    let v = serde_yaml::to_value(value).expect("scene serializes");
     let mut out = String::new();
     emit(&v, 0, &mut out, false);
     out
-}
-
-/// Externally tagged enums (`!vertices [...]`) → one-key mappings.
-fn untag(v: serde_yaml::Value) -> serde_yaml::Value {
-    use serde_yaml::Value as V;
-    match v {
-        V::Tagged(t) => {
-            let mut m = serde_yaml::Mapping::new();
-            let tag = t.tag.to_string();
-            m.insert(V::String(tag.trim_start_matches('!').to_string()), untag(t.value));
-            V::Mapping(m)
-        }
-        V::Sequence(s) => V::Sequence(s.into_iter().map(untag).collect()),
-        V::Mapping(m) => V::Mapping(m.into_iter().map(|(k, v)| (k, untag(v))).collect()),
-        other => other,
-    }
 }
 
 fn scalar(v: &serde_yaml::Value) -> Option<String> {
@@ -271,6 +256,10 @@ fn emit(v: &serde_yaml::Value, indent: usize, out: &mut String, inline_first: bo
                 out.push_str("- ");
                 match item {
                     V::Mapping(_) => emit(item, indent + 2, out, true),
+                    V::Tagged(t) => {
+                        out.push_str(&t.tag.to_string());
+                        write_value(&t.value, indent, out);
+                    }
                     V::Sequence(inner) if !inner.iter().all(|x| scalar(x).is_some()) => {
                         out.push('\n');
                         emit(item, indent + 2, out, false);
@@ -301,7 +290,7 @@ fn inline(v: &serde_yaml::Value) -> String {
                 .collect::<Vec<_>>()
                 .join(", ")
         ),
-        V::Tagged(t) => inline(&t.value),
+        V::Tagged(t) => format!("{} {}", t.tag, inline(&t.value)),
         _ => scalar(v).unwrap_or_default(),
     }
 }
@@ -341,11 +330,11 @@ fn write_value(val: &serde_yaml::Value, indent: usize, out: &mut String) {
             emit(val, indent + 2, out, false);
         }
         V::Tagged(t) => {
-            // Externally tagged enum (e.g. `vertices:` hull): `!tag value`
-            // becomes a one-key mapping.
-            let mut m = serde_yaml::Mapping::new();
-            m.insert(V::String(t.tag.to_string().trim_start_matches('!').to_string()), t.value.clone());
-            write_value(&V::Mapping(m), indent, out);
+            // Externally tagged enum (a hull): `!vertices` / `!box`, the
+            // form serde_yaml reads.
+            out.push(' ');
+            out.push_str(&t.tag.to_string());
+            write_value(&t.value, indent, out);
         }
         _ => {
             out.push(' ');
