@@ -27,6 +27,9 @@ def main():
     ap.add_argument("--max-hulls", type=int, default=-1)
     ap.add_argument("--resolution", type=int, default=2000)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--extrude-margin", type=float, default=0.01,
+                    help="CoACD extrudes neighbouring parts into each other by this much (relative) "
+                         "so they overlap; 0 disables (parts then only nearly touch)")
     a = ap.parse_args()
     mesh = trimesh.load(a.mesh, force="mesh", process=False)
     if len(mesh.faces) == 0:
@@ -40,6 +43,8 @@ def main():
         max_convex_hull=a.max_hulls if a.max_hulls > 0 else -1,
         resolution=a.resolution,
         seed=a.seed,
+        extrude=a.extrude_margin > 0,
+        extrude_margin=max(a.extrude_margin, 1e-6),
     )
     hulls = [{"vertices": np.asarray(v, dtype=float).tolist()} for v, _f in parts]
     with open(a.out, "w") as f:
