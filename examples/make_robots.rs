@@ -77,10 +77,17 @@ fn box_mesh(lo: V3, hi: V3) -> Mesh {
 
 /// Ear-clipping triangulation of a simple counter-clockwise polygon.
 fn ear_clip(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
     // Vertices on the candidate triangle's boundary block it too.
     let inside = |p: [f64; 2], a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
-        p != a && p != b && p != c && cross(a, b, p) >= -1e-12 && cross(b, c, p) >= -1e-12 && cross(c, a, p) >= -1e-12
+        p != a
+            && p != b
+            && p != c
+            && cross(a, b, p) >= -1e-12
+            && cross(b, c, p) >= -1e-12
+            && cross(c, a, p) >= -1e-12
     };
     let mut idx: Vec<usize> = (0..poly.len()).collect();
     let mut out = Vec::new();
@@ -93,7 +100,10 @@ fn ear_clip(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
             if cross(a, b, c) <= 1e-12 {
                 continue;
             }
-            if idx.iter().any(|&j| j != i0 && j != i1 && j != i2 && inside(poly[j], a, b, c)) {
+            if idx
+                .iter()
+                .any(|&j| j != i0 && j != i1 && j != i2 && inside(poly[j], a, b, c))
+            {
                 continue;
             }
             out.push([i0, i1, i2]);
@@ -153,7 +163,11 @@ fn tube(rings: usize, segs: usize, c: impl Fn(f64) -> V3, r: impl Fn(f64) -> (f6
         let (a, b) = (c(s0), c(s1));
         let t = norm([b[0] - a[0], b[1] - a[1], b[2] - a[2]]);
         // Frame: a fixed up vector not parallel to the tangent.
-        let up = if t[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
+        let up = if t[2].abs() < 0.9 {
+            [0.0, 0.0, 1.0]
+        } else {
+            [1.0, 0.0, 0.0]
+        };
         let n1 = norm(cross(up, t));
         let n2 = cross(t, n1);
         let (ra, rb) = r(s);
@@ -194,14 +208,19 @@ fn signed_volume(m: &Mesh) -> f64 {
     m.f.iter()
         .map(|t| {
             let (a, b, c) = (m.v[t[0]], m.v[t[1]], m.v[t[2]]);
-            a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
+            a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0])
         })
         .sum::<f64>()
         / 6.0
 }
 
 fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn norm(a: V3) -> V3 {
     let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
@@ -221,21 +240,41 @@ fn prism(r: f64, h: f64, n: usize) -> Mesh {
 
 /// Icosphere-like ball: a UV sphere with `rings` × `segs` points + poles.
 fn ball(r: f64, rings: usize, segs: usize) -> Mesh {
-    tube(rings, segs, |s| [0.0, 0.0, r * (PI * (0.5 + 0.45 * (2.0 * s - 1.0))).cos() * -1.0], |s| {
-        let th = PI * (0.5 + 0.45 * (2.0 * s - 1.0));
-        (r * th.sin(), r * th.sin())
-    })
+    tube(
+        rings,
+        segs,
+        |s| [0.0, 0.0, -(r * (PI * (0.5 + 0.45 * (2.0 * s - 1.0))).cos())],
+        |s| {
+            let th = PI * (0.5 + 0.45 * (2.0 * s - 1.0));
+            (r * th.sin(), r * th.sin())
+        },
+    )
 }
 
 /// Plus-shaped polygon with arm half-width `w` and half-length `l`,
 /// rotated by `rot`.
 fn plus(w: f64, l: f64, rot: f64) -> Vec<[f64; 2]> {
     let p = [
-        [l, -w], [l, w], [w, w], [w, l], [-w, l], [-w, w],
-        [-l, w], [-l, -w], [-w, -w], [-w, -l], [w, -l], [w, -w],
+        [l, -w],
+        [l, w],
+        [w, w],
+        [w, l],
+        [-w, l],
+        [-w, w],
+        [-l, w],
+        [-l, -w],
+        [-w, -w],
+        [-w, -l],
+        [w, -l],
+        [w, -w],
     ];
     p.iter()
-        .map(|q| [q[0] * rot.cos() - q[1] * rot.sin(), q[0] * rot.sin() + q[1] * rot.cos()])
+        .map(|q| {
+            [
+                q[0] * rot.cos() - q[1] * rot.sin(),
+                q[0] * rot.sin() + q[1] * rot.cos(),
+            ]
+        })
         .collect()
 }
 
@@ -281,10 +320,28 @@ impl Urdf {
         let _ = writeln!(self.body, "  <link name=\"{name}\"/>");
     }
     #[allow(clippy::too_many_arguments)]
-    fn joint(&mut self, name: &str, kind: &str, parent: &str, child: &str, xyz: V3, rpy: V3, axis: V3, limit: (f64, f64)) {
+    fn joint(
+        &mut self,
+        name: &str,
+        kind: &str,
+        parent: &str,
+        child: &str,
+        xyz: V3,
+        rpy: V3,
+        axis: V3,
+        limit: (f64, f64),
+    ) {
         let _ = writeln!(self.body, "  <joint name=\"{name}\" type=\"{kind}\">");
-        let _ = writeln!(self.body, "    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>");
-        let _ = writeln!(self.body, "    <origin xyz=\"{}\" rpy=\"{}\"/>", v3(xyz), v3(rpy));
+        let _ = writeln!(
+            self.body,
+            "    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>"
+        );
+        let _ = writeln!(
+            self.body,
+            "    <origin xyz=\"{}\" rpy=\"{}\"/>",
+            v3(xyz),
+            v3(rpy)
+        );
         if kind != "fixed" && kind != "floating" {
             let _ = writeln!(self.body, "    <axis xyz=\"{}\"/>", v3(axis));
         }
@@ -302,8 +359,26 @@ impl Urdf {
     fn ball(&mut self, name: &str, parent: &str, child: &str, xyz: V3) {
         let g = format!("{name}_gimbal");
         self.empty_link(&g);
-        self.joint(&format!("{name}_x"), "revolute", parent, &g, xyz, [0.0; 3], [1.0, 0.0, 0.0], (-1.5, 1.5));
-        self.joint(&format!("{name}_y"), "revolute", &g, child, [0.0; 3], [0.0; 3], [0.0, 1.0, 0.0], (-1.5, 1.5));
+        self.joint(
+            &format!("{name}_x"),
+            "revolute",
+            parent,
+            &g,
+            xyz,
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            (-1.5, 1.5),
+        );
+        self.joint(
+            &format!("{name}_y"),
+            "revolute",
+            &g,
+            child,
+            [0.0; 3],
+            [0.0; 3],
+            [0.0, 1.0, 0.0],
+            (-1.5, 1.5),
+        );
     }
     fn text(&self) -> String {
         format!(
@@ -324,10 +399,16 @@ impl Out {
         std::fs::write(&p, text).unwrap();
     }
     fn mesh(&self, robot: &str, name: &str, m: &Mesh) {
-        self.write(&format!("{robot}/meshes/{name}.obj"), &m.obj(&format!("{robot}: {name}")));
+        self.write(
+            &format!("{robot}/meshes/{name}.obj"),
+            &m.obj(&format!("{robot}: {name}")),
+        );
     }
     fn object(&self, robot: &str, name: &str, m: &Mesh) {
-        self.write(&format!("{robot}/objects/{name}.obj"), &m.obj(&format!("{robot}: object {name}")));
+        self.write(
+            &format!("{robot}/objects/{name}.obj"),
+            &m.obj(&format!("{robot}: object {name}")),
+        );
     }
     fn urdf(&self, u: &Urdf) {
         self.write(&format!("{}/{}.urdf", u.name, u.name), &u.text());
@@ -340,7 +421,14 @@ impl Out {
 fn rotating_chains(o: &Out) {
     let name = "rotating_chains";
     let (len, w) = (0.5, 0.1);
-    o.mesh(name, "link", &box_mesh([-w / 2.0, -w / 2.0, -len - w / 4.0], [w / 2.0, w / 2.0, w / 4.0]));
+    o.mesh(
+        name,
+        "link",
+        &box_mesh(
+            [-w / 2.0, -w / 2.0, -len - w / 4.0],
+            [w / 2.0, w / 2.0, w / 4.0],
+        ),
+    );
     let mut u = Urdf::new(name);
     u.empty_link("world");
     for c in 0..4 {
@@ -348,7 +436,11 @@ fn rotating_chains(o: &Out) {
         for l in 0..4 {
             let link = format!("chain{c}_link{l}");
             u.link(&link, 0.1, [0.0, 0.0, -len / 2.0], &["link"]);
-            let xyz = if l == 0 { [0.6 * c as f64, 0.0, 2.5] } else { [0.0, 0.0, -len] };
+            let xyz = if l == 0 {
+                [0.6 * c as f64, 0.0, 2.5]
+            } else {
+                [0.0, 0.0, -len]
+            };
             u.ball(&format!("chain{c}_joint{l}"), &parent, &link, xyz);
             parent = link;
         }
@@ -364,8 +456,18 @@ fn ibeam(len: f64, w: f64) -> Mesh {
     let z1 = -len - w / 4.0;
     // Polygon in (x, z), CCW.
     let poly = vec![
-        [-h, z1], [h, z1], [h, z1 + f], [t, z1 + f], [t, z0 - f], [h, z0 - f], [h, z0], [-h, z0],
-        [-h, z0 - f], [-t, z0 - f], [-t, z1 + f], [-h, z1 + f],
+        [-h, z1],
+        [h, z1],
+        [h, z1 + f],
+        [t, z1 + f],
+        [t, z0 - f],
+        [h, z0 - f],
+        [h, z0],
+        [-h, z0],
+        [-h, z0 - f],
+        [-t, z0 - f],
+        [-t, z1 + f],
+        [-h, z1 + f],
     ];
     // u = x, v = z, w = y: (x, z, y) is left-handed, extrude() fixes it.
     extrude(&poly, w, [0, 2, 1])
@@ -377,13 +479,30 @@ fn chains_8link(o: &Out) {
     let name = "chains_8link";
     let (len, w) = (0.25, 0.08);
     o.mesh(name, "link", &ibeam(len, w));
-    o.mesh(name, "carriage", &box_mesh([-0.1, -0.06, -0.03], [0.1, 0.06, 0.06]));
+    o.mesh(
+        name,
+        "carriage",
+        &box_mesh([-0.1, -0.06, -0.03], [0.1, 0.06, 0.06]),
+    );
     let mut u = Urdf::new(name);
     u.empty_link("world");
     u.link("carriage", 1.0, [0.0; 3], &["carriage"]);
-    u.joint("slide", "prismatic", "world", "carriage", [0.0, 0.0, 2.5], [0.0; 3], [1.0, 0.0, 0.0], (-1.0, 1.0));
+    u.joint(
+        "slide",
+        "prismatic",
+        "world",
+        "carriage",
+        [0.0, 0.0, 2.5],
+        [0.0; 3],
+        [1.0, 0.0, 0.0],
+        (-1.0, 1.0),
+    );
     for c in 0..3 {
-        let mut parent = if c == 0 { "carriage".to_string() } else { "world".to_string() };
+        let mut parent = if c == 0 {
+            "carriage".to_string()
+        } else {
+            "world".to_string()
+        };
         for l in 0..8 {
             let link = format!("chain{c}_link{l}");
             u.link(&link, 0.05, [0.0, 0.0, -len / 2.0], &["link"]);
@@ -421,13 +540,30 @@ fn spider_foot() -> Mesh {
 fn spider(o: &Out) {
     let name = "spider";
     o.mesh(name, "body", &prism(0.2, 0.08, 16));
-    o.mesh(name, "upper_leg", &box_mesh([-0.025, -0.025, -0.02], [0.3, 0.025, 0.025]));
-    o.mesh(name, "shin", &box_mesh([-0.025, -0.025, -0.26], [0.025, 0.025, 0.025]));
+    o.mesh(
+        name,
+        "upper_leg",
+        &box_mesh([-0.025, -0.025, -0.02], [0.3, 0.025, 0.025]),
+    );
+    o.mesh(
+        name,
+        "shin",
+        &box_mesh([-0.025, -0.025, -0.26], [0.025, 0.025, 0.025]),
+    );
     o.mesh(name, "foot", &spider_foot());
     let mut u = Urdf::new(name);
     u.empty_link("world");
     u.link("body", 2.0, [0.0; 3], &["body"]);
-    u.joint("root", "floating", "world", "body", [0.0, 0.0, 0.5], [0.0; 3], [0.0; 3], (0.0, 0.0));
+    u.joint(
+        "root",
+        "floating",
+        "world",
+        "body",
+        [0.0, 0.0, 0.5],
+        [0.0; 3],
+        [0.0; 3],
+        (0.0, 0.0),
+    );
     for k in 0..4 {
         let a = PI / 4.0 + PI / 2.0 * k as f64;
         let upper = format!("leg{k}_upper");
@@ -436,8 +572,26 @@ fn spider(o: &Out) {
         let hip = format!("leg{k}_hip");
         let g = format!("{hip}_gimbal");
         u.empty_link(&g);
-        u.joint(&format!("{hip}_z"), "revolute", "body", &g, [0.17 * a.cos(), 0.17 * a.sin(), 0.0], [0.0, 0.0, a], [0.0, 0.0, 1.0], (-1.0, 1.0));
-        u.joint(&format!("{hip}_y"), "revolute", &g, &upper, [0.0; 3], [0.0; 3], [0.0, 1.0, 0.0], (-1.0, 1.0));
+        u.joint(
+            &format!("{hip}_z"),
+            "revolute",
+            "body",
+            &g,
+            [0.17 * a.cos(), 0.17 * a.sin(), 0.0],
+            [0.0, 0.0, a],
+            [0.0, 0.0, 1.0],
+            (-1.0, 1.0),
+        );
+        u.joint(
+            &format!("{hip}_y"),
+            "revolute",
+            &g,
+            &upper,
+            [0.0; 3],
+            [0.0; 3],
+            [0.0, 1.0, 0.0],
+            (-1.0, 1.0),
+        );
         u.link(&upper, 0.2, [0.15, 0.0, 0.0], &["upper_leg"]);
         u.ball(&format!("leg{k}_knee"), &upper, &lower, [0.28, 0.0, 0.0]);
         u.link(&lower, 0.2, [0.0, 0.0, -0.2], &["shin", "foot"]);
@@ -465,16 +619,41 @@ fn biped_foot() -> Mesh {
 /// (12 joint DOF; 7 links).
 fn biped(o: &Out) {
     let name = "biped";
-    o.mesh(name, "torso", &box_mesh([-0.1, -0.15, -0.05], [0.1, 0.15, 0.25]));
-    o.mesh(name, "thigh", &box_mesh([-0.04, -0.04, -0.42], [0.04, 0.04, 0.04]));
-    o.mesh(name, "shin", &box_mesh([-0.035, -0.035, -0.42], [0.035, 0.035, 0.035]));
+    o.mesh(
+        name,
+        "torso",
+        &box_mesh([-0.1, -0.15, -0.05], [0.1, 0.15, 0.25]),
+    );
+    o.mesh(
+        name,
+        "thigh",
+        &box_mesh([-0.04, -0.04, -0.42], [0.04, 0.04, 0.04]),
+    );
+    o.mesh(
+        name,
+        "shin",
+        &box_mesh([-0.035, -0.035, -0.42], [0.035, 0.035, 0.035]),
+    );
     o.mesh(name, "foot", &biped_foot().translate([0.0, 0.0, 0.02]));
     let mut u = Urdf::new(name);
     u.empty_link("world");
     u.link("torso", 5.0, [0.0, 0.0, 0.1], &["torso"]);
-    u.joint("root", "floating", "world", "torso", [0.0, 0.0, 0.95], [0.0; 3], [0.0; 3], (0.0, 0.0));
+    u.joint(
+        "root",
+        "floating",
+        "world",
+        "torso",
+        [0.0, 0.0, 0.95],
+        [0.0; 3],
+        [0.0; 3],
+        (0.0, 0.0),
+    );
     for (side, y) in [("left", 0.09), ("right", -0.09)] {
-        let (thigh, shin, foot) = (format!("{side}_thigh"), format!("{side}_shin"), format!("{side}_foot"));
+        let (thigh, shin, foot) = (
+            format!("{side}_thigh"),
+            format!("{side}_shin"),
+            format!("{side}_foot"),
+        );
         u.link(&thigh, 1.0, [0.0, 0.0, -0.2], &["thigh"]);
         u.ball(&format!("{side}_hip"), "torso", &thigh, [0.0, y, -0.03]);
         u.link(&shin, 0.8, [0.0, 0.0, -0.2], &["shin"]);
@@ -490,15 +669,34 @@ fn single_jaw_gripper(o: &Out) {
     let name = "single_jaw_gripper";
     // C profile in (x, z), opening downward, extruded along y.
     let c = vec![
-        [-0.15, -0.12], [-0.11, -0.12], [-0.11, 0.0], [0.11, 0.0], [0.11, -0.12], [0.15, -0.12],
-        [0.15, 0.05], [-0.15, 0.05],
+        [-0.15, -0.12],
+        [-0.11, -0.12],
+        [-0.11, 0.0],
+        [0.11, 0.0],
+        [0.11, -0.12],
+        [0.15, -0.12],
+        [0.15, 0.05],
+        [-0.15, 0.05],
     ];
     o.mesh(name, "jaw", &extrude(&c, 0.12, [0, 2, 1]));
-    o.object(name, "x_object", &extrude(&plus(0.02, 0.1, PI / 4.0), 0.04, [0, 1, 2]).translate([0.0, 0.0, 0.02]));
+    o.object(
+        name,
+        "x_object",
+        &extrude(&plus(0.02, 0.1, PI / 4.0), 0.04, [0, 1, 2]).translate([0.0, 0.0, 0.02]),
+    );
     let mut u = Urdf::new(name);
     u.empty_link("world");
     u.link("jaw", 1.0, [0.0, 0.0, 0.0], &["jaw"]);
-    u.joint("base", "floating", "world", "jaw", [0.0, 0.0, 0.4], [0.0; 3], [0.0; 3], (0.0, 0.0));
+    u.joint(
+        "base",
+        "floating",
+        "world",
+        "jaw",
+        [0.0, 0.0, 0.4],
+        [0.0; 3],
+        [0.0; 3],
+        (0.0, 0.0),
+    );
     o.urdf(&u);
 }
 
@@ -506,10 +704,19 @@ fn single_jaw_gripper(o: &Out) {
 /// 2-DOF ball joints (5 DOF, 3 links); four objects.
 fn parallel_jaw_gripper(o: &Out) {
     let name = "parallel_jaw_gripper";
-    o.mesh(name, "palm", &box_mesh([-0.12, -0.04, -0.02], [0.12, 0.04, 0.04]));
+    o.mesh(
+        name,
+        "palm",
+        &box_mesh([-0.12, -0.04, -0.02], [0.12, 0.04, 0.04]),
+    );
     // L-shaped jaw in (x, z): a finger pointing down with an inward tip.
     let l = vec![
-        [-0.015, 0.015], [-0.015, -0.16], [0.03, -0.16], [0.03, -0.13], [0.015, -0.13], [0.015, 0.015],
+        [-0.015, 0.015],
+        [-0.015, -0.16],
+        [0.03, -0.16],
+        [0.03, -0.13],
+        [0.015, -0.13],
+        [0.015, 0.015],
     ];
     o.mesh(name, "jaw_left", &extrude(&l, 0.06, [0, 2, 1]));
     let r: Vec<[f64; 2]> = l.iter().rev().map(|p| [-p[0], p[1]]).collect();
@@ -517,11 +724,24 @@ fn parallel_jaw_gripper(o: &Out) {
     o.object(name, "cube", &box_mesh([-0.03; 3], [0.03; 3]));
     o.object(name, "cylinder", &prism(0.03, 0.08, 24));
     o.object(name, "ball", &ball(0.035, 10, 16));
-    o.object(name, "plus", &extrude(&plus(0.012, 0.04, 0.0), 0.05, [0, 1, 2]));
+    o.object(
+        name,
+        "plus",
+        &extrude(&plus(0.012, 0.04, 0.0), 0.05, [0, 1, 2]),
+    );
     let mut u = Urdf::new(name);
     u.empty_link("world");
     u.link("palm", 0.5, [0.0; 3], &["palm"]);
-    u.joint("lift", "prismatic", "world", "palm", [0.0, 0.0, 0.4], [0.0; 3], [0.0, 0.0, 1.0], (-0.3, 0.3));
+    u.joint(
+        "lift",
+        "prismatic",
+        "world",
+        "palm",
+        [0.0, 0.0, 0.4],
+        [0.0; 3],
+        [0.0, 0.0, 1.0],
+        (-0.3, 0.3),
+    );
     u.link("jaw_left", 0.1, [0.0, 0.0, -0.07], &["jaw_left"]);
     u.ball("jaw_left_pivot", "palm", "jaw_left", [-0.09, 0.0, 0.0]);
     u.link("jaw_right", 0.1, [0.0, 0.0, -0.07], &["jaw_right"]);
@@ -558,10 +778,28 @@ fn three_finger_hand(o: &Out) {
         let a = 2.0 * PI * k as f64 / 3.0;
         let (p, d) = (format!("finger{k}_proximal"), format!("finger{k}_distal"));
         u.link(&p, 0.05, [0.0, 0.0, -0.04], &["proximal"]);
-        u.joint(&format!("finger{k}_base"), "revolute", "world", &p, [0.05 * a.cos(), 0.05 * a.sin(), 0.3], [0.0, 0.0, a + PI], [0.0, 1.0, 0.0], (-0.5, 1.2));
+        u.joint(
+            &format!("finger{k}_base"),
+            "revolute",
+            "world",
+            &p,
+            [0.05 * a.cos(), 0.05 * a.sin(), 0.3],
+            [0.0, 0.0, a + PI],
+            [0.0, 1.0, 0.0],
+            (-0.5, 1.2),
+        );
         u.link(&d, 0.03, [0.0, 0.0, -0.03], &["distal"]);
         let tip = phalanx_centre(0.08, 0.015, 0.9);
-        u.joint(&format!("finger{k}_mid"), "revolute", &p, &d, tip, [0.0, 0.3, 0.0], [0.0, 1.0, 0.0], (0.0, 1.5));
+        u.joint(
+            &format!("finger{k}_mid"),
+            "revolute",
+            &p,
+            &d,
+            tip,
+            [0.0, 0.3, 0.0],
+            [0.0, 1.0, 0.0],
+            (0.0, 1.5),
+        );
     }
     o.urdf(&u);
 }

@@ -8,8 +8,8 @@
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
 pub mod control;
-pub mod import;
 pub mod energy;
+pub mod import;
 pub mod kinematics;
 pub mod math;
 pub mod model;

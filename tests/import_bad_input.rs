@@ -63,7 +63,10 @@ fn fails(name: &str, files: &[(&str, &str)], input: &str) -> (String, PathBuf) {
     eprintln!("{name}: {text}");
     let after: Vec<String> = listing(&dir).into_iter().filter(|f| f != "out").collect();
     assert_eq!(after, before, "{name}: files were left behind ({text})");
-    assert!(text.contains(&inp.display().to_string()), "{name}: the message must name the file: {text}");
+    assert!(
+        text.contains(&inp.display().to_string()),
+        "{name}: the message must name the file: {text}"
+    );
     (text, dir)
 }
 
@@ -73,15 +76,28 @@ fn cleanup(dir: &Path) {
 
 #[test]
 fn missing_mesh_file_names_the_urdf_link_and_mesh() {
-    let (e, dir) = fails("missing", &[("r.urdf", &urdf("revolute", "meshes/arm.obj", ""))], "r.urdf");
-    assert!(e.contains("link \"arm\" collision[0]") && e.contains("arm.obj") && e.contains("not found"), "{e}");
+    let (e, dir) = fails(
+        "missing",
+        &[("r.urdf", &urdf("revolute", "meshes/arm.obj", ""))],
+        "r.urdf",
+    );
+    assert!(
+        e.contains("link \"arm\" collision[0]") && e.contains("arm.obj") && e.contains("not found"),
+        "{e}"
+    );
     cleanup(&dir);
     let (e, dir) = fails(
         "missing-pkg",
-        &[("r.urdf", &urdf("revolute", "package://nowhere_pkg/arm.stl", ""))],
+        &[(
+            "r.urdf",
+            &urdf("revolute", "package://nowhere_pkg/arm.stl", ""),
+        )],
         "r.urdf",
     );
-    assert!(e.contains("nowhere_pkg") && e.contains("ROS_PACKAGE_PATH"), "{e}");
+    assert!(
+        e.contains("nowhere_pkg") && e.contains("ROS_PACKAGE_PATH"),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
@@ -89,10 +105,16 @@ fn missing_mesh_file_names_the_urdf_link_and_mesh() {
 fn empty_mesh_names_the_mesh() {
     let (e, dir) = fails(
         "empty",
-        &[("r.urdf", &urdf("revolute", "arm.obj", "")), ("arm.obj", "# nothing\nv 0 0 0\n")],
+        &[
+            ("r.urdf", &urdf("revolute", "arm.obj", "")),
+            ("arm.obj", "# nothing\nv 0 0 0\n"),
+        ],
         "r.urdf",
     );
-    assert!(e.contains("arm.obj") && e.contains("empty") && e.contains("link \"arm\""), "{e}");
+    assert!(
+        e.contains("arm.obj") && e.contains("empty") && e.contains("link \"arm\""),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
@@ -100,16 +122,33 @@ fn empty_mesh_names_the_mesh() {
 fn non_manifold_mesh_names_the_mesh() {
     // A tetrahedron with a fin: edge 1-2 carries three triangles.
     let fin = format!("{TET}v 0.5 -1 0\nf 1 2 5\n");
-    let (e, dir) = fails("nonmanifold", &[("r.urdf", &urdf("revolute", "arm.obj", "")), ("arm.obj", &fin)], "r.urdf");
-    assert!(e.contains("arm.obj") && e.contains("not manifold") && e.contains("link \"arm\""), "{e}");
+    let (e, dir) = fails(
+        "nonmanifold",
+        &[
+            ("r.urdf", &urdf("revolute", "arm.obj", "")),
+            ("arm.obj", &fin),
+        ],
+        "r.urdf",
+    );
+    assert!(
+        e.contains("arm.obj") && e.contains("not manifold") && e.contains("link \"arm\""),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
 #[test]
 fn unknown_joint_type_names_the_joint() {
     for t in ["planar", "hinge"] {
-        let (e, dir) = fails(&format!("joint-{t}"), &[("r.urdf", &urdf(t, "arm.obj", "")), ("arm.obj", TET)], "r.urdf");
-        assert!(e.contains("joint \"shoulder\"") && e.contains(t) && e.contains("supported"), "{e}");
+        let (e, dir) = fails(
+            &format!("joint-{t}"),
+            &[("r.urdf", &urdf(t, "arm.obj", "")), ("arm.obj", TET)],
+            "r.urdf",
+        );
+        assert!(
+            e.contains("joint \"shoulder\"") && e.contains(t) && e.contains("supported"),
+            "{e}"
+        );
         cleanup(&dir);
     }
 }
@@ -122,30 +161,60 @@ fn kinematic_loop_names_the_links_and_joints() {
 "#;
     let (e, dir) = fails(
         "loop",
-        &[("r.urdf", &urdf("revolute", "arm.obj", second_parent)), ("arm.obj", TET)],
+        &[
+            ("r.urdf", &urdf("revolute", "arm.obj", second_parent)),
+            ("arm.obj", TET),
+        ],
         "r.urdf",
     );
-    assert!(e.contains("kinematic loop") && e.contains("\"hand\"") && e.contains("closing"), "{e}");
+    assert!(
+        e.contains("kinematic loop") && e.contains("\"hand\"") && e.contains("closing"),
+        "{e}"
+    );
     cleanup(&dir);
     let cycle = r#"  <joint name="back" type="fixed"><parent link="arm"/><child link="base"/></joint>
 "#;
-    let (e, dir) = fails("cycle", &[("r.urdf", &urdf("revolute", "arm.obj", cycle)), ("arm.obj", TET)], "r.urdf");
-    assert!(e.contains("kinematic loop") && e.contains("\"base\"") && e.contains("\"arm\""), "{e}");
+    let (e, dir) = fails(
+        "cycle",
+        &[
+            ("r.urdf", &urdf("revolute", "arm.obj", cycle)),
+            ("arm.obj", TET),
+        ],
+        "r.urdf",
+    );
+    assert!(
+        e.contains("kinematic loop") && e.contains("\"base\"") && e.contains("\"arm\""),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
 #[test]
 fn malformed_xml_names_the_file_and_line() {
-    let text = urdf("revolute", "arm.obj", "").replace("</link>\n  <link name=\"arm\">", "\n  <link name=\"arm\">");
+    let text = urdf("revolute", "arm.obj", "")
+        .replace("</link>\n  <link name=\"arm\">", "\n  <link name=\"arm\">");
     let (e, dir) = fails("xml", &[("r.urdf", &text), ("arm.obj", TET)], "r.urdf");
-    assert!(e.contains("malformed URDF XML") && e.contains("line"), "{e}");
+    assert!(
+        e.contains("malformed URDF XML") && e.contains("line"),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
 #[test]
 fn unsupported_mesh_format_says_how_to_convert() {
-    let (e, dir) = fails("dae", &[("r.urdf", &urdf("revolute", "arm.dae", "")), ("arm.dae", "<COLLADA/>")], "r.urdf");
-    assert!(e.contains(".dae") && e.contains("trimesh") && e.contains("Blender"), "{e}");
+    let (e, dir) = fails(
+        "dae",
+        &[
+            ("r.urdf", &urdf("revolute", "arm.dae", "")),
+            ("arm.dae", "<COLLADA/>"),
+        ],
+        "r.urdf",
+    );
+    assert!(
+        e.contains(".dae") && e.contains("trimesh") && e.contains("Blender"),
+        "{e}"
+    );
     cleanup(&dir);
 }
 
@@ -207,15 +276,25 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     };
     unsafe { std::env::set_var("SDRS_PYTHON", dir.join("no-such-python")) };
     let e = sdrs::import::import(&inp, &opts).unwrap_err().to_string();
-    assert!(e.contains("tools/setup_python.sh") && e.contains("cannot run Python"), "{e}");
+    assert!(
+        e.contains("tools/setup_python.sh") && e.contains("cannot run Python"),
+        "{e}"
+    );
     // An interpreter without the package: a venv-less python with an empty
     // path for site packages.
     let fake = dir.join("fake-python.sh");
     std::fs::write(&fake, "#!/bin/sh\nexec python3 -S -I \"$@\"\n").unwrap();
-    std::process::Command::new("chmod").arg("+x").arg(&fake).status().unwrap();
+    std::process::Command::new("chmod")
+        .arg("+x")
+        .arg(&fake)
+        .status()
+        .unwrap();
     unsafe { std::env::set_var("SDRS_PYTHON", &fake) };
     let e = sdrs::import::import(&inp, &opts).unwrap_err().to_string();
     unsafe { std::env::remove_var("SDRS_PYTHON") };
-    assert!(e.contains("missing Python package") && e.contains("tools/setup_python.sh"), "{e}");
+    assert!(
+        e.contains("missing Python package") && e.contains("tools/setup_python.sh"),
+        "{e}"
+    );
     cleanup(&dir);
 }

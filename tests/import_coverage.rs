@@ -22,7 +22,13 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
     for (k, input) in inputs.iter().enumerate() {
         let imp = import(input, &opts).unwrap_or_else(|e| panic!("{e}"));
         for l in &imp.report.links {
-            assert!(l.coverage >= 0.95, "{}: link {} coverage {} (ours)", input.display(), l.name, l.coverage);
+            assert!(
+                l.coverage >= 0.95,
+                "{}: link {} coverage {} (ours)",
+                input.display(),
+                l.name,
+                l.coverage
+            );
         }
         let out = dir.join(format!("design{k}.yaml"));
         write_outputs(&imp, input, &OutputPaths::new(&out, None), false).unwrap();
@@ -30,8 +36,8 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
             "check_coverage.py",
             &[input, &out, Path::new("--min"), Path::new("0.95")],
         );
-        let summary: serde_json::Value =
-            serde_json::from_str(stdout.trim()).unwrap_or_else(|_| panic!("{}: {err}", input.display()));
+        let summary: serde_json::Value = serde_json::from_str(stdout.trim())
+            .unwrap_or_else(|_| panic!("{}: {err}", input.display()));
         eprintln!(
             "{}: min coverage {} over {} links (trimesh)",
             input.strip_prefix(root()).unwrap().display(),

@@ -32,7 +32,11 @@ fn vhacd_and_coacd_split_the_x_object_into_connected_unchanged_hulls() {
             l.coverage,
             l.union_volume,
             l.source_volume.unwrap(),
-            l.connectivity.shared.iter().map(|s| s.kind).collect::<Vec<_>>()
+            l.connectivity
+                .shared
+                .iter()
+                .map(|s| s.kind)
+                .collect::<Vec<_>>()
         );
         assert!(l.hulls >= 2, "{d:?}: an X is not convex");
         assert_eq!(l.connectivity.components, 1, "{d:?}");
@@ -44,11 +48,19 @@ fn vhacd_and_coacd_split_the_x_object_into_connected_unchanged_hulls() {
         if d == Decomposer::Vhacd {
             // V-HACD parts touch exactly: ties never change a hull.
             assert!(!bridged);
-            assert!(l.max_hull_volume_change <= 1e-9, "{d:?}: {}", l.max_hull_volume_change);
+            assert!(
+                l.max_hull_volume_change <= 1e-9,
+                "{d:?}: {}",
+                l.max_hull_volume_change
+            );
         } else {
             // CoACD can leave ~1e-5 gaps between parts: bridged, reported,
             // and the hulls change only slightly.
-            assert!(l.max_hull_volume_change <= 1e-3, "{d:?}: {}", l.max_hull_volume_change);
+            assert!(
+                l.max_hull_volume_change <= 1e-3,
+                "{d:?}: {}",
+                l.max_hull_volume_change
+            );
             assert!(!bridged || l.max_hull_volume_change > 0.0);
         }
         assert!(l.coverage >= 0.95, "{d:?}");
@@ -92,6 +104,11 @@ fn none_mode_accepts_convex_meshes_and_rejects_others() {
     let imp = import(&cube, &opts(Decomposer::None)).unwrap();
     assert_eq!(imp.report.links[0].hulls, 1);
     assert_eq!(imp.report.links[0].vertices, 8);
-    let err = import(&x_object(), &opts(Decomposer::None)).unwrap_err().to_string();
-    assert!(err.contains("x_object.obj") && err.contains("needs a convex mesh"), "{err}");
+    let err = import(&x_object(), &opts(Decomposer::None))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("x_object.obj") && err.contains("needs a convex mesh"),
+        "{err}"
+    );
 }

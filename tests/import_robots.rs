@@ -67,9 +67,9 @@ fn check_ties_keep_hulls(scene: &sdrs::scene::SceneSpec) -> usize {
                 l.name
             );
             let scale = without.diagonal();
-            for k in 0..pts.len() {
+            for (k, x) in pts.iter().enumerate() {
                 if added.contains(&(l.name.clone(), hi, k)) {
-                    let viol = without.violation(&pts[k]);
+                    let viol = without.violation(x);
                     assert!(
                         viol <= 1e-12 * scale,
                         "link {} hull {hi} vertex {k} lies {viol:.3e} m outside the hull",
@@ -84,7 +84,11 @@ fn check_ties_keep_hulls(scene: &sdrs::scene::SceneSpec) -> usize {
 }
 
 fn vertex(robot: &sdrs::scene::schema::RobotSpec, r: &sdrs::scene::schema::VertexRef) -> [f64; 3] {
-    let l = robot.links.iter().find(|l| l.name == r.link).expect("tie link exists");
+    let l = robot
+        .links
+        .iter()
+        .find(|l| l.name == r.link)
+        .expect("tie link exists");
     match &l.hulls[r.hull] {
         HullSpec::Vertices(v) => v[r.vertex],
         HullSpec::Box { .. } => panic!("imported hulls are vertex lists"),
@@ -102,11 +106,18 @@ fn authored_robots_are_connected_and_ties_leave_hull_volumes_unchanged() {
         let imp = import(&robot_urdf(name), &opts()).unwrap_or_else(|e| panic!("{name}: {e}"));
         let secs = t.elapsed().as_secs_f64();
         let r = &imp.report;
-        assert!(r.disconnected_links.is_empty(), "{name}: {:?}", r.disconnected_links);
+        assert!(
+            r.disconnected_links.is_empty(),
+            "{name}: {:?}",
+            r.disconnected_links
+        );
         for l in &r.links {
             assert_eq!(l.connectivity.components, 1, "{name}/{}", l.name);
             assert!(
-                l.connectivity.shared.iter().all(|s| s.kind != sdrs::import::connectivity::TieKind::Bridge),
+                l.connectivity
+                    .shared
+                    .iter()
+                    .all(|s| s.kind != sdrs::import::connectivity::TieKind::Bridge),
                 "{name}/{}: hulls had to be bridged",
                 l.name
             );
@@ -189,11 +200,16 @@ fn authored_robots_and_objects_write_outputs_that_simulate() {
         let meshes = dir.join(format!("{robot}_{stem}_meshes"));
         let scene = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
         for l in &scene.model.links {
-            assert!(meshes.join(format!("{}.obj", l.name)).is_file(), "{}", l.name);
+            assert!(
+                meshes.join(format!("{}.obj", l.name)).is_file(),
+                "{}",
+                l.name
+            );
         }
         let mut sim = scene.simulator();
         for _ in 0..3 {
-            sim.step().unwrap_or_else(|e| panic!("{}: {e}", input.display()));
+            sim.step()
+                .unwrap_or_else(|e| panic!("{}: {e}", input.display()));
         }
         // A second import without --force must refuse and leave the files.
         let again = run_import(&cli.args);
@@ -218,7 +234,10 @@ fn make_robots_output_is_reproducible() {
         if p.is_file() {
             let committed = std::fs::read(root().join("robots").join(&f))
                 .unwrap_or_else(|_| panic!("robots/{f} is not committed"));
-            assert!(std::fs::read(&p).unwrap() == committed, "robots/{f} differs from the generator's output");
+            assert!(
+                std::fs::read(&p).unwrap() == committed,
+                "robots/{f} differs from the generator's output"
+            );
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

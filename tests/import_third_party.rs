@@ -33,7 +33,11 @@ fn third_party_kuka_iiwa_imports_and_simulates() {
         );
         assert!(l.coverage >= 0.95, "{}: coverage {}", l.name, l.coverage);
     }
-    assert!(r.disconnected_links.is_empty(), "{:?}", r.disconnected_links);
+    assert!(
+        r.disconnected_links.is_empty(),
+        "{:?}",
+        r.disconnected_links
+    );
     assert_eq!(r.links.len(), 8);
     let scene = Scene::from_spec(imp.scene.clone(), &urdf).unwrap();
     assert_eq!(scene.model.ndof(), 7);

@@ -98,7 +98,10 @@ pub struct LinkConnectivity {
 }
 
 fn link_scale(hulls: &[DesignHull]) -> f64 {
-    let all: Vec<Vector3<f64>> = hulls.iter().flat_map(|h| h.vertices.iter().copied()).collect();
+    let all: Vec<Vector3<f64>> = hulls
+        .iter()
+        .flat_map(|h| h.vertices.iter().copied())
+        .collect();
     let (lo, hi) = bounds(&all);
     (hi - lo).norm().max(1e-12)
 }
@@ -139,7 +142,12 @@ fn analyse_pair(a: &DesignHull, b: &DesignHull, scale: f64) -> PairResult {
         .vertices
         .iter()
         .filter(|v| b.poly.violation(v) <= tol)
-        .chain(b.poly.vertices.iter().filter(|v| a.poly.violation(v) <= tol))
+        .chain(
+            b.poly
+                .vertices
+                .iter()
+                .filter(|v| a.poly.violation(v) <= tol),
+        )
         .copied()
         .collect();
     if !common.is_empty() {
@@ -192,10 +200,11 @@ pub fn connect_link(hulls: &mut [DesignHull], bridge_gaps: bool) -> LinkConnecti
         // Candidates between every pair of separate groups, closest first.
         for i in 0..n {
             for j in i + 1..n {
-                if dsu.find(i) != dsu.find(j) && !gaps.iter().any(|g| g.1 == i && g.2 == j) {
-                    if let PairResult::Gap(p, m) = analyse_pair(&hulls[i], &hulls[j], scale) {
-                        gaps.push((m, i, j, p));
-                    }
+                if dsu.find(i) != dsu.find(j)
+                    && !gaps.iter().any(|g| g.1 == i && g.2 == j)
+                    && let PairResult::Gap(p, m) = analyse_pair(&hulls[i], &hulls[j], scale)
+                {
+                    gaps.push((m, i, j, p));
                 }
             }
         }

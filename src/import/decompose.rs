@@ -57,7 +57,8 @@ pub fn decompose(
         element: ctx.element.clone(),
         msg,
     };
-    let whole = || convex_hull(&mesh.vertices).map_err(|e| fail(format!("the mesh has no volume: {e}")));
+    let whole =
+        || convex_hull(&mesh.vertices).map_err(|e| fail(format!("the mesh has no volume: {e}")));
     match opts.decomposer {
         Decomposer::Hull => Ok(vec![whole()?]),
         Decomposer::None => {
@@ -75,8 +76,13 @@ pub fn decompose(
             }
         }
         Decomposer::Vhacd => {
-            let points: Vec<PVec> = mesh.vertices.iter().map(|v| PVec::new(v.x, v.y, v.z)).collect();
-            let indices: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+            let points: Vec<PVec> = mesh
+                .vertices
+                .iter()
+                .map(|v| PVec::new(v.x, v.y, v.z))
+                .collect();
+            let indices: Vec<[u32; 3]> =
+                mesh.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
             let params = VHACDParameters {
                 resolution: opts.resolution,
                 concavity: opts.threshold,
@@ -87,7 +93,8 @@ pub fn decompose(
             let v = VHACD::decompose(&params, &points, &indices, false);
             let mut hulls = Vec::new();
             for (verts, _) in v.compute_convex_hulls(1) {
-                let pts: Vec<Vector3<f64>> = verts.iter().map(|p| Vector3::new(p.x, p.y, p.z)).collect();
+                let pts: Vec<Vector3<f64>> =
+                    verts.iter().map(|p| Vector3::new(p.x, p.y, p.z)).collect();
                 if let Ok(h) = convex_hull(&pts) {
                     hulls.push(h);
                 }

@@ -67,16 +67,14 @@ pub enum ImportError {
         msg: String,
     },
     #[error(
-        "{}: {element}: mesh format \".{ext}\" of {} is not supported (supported: .obj, .stl); convert it first, e.g. `python -c \"import trimesh; trimesh.load('{name}', force='mesh').export('{stem}.obj')\"`, or with MeshLab/Blender (File → Export → OBJ)",
-        path.display(), mesh.display()
+        "{}: {element}: mesh format \".{ext}\" of {} is not supported (supported: .obj, .stl); convert it first, e.g. `python -c \"import trimesh; trimesh.load('{}', force='mesh').export('{}.obj')\"`, or with MeshLab/Blender (File → Export → OBJ)",
+        path.display(), mesh.display(), file_name(mesh), file_stem(mesh)
     )]
     UnsupportedFormat {
         path: PathBuf,
         element: String,
         mesh: PathBuf,
         ext: String,
-        name: String,
-        stem: String,
     },
     #[error("{}: {element}: {msg}", path.display())]
     Geometry {
@@ -100,4 +98,16 @@ pub enum ImportError {
 
 fn at_line(line: Option<usize>) -> String {
     line.map(|l| format!(" (line {l})")).unwrap_or_default()
+}
+
+fn file_name(p: &std::path::Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn file_stem(p: &std::path::Path) -> String {
+    p.file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }

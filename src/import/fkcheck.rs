@@ -43,7 +43,10 @@ pub fn fk_samples(scene: &Scene, report: &ImportReport, n: usize, seed: u64) -> 
                     }
                     let uq = UnitQuaternion::from_scaled_axis(phi);
                     let c = uq.coords; // (i, j, k, w)
-                    joints.insert(inp[0].name.clone(), json!([p.x, p.y, p.z, c.x, c.y, c.z, c.w]));
+                    joints.insert(
+                        inp[0].name.clone(),
+                        json!([p.x, p.y, p.z, c.x, c.y, c.z, c.w]),
+                    );
                 }
                 (_, Some(inp)) if inp.len() == link.ndof() => {
                     for (k, j) in inp.iter().enumerate() {

@@ -24,7 +24,11 @@ pub struct DeepestPoint {
 /// Solves the Chebyshev-centre problem for `planes` (`n·x ≤ b`, unit `n`),
 /// starting near `start`, in units where `scale` is the problem's size.
 /// The optimal depth is found to within about `1e-10 · scale`.
-pub fn deepest_point(planes: &[(Vector3<f64>, f64)], start: Vector3<f64>, scale: f64) -> DeepestPoint {
+pub fn deepest_point(
+    planes: &[(Vector3<f64>, f64)],
+    start: Vector3<f64>,
+    scale: f64,
+) -> DeepestPoint {
     let m = planes.len();
     assert!(m > 0 && scale > 0.0);
     // Normalised data: x = start + scale·y, r = scale·ρ.

@@ -52,7 +52,10 @@ mod tests {
 
     #[test]
     fn modes_and_fallback() {
-        assert_eq!(link_mass(MassMode::Urdf, Some(2.0), 1000.0, 1e-3), (2.0, MassSource::Urdf));
+        assert_eq!(
+            link_mass(MassMode::Urdf, Some(2.0), 1000.0, 1e-3),
+            (2.0, MassSource::Urdf)
+        );
         assert_eq!(
             link_mass(MassMode::Urdf, None, 1000.0, 1e-3),
             (1.0, MassSource::DensityFallback)

@@ -172,21 +172,11 @@ pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError>
         msg,
     };
     if !matches!(ext.as_str(), "obj" | "stl") {
-        let name = mesh
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let stem = mesh
-            .file_stem()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
         return Err(ImportError::UnsupportedFormat {
             path: ctx.file.clone(),
             element: ctx.element.clone(),
             mesh: mesh.to_path_buf(),
             ext,
-            name,
-            stem,
         });
     }
     if !mesh.is_file() {
@@ -240,7 +230,11 @@ fn read_obj(path: &Path) -> Result<RawMesh, String> {
             v.push(Vector3::new(p[0], p[1], p[2]));
         }
         for f in m.indices.chunks_exact(3) {
-            let tri = [f[0] as usize + base, f[1] as usize + base, f[2] as usize + base];
+            let tri = [
+                f[0] as usize + base,
+                f[1] as usize + base,
+                f[2] as usize + base,
+            ];
             if tri.iter().any(|&i| i >= v.len()) {
                 return Err("face index out of range".into());
             }

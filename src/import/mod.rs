@@ -12,6 +12,9 @@
 //! puts the scene, an OBJ per link and the report on disk atomically; [`cli`]
 //! is the `sdrs import` command.
 
+// Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod cli;
 pub mod connectivity;
 pub mod decompose;
@@ -182,9 +185,13 @@ fn link_geometry(
         let place = |v: &Vector3<f64>| g.rotation * v + g.translation;
         let prim = match &g.shape {
             SourceShape::Box { size } => Some(primitives::box_hull(*size)),
-            SourceShape::Cylinder { radius, length } => Some(primitives::cylinder_hull(*radius, *length)),
+            SourceShape::Cylinder { radius, length } => {
+                Some(primitives::cylinder_hull(*radius, *length))
+            }
             SourceShape::Sphere { radius } => Some(primitives::sphere_hull(*radius)),
-            SourceShape::Capsule { radius, length } => Some(primitives::capsule_hull(*radius, *length)),
+            SourceShape::Capsule { radius, length } => {
+                Some(primitives::capsule_hull(*radius, *length))
+            }
             SourceShape::Tiny { edge } => Some(primitives::box_hull([*edge; 3])),
             SourceShape::Mesh { .. } => None,
         };
@@ -192,13 +199,20 @@ fn link_geometry(
             let prim = prim.map_err(geom_err)?;
             let pts: Vec<_> = prim.hull.iter().map(place).collect();
             hulls.push(DesignHull::new(convex_hull(&pts).map_err(geom_err)?));
-            sources.push(prim.source.transformed([1.0; 3], &g.rotation, &g.translation));
+            sources.push(
+                prim.source
+                    .transformed([1.0; 3], &g.rotation, &g.translation),
+            );
             volume = volume.map(|v| v + prim.volume);
             continue;
         }
-        let SourceShape::Mesh { path, scale } = &g.shape else { unreachable!() };
+        let SourceShape::Mesh { path, scale } = &g.shape else {
+            unreachable!()
+        };
         if scale.iter().any(|s| *s == 0.0 || !s.is_finite()) {
-            return Err(geom_err(format!("mesh scale must be finite and non-zero, got {scale:?}")));
+            return Err(geom_err(format!(
+                "mesh scale must be finite and non-zero, got {scale:?}"
+            )));
         }
         let ctx = MeshContext {
             file: src.file.clone(),

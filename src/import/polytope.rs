@@ -20,12 +20,17 @@ pub struct Polytope {
 /// Convex hull of a point set, or why there is none.
 pub fn convex_hull(points: &[Vector3<f64>]) -> Result<Polytope, String> {
     if points.len() < 4 {
-        return Err(format!("a hull needs at least 4 points, got {}", points.len()));
+        return Err(format!(
+            "a hull needs at least 4 points, got {}",
+            points.len()
+        ));
     }
     if points.iter().any(|p| !p.iter().all(|v| v.is_finite())) {
         return Err("non-finite coordinates".into());
     }
-    let lo = points.iter().fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
+    let lo = points
+        .iter()
+        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
     let hi = points
         .iter()
         .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
@@ -73,29 +78,42 @@ fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usi
         }
     };
     // Initial tetrahedron from extreme points.
-    let i0 = (0..pts.len()).min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x)).unwrap();
+    let i0 = (0..pts.len())
+        .min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x))
+        .unwrap();
     let i1 = (0..pts.len())
-        .max_by(|&a, &b| (pts[a] - pts[i0]).norm().total_cmp(&(pts[b] - pts[i0]).norm()))
+        .max_by(|&a, &b| {
+            (pts[a] - pts[i0])
+                .norm()
+                .total_cmp(&(pts[b] - pts[i0]).norm())
+        })
         .unwrap();
     let d01 = (pts[i1] - pts[i0]).normalize();
     let line = |k: usize| {
         let w = pts[k] - pts[i0];
         (w - d01 * d01.dot(&w)).norm()
     };
-    let i2 = (0..pts.len()).max_by(|&a, &b| line(a).total_cmp(&line(b))).unwrap();
+    let i2 = (0..pts.len())
+        .max_by(|&a, &b| line(a).total_cmp(&line(b)))
+        .unwrap();
     if line(i2) <= eps {
         return Err("the points are collinear".into());
     }
     let nrm = (pts[i1] - pts[i0]).cross(&(pts[i2] - pts[i0])).normalize();
     let off = |k: usize| nrm.dot(&(pts[k] - pts[i0]));
-    let i3 = (0..pts.len()).max_by(|&a, &b| off(a).abs().total_cmp(&off(b).abs())).unwrap();
+    let i3 = (0..pts.len())
+        .max_by(|&a, &b| off(a).abs().total_cmp(&off(b).abs()))
+        .unwrap();
     if off(i3).abs() <= eps {
         return Err("the points are coplanar: the hull encloses no volume".into());
     }
     let centre = (pts[i0] + pts[i1] + pts[i2] + pts[i3]) / 4.0;
     let mut faces: Vec<Face> = Vec::new();
-    let mut edge: std::collections::HashMap<(usize, usize), usize> = std::collections::HashMap::new();
-    let add = |faces: &mut Vec<Face>, edge: &mut std::collections::HashMap<(usize, usize), usize>, mut v: [usize; 3]| {
+    let mut edge: std::collections::HashMap<(usize, usize), usize> =
+        std::collections::HashMap::new();
+    let add = |faces: &mut Vec<Face>,
+               edge: &mut std::collections::HashMap<(usize, usize), usize>,
+               mut v: [usize; 3]| {
         let mut f = make(v);
         if f.n.dot(&centre) > f.b {
             v.swap(1, 2);
@@ -110,11 +128,10 @@ fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usi
         add(&mut faces, &mut edge, v);
     }
     let initial = [i0, i1, i2, i3];
-    for p in 0..pts.len() {
+    for (p, &x) in pts.iter().enumerate() {
         if initial.contains(&p) {
             continue;
         }
-        let x = pts[p];
         let visible: Vec<usize> = (0..faces.len())
             .filter(|&f| faces[f].alive && faces[f].n.dot(&x) - faces[f].b > eps)
             .collect();
@@ -175,7 +192,10 @@ fn planes_of(v: &[Vector3<f64>], tris: &[[usize; 3]], diag: f64) -> Vec<(Vector3
         }
         let n = n / len;
         // Offset from the farthest of the three corners: robust for slivers.
-        let b = t.iter().map(|&i| n.dot(&v[i])).fold(f64::NEG_INFINITY, f64::max);
+        let b = t
+            .iter()
+            .map(|&i| n.dot(&v[i]))
+            .fold(f64::NEG_INFINITY, f64::max);
         if planes
             .iter()
             .any(|(m, c)| (m - n).norm() < 1e-9 && (c - b).abs() < 1e-9 * diag)
@@ -244,7 +264,9 @@ pub fn mesh_volume(v: &[Vector3<f64>], tris: &[[usize; 3]]) -> f64 {
 
 /// Axis-aligned bounds of a point set.
 pub fn bounds(v: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>) {
-    let lo = v.iter().fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
+    let lo = v
+        .iter()
+        .fold(Vector3::repeat(f64::INFINITY), |a, p| a.inf(p));
     let hi = v
         .iter()
         .fold(Vector3::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));

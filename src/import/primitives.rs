@@ -75,7 +75,9 @@ pub fn cylinder_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> 
     let rv = radius / (PI / n as f64).cos();
     let h = length / 2.0;
     let hull: Vec<_> = ring(rv, -h, n, 0.0).chain(ring(rv, h, n, 0.0)).collect();
-    let fine: Vec<_> = ring(radius, -h, 64, 0.0).chain(ring(radius, h, 64, 0.0)).collect();
+    let fine: Vec<_> = ring(radius, -h, 64, 0.0)
+        .chain(ring(radius, h, 64, 0.0))
+        .collect();
     Ok(PrimitiveHull {
         hull,
         source: hull_mesh(&fine),
@@ -122,8 +124,14 @@ fn icosphere() -> Vec<Vector3<f64>> {
 fn circumscribed_sphere(radius: f64, centre: Vector3<f64>) -> Vec<Vector3<f64>> {
     let unit = icosphere();
     let p = convex_hull(&unit).expect("icosphere");
-    let inradius = p.planes.iter().map(|(_, b)| *b).fold(f64::INFINITY, f64::min);
-    unit.iter().map(|v| centre + v * (radius / inradius)).collect()
+    let inradius = p
+        .planes
+        .iter()
+        .map(|(_, b)| *b)
+        .fold(f64::INFINITY, f64::min);
+    unit.iter()
+        .map(|v| centre + v * (radius / inradius))
+        .collect()
 }
 
 fn uv_sphere(radius: f64, centre: Vector3<f64>) -> Vec<Vector3<f64>> {
@@ -187,7 +195,11 @@ mod tests {
         for p in [&b, &c, &s, &k] {
             assert!(contains_source(p));
             let hv = convex_hull(&p.hull).unwrap().volume();
-            assert!(hv >= p.volume && hv < 1.2 * p.volume, "{hv} vs {}", p.volume);
+            assert!(
+                hv >= p.volume && hv < 1.2 * p.volume,
+                "{hv} vs {}",
+                p.volume
+            );
         }
         assert!(cylinder_hull(-1.0, 1.0).is_err());
     }

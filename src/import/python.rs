@@ -54,7 +54,10 @@ pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput,
     let path = tool(script);
     if !path.is_file() {
         return Err(ImportError::Python {
-            msg: format!("helper {} not found (set SDRS_ROOT to the sdrs source tree)", path.display()),
+            msg: format!(
+                "helper {} not found (set SDRS_ROOT to the sdrs source tree)",
+                path.display()
+            ),
         });
     }
     let out = Command::new(&py).arg(&path).args(args).output().map_err(|e| ImportError::Python {

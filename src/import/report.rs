@@ -80,7 +80,10 @@ pub struct ImportReport {
 
 /// Volume of the union of `hulls` on a `grid³` lattice.
 pub fn union_volume(hulls: &[Polytope], grid: usize) -> f64 {
-    let all: Vec<Vector3<f64>> = hulls.iter().flat_map(|h| h.vertices.iter().copied()).collect();
+    let all: Vec<Vector3<f64>> = hulls
+        .iter()
+        .flat_map(|h| h.vertices.iter().copied())
+        .collect();
     let (lo, hi) = bounds(&all);
     let ext = hi - lo;
     let cell = ext / grid as f64;

@@ -11,14 +11,29 @@ use std::path::PathBuf;
 #[derive(Clone, Debug)]
 pub enum SourceShape {
     /// A mesh file with per-axis scale.
-    Mesh { path: PathBuf, scale: [f64; 3] },
-    Box { size: [f64; 3] },
-    Cylinder { radius: f64, length: f64 },
-    Sphere { radius: f64 },
-    Capsule { radius: f64, length: f64 },
+    Mesh {
+        path: PathBuf,
+        scale: [f64; 3],
+    },
+    Box {
+        size: [f64; 3],
+    },
+    Cylinder {
+        radius: f64,
+        length: f64,
+    },
+    Sphere {
+        radius: f64,
+    },
+    Capsule {
+        radius: f64,
+        length: f64,
+    },
     /// No geometry in the input: a small cube of the given edge at the link
     /// origin keeps the link valid (see [`super::ImportOptions::tiny_hull_size`]).
-    Tiny { edge: f64 },
+    Tiny {
+        edge: f64,
+    },
 }
 
 /// One geometry of a link, placed in the link frame.
@@ -120,7 +135,13 @@ impl SourceRobot {
 pub fn sanitize(s: &str) -> String {
     let t: String = s
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if t.is_empty() { "body".into() } else { t }
 }

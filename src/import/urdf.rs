@@ -71,9 +71,12 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
     let mut saw_robot = false;
     loop {
         let pos = reader.buffer_position() as usize;
-        let ev = reader
-            .read_event()
-            .map_err(|e| malformed(line_of(text, reader.error_position() as usize), e.to_string()))?;
+        let ev = reader.read_event().map_err(|e| {
+            malformed(
+                line_of(text, reader.error_position() as usize),
+                e.to_string(),
+            )
+        })?;
         let (e, empty) = match &ev {
             Event::Start(e) => (e, false),
             Event::Empty(e) => (e, true),
@@ -288,7 +291,11 @@ fn type_name(t: &urdf_rs::JointType) -> &'static str {
     }
 }
 
-fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<SourceRobot, ImportError> {
+fn convert(
+    path: &Path,
+    robot: &urdf_rs::Robot,
+    opts: &ImportOptions,
+) -> Result<SourceRobot, ImportError> {
     let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
         path: path.to_path_buf(),
         element,
@@ -300,7 +307,10 @@ fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<
     let mut index = HashMap::new();
     for (i, l) in robot.links.iter().enumerate() {
         if index.insert(l.name.as_str(), i).is_some() {
-            return Err(invalid(format!("link \"{}\"", l.name), "duplicate link name".into()));
+            return Err(invalid(
+                format!("link \"{}\"", l.name),
+                "duplicate link name".into(),
+            ));
         }
     }
     // Parent joint of each link.
@@ -308,7 +318,10 @@ fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<
     let mut joint_names = HashMap::new();
     for (ji, j) in robot.joints.iter().enumerate() {
         if joint_names.insert(j.name.as_str(), ji).is_some() {
-            return Err(invalid(format!("joint \"{}\"", j.name), "duplicate joint name".into()));
+            return Err(invalid(
+                format!("joint \"{}\"", j.name),
+                "duplicate joint name".into(),
+            ));
         }
         for (role, l) in [("parent", &j.parent.link), ("child", &j.child.link)] {
             if !index.contains_key(l.as_str()) {
@@ -365,9 +378,14 @@ fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<
             cur = p;
         }
     }
-    let roots: Vec<usize> = (0..robot.links.len()).filter(|&i| parent_joint[i].is_none()).collect();
+    let roots: Vec<usize> = (0..robot.links.len())
+        .filter(|&i| parent_joint[i].is_none())
+        .collect();
     if roots.len() != 1 {
-        let names: Vec<&str> = roots.iter().map(|&i| robot.links[i].name.as_str()).collect();
+        let names: Vec<&str> = roots
+            .iter()
+            .map(|&i| robot.links[i].name.as_str())
+            .collect();
         return Err(invalid(
             "robot".into(),
             format!(
@@ -531,7 +549,13 @@ fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<
         }
         let c = kids[0];
         let cl = links[c].as_ref().unwrap();
-        let zero = cl.joint.origin.xyz.iter().chain(&cl.joint.origin.rpy).all(|v| v.abs() < 1e-12);
+        let zero = cl
+            .joint
+            .origin
+            .xyz
+            .iter()
+            .chain(&cl.joint.origin.rpy)
+            .all(|v| v.abs() < 1e-12);
         let (a1, a2) = (m.joint.axis.unwrap(), cl.joint.axis.unwrap_or([0.0; 3]));
         let dot: f64 = a1.iter().zip(&a2).map(|(x, y)| x * y).sum();
         if cl.joint.kind != JointType::Revolute || !zero || dot.abs() > 1e-9 {
@@ -540,7 +564,7 @@ fn convert(path: &Path, robot: &urdf_rs::Robot, opts: &ImportOptions) -> Result<
         let m = links[i].take().unwrap();
         let cl = links[c].as_mut().unwrap();
         let mut inputs = m.joint.input_joints.clone();
-        inputs.extend(cl.joint.input_joints.drain(..));
+        inputs.append(&mut cl.joint.input_joints);
         cl.joint = SourceJoint {
             name: format!("{}+{}", m.joint.name, cl.joint.name),
             kind: JointType::Ball,

@@ -52,13 +52,13 @@ fn canonical(p: &Path) -> Option<PathBuf> {
 pub fn check_outputs(input: &Path, paths: &OutputPaths, force: bool) -> Result<(), ImportError> {
     let input_c = canonical(input).unwrap_or_else(|| input.to_path_buf());
     for p in paths.all() {
-        if let Some(c) = canonical(p) {
-            if input_c.starts_with(&c) {
-                return Err(ImportError::Output {
-                    path: p.to_path_buf(),
-                    msg: format!("refusing to write over the input {}", input.display()),
-                });
-            }
+        if let Some(c) = canonical(p)
+            && input_c.starts_with(&c)
+        {
+            return Err(ImportError::Output {
+                path: p.to_path_buf(),
+                msg: format!("refusing to write over the input {}", input.display()),
+            });
         }
         if p.exists() && !force {
             return Err(ImportError::Output {
@@ -125,7 +125,11 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> ImportError + '_ {
     }
 }
 
-fn stage(imported: &Imported, paths: &OutputPaths, staged: &[(PathBuf, PathBuf)]) -> Result<(), ImportError> {
+fn stage(
+    imported: &Imported,
+    paths: &OutputPaths,
+    staged: &[(PathBuf, PathBuf)],
+) -> Result<(), ImportError> {
     let (design_tmp, meshes_tmp) = (&staged[0].0, &staged[1].0);
     for (tmp, fin) in staged {
         if let Some(dir) = fin.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -136,7 +140,11 @@ fn stage(imported: &Imported, paths: &OutputPaths, staged: &[(PathBuf, PathBuf)]
     let header = format!(
         "# SDRS design space imported by `sdrs import` from {}\n# Scene schema version 1 (see src/scene/schema.rs); hull OBJs in {}/\n",
         imported.report.input,
-        paths.meshes.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+        paths
+            .meshes
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
     );
     let yaml = header + &super::write::to_yaml(&imported.scene);
     std::fs::write(design_tmp, yaml).map_err(io(&paths.design))?;
@@ -151,7 +159,12 @@ fn stage(imported: &Imported, paths: &OutputPaths, staged: &[(PathBuf, PathBuf)]
                 obj.push_str(&format!("v {} {} {}\n", v.x, v.y, v.z));
             }
             for t in &p.triangles {
-                obj.push_str(&format!("f {} {} {}\n", t[0] + base, t[1] + base, t[2] + base));
+                obj.push_str(&format!(
+                    "f {} {} {}\n",
+                    t[0] + base,
+                    t[1] + base,
+                    t[2] + base
+                ));
             }
             base += p.vertices.len();
         }
@@ -159,10 +172,11 @@ fn stage(imported: &Imported, paths: &OutputPaths, staged: &[(PathBuf, PathBuf)]
         std::fs::write(&f, obj).map_err(io(&paths.meshes))?;
     }
     if let (Some(r), Some((tmp, _))) = (&paths.report, staged.get(2)) {
-        let json = serde_json::to_string_pretty(&imported.report).map_err(|e| ImportError::Output {
-            path: r.clone(),
-            msg: e.to_string(),
-        })?;
+        let json =
+            serde_json::to_string_pretty(&imported.report).map_err(|e| ImportError::Output {
+                path: r.clone(),
+                msg: e.to_string(),
+            })?;
         std::fs::write(tmp, json).map_err(io(r))?;
     }
     Ok(())
@@ -218,9 +232,17 @@ fn scalar(v: &serde_yaml::Value) -> Option<String> {
 
 fn float(x: f64) -> String {
     if !x.is_finite() {
-        return if x.is_nan() { ".nan".into() } else if x > 0.0 { ".inf".into() } else { "-.inf".into() };
+        return if x.is_nan() {
+            ".nan".into()
+        } else if x > 0.0 {
+            ".inf".into()
+        } else {
+            "-.inf".into()
+        };
     }
-    let s = serde_json::Number::from_f64(x).map(|n| n.to_string()).unwrap_or_default();
+    let s = serde_json::Number::from_f64(x)
+        .map(|n| n.to_string())
+        .unwrap_or_default();
     if s.contains('.') {
         s
     } else if let Some(i) = s.find(['e', 'E']) {
@@ -286,7 +308,11 @@ fn inline(v: &serde_yaml::Value) -> String {
         V::Mapping(m) => format!(
             "{{{}}}",
             m.iter()
-                .map(|(k, v)| format!("{}: {}", scalar(k).unwrap_or_default().trim_matches('"'), inline(v)))
+                .map(|(k, v)| format!(
+                    "{}: {}",
+                    scalar(k).unwrap_or_default().trim_matches('"'),
+                    inline(v)
+                ))
                 .collect::<Vec<_>>()
                 .join(", ")
         ),
@@ -297,10 +323,21 @@ fn inline(v: &serde_yaml::Value) -> String {
 
 fn write_value(val: &serde_yaml::Value, indent: usize, out: &mut String) {
     use serde_yaml::Value as V;
-    let flat = |s: &Vec<V>| s.iter().all(|x| scalar(x).is_some() || matches!(x, V::Sequence(i) if i.iter().all(|y| scalar(y).is_some())));
+    let flat = |s: &Vec<V>| {
+        s.iter().all(|x| {
+            scalar(x).is_some()
+                || matches!(x, V::Sequence(i) if i.iter().all(|y| scalar(y).is_some()))
+        })
+    };
     match val {
         V::Mapping(m) if m.is_empty() => out.push_str(" {}\n"),
-        V::Mapping(m) if m.len() <= 2 && m.iter().all(|(_, v)| scalar(v).is_some() || matches!(v, V::Sequence(s) if s.iter().all(|x| scalar(x).is_some()))) => {
+        V::Mapping(m)
+            if m.len() <= 2
+                && m.iter().all(|(_, v)| {
+                    scalar(v).is_some()
+                        || matches!(v, V::Sequence(s) if s.iter().all(|x| scalar(x).is_some()))
+                }) =>
+        {
             out.push(' ');
             out.push_str(&inline(val));
             out.push('\n');

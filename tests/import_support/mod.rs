@@ -19,7 +19,10 @@ pub fn root() -> PathBuf {
 }
 
 pub fn robot_urdf(name: &str) -> PathBuf {
-    root().join("robots").join(name).join(format!("{name}.urdf"))
+    root()
+        .join("robots")
+        .join(name)
+        .join(format!("{name}.urdf"))
 }
 
 /// Every object mesh of the authored robots.
@@ -66,7 +69,10 @@ pub fn run_tool(script: &str, args: &[&Path]) -> (bool, String, String) {
 /// in the venv (installed by tools/setup_python.sh).
 pub fn third_party_urdf() -> PathBuf {
     let out = Command::new(venv_python())
-        .args(["-c", "import pybullet_data; print(pybullet_data.getDataPath())"])
+        .args([
+            "-c",
+            "import pybullet_data; print(pybullet_data.getDataPath())",
+        ])
         .output()
         .expect("run Python");
     assert!(
