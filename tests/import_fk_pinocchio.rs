@@ -73,3 +73,57 @@ fn fk_check_detects_a_wrong_pose() {
     assert!(!ok && err.contains("finger1_distal"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn fk_with_merged_fixed_links_primitives_continuous_and_prismatic_matches_pinocchio() {
+    // A geometry-less flange on a fixed joint is merged into its parent (its
+    // child's origin composed through it); continuous joints are (cos, sin)
+    // in Pinocchio.
+    let text = r#"<?xml version="1.0"?>
+<robot name="mixed">
+  <link name="base"><collision><geometry><box size="0.3 0.3 0.1"/></geometry></collision></link>
+  <link name="upper">
+    <inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>
+    <collision><origin xyz="0 0 0.2" rpy="0.1 0 0"/><geometry><cylinder radius="0.04" length="0.4"/></geometry></collision>
+  </link>
+  <link name="flange"/>
+  <link name="slider"><collision><geometry><capsule radius="0.03" length="0.1"/></geometry></collision></link>
+  <link name="tip"><visual><geometry><sphere radius="0.05"/></geometry></visual></link>
+  <joint name="spin" type="continuous">
+    <parent link="base"/><child link="upper"/>
+    <origin xyz="0.01 0.02 0.05" rpy="0.3 -0.2 0.7"/><axis xyz="0.2 0.3 1"/>
+  </joint>
+  <joint name="mount" type="fixed">
+    <parent link="upper"/><child link="flange"/>
+    <origin xyz="0 0.05 0.4" rpy="0.5 0.1 -0.3"/>
+  </joint>
+  <joint name="slide" type="prismatic">
+    <parent link="flange"/><child link="slider"/>
+    <origin xyz="0.02 0 0.01" rpy="0 0.4 0"/><axis xyz="1 0 0"/>
+    <limit lower="-0.2" upper="0.3" effort="1" velocity="1"/>
+  </joint>
+  <joint name="wrist" type="revolute">
+    <parent link="slider"/><child link="tip"/>
+    <origin xyz="0 0 0.05" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="1" velocity="1"/>
+  </joint>
+</robot>
+"#;
+    let dir = temp_dir("fk-mixed-src");
+    let urdf = dir.join("mixed.urdf");
+    std::fs::write(&urdf, text).unwrap();
+    let opts = ImportOptions {
+        progress: false,
+        ..ImportOptions::default()
+    };
+    let imp = import(&urdf, &opts).unwrap();
+    assert!(
+        imp.report
+            .notes
+            .iter()
+            .any(|n| n.contains("\"flange\"") && n.contains("merged"))
+    );
+    assert_eq!(imp.report.links.len(), 4);
+    check(&urdf, "mixed", 6);
+    let _ = std::fs::remove_dir_all(&dir);
+}

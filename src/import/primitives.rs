@@ -7,7 +7,7 @@
 //! | box       | 8 (exact) |
 //! | cylinder  | 32: a 16-gon prism whose side faces touch the cylinder (vertex radius `r / cos(π/16)`) |
 //! | sphere    | 42: an icosahedron subdivided once, scaled so that its faces touch the sphere |
-//! | capsule   | the hull of two such 42-vertex spheres at the segment ends (50 extreme points) |
+//! | capsule   | the hull of two such 42-vertex spheres at the segment ends (54 vertices: the hull keeps the points on the cylindrical band) |
 //!
 //! Axes follow URDF: cylinders and capsules lie along the geometry's `z`,
 //! centred at its origin; `length` excludes the capsule's caps.
@@ -191,7 +191,7 @@ mod tests {
         let s = sphere_hull(0.3).unwrap();
         assert_eq!(s.hull.len(), 42);
         let k = capsule_hull(0.2, 1.0).unwrap();
-        assert_eq!(k.hull.len(), 50);
+        assert_eq!(k.hull.len(), 54);
         for p in [&b, &c, &s, &k] {
             assert!(contains_source(p));
             let hv = convex_hull(&p.hull).unwrap().volume();

@@ -623,3 +623,51 @@ fn children_of_raw(links: &[Option<SourceLink>], p: usize) -> Vec<usize> {
         .filter(|&c| links[c].as_ref().is_some_and(|l| l.parent == Some(p)))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn package_paths_resolve_upward_and_through_ros_package_path() {
+        let root = std::env::temp_dir().join(format!("sdrs-pkg-{}", std::process::id()));
+        let urdf_dir = root.join("ws/my_robot/urdf");
+        std::fs::create_dir_all(&urdf_dir).unwrap();
+        std::fs::create_dir_all(root.join("ws/my_robot/meshes")).unwrap();
+        std::fs::write(root.join("ws/my_robot/meshes/a.stl"), "x").unwrap();
+        std::fs::create_dir_all(root.join("elsewhere/other_pkg/m")).unwrap();
+        std::fs::write(root.join("elsewhere/other_pkg/m/b.obj"), "x").unwrap();
+        let urdf = urdf_dir.join("r.urdf");
+        // Upward: an ancestor named like the package.
+        let p = resolve_mesh_path(&urdf, "package://my_robot/meshes/a.stl").unwrap();
+        assert!(p.ends_with("my_robot/meshes/a.stl"));
+        // Relative to the URDF.
+        assert!(resolve_mesh_path(&urdf, "../meshes/a.stl").is_ok());
+        // Not found without ROS_PACKAGE_PATH; found with it.
+        assert!(resolve_mesh_path(&urdf, "package://other_pkg/m/b.obj").is_err());
+        // SAFETY: only this test reads or writes ROS_PACKAGE_PATH.
+        unsafe { std::env::set_var("ROS_PACKAGE_PATH", root.join("elsewhere")) };
+        let found = resolve_mesh_path(&urdf, "package://other_pkg/m/b.obj");
+        unsafe { std::env::remove_var("ROS_PACKAGE_PATH") };
+        assert!(found.unwrap().ends_with("other_pkg/m/b.obj"));
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    #[test]
+    fn composed_origins_match_matrix_products() {
+        let a = Origin {
+            xyz: [0.1, -0.2, 0.3],
+            rpy: [0.3, -0.4, 1.2],
+        };
+        let b = Origin {
+            xyz: [0.5, 0.0, -0.1],
+            rpy: [-0.7, 0.2, 0.4],
+        };
+        let c = compose_origin(&a, &b);
+        let (ra, ta) = rt(&a);
+        let (rb, tb) = rt(&b);
+        let (rc, tc) = rt(&c);
+        assert!((rc - ra * rb).norm() < 1e-12);
+        assert!((tc - (ta + ra * tb)).norm() < 1e-12);
+    }
+}

@@ -380,3 +380,14 @@ fn write_value(val: &serde_yaml::Value, indent: usize, out: &mut String) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn floats_always_carry_a_dot() {
+        assert_eq!(super::float(1.0), "1.0");
+        assert_eq!(super::float(1e-7), "1.0e-7");
+        assert_eq!(super::float(-0.25), "-0.25");
+        assert_eq!(super::float(2.5e20), "2.5e+20");
+    }
+}
