@@ -3,7 +3,8 @@
 //! Pipeline stages, one folder each: [`scene`] (files → model), [`model`]
 //! (links, hulls, joints), [`kinematics`] (poses and derivatives), [`energy`]
 //! (terms of the step objective), [`sim`] (Newton per step), [`control`]
-//! (target signals), [`output`] (trajectory CSV, summary JSON).
+//! (target signals), [`output`] (trajectory CSV, summary JSON), [`import`]
+//! (URDF / OBJ / STL → convex-hull design spaces).
 //!
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
