@@ -275,8 +275,16 @@ fn emit(v: &serde_yaml::Value, indent: usize, out: &mut String, inline_first: bo
         V::Sequence(s) => {
             for item in s {
                 out.push_str(&pad);
-                out.push_str("- ");
+                out.push('-');
+                if !matches!(item, V::Sequence(inner) if !inner.iter().all(|x| scalar(x).is_some()))
+                {
+                    out.push(' ');
+                }
                 match item {
+                    V::Mapping(m) if m.len() <= 4 && m.iter().all(|(_, v)| scalar(v).is_some()) => {
+                        out.push_str(&inline(item));
+                        out.push('\n');
+                    }
                     V::Mapping(_) => emit(item, indent + 2, out, true),
                     V::Tagged(t) => {
                         out.push_str(&t.tag.to_string());
@@ -389,5 +397,21 @@ mod tests {
         assert_eq!(super::float(1e-7), "1.0e-7");
         assert_eq!(super::float(-0.25), "-0.25");
         assert_eq!(super::float(2.5e20), "2.5e+20");
+    }
+
+    #[test]
+    fn design_yaml_round_trips_exactly() {
+        let input = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("robots/parallel_jaw_gripper/parallel_jaw_gripper.urdf");
+        let opts = crate::import::ImportOptions {
+            decomposer: crate::import::Decomposer::Hull,
+            progress: false,
+            ..Default::default()
+        };
+        let imp = crate::import::import(&input, &opts).unwrap();
+        let yaml = super::to_yaml(&imp.scene);
+        let back: crate::scene::SceneSpec = serde_yaml::from_str(&yaml).unwrap();
+        assert_eq!(back, imp.scene);
+        assert!(yaml.contains("!vertices") && yaml.contains("ties:"));
     }
 }
