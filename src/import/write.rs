@@ -404,7 +404,6 @@ mod tests {
         let input = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("robots/parallel_jaw_gripper/parallel_jaw_gripper.urdf");
         let opts = crate::import::ImportOptions {
-            decomposer: crate::import::Decomposer::Hull,
             progress: false,
             ..Default::default()
         };
