@@ -1,11 +1,13 @@
 //! SDRS — shape-differentiable robot simulation.
 //!
-//! Pipeline stages, one folder each: [`scene`] (files → model), [`model`]
-//! (links, hulls, joints), [`kinematics`] (poses and derivatives),
-//! [`geometry`] (world hulls, broad phase), [`contact`] (separating-plane
-//! contact and friction potentials of one hull pair), [`energy`] (terms of
-//! the step objective), [`sim`] (Newton per step), [`control`] (target
-//! signals), [`output`] (trajectory CSV, summary JSON).
+//! Pipeline stages, one folder each: [`import`] (URDF / OBJ / STL →
+//! convex-hull design spaces), [`scene`] (files → model), [`model`] (links,
+//! hulls, joints), [`kinematics`] (poses and derivatives), [`geometry`]
+//! (world hulls, broad phase), [`contact`] (separating-plane contact and
+//! friction potentials of one hull pair), [`energy`] (terms of the step
+//! objective), [`sim`] (Newton per step), [`control`] (target signals),
+//! [`diff`] (adjoint gradients of trajectories), [`optimize`] (co-design),
+//! [`output`] (trajectory CSV, summary JSON).
 //!
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
@@ -14,6 +16,7 @@ pub mod control;
 pub mod diff;
 pub mod energy;
 pub mod geometry;
+pub mod import;
 pub mod kinematics;
 pub mod math;
 pub mod model;

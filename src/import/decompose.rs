@@ -1,0 +1,208 @@
+//! Convex decomposition of one mesh into hulls.
+//!
+//! - `vhacd` (default): V-HACD from parry3d on a voxelization of the mesh.
+//!   Hulls are the convex hulls of each part's surface voxels (every voxel
+//!   corner is used: `convex_hull_downsampling = 1`), so neighbouring parts
+//!   touch exactly along their cut planes and the hulls cover the mesh to
+//!   within half a voxel. parry does not merge parts, so when it returns more
+//!   than `max_hulls` parts we merge the pair whose merged hull adds the
+//!   least volume until `max_hulls` remain.
+//! - `coacd`: CoACD through `tools/coacd_decompose.py` (Python `coacd`
+//!   package), `threshold` is its concavity threshold, `max_hulls` its
+//!   `max_convex_hull`, `resolution` its `resolution`.
+//! - `hull`: one convex hull of the whole mesh.
+//! - `none`: the mesh must already be convex (its volume equals its hull's to
+//!   1e-6 relative); otherwise an error.
+
+use super::ImportOptions;
+use super::error::ImportError;
+use super::mesh::{MeshContext, TriMesh};
+use super::polytope::{Polytope, convex_hull};
+use super::python;
+use nalgebra::Vector3;
+use parry3d_f64::math::Vector as PVec;
+use parry3d_f64::transformation::vhacd::{VHACD, VHACDParameters};
+use serde::{Deserialize, Serialize};
+
+/// Which decomposition to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Decomposer {
+    Vhacd,
+    Coacd,
+    Hull,
+    None,
+}
+
+impl Decomposer {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Decomposer::Vhacd => "vhacd",
+            Decomposer::Coacd => "coacd",
+            Decomposer::Hull => "hull",
+            Decomposer::None => "none",
+        }
+    }
+}
+
+/// Decomposes `mesh` into at most `opts.max_hulls` convex hulls.
+pub fn decompose(
+    mesh: &TriMesh,
+    opts: &ImportOptions,
+    max_hulls: usize,
+    ctx: &MeshContext,
+) -> Result<Vec<Polytope>, ImportError> {
+    let fail = |msg: String| ImportError::Decomposition {
+        path: ctx.file.clone(),
+        element: ctx.element.clone(),
+        msg,
+    };
+    let whole =
+        || convex_hull(&mesh.vertices).map_err(|e| fail(format!("the mesh has no volume: {e}")));
+    match opts.decomposer {
+        Decomposer::Hull => Ok(vec![whole()?]),
+        Decomposer::None => {
+            let h = whole()?;
+            let hv = h.volume();
+            let mv = mesh.volume();
+            match mv {
+                Some(v) if (hv - v).abs() <= 1e-6 * hv => Ok(vec![h]),
+                Some(v) => Err(fail(format!(
+                    "--decomposer none needs a convex mesh, but the mesh volume {v:.6e} differs from its convex hull's {hv:.6e}; use vhacd, coacd or hull"
+                ))),
+                None => Err(fail(
+                    "--decomposer none needs a closed convex mesh, but the mesh has open edges; use vhacd, coacd or hull".into(),
+                )),
+            }
+        }
+        Decomposer::Vhacd => {
+            let points: Vec<PVec> = mesh
+                .vertices
+                .iter()
+                .map(|v| PVec::new(v.x, v.y, v.z))
+                .collect();
+            let indices: Vec<[u32; 3]> =
+                mesh.triangles.iter().map(|t| t.map(|i| i as u32)).collect();
+            let params = VHACDParameters {
+                resolution: opts.resolution,
+                concavity: opts.threshold,
+                max_convex_hulls: max_hulls as u32,
+                convex_hull_downsampling: 1,
+                ..VHACDParameters::default()
+            };
+            let v = VHACD::decompose(&params, &points, &indices, false);
+            let mut hulls = Vec::new();
+            for (verts, _) in v.compute_convex_hulls(1) {
+                let pts: Vec<Vector3<f64>> =
+                    verts.iter().map(|p| Vector3::new(p.x, p.y, p.z)).collect();
+                if let Ok(h) = convex_hull(&pts) {
+                    hulls.push(h);
+                }
+            }
+            if hulls.is_empty() {
+                return Err(fail("V-HACD returned no part (is the mesh closed?)".into()));
+            }
+            merge_down(hulls, max_hulls).map_err(fail)
+        }
+        Decomposer::Coacd => {
+            let hulls = coacd(mesh, opts, max_hulls, ctx)?;
+            merge_down(hulls, max_hulls).map_err(fail)
+        }
+    }
+}
+
+/// Greedily merges hull pairs (smallest added volume first) until at most
+/// `max` remain.
+fn merge_down(mut hulls: Vec<Polytope>, max: usize) -> Result<Vec<Polytope>, String> {
+    let max = max.max(1);
+    while hulls.len() > max {
+        let mut best: Option<(f64, usize, usize, Polytope)> = None;
+        for i in 0..hulls.len() {
+            for j in i + 1..hulls.len() {
+                let mut pts = hulls[i].vertices.clone();
+                pts.extend_from_slice(&hulls[j].vertices);
+                let m = convex_hull(&pts)?;
+                let cost = m.volume() - hulls[i].volume() - hulls[j].volume();
+                if best.as_ref().is_none_or(|b| cost < b.0) {
+                    best = Some((cost, i, j, m));
+                }
+            }
+        }
+        let (_, i, j, m) = best.expect("at least two hulls");
+        hulls.swap_remove(j);
+        hulls[i] = m;
+    }
+    Ok(hulls)
+}
+
+/// Runs CoACD through the Python helper: mesh (OBJ) in, hulls (JSON) out.
+fn coacd(
+    mesh: &TriMesh,
+    opts: &ImportOptions,
+    max_hulls: usize,
+    ctx: &MeshContext,
+) -> Result<Vec<Polytope>, ImportError> {
+    let fail = |msg: String| ImportError::Decomposition {
+        path: ctx.file.clone(),
+        element: ctx.element.clone(),
+        msg,
+    };
+    let dir = std::env::temp_dir().join(format!(
+        "sdrs-coacd-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&dir).map_err(|e| fail(format!("temporary directory: {e}")))?;
+    let input = dir.join("mesh.obj");
+    let output = dir.join("hulls.json");
+    let result = (|| {
+        std::fs::write(&input, mesh.to_obj()).map_err(|e| fail(e.to_string()))?;
+        let args: Vec<std::ffi::OsString> = vec![
+            input.clone().into(),
+            output.clone().into(),
+            "--threshold".into(),
+            opts.threshold.to_string().into(),
+            "--max-hulls".into(),
+            max_hulls.to_string().into(),
+            "--resolution".into(),
+            (opts.resolution.max(20) * 32).to_string().into(),
+            "--seed".into(),
+            opts.seed.to_string().into(),
+        ];
+        let out = python::run_tool("coacd_decompose.py", &args)?;
+        if out.code != Some(0) {
+            return Err(fail(format!(
+                "tools/coacd_decompose.py failed ({:?}): {}",
+                out.code,
+                out.stderr.trim()
+            )));
+        }
+        let text = std::fs::read_to_string(&output).map_err(|e| fail(e.to_string()))?;
+        let parsed: CoacdOutput = serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
+        let mut hulls = Vec::new();
+        for h in parsed.hulls {
+            let pts: Vec<Vector3<f64>> = h.vertices.iter().map(|p| Vector3::from(*p)).collect();
+            if let Ok(p) = convex_hull(&pts) {
+                hulls.push(p);
+            }
+        }
+        if hulls.is_empty() {
+            return Err(fail("CoACD returned no part".into()));
+        }
+        Ok(hulls)
+    })();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+#[derive(Deserialize)]
+struct CoacdOutput {
+    hulls: Vec<CoacdHull>,
+}
+
+#[derive(Deserialize)]
+struct CoacdHull {
+    vertices: Vec<[f64; 3]>,
+}

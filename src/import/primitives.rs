@@ -1,0 +1,206 @@
+//! URDF primitives as convex hulls. Every hull *circumscribes* its primitive
+//! (contains the exact shape), so coverage of the true surface is complete.
+//! Vertex counts:
+//!
+//! | primitive | hull vertices |
+//! |-----------|---------------|
+//! | box       | 8 (exact) |
+//! | cylinder  | 32: a 16-gon prism whose side faces touch the cylinder (vertex radius `r / cos(π/16)`) |
+//! | sphere    | 42: an icosahedron subdivided once, scaled so that its faces touch the sphere |
+//! | capsule   | the hull of two such 42-vertex spheres at the segment ends (54 vertices: the hull keeps the points on the cylindrical band) |
+//!
+//! Axes follow URDF: cylinders and capsules lie along the geometry's `z`,
+//! centred at its origin; `length` excludes the capsule's caps.
+//!
+//! For reports, each primitive also comes with a fine tessellation whose
+//! vertices lie on the exact surface (the "source mesh") and its exact volume.
+
+use super::mesh::TriMesh;
+use super::polytope::convex_hull;
+use nalgebra::Vector3;
+use std::f64::consts::PI;
+
+/// Segments of the circumscribed cylinder.
+pub const CYLINDER_SEGMENTS: usize = 16;
+
+/// A primitive turned into a hull.
+#[derive(Clone, Debug)]
+pub struct PrimitiveHull {
+    /// Hull vertices (geometry frame).
+    pub hull: Vec<Vector3<f64>>,
+    /// Fine tessellation with vertices on the exact surface.
+    pub source: TriMesh,
+    /// Exact volume of the primitive.
+    pub volume: f64,
+}
+
+fn check(name: &str, vals: &[f64]) -> Result<(), String> {
+    if vals.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("{name} dimensions must be positive, got {vals:?}"))
+    }
+}
+
+fn hull_mesh(points: &[Vector3<f64>]) -> TriMesh {
+    let p = convex_hull(points).expect("primitive tessellations are full-dimensional");
+    TriMesh {
+        vertices: p.vertices,
+        triangles: p.triangles,
+    }
+}
+
+/// Box of full `size`.
+pub fn box_hull(size: [f64; 3]) -> Result<PrimitiveHull, String> {
+    check("box", &size)?;
+    let hull = crate::model::Hull::cuboid(Vector3::from(size), Vector3::zeros());
+    Ok(PrimitiveHull {
+        source: hull_mesh(&hull),
+        volume: size.iter().product(),
+        hull,
+    })
+}
+
+fn ring(r: f64, z: f64, n: usize, phase: f64) -> impl Iterator<Item = Vector3<f64>> {
+    (0..n).map(move |k| {
+        let a = phase + 2.0 * PI * k as f64 / n as f64;
+        Vector3::new(r * a.cos(), r * a.sin(), z)
+    })
+}
+
+/// Cylinder of `radius` and `length` along z.
+pub fn cylinder_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> {
+    check("cylinder", &[radius, length])?;
+    let n = CYLINDER_SEGMENTS;
+    let rv = radius / (PI / n as f64).cos();
+    let h = length / 2.0;
+    let hull: Vec<_> = ring(rv, -h, n, 0.0).chain(ring(rv, h, n, 0.0)).collect();
+    let fine: Vec<_> = ring(radius, -h, 64, 0.0)
+        .chain(ring(radius, h, 64, 0.0))
+        .collect();
+    Ok(PrimitiveHull {
+        hull,
+        source: hull_mesh(&fine),
+        volume: PI * radius * radius * length,
+    })
+}
+
+/// Unit icosphere vertices (icosahedron subdivided once: 42 vertices).
+fn icosphere() -> Vec<Vector3<f64>> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v: Vec<Vector3<f64>> = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|p| Vector3::from(*p).normalize())
+    .collect();
+    // Edge midpoints: the icosahedron's 30 edges join vertices at the
+    // minimal distance.
+    let dmin = (v[0] - v[1]).norm();
+    let n = v.len();
+    for i in 0..n {
+        for j in i + 1..n {
+            if ((v[i] - v[j]).norm() - dmin).abs() < 1e-9 {
+                v.push(((v[i] + v[j]) / 2.0).normalize());
+            }
+        }
+    }
+    debug_assert_eq!(v.len(), 42);
+    v
+}
+
+/// Icosphere scaled so its faces touch the sphere of `radius`.
+fn circumscribed_sphere(radius: f64, centre: Vector3<f64>) -> Vec<Vector3<f64>> {
+    let unit = icosphere();
+    let p = convex_hull(&unit).expect("icosphere");
+    let inradius = p
+        .planes
+        .iter()
+        .map(|(_, b)| *b)
+        .fold(f64::INFINITY, f64::min);
+    unit.iter()
+        .map(|v| centre + v * (radius / inradius))
+        .collect()
+}
+
+fn uv_sphere(radius: f64, centre: Vector3<f64>) -> Vec<Vector3<f64>> {
+    let mut v = vec![
+        centre + Vector3::new(0.0, 0.0, radius),
+        centre - Vector3::new(0.0, 0.0, radius),
+    ];
+    for i in 1..16 {
+        let th = PI * i as f64 / 16.0;
+        v.extend(ring(radius * th.sin(), radius * th.cos(), 32, 0.0).map(|p| p + centre));
+    }
+    v
+}
+
+/// Sphere of `radius`.
+pub fn sphere_hull(radius: f64) -> Result<PrimitiveHull, String> {
+    check("sphere", &[radius])?;
+    Ok(PrimitiveHull {
+        hull: circumscribed_sphere(radius, Vector3::zeros()),
+        source: hull_mesh(&uv_sphere(radius, Vector3::zeros())),
+        volume: 4.0 / 3.0 * PI * radius.powi(3),
+    })
+}
+
+/// Capsule: a cylinder of `radius` and `length` along z with hemispherical
+/// caps beyond `±length/2`.
+pub fn capsule_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> {
+    check("capsule", &[radius, length])?;
+    let h = Vector3::new(0.0, 0.0, length / 2.0);
+    let mut pts = circumscribed_sphere(radius, h);
+    pts.extend(circumscribed_sphere(radius, -h));
+    let hull = convex_hull(&pts).map_err(|e| e.to_string())?.vertices;
+    let mut fine = uv_sphere(radius, h);
+    fine.extend(uv_sphere(radius, -h));
+    Ok(PrimitiveHull {
+        hull,
+        source: hull_mesh(&fine),
+        volume: PI * radius * radius * (length + 4.0 / 3.0 * radius),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contains_source(p: &PrimitiveHull) -> bool {
+        let poly = convex_hull(&p.hull).unwrap();
+        p.source.vertices.iter().all(|v| poly.violation(v) <= 1e-12)
+    }
+
+    #[test]
+    fn primitives_circumscribe_their_shapes_with_documented_counts() {
+        let b = box_hull([1.0, 2.0, 3.0]).unwrap();
+        assert_eq!(b.hull.len(), 8);
+        let c = cylinder_hull(0.5, 2.0).unwrap();
+        assert_eq!(c.hull.len(), 32);
+        let s = sphere_hull(0.3).unwrap();
+        assert_eq!(s.hull.len(), 42);
+        let k = capsule_hull(0.2, 1.0).unwrap();
+        assert_eq!(k.hull.len(), 54);
+        for p in [&b, &c, &s, &k] {
+            assert!(contains_source(p));
+            let hv = convex_hull(&p.hull).unwrap().volume();
+            assert!(
+                hv >= p.volume && hv < 1.2 * p.volume,
+                "{hv} vs {}",
+                p.volume
+            );
+        }
+        assert!(cylinder_hull(-1.0, 1.0).is_err());
+    }
+}

@@ -1,0 +1,673 @@
+//! URDF → [`SourceRobot`].
+//!
+//! - The XML is checked first (quick-xml) so malformed files and unknown
+//!   joint types get errors naming the line or the joint; urdf-rs then
+//!   parses the elements.
+//! - Joints: `revolute`, `continuous` (→ revolute), `prismatic`, `fixed`,
+//!   `floating` (→ free). `planar`, `spherical` and anything else are errors.
+//!   Limits are kept for reports and checks (the scene schema has none).
+//! - Geometry: `<collision>` elements, or `<visual>` ones when a link has no
+//!   collision element. Mesh `scale` is honoured. Paths: `package://PKG/…`
+//!   is resolved by looking for a directory `PKG` in each ancestor of the
+//!   URDF's directory (or an ancestor named `PKG`), then in every entry of
+//!   `ROS_PACKAGE_PATH`; `file://` and absolute paths are used as given;
+//!   relative paths are relative to the URDF.
+//! - Links without geometry (documented choice):
+//!   * the root, when it has children (a `world` link): dropped; its child
+//!     joints attach directly to the robot base (identity pose), so world
+//!     poses are unchanged;
+//!   * a link attached by a `fixed` joint: merged into its parent (its mass
+//!     is added to the parent's, its children re-attached with the composed
+//!     origin);
+//!   * a link between two revolute/continuous joints whose second joint has a
+//!     zero origin and an axis orthogonal to the first: the pair becomes one
+//!     two-hinge `ball` joint (exactly the same kinematics);
+//!   * any other: a tiny cube at the link origin.
+//! - Kinematic loops (a link that is the child of two joints, or a cycle)
+//!   are errors naming the links and joints.
+
+use super::ImportOptions;
+use super::error::ImportError;
+use super::source::*;
+use crate::math::rpy_to_matrix;
+use crate::scene::schema::{JointType, Origin};
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use quick_xml::events::Event;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Reads a URDF file.
+pub fn read_urdf(path: &Path, opts: &ImportOptions) -> Result<SourceRobot, ImportError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    prescan(path, &text)?;
+    let robot = urdf_rs::read_from_string(&text).map_err(|e| ImportError::MalformedXml {
+        path: path.to_path_buf(),
+        line: None,
+        msg: e.to_string(),
+    })?;
+    convert(path, &robot, opts)
+}
+
+fn line_of(text: &str, pos: usize) -> usize {
+    text.as_bytes()[..pos.min(text.len())]
+        .iter()
+        .filter(|&&c| c == b'\n')
+        .count()
+        + 1
+}
+
+/// Well-formedness and joint types.
+fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut stack: Vec<String> = Vec::new();
+    let malformed = |line: usize, msg: String| ImportError::MalformedXml {
+        path: path.to_path_buf(),
+        line: Some(line),
+        msg,
+    };
+    let mut saw_robot = false;
+    loop {
+        let pos = reader.buffer_position() as usize;
+        let ev = reader.read_event().map_err(|e| {
+            malformed(
+                line_of(text, reader.error_position() as usize),
+                e.to_string(),
+            )
+        })?;
+        let (e, empty) = match &ev {
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            Event::End(_) => {
+                stack.pop();
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+        if stack.is_empty() {
+            if name != "robot" {
+                return Err(malformed(
+                    line_of(text, pos),
+                    format!("the root element is <{name}>, expected <robot>"),
+                ));
+            }
+            saw_robot = true;
+        }
+        if name == "joint" && stack.len() == 1 {
+            let attr = |k: &str| -> Option<String> {
+                e.try_get_attribute(k)
+                    .ok()
+                    .flatten()
+                    .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+            };
+            let jname = attr("name").unwrap_or_else(|| "<unnamed>".into());
+            let kind = attr("type").unwrap_or_default();
+            if !matches!(
+                kind.as_str(),
+                "revolute" | "continuous" | "prismatic" | "fixed" | "floating"
+            ) {
+                return Err(ImportError::UnsupportedJoint {
+                    path: path.to_path_buf(),
+                    joint: jname,
+                    kind,
+                });
+            }
+        }
+        if !empty {
+            stack.push(name);
+        }
+    }
+    if let Some(open) = stack.last() {
+        return Err(malformed(
+            line_of(text, text.len()),
+            format!("element <{open}> is not closed"),
+        ));
+    }
+    if !saw_robot {
+        return Err(malformed(1, "no <robot> element".into()));
+    }
+    Ok(())
+}
+
+fn origin_of(p: &urdf_rs::Pose) -> Origin {
+    Origin {
+        xyz: p.xyz.0,
+        rpy: p.rpy.0,
+    }
+}
+
+/// Rotation and translation of an origin.
+fn rt(o: &Origin) -> (Matrix3<f64>, Vector3<f64>) {
+    (rpy_to_matrix(&o.rpy), Vector3::from(o.xyz))
+}
+
+/// `a ∘ b` as an origin (xyz + rpy).
+fn compose_origin(a: &Origin, b: &Origin) -> Origin {
+    let (ra, ta) = rt(a);
+    let (rb, tb) = rt(b);
+    let r = ra * rb;
+    let t = ta + ra * tb;
+    let (roll, pitch, yaw) = Rotation3::from_matrix_unchecked(r).euler_angles();
+    Origin {
+        xyz: [t.x, t.y, t.z],
+        rpy: [roll, pitch, yaw],
+    }
+}
+
+/// Resolves a mesh file name from a URDF.
+pub fn resolve_mesh_path(urdf: &Path, filename: &str) -> Result<PathBuf, Vec<PathBuf>> {
+    let base = urdf
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    if let Some(rest) = filename.strip_prefix("package://") {
+        let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
+        let mut tried = Vec::new();
+        let abs = std::fs::canonicalize(&base).unwrap_or(base.clone());
+        for dir in abs.ancestors() {
+            let cands = [
+                dir.join(pkg),
+                if dir.file_name().is_some_and(|n| n == pkg) {
+                    dir.to_path_buf()
+                } else {
+                    PathBuf::new()
+                },
+            ];
+            for c in cands {
+                if c.as_os_str().is_empty() {
+                    continue;
+                }
+                let f = c.join(rel);
+                if f.is_file() {
+                    return Ok(f);
+                }
+                tried.push(f);
+            }
+        }
+        if let Some(rpp) = std::env::var_os("ROS_PACKAGE_PATH") {
+            for entry in std::env::split_paths(&rpp) {
+                for c in [entry.join(pkg), entry.clone()] {
+                    if c == entry && entry.file_name().is_none_or(|n| n != pkg) {
+                        continue;
+                    }
+                    let f = c.join(rel);
+                    if f.is_file() {
+                        return Ok(f);
+                    }
+                    tried.push(f);
+                }
+            }
+        }
+        return Err(tried);
+    }
+    let p = if let Some(rest) = filename.strip_prefix("file://") {
+        PathBuf::from(rest)
+    } else {
+        PathBuf::from(filename)
+    };
+    let f = if p.is_absolute() { p } else { base.join(p) };
+    if f.is_file() { Ok(f) } else { Err(vec![f]) }
+}
+
+fn geometry_of(
+    path: &Path,
+    element: String,
+    origin: &urdf_rs::Pose,
+    g: &urdf_rs::Geometry,
+) -> Result<SourceGeometry, ImportError> {
+    let o = origin_of(origin);
+    let (rotation, translation) = rt(&o);
+    let shape = match g {
+        urdf_rs::Geometry::Box { size } => SourceShape::Box { size: size.0 },
+        urdf_rs::Geometry::Cylinder { radius, length } => SourceShape::Cylinder {
+            radius: *radius,
+            length: *length,
+        },
+        urdf_rs::Geometry::Sphere { radius } => SourceShape::Sphere { radius: *radius },
+        urdf_rs::Geometry::Capsule { radius, length } => SourceShape::Capsule {
+            radius: *radius,
+            length: *length,
+        },
+        urdf_rs::Geometry::Mesh { filename, scale } => {
+            let file = resolve_mesh_path(path, filename).map_err(|tried| {
+                let hint = if filename.starts_with("package://") {
+                    format!(
+                        " (looked for the package directory upward from the URDF and in ROS_PACKAGE_PATH; tried {})",
+                        tried
+                            .iter()
+                            .take(4)
+                            .map(|p| p.display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                } else {
+                    String::new()
+                };
+                ImportError::MissingMesh {
+                    path: path.to_path_buf(),
+                    element: element.clone(),
+                    mesh: tried.first().cloned().unwrap_or_else(|| PathBuf::from(filename)),
+                    hint,
+                }
+            })?;
+            SourceShape::Mesh {
+                path: file,
+                scale: scale.map(|s| s.0).unwrap_or([1.0; 3]),
+            }
+        }
+    };
+    Ok(SourceGeometry {
+        element,
+        rotation,
+        translation,
+        shape,
+    })
+}
+
+fn limits(j: &urdf_rs::Joint) -> (f64, f64) {
+    let (lo, hi) = (j.limit.lower, j.limit.upper);
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        (lo, hi)
+    } else if matches!(j.joint_type, urdf_rs::JointType::Prismatic) {
+        (-0.5, 0.5)
+    } else {
+        (-std::f64::consts::PI, std::f64::consts::PI)
+    }
+}
+
+fn type_name(t: &urdf_rs::JointType) -> &'static str {
+    match t {
+        urdf_rs::JointType::Revolute => "revolute",
+        urdf_rs::JointType::Continuous => "continuous",
+        urdf_rs::JointType::Prismatic => "prismatic",
+        urdf_rs::JointType::Fixed => "fixed",
+        urdf_rs::JointType::Floating => "floating",
+        urdf_rs::JointType::Planar => "planar",
+        urdf_rs::JointType::Spherical => "spherical",
+    }
+}
+
+fn convert(
+    path: &Path,
+    robot: &urdf_rs::Robot,
+    opts: &ImportOptions,
+) -> Result<SourceRobot, ImportError> {
+    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+        path: path.to_path_buf(),
+        element,
+        msg,
+    };
+    if robot.links.is_empty() {
+        return Err(invalid("robot".into(), "the URDF has no <link>".into()));
+    }
+    let mut index = HashMap::new();
+    for (i, l) in robot.links.iter().enumerate() {
+        if index.insert(l.name.as_str(), i).is_some() {
+            return Err(invalid(
+                format!("link \"{}\"", l.name),
+                "duplicate link name".into(),
+            ));
+        }
+    }
+    // Parent joint of each link.
+    let mut parent_joint: Vec<Option<usize>> = vec![None; robot.links.len()];
+    let mut joint_names = HashMap::new();
+    for (ji, j) in robot.joints.iter().enumerate() {
+        if joint_names.insert(j.name.as_str(), ji).is_some() {
+            return Err(invalid(
+                format!("joint \"{}\"", j.name),
+                "duplicate joint name".into(),
+            ));
+        }
+        for (role, l) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+            if !index.contains_key(l.as_str()) {
+                return Err(invalid(
+                    format!("joint \"{}\"", j.name),
+                    format!("{role} link \"{l}\" does not exist"),
+                ));
+            }
+        }
+        if matches!(
+            j.joint_type,
+            urdf_rs::JointType::Planar | urdf_rs::JointType::Spherical
+        ) {
+            return Err(ImportError::UnsupportedJoint {
+                path: path.to_path_buf(),
+                joint: j.name.clone(),
+                kind: type_name(&j.joint_type).into(),
+            });
+        }
+        let c = index[j.child.link.as_str()];
+        if let Some(prev) = parent_joint[c] {
+            return Err(ImportError::KinematicLoop {
+                path: path.to_path_buf(),
+                msg: format!(
+                    "link \"{}\" is the child of two joints, \"{}\" and \"{}\" (URDF describes trees only)",
+                    robot.links[c].name, robot.joints[prev].name, j.name
+                ),
+            });
+        }
+        parent_joint[c] = Some(ji);
+    }
+    // Cycles: follow parents.
+    for start in 0..robot.links.len() {
+        let mut seen = vec![start];
+        let mut cur = start;
+        while let Some(ji) = parent_joint[cur] {
+            let p = index[robot.joints[ji].parent.link.as_str()];
+            if let Some(pos) = seen.iter().position(|&x| x == p) {
+                let names: Vec<String> = seen[pos..]
+                    .iter()
+                    .rev()
+                    .map(|&k| format!("\"{}\"", robot.links[k].name))
+                    .collect();
+                return Err(ImportError::KinematicLoop {
+                    path: path.to_path_buf(),
+                    msg: format!(
+                        "the links {} form a cycle through joint \"{}\"",
+                        names.join(" → "),
+                        robot.joints[ji].name
+                    ),
+                });
+            }
+            seen.push(p);
+            cur = p;
+        }
+    }
+    let roots: Vec<usize> = (0..robot.links.len())
+        .filter(|&i| parent_joint[i].is_none())
+        .collect();
+    if roots.len() != 1 {
+        let names: Vec<&str> = roots
+            .iter()
+            .map(|&i| robot.links[i].name.as_str())
+            .collect();
+        return Err(invalid(
+            "robot".into(),
+            format!(
+                "a URDF needs exactly one root link, found {}: {}",
+                roots.len(),
+                names.join(", ")
+            ),
+        ));
+    }
+    // Children lists, then a depth-first order from the root.
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
+    for (ji, j) in robot.joints.iter().enumerate() {
+        children[index[j.parent.link.as_str()]].push(ji);
+    }
+    let mut order = vec![roots[0]];
+    let mut k = 0;
+    while k < order.len() {
+        for &ji in &children[order[k]] {
+            order.push(index[robot.joints[ji].child.link.as_str()]);
+        }
+        k += 1;
+    }
+
+    // Initial links.
+    let mut tmp: Vec<SourceLink> = Vec::new();
+    let mut pos = vec![usize::MAX; robot.links.len()];
+    for &li in &order {
+        let l = &robot.links[li];
+        let mut geometry = Vec::new();
+        if !l.collision.is_empty() {
+            for (gi, c) in l.collision.iter().enumerate() {
+                geometry.push(geometry_of(
+                    path,
+                    format!("link \"{}\" collision[{gi}]", l.name),
+                    &c.origin,
+                    &c.geometry,
+                )?);
+            }
+        } else {
+            for (gi, v) in l.visual.iter().enumerate() {
+                geometry.push(geometry_of(
+                    path,
+                    format!("link \"{}\" visual[{gi}]", l.name),
+                    &v.origin,
+                    &v.geometry,
+                )?);
+            }
+        }
+        let (parent, joint) = match parent_joint[li] {
+            None => (
+                None,
+                SourceJoint {
+                    name: l.name.clone(),
+                    kind: JointType::Fixed,
+                    axis: None,
+                    axes: None,
+                    origin: Origin::default(),
+                    input_joints: Vec::new(),
+                },
+            ),
+            Some(ji) => {
+                let j = &robot.joints[ji];
+                let pi = pos[index[j.parent.link.as_str()]];
+                let axis = {
+                    let a = Vector3::from(j.axis.xyz.0);
+                    if !(a.norm() > 1e-12) {
+                        return Err(invalid(format!("joint \"{}\"", j.name), "zero axis".into()));
+                    }
+                    let a = a.normalize();
+                    [a.x, a.y, a.z]
+                };
+                let (kind, axis) = match j.joint_type {
+                    urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+                        (JointType::Revolute, Some(axis))
+                    }
+                    urdf_rs::JointType::Prismatic => (JointType::Prismatic, Some(axis)),
+                    urdf_rs::JointType::Fixed => (JointType::Fixed, None),
+                    urdf_rs::JointType::Floating => (JointType::Free, None),
+                    _ => unreachable!("rejected above"),
+                };
+                let (lower, upper) = limits(j);
+                let input_joints = if kind == JointType::Fixed {
+                    Vec::new()
+                } else {
+                    vec![InputJoint {
+                        name: j.name.clone(),
+                        kind: type_name(&j.joint_type).into(),
+                        lower,
+                        upper,
+                    }]
+                };
+                (
+                    Some(pi),
+                    SourceJoint {
+                        name: j.name.clone(),
+                        kind,
+                        axis,
+                        axes: None,
+                        origin: origin_of(&j.origin),
+                        input_joints,
+                    },
+                )
+            }
+        };
+        pos[li] = tmp.len();
+        tmp.push(SourceLink {
+            name: l.name.clone(),
+            parent,
+            joint,
+            geometry,
+            mass: Some(l.inertial.mass.value).filter(|m| *m > 0.0 && m.is_finite()),
+        });
+    }
+    let mut links: Vec<Option<SourceLink>> = tmp.into_iter().map(Some).collect();
+    let mut notes = Vec::new();
+    let n = links.len();
+
+    // 1. Geometry-less root with children: dropped.
+    if links[0].as_ref().unwrap().geometry.is_empty() && !children_of_raw(&links, 0).is_empty() {
+        let root = links[0].take().unwrap();
+        for c in children_of_raw(&links, 0) {
+            links[c].as_mut().unwrap().parent = None;
+        }
+        notes.push(format!(
+            "link \"{}\" has no geometry and is the root: dropped, its child joints attach to the base",
+            root.name
+        ));
+    }
+    // 2. Geometry-less links on fixed joints: merged into their parents.
+    for i in 0..n {
+        let Some(l) = links[i].as_ref() else { continue };
+        if !l.geometry.is_empty() || l.joint.kind != JointType::Fixed {
+            continue;
+        }
+        let Some(p) = l.parent else { continue };
+        let l = links[i].take().unwrap();
+        if let Some(m) = l.mass {
+            let pl = links[p].as_mut().unwrap();
+            pl.mass = Some(pl.mass.unwrap_or(0.0) + m);
+        }
+        for c in children_of_raw(&links, i) {
+            let cl = links[c].as_mut().unwrap();
+            cl.parent = Some(p);
+            cl.joint.origin = compose_origin(&l.joint.origin, &cl.joint.origin);
+        }
+        notes.push(format!(
+            "link \"{}\" has no geometry and a fixed joint: merged into \"{}\"",
+            l.name,
+            links[p].as_ref().unwrap().name
+        ));
+    }
+    // 3. Revolute pairs through a geometry-less link: one ball joint.
+    for i in 0..n {
+        let Some(m) = links[i].as_ref() else { continue };
+        if !m.geometry.is_empty() || m.joint.kind != JointType::Revolute {
+            continue;
+        }
+        let kids = children_of_raw(&links, i);
+        if kids.len() != 1 {
+            continue;
+        }
+        let c = kids[0];
+        let cl = links[c].as_ref().unwrap();
+        let zero = cl
+            .joint
+            .origin
+            .xyz
+            .iter()
+            .chain(&cl.joint.origin.rpy)
+            .all(|v| v.abs() < 1e-12);
+        let (a1, a2) = (m.joint.axis.unwrap(), cl.joint.axis.unwrap_or([0.0; 3]));
+        let dot: f64 = a1.iter().zip(&a2).map(|(x, y)| x * y).sum();
+        if cl.joint.kind != JointType::Revolute || !zero || dot.abs() > 1e-9 {
+            continue;
+        }
+        let m = links[i].take().unwrap();
+        let cl = links[c].as_mut().unwrap();
+        let mut inputs = m.joint.input_joints.clone();
+        inputs.append(&mut cl.joint.input_joints);
+        cl.joint = SourceJoint {
+            name: format!("{}+{}", m.joint.name, cl.joint.name),
+            kind: JointType::Ball,
+            axis: None,
+            axes: Some([a1, a2]),
+            origin: m.joint.origin.clone(),
+            input_joints: inputs,
+        };
+        cl.parent = m.parent;
+        if let Some(mm) = m.mass {
+            cl.mass = Some(cl.mass.unwrap_or(0.0) + mm);
+        }
+        notes.push(format!(
+            "link \"{}\" has no geometry between two orthogonal hinges: joints merged into ball joint \"{}\"",
+            m.name, cl.joint.name
+        ));
+    }
+    // 4. Remaining geometry-less links: a tiny cube.
+    for l in links.iter_mut().flatten() {
+        if l.geometry.is_empty() {
+            l.geometry.push(SourceGeometry {
+                element: format!("link \"{}\" (no geometry)", l.name),
+                rotation: Matrix3::identity(),
+                translation: Vector3::zeros(),
+                shape: SourceShape::Tiny {
+                    edge: opts.tiny_hull_size,
+                },
+            });
+            notes.push(format!(
+                "link \"{}\" has no geometry: a {} m cube at its origin stands in",
+                l.name, opts.tiny_hull_size
+            ));
+        }
+    }
+    // Compact, re-indexing parents.
+    let mut new_index = vec![usize::MAX; n];
+    let mut out = Vec::new();
+    for (i, l) in links.into_iter().enumerate() {
+        if let Some(mut l) = l {
+            l.parent = l.parent.map(|p| new_index[p]);
+            debug_assert!(l.parent.is_none_or(|p| p != usize::MAX));
+            new_index[i] = out.len();
+            out.push(l);
+        }
+    }
+    Ok(SourceRobot {
+        name: sanitize(&robot.name),
+        file: path.to_path_buf(),
+        links: out,
+        notes,
+    })
+}
+
+fn children_of_raw(links: &[Option<SourceLink>], p: usize) -> Vec<usize> {
+    (0..links.len())
+        .filter(|&c| links[c].as_ref().is_some_and(|l| l.parent == Some(p)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn package_paths_resolve_upward_and_through_ros_package_path() {
+        let root = std::env::temp_dir().join(format!("sdrs-pkg-{}", std::process::id()));
+        let urdf_dir = root.join("ws/my_robot/urdf");
+        std::fs::create_dir_all(&urdf_dir).unwrap();
+        std::fs::create_dir_all(root.join("ws/my_robot/meshes")).unwrap();
+        std::fs::write(root.join("ws/my_robot/meshes/a.stl"), "x").unwrap();
+        std::fs::create_dir_all(root.join("elsewhere/other_pkg/m")).unwrap();
+        std::fs::write(root.join("elsewhere/other_pkg/m/b.obj"), "x").unwrap();
+        let urdf = urdf_dir.join("r.urdf");
+        // Upward: an ancestor named like the package.
+        let p = resolve_mesh_path(&urdf, "package://my_robot/meshes/a.stl").unwrap();
+        assert!(p.ends_with("my_robot/meshes/a.stl"));
+        // Relative to the URDF.
+        assert!(resolve_mesh_path(&urdf, "../meshes/a.stl").is_ok());
+        // Not found without ROS_PACKAGE_PATH; found with it.
+        assert!(resolve_mesh_path(&urdf, "package://other_pkg/m/b.obj").is_err());
+        // SAFETY: only this test reads or writes ROS_PACKAGE_PATH.
+        unsafe { std::env::set_var("ROS_PACKAGE_PATH", root.join("elsewhere")) };
+        let found = resolve_mesh_path(&urdf, "package://other_pkg/m/b.obj");
+        unsafe { std::env::remove_var("ROS_PACKAGE_PATH") };
+        assert!(found.unwrap().ends_with("other_pkg/m/b.obj"));
+        let _ = std::fs::remove_dir_all(&root);
+    }
+
+    #[test]
+    fn composed_origins_match_matrix_products() {
+        let a = Origin {
+            xyz: [0.1, -0.2, 0.3],
+            rpy: [0.3, -0.4, 1.2],
+        };
+        let b = Origin {
+            xyz: [0.5, 0.0, -0.1],
+            rpy: [-0.7, 0.2, 0.4],
+        };
+        let c = compose_origin(&a, &b);
+        let (ra, ta) = rt(&a);
+        let (rb, tb) = rt(&b);
+        let (rc, tc) = rt(&c);
+        assert!((rc - ra * rb).norm() < 1e-12);
+        assert!((tc - (ta + ra * tb)).norm() < 1e-12);
+    }
+}

@@ -1,0 +1,112 @@
+//! Shared helpers of the `import_*` integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+pub const ROBOTS: [&str; 7] = [
+    "rotating_chains",
+    "chains_8link",
+    "spider",
+    "biped",
+    "single_jaw_gripper",
+    "parallel_jaw_gripper",
+    "three_finger_hand",
+];
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+pub fn robot_urdf(name: &str) -> PathBuf {
+    root()
+        .join("robots")
+        .join(name)
+        .join(format!("{name}.urdf"))
+}
+
+/// Every object mesh of the authored robots.
+pub fn object_meshes() -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for r in ROBOTS {
+        let dir = root().join("robots").join(r).join("objects");
+        if let Ok(rd) = std::fs::read_dir(&dir) {
+            for e in rd.flatten() {
+                v.push(e.path());
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+/// The project venv's Python; fails the test (never skips) when missing.
+pub fn venv_python() -> PathBuf {
+    let py = root().join(".venv/bin/python");
+    assert!(
+        py.exists(),
+        "the Python helpers' environment is missing ({}): run `bash tools/setup_python.sh` from the repository root first",
+        py.display()
+    );
+    py
+}
+
+/// Runs `tools/<script>` with the venv Python; returns (status ok, stdout, stderr).
+pub fn run_tool(script: &str, args: &[&Path]) -> (bool, String, String) {
+    let out = Command::new(venv_python())
+        .arg(root().join("tools").join(script))
+        .args(args)
+        .output()
+        .expect("run the Python helper");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The third-party robot: KUKA iiwa (URDF + STL meshes) from `pybullet_data`
+/// in the venv (installed by tools/setup_python.sh).
+pub fn third_party_urdf() -> PathBuf {
+    let out = Command::new(venv_python())
+        .args([
+            "-c",
+            "import pybullet_data; print(pybullet_data.getDataPath())",
+        ])
+        .output()
+        .expect("run Python");
+    assert!(
+        out.status.success(),
+        "pybullet_data is not installed in .venv: run `bash tools/setup_python.sh` ({})",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dir = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    let urdf = dir.join("kuka_iiwa/model.urdf");
+    assert!(urdf.is_file(), "{} not found", urdf.display());
+    urdf
+}
+
+/// A fresh, empty temporary directory for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sdrs-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Sorted file names in `dir` (recursively, relative).
+pub fn listing(dir: &Path) -> Vec<String> {
+    let mut v = Vec::new();
+    fn walk(base: &Path, d: &Path, v: &mut Vec<String>) {
+        for e in std::fs::read_dir(d).unwrap().flatten() {
+            let p = e.path();
+            v.push(p.strip_prefix(base).unwrap().display().to_string());
+            if p.is_dir() {
+                walk(base, &p, v);
+            }
+        }
+    }
+    walk(dir, dir, &mut v);
+    v.sort();
+    v
+}
