@@ -27,6 +27,8 @@ enum Command {
     Bench(BenchArgs),
     /// Co-design: optimize shape and controller of a task with adjoint gradients.
     Optimize(OptimizeArgs),
+    /// Import a robot (URDF, OBJ or STL) as a convex-hull design space.
+    Import(sdrs::import::ImportArgs),
 }
 
 #[derive(clap::Args)]
@@ -97,6 +99,7 @@ fn main() {
         Command::Simulate(a) => simulate(a),
         Command::Bench(a) => bench(a),
         Command::Optimize(a) => optimize(a),
+        Command::Import(a) => sdrs::import::run_import(&a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");

@@ -49,7 +49,7 @@ fn check_ties_keep_hulls(scene: &sdrs::scene::SceneSpec) -> usize {
     let mut checked = 0;
     for l in &robot.links {
         for (hi, h) in l.hulls.iter().enumerate() {
-            let HullSpec::Vertices(v) = h else { continue };
+            let Some(v) = &h.vertices else { continue };
             let pts: Vec<Vector3<f64>> = v.iter().map(|p| Vector3::from(*p)).collect();
             let keep: Vec<Vector3<f64>> = (0..pts.len())
                 .filter(|&k| !added.contains(&(l.name.clone(), hi, k)))
@@ -89,9 +89,9 @@ fn vertex(robot: &sdrs::scene::schema::RobotSpec, r: &sdrs::scene::schema::Verte
         .iter()
         .find(|l| l.name == r.link)
         .expect("tie link exists");
-    match &l.hulls[r.hull] {
-        HullSpec::Vertices(v) => v[r.vertex],
-        HullSpec::Box { .. } => panic!("imported hulls are vertex lists"),
+    match &l.hulls[r.hull].vertices {
+        Some(v) => v[r.vertex],
+        None => panic!("imported hulls are vertex lists"),
     }
 }
 
