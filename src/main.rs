@@ -242,8 +242,16 @@ fn bench(a: BenchArgs) -> Result<()> {
 }
 
 fn optimize(a: OptimizeArgs) -> Result<()> {
-    if a.out.exists() && std::fs::read_dir(&a.out).map(|mut d| d.next().is_some()).unwrap_or(true) && !a.force {
-        bail!("{}: the output directory is not empty (use --force to write into it)", a.out.display());
+    if a.out.exists()
+        && std::fs::read_dir(&a.out)
+            .map(|mut d| d.next().is_some())
+            .unwrap_or(true)
+        && !a.force
+    {
+        bail!(
+            "{}: the output directory is not empty (use --force to write into it)",
+            a.out.display()
+        );
     }
     let problem = sdrs::optimize::Problem::load(&a.task, a.design == "on")?;
     let iters = a.iters.unwrap_or(problem.task.optimizer.iters);
@@ -257,15 +265,22 @@ fn optimize(a: OptimizeArgs) -> Result<()> {
     );
     let pb = progress(iters + 1, a.quiet);
     pb.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}")
-            .expect("static template"),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}",
+        )
+        .expect("static template"),
     );
-    let outcome = sdrs::optimize::optimize(&problem, iters, |r| {
+    let outcome = sdrs::optimize::optimize(&problem, iters, |r, _| {
         pb.set_position(r.iter as u64 + 1);
         pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
     })?;
     pb.finish_and_clear();
-    sdrs::optimize::output::write_all(&a.out, &problem, &outcome, serde_json::json!({"design": a.design}))?;
+    sdrs::optimize::output::write_all(
+        &a.out,
+        &problem,
+        &outcome,
+        serde_json::json!({"design": a.design}),
+    )?;
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
         outcome.initial_loss,

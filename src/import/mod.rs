@@ -394,7 +394,9 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
             hulls: g
                 .hulls
                 .iter()
-                .map(|h| HullSpec::from_vertices(h.vertices.iter().map(|v| [v.x, v.y, v.z]).collect()))
+                .map(|h| {
+                    HullSpec::from_vertices(h.vertices.iter().map(|v| [v.x, v.y, v.z]).collect())
+                })
                 .collect(),
         });
         imported_links.push(ImportedLink {

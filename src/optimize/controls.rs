@@ -22,16 +22,30 @@ pub struct ControlSpace {
 }
 
 impl ControlSpace {
-    pub fn build(model: &Model, controller: &Controller, joints: &[String], gains: bool) -> Result<Self, NameError> {
+    pub fn build(
+        model: &Model,
+        controller: &Controller,
+        joints: &[String],
+        gains: bool,
+    ) -> Result<Self, NameError> {
         let mut entries = Vec::new();
         for name in joints {
             let l = names::joint(model, name)?;
             let link = &model.links[l];
             let dofs = link.dof_offset..link.dof_offset + link.ndof();
-            let chans: Vec<usize> =
-                controller.channels.iter().enumerate().filter(|(_, c)| dofs.contains(&c.dof)).map(|(i, _)| i).collect();
+            let chans: Vec<usize> = controller
+                .channels
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| dofs.contains(&c.dof))
+                .map(|(i, _)| i)
+                .collect();
             if chans.is_empty() {
-                return Err(NameError { what: "joint", name: name.clone(), msg: "has no controller target to optimize".into() });
+                return Err(NameError {
+                    what: "joint",
+                    name: name.clone(),
+                    msg: "has no controller target to optimize".into(),
+                });
             }
             for ch in chans {
                 for param in 0..controller.channels[ch].signal.nparams() {
@@ -58,7 +72,9 @@ impl ControlSpace {
         DVector::from_iterator(
             self.len(),
             self.entries.iter().map(|e| match *e {
-                ControlTarget::Signal { channel, param } => c.channels[channel].signal.params()[param],
+                ControlTarget::Signal { channel, param } => {
+                    c.channels[channel].signal.params()[param]
+                }
                 ControlTarget::Kp { channel } => c.channels[channel].kp,
                 ControlTarget::Kd { channel } => c.channels[channel].kd,
             }),

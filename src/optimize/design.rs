@@ -20,8 +20,16 @@ use nalgebra::{DVector, Vector3};
 /// Where a design variable is written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Target {
-    Attachment { link: usize, axis: usize },
-    Vertex { link: usize, hull: usize, vertex: usize, axis: usize },
+    Attachment {
+        link: usize,
+        axis: usize,
+    },
+    Vertex {
+        link: usize,
+        hull: usize,
+        vertex: usize,
+        axis: usize,
+    },
 }
 
 /// One scalar design variable.
@@ -43,7 +51,12 @@ pub struct DesignSpace {
 fn read(model: &Model, t: Target) -> f64 {
     match t {
         Target::Attachment { link, axis } => model.links[link].attach[(axis, 3)],
-        Target::Vertex { link, hull, vertex, axis } => model.links[link].hulls[hull].x_local[vertex][axis],
+        Target::Vertex {
+            link,
+            hull,
+            vertex,
+            axis,
+        } => model.links[link].hulls[hull].x_local[vertex][axis],
     }
 }
 
@@ -60,7 +73,10 @@ fn find_vertex(model: &Model, link: usize, p: &Vector3<f64>) -> Option<(usize, u
 /// nearest to `p`; returns `(hull, vertex)`.
 fn add_vertex(model: &mut Model, link: usize, p: Vector3<f64>) -> (usize, usize) {
     let dist = |h: &crate::model::Hull| {
-        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+        let (mut lo, mut hi) = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
         for x in &h.x_local {
             lo = lo.inf(x);
             hi = hi.sup(x);
@@ -68,7 +84,9 @@ fn add_vertex(model: &mut Model, link: usize, p: Vector3<f64>) -> (usize, usize)
         (lo - p).sup(&(p - hi)).sup(&Vector3::zeros()).norm()
     };
     let hulls = &mut model.links[link].hulls;
-    let h = (0..hulls.len()).min_by(|&a, &b| dist(&hulls[a]).total_cmp(&dist(&hulls[b]))).unwrap_or(0);
+    let h = (0..hulls.len())
+        .min_by(|&a, &b| dist(&hulls[a]).total_cmp(&dist(&hulls[b])))
+        .unwrap_or(0);
     hulls[h].x_local.push(p);
     hulls[h].vertex_mass.push(0.0);
     (h, hulls[h].x_local.len() - 1)
@@ -79,9 +97,16 @@ impl DesignSpace {
     /// vertices of `vertex_links` (names `robot/link`), with box half-width
     /// `bound`. Adds the connectivity vertices to `model` (see the module
     /// docs).
-    pub fn build(model: &mut Model, attachments: &[String], vertex_links: &[String], bound: f64) -> Result<Self, NameError> {
+    pub fn build(
+        model: &mut Model,
+        attachments: &[String],
+        vertex_links: &[String],
+        bound: f64,
+    ) -> Result<Self, NameError> {
         let mut vars: Vec<DesignVar> = Vec::new();
-        let label = |m: &Model, l: usize| format!("{}/{}", m.robots[m.links[l].robot].name, m.links[l].name);
+        let label = |m: &Model, l: usize| {
+            format!("{}/{}", m.robots[m.links[l].robot].name, m.links[l].name)
+        };
         let mut claimed: Vec<(usize, usize, usize)> = Vec::new();
         for name in attachments {
             let c = names::link(model, name)?;
@@ -90,7 +115,8 @@ impl DesignSpace {
                 let (h, m) = find_vertex(model, p, &t).unwrap_or_else(|| add_vertex(model, p, t));
                 (p, h, m)
             });
-            if model.links[c].parent.is_some() && find_vertex(model, c, &Vector3::zeros()).is_none() {
+            if model.links[c].parent.is_some() && find_vertex(model, c, &Vector3::zeros()).is_none()
+            {
                 let hulls = &mut model.links[c].hulls;
                 hulls[0].x_local.push(Vector3::zeros());
                 hulls[0].vertex_mass.push(0.0);
@@ -98,15 +124,31 @@ impl DesignSpace {
             if let Some(pv) = parent_vertex {
                 claimed.push(pv);
             }
-            if let Some((h, m)) = find_vertex(model, c, &Vector3::zeros()).filter(|_| model.links[c].parent.is_some()) {
+            if let Some((h, m)) =
+                find_vertex(model, c, &Vector3::zeros()).filter(|_| model.links[c].parent.is_some())
+            {
                 claimed.push((c, h, m)); // the child-side joint vertex stays at the origin
             }
             for axis in 0..3 {
                 let mut targets = vec![Target::Attachment { link: c, axis }];
                 if let Some((p, h, m)) = parent_vertex {
-                    targets.push(Target::Vertex { link: p, hull: h, vertex: m, axis });
+                    targets.push(Target::Vertex {
+                        link: p,
+                        hull: h,
+                        vertex: m,
+                        axis,
+                    });
                 }
-                vars.push(DesignVar { targets, lower: 0.0, upper: 0.0, name: format!("{}.attach.{}", label(model, c), "xyz".as_bytes()[axis] as char) });
+                vars.push(DesignVar {
+                    targets,
+                    lower: 0.0,
+                    upper: 0.0,
+                    name: format!(
+                        "{}.attach.{}",
+                        label(model, c),
+                        "xyz".as_bytes()[axis] as char
+                    ),
+                });
             }
         }
         for name in vertex_links {
@@ -118,10 +160,19 @@ impl DesignSpace {
                     }
                     for axis in 0..3 {
                         vars.push(DesignVar {
-                            targets: vec![Target::Vertex { link: l, hull: h, vertex: m, axis }],
+                            targets: vec![Target::Vertex {
+                                link: l,
+                                hull: h,
+                                vertex: m,
+                                axis,
+                            }],
                             lower: 0.0,
                             upper: 0.0,
-                            name: format!("{}.hull{h}.v{m}.{}", label(model, l), "xyz".as_bytes()[axis] as char),
+                            name: format!(
+                                "{}.hull{h}.v{m}.{}",
+                                label(model, l),
+                                "xyz".as_bytes()[axis] as char
+                            ),
                         });
                     }
                 }
@@ -146,7 +197,10 @@ impl DesignSpace {
 
     /// Current values (from each variable's first target).
     pub fn values(&self, model: &Model) -> DVector<f64> {
-        DVector::from_iterator(self.len(), self.vars.iter().map(|v| read(model, v.targets[0])))
+        DVector::from_iterator(
+            self.len(),
+            self.vars.iter().map(|v| read(model, v.targets[0])),
+        )
     }
 
     /// Writes `d` into every target (ties stay identical) and refreshes the
@@ -156,7 +210,12 @@ impl DesignSpace {
             for t in &v.targets {
                 match *t {
                     Target::Attachment { link, axis } => model.links[link].attach[(axis, 3)] = x,
-                    Target::Vertex { link, hull, vertex, axis } => model.links[link].hulls[hull].x_local[vertex][axis] = x,
+                    Target::Vertex {
+                        link,
+                        hull,
+                        vertex,
+                        axis,
+                    } => model.links[link].hulls[hull].x_local[vertex][axis] = x,
                 }
             }
         }
@@ -172,7 +231,12 @@ impl DesignSpace {
                     .iter()
                     .map(|t| match *t {
                         Target::Attachment { link, axis } => g.attachments[link][axis],
-                        Target::Vertex { link, hull, vertex, axis } => g.vertices[link][hull][vertex][axis],
+                        Target::Vertex {
+                            link,
+                            hull,
+                            vertex,
+                            axis,
+                        } => g.vertices[link][hull][vertex][axis],
                     })
                     .sum::<f64>()
             }),
@@ -200,11 +264,18 @@ impl DesignSpace {
         for v in &self.vars {
             let x = read(model, v.targets[0]);
             if !(v.lower..=v.upper).contains(&x) {
-                return Err(format!("{} = {x} outside [{}, {}]", v.name, v.lower, v.upper));
+                return Err(format!(
+                    "{} = {x} outside [{}, {}]",
+                    v.name, v.lower, v.upper
+                ));
             }
             for t in &v.targets[1..] {
                 if read(model, *t) != x {
-                    return Err(format!("{}: tied targets differ ({} vs {x})", v.name, read(model, *t)));
+                    return Err(format!(
+                        "{}: tied targets differ ({} vs {x})",
+                        v.name,
+                        read(model, *t)
+                    ));
                 }
             }
         }

@@ -10,7 +10,13 @@ use nalgebra::DVector;
 /// (`ν → 0`, the box corner of the descent orthant, if within the ball) or
 /// `ν` solves `‖Δ(ν)‖ = r`, found by bisection on `log ν`. Exact up to the
 /// bisection tolerance; no external solver.
-pub fn trust_region_step(g: &DVector<f64>, x: &DVector<f64>, lo: &DVector<f64>, hi: &DVector<f64>, r: f64) -> DVector<f64> {
+pub fn trust_region_step(
+    g: &DVector<f64>,
+    x: &DVector<f64>,
+    lo: &DVector<f64>,
+    hi: &DVector<f64>,
+    r: f64,
+) -> DVector<f64> {
     let n = g.len();
     let delta = |nu: f64| -> DVector<f64> {
         DVector::from_fn(n, |i, _| {
@@ -59,7 +65,15 @@ pub struct Adam {
 impl Adam {
     /// Standard settings: β₁ = 0.9, β₂ = 0.999, ε = 1e-8.
     pub fn new(n: usize, lr: f64) -> Self {
-        Adam { lr, beta1: 0.9, beta2: 0.999, eps: 1e-8, m: DVector::zeros(n), v: DVector::zeros(n), t: 0 }
+        Adam {
+            lr,
+            beta1: 0.9,
+            beta2: 0.999,
+            eps: 1e-8,
+            m: DVector::zeros(n),
+            v: DVector::zeros(n),
+            t: 0,
+        }
     }
 
     /// The step `Δ` for gradient `g`.
@@ -92,7 +106,9 @@ mod tests {
         assert!((d.norm() - 0.5).abs() < 1e-9 && d[1] > 0.0);
         // Brute force: no feasible point on a fine grid does better.
         let best = (0..=400)
-            .flat_map(|i| (0..=400).map(move |j| (-0.1 + 0.2 * i as f64 / 400.0, -0.5 + j as f64 / 400.0)))
+            .flat_map(|i| {
+                (0..=400).map(move |j| (-0.1 + 0.2 * i as f64 / 400.0, -0.5 + j as f64 / 400.0))
+            })
             .filter(|(a, b)| a * a + b * b <= 0.25)
             .map(|(a, b)| 3.0 * a - 4.0 * b)
             .fold(f64::INFINITY, f64::min);

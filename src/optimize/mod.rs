@@ -34,7 +34,11 @@ pub enum TaskError {
     #[error("{}: malformed task: {msg}", path.display())]
     Parse { path: PathBuf, msg: String },
     #[error("{}: {element}: {msg}", path.display())]
-    Invalid { path: PathBuf, element: String, msg: String },
+    Invalid {
+        path: PathBuf,
+        element: String,
+        msg: String,
+    },
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
 }
@@ -57,12 +61,24 @@ pub struct Problem {
 impl Problem {
     /// Loads a task and its scene. `design = false` optimizes the controller only.
     pub fn load(path: &Path, design: bool) -> Result<Problem, TaskError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TaskError::Io { path: path.into(), source })?;
-        let task: TaskSpec =
-            serde_yaml::from_str(&text).map_err(|e| TaskError::Parse { path: path.into(), msg: e.to_string() })?;
-        let invalid = |element: &str, msg: String| TaskError::Invalid { path: path.into(), element: element.into(), msg };
+        let text = std::fs::read_to_string(path).map_err(|source| TaskError::Io {
+            path: path.into(),
+            source,
+        })?;
+        let task: TaskSpec = serde_yaml::from_str(&text).map_err(|e| TaskError::Parse {
+            path: path.into(),
+            msg: e.to_string(),
+        })?;
+        let invalid = |element: &str, msg: String| TaskError::Invalid {
+            path: path.into(),
+            element: element.into(),
+            msg,
+        };
         if task.version != 1 {
-            return Err(invalid("version", format!("unsupported task version {}", task.version)));
+            return Err(invalid(
+                "version",
+                format!("unsupported task version {}", task.version),
+            ));
         }
         let scene_path = path.parent().unwrap_or(Path::new(".")).join(&task.scene);
         let scene = Scene::load(&scene_path)?;
@@ -79,15 +95,23 @@ impl Problem {
             let ds = match (&task.design, design) {
                 (Some(d), true) => {
                     if !(d.bound > 0.0) {
-                        return Err(invalid("design.bound", format!("must be positive, got {}", d.bound)));
+                        return Err(invalid(
+                            "design.bound",
+                            format!("must be positive, got {}", d.bound),
+                        ));
                     }
                     DesignSpace::build(&mut model, &d.attachments, &d.vertices, d.bound)
                         .map_err(|e| invalid("design", e.to_string()))?
                 }
                 _ => DesignSpace::default(),
             };
-            let cs = ControlSpace::build(&model, &scene.controller, &task.controller.joints, task.controller.gains)
-                .map_err(|e| invalid("controller", e.to_string()))?;
+            let cs = ControlSpace::build(
+                &model,
+                &scene.controller,
+                &task.controller.joints,
+                task.controller.gains,
+            )
+            .map_err(|e| invalid("controller", e.to_string()))?;
             (ds, cs)
         };
         if design_space.is_empty() && controls.is_empty() {
@@ -98,21 +122,47 @@ impl Problem {
             let el = format!("loss[{i}]");
             let bad = |e: names::NameError| invalid(&el, e.to_string());
             loss.terms.push(match l {
-                LossSpec::LinkPoint { link, point, target, weight, when } => LossTerm::LinkPoint {
+                LossSpec::LinkPoint {
+                    link,
+                    point,
+                    target,
+                    weight,
+                    when,
+                } => LossTerm::LinkPoint {
                     link: names::link(&model, link).map_err(bad)?,
                     point: Vector3::from(*point),
                     target: Vector3::from(*target),
                     weight: *weight,
                     when: *when,
                 },
-                LossSpec::Joint { joint, index, target, weight, when } => {
+                LossSpec::Joint {
+                    joint,
+                    index,
+                    target,
+                    weight,
+                    when,
+                } => {
                     let li = names::joint(&model, joint).map_err(bad)?;
                     if *index >= model.links[li].ndof() {
-                        return Err(invalid(&el, format!("joint {joint} has {} coordinate(s)", model.links[li].ndof())));
+                        return Err(invalid(
+                            &el,
+                            format!("joint {joint} has {} coordinate(s)", model.links[li].ndof()),
+                        ));
                     }
-                    LossTerm::Joint { dof: model.links[li].dof_offset + index, target: *target, weight: *weight, when: *when }
+                    LossTerm::Joint {
+                        dof: model.links[li].dof_offset + index,
+                        target: *target,
+                        weight: *weight,
+                        when: *when,
+                    }
                 }
-                LossSpec::Com { robot, target, axes, weight, when } => {
+                LossSpec::Com {
+                    robot,
+                    target,
+                    axes,
+                    weight,
+                    when,
+                } => {
                     let r = names::robot(&model, robot).map_err(bad)?;
                     LossTerm::CenterOfMass {
                         links: model.robots[r].links.clone().collect(),
@@ -122,7 +172,15 @@ impl Problem {
                         when: *when,
                     }
                 }
-                LossSpec::Relative { link, point, to_link, to_point, offset, weight, when } => LossTerm::Relative {
+                LossSpec::Relative {
+                    link,
+                    point,
+                    to_link,
+                    to_point,
+                    offset,
+                    weight,
+                    when,
+                } => LossTerm::Relative {
                     link_a: names::link(&model, link).map_err(bad)?,
                     point_a: Vector3::from(*point),
                     link_b: names::link(&model, to_link).map_err(bad)?,
@@ -169,7 +227,15 @@ impl Problem {
         }
         let gd = self.design.gradient(&grads);
         let gc = self.controls.gradient(&grads);
-        Ok(Evaluation { loss: grads.loss, grad_design: gd, grad_controller: gc, forward_seconds: forward, backward_seconds: grads.seconds, grads, model })
+        Ok(Evaluation {
+            loss: grads.loss,
+            grad_design: gd,
+            grad_controller: gc,
+            forward_seconds: forward,
+            backward_seconds: grads.seconds,
+            grads,
+            model,
+        })
     }
 }
 
@@ -210,8 +276,13 @@ pub struct Outcome {
     pub loss: f64,
 }
 
-/// Runs the optimizer for `iters` iterations; `on_iter` sees each record.
-pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord)) -> anyhow::Result<Outcome> {
+/// Runs the optimizer for `iters` iterations; `on_iter` sees each record
+/// and the design vector that iteration simulated (after projection).
+pub fn optimize(
+    p: &Problem,
+    iters: usize,
+    mut on_iter: impl FnMut(&IterRecord, &DVector<f64>),
+) -> anyhow::Result<Outcome> {
     let t0 = Instant::now();
     let o = &p.task.optimizer;
     let (lo, hi) = (p.design.lower(), p.design.upper());
@@ -220,9 +291,19 @@ pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord))
     let mut ev = p.evaluate(&d, &c)?;
     let initial_loss = ev.loss;
     let (mut rd, mut rc) = (o.step_design, o.step_controller);
-    let mut adam = (Adam::new(d.len(), o.step_design), Adam::new(c.len(), o.step_controller));
+    let mut adam = (
+        Adam::new(d.len(), o.step_design),
+        Adam::new(c.len(), o.step_controller),
+    );
     let mut history = Vec::with_capacity(iters + 1);
-    let mut push = |history: &mut Vec<IterRecord>, it, ev: &Evaluation, best: f64, rd, rc, accepted| {
+    let mut push = |history: &mut Vec<IterRecord>,
+                    it,
+                    ev: &Evaluation,
+                    d: &DVector<f64>,
+                    best: f64,
+                    rd,
+                    rc,
+                    accepted| {
         let r = IterRecord {
             iter: it,
             loss: ev.loss,
@@ -236,17 +317,24 @@ pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord))
             backward_seconds: ev.backward_seconds,
             wall_seconds: t0.elapsed().as_secs_f64(),
         };
-        on_iter(&r);
+        on_iter(&r, d);
         history.push(r);
     };
-    push(&mut history, 0, &ev, ev.loss, rd, rc, true);
+    push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
     for it in 1..=iters {
         let (dd, dc) = match o.method {
             Method::TrustRegion => (
                 trust_region_step(&ev.grad_design, &d, &lo, &hi, rd),
-                if ev.grad_controller.norm() > 0.0 { -rc * &ev.grad_controller / ev.grad_controller.norm() } else { c.map(|_| 0.0) },
+                if ev.grad_controller.norm() > 0.0 {
+                    -rc * &ev.grad_controller / ev.grad_controller.norm()
+                } else {
+                    c.map(|_| 0.0)
+                },
             ),
-            Method::Adam => (adam.0.step(&ev.grad_design), adam.1.step(&ev.grad_controller)),
+            Method::Adam => (
+                adam.0.step(&ev.grad_design),
+                adam.1.step(&ev.grad_controller),
+            ),
         };
         let mut d_new = &d + dd;
         p.design.project(&mut d_new);
@@ -258,7 +346,7 @@ pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord))
                 c = c_new;
                 ev = e;
                 let best = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                push(&mut history, it, &ev, best, rd, rc, true);
+                push(&mut history, it, &ev, &d, best, rd, rc, true);
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 d = d_new;
@@ -266,22 +354,28 @@ pub fn optimize(p: &Problem, iters: usize, mut on_iter: impl FnMut(&IterRecord))
                 ev = e;
                 rd = (rd * 1.25).min(4.0 * o.step_design);
                 rc = (rc * 1.25).min(4.0 * o.step_controller);
-                push(&mut history, it, &ev, ev.loss, rd, rc, true);
+                push(&mut history, it, &ev, &d, ev.loss, rd, rc, true);
             }
             (Method::TrustRegion, Ok(e)) => {
                 // Rejected: the row shows the trial's loss; the iterate stays.
                 rd *= 0.5;
                 rc *= 0.5;
-                push(&mut history, it, &e, ev.loss, rd, rc, false);
+                push(&mut history, it, &e, &d_new, ev.loss, rd, rc, false);
             }
             (Method::Adam, Err(e)) => return Err(e.context(format!("iteration {it}"))),
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
                 rd *= 0.5;
                 rc *= 0.5;
-                push(&mut history, it, &ev, ev.loss, rd, rc, false);
+                push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
             }
         }
     }
-    Ok(Outcome { history, loss: ev.loss, design: d, controller: c, initial_loss })
+    Ok(Outcome {
+        history,
+        loss: ev.loss,
+        design: d,
+        controller: c,
+        initial_loss,
+    })
 }

@@ -5,7 +5,9 @@ use crate::control::Controller;
 use crate::math::{compose, rigid_inverse, rot};
 use crate::model::{JointKind, Model};
 use crate::output::write_atomic;
-use crate::scene::schema::{Gains, HullSpec, JointSpec, JointType, LinkSpec, Origin, SceneSpec, SignalList};
+use crate::scene::schema::{
+    Gains, HullSpec, JointSpec, JointType, LinkSpec, Origin, SceneSpec, SignalList,
+};
 use anyhow::Result;
 use std::path::Path;
 
@@ -41,26 +43,53 @@ pub fn convergence_svg(series: &[(&str, &[IterRecord])]) -> Result<String> {
     {
         let root = SVGBackend::with_string(&mut svg, (720, 440)).into_drawing_area();
         root.fill(&WHITE)?;
-        let n = series.iter().map(|(_, h)| h.len()).max().unwrap_or(1).max(2);
-        let vals = series.iter().flat_map(|(_, h)| h.iter().map(|r| r.best_loss)).filter(|v| *v > 0.0);
+        let n = series
+            .iter()
+            .map(|(_, h)| h.len())
+            .max()
+            .unwrap_or(1)
+            .max(2);
+        let vals = series
+            .iter()
+            .flat_map(|(_, h)| h.iter().map(|r| r.best_loss))
+            .filter(|v| *v > 0.0);
         let (lo, hi) = vals.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
-        let (lo, hi) = if lo.is_finite() { (lo * 0.8, hi * 1.25) } else { (1e-6, 1.0) };
+        let (lo, hi) = if lo.is_finite() {
+            (lo * 0.8, hi * 1.25)
+        } else {
+            (1e-6, 1.0)
+        };
         let mut chart = ChartBuilder::on(&root)
-            .caption("loss", ("sans-serif", 20))
+            .caption("convergence", ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(36)
             .y_label_area_size(64)
             .build_cartesian_2d(0f64..(n - 1) as f64, (lo..hi).log_scale())?;
-        chart.configure_mesh().x_desc("iteration").y_desc("best loss").draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("iteration")
+            .y_desc("best loss")
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|y| format!("{y:.0e}"))
+            .draw()?;
         let colors = [BLUE, RED, GREEN, MAGENTA];
         for (k, (label, h)) in series.iter().enumerate() {
             let color = colors[k % colors.len()];
             chart
-                .draw_series(LineSeries::new(h.iter().map(|r| (r.iter as f64, r.best_loss.max(lo))), color.stroke_width(2)))?
+                .draw_series(LineSeries::new(
+                    h.iter().map(|r| (r.iter as f64, r.best_loss.max(lo))),
+                    color.stroke_width(2),
+                ))?
                 .label(*label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
         }
-        chart.configure_series_labels().border_style(BLACK).background_style(WHITE).draw()?;
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE)
+            .draw()?;
         root.present()?;
     }
     Ok(svg)
@@ -71,7 +100,11 @@ fn joint_type(k: &JointKind) -> (JointType, Option<[f64; 3]>, Option<[[f64; 3]; 
         JointKind::Fixed => (JointType::Fixed, None, None),
         JointKind::Revolute { axis } => (JointType::Revolute, Some((*axis).into()), None),
         JointKind::Prismatic { axis } => (JointType::Prismatic, Some((*axis).into()), None),
-        JointKind::Ball { axes } => (JointType::Ball, None, Some([axes[0].into(), axes[1].into()])),
+        JointKind::Ball { axes } => (
+            JointType::Ball,
+            None,
+            Some([axes[0].into(), axes[1].into()]),
+        ),
         JointKind::Spherical => (JointType::Spherical, None, None),
         JointKind::Free => (JointType::Free, None, None),
     }
@@ -83,16 +116,24 @@ fn joint_type(k: &JointKind) -> (JointType, Option<[f64; 3]>, Option<[[f64; 3]; 
 pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) -> SceneSpec {
     let mut out = spec.clone();
     for r in &mut out.robots {
-        let Some(ri) = model.robots.iter().position(|x| x.name == r.name) else { continue };
-        let base = crate::math::pose_from(&crate::math::rpy_to_matrix(&r.base.rpy), &r.base.xyz.into());
+        let Some(ri) = model.robots.iter().position(|x| x.name == r.name) else {
+            continue;
+        };
+        let base =
+            crate::math::pose_from(&crate::math::rpy_to_matrix(&r.base.rpy), &r.base.xyz.into());
         let range = model.robots[ri].links.clone();
         r.chain = None;
         r.links = range
             .clone()
             .map(|l| {
                 let link = &model.links[l];
-                let attach = if link.parent.is_some() { link.attach } else { compose(&rigid_inverse(&base), &link.attach) };
-                let (roll, pitch, yaw) = nalgebra::Rotation3::from_matrix_unchecked(rot(&attach)).euler_angles();
+                let attach = if link.parent.is_some() {
+                    link.attach
+                } else {
+                    compose(&rigid_inverse(&base), &link.attach)
+                };
+                let (roll, pitch, yaw) =
+                    nalgebra::Rotation3::from_matrix_unchecked(rot(&attach)).euler_angles();
                 let (kind, axis, axes) = joint_type(&link.joint);
                 LinkSpec {
                     name: link.name.clone(),
@@ -102,7 +143,10 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                         kind,
                         axis,
                         axes,
-                        origin: Origin { xyz: attach.column(3).into_owned().into(), rpy: [roll, pitch, yaw] },
+                        origin: Origin {
+                            xyz: attach.column(3).into_owned().into(),
+                            rpy: [roll, pitch, yaw],
+                        },
                     },
                     mass: None,
                     vertex_mass: None,
@@ -126,14 +170,28 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
             }
             let link = &model.links[l];
             let local = ch.dof - link.dof_offset;
-            let entry = r.controller.targets.entry(link.joint_name.clone()).or_insert_with(|| SignalList::Many(vec![]));
+            let entry = r
+                .controller
+                .targets
+                .entry(link.joint_name.clone())
+                .or_insert_with(|| SignalList::Many(vec![]));
             let mut list = entry.as_slice().to_vec();
             if list.len() < link.ndof() {
                 list.resize(link.ndof(), ch.signal.clone());
             }
             list[local] = ch.signal.clone();
-            *entry = if list.len() == 1 { SignalList::One(list.remove(0)) } else { SignalList::Many(list) };
-            r.controller.gains.insert(link.joint_name.clone(), Gains { kp: Some(ch.kp), kd: Some(ch.kd) });
+            *entry = if list.len() == 1 {
+                SignalList::One(list.remove(0))
+            } else {
+                SignalList::Many(list)
+            };
+            r.controller.gains.insert(
+                link.joint_name.clone(),
+                Gains {
+                    kp: Some(ch.kp),
+                    kd: Some(ch.kd),
+                },
+            );
         }
     }
     out
@@ -144,17 +202,29 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
 pub fn link_obj(model: &Model, link: usize) -> String {
     use parry3d_f64::math::Vector;
     let l = &model.links[link];
-    let mut s = format!("# sdrs: {}/{} (link frame, m)\n", model.robots[l.robot].name, l.name);
+    let mut s = format!(
+        "# sdrs: {}/{} (link frame, m)\n",
+        model.robots[l.robot].name, l.name
+    );
     let mut offset = 1;
     for (h, hull) in l.hulls.iter().enumerate() {
-        let pts: Vec<Vector> = hull.x_local.iter().map(|x| Vector::new(x.x, x.y, x.z)).collect();
+        let pts: Vec<Vector> = hull
+            .x_local
+            .iter()
+            .map(|x| Vector::new(x.x, x.y, x.z))
+            .collect();
         let (v, f) = parry3d_f64::transformation::convex_hull(&pts);
         s.push_str(&format!("o hull{h}\n"));
         for p in &v {
             s.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
         }
         for t in &f {
-            s.push_str(&format!("f {} {} {}\n", t[0] as usize + offset, t[1] as usize + offset, t[2] as usize + offset));
+            s.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] as usize + offset,
+                t[1] as usize + offset,
+                t[2] as usize + offset
+            ));
         }
         offset += v.len();
     }
@@ -162,30 +232,57 @@ pub fn link_obj(model: &Model, link: usize) -> String {
 }
 
 /// Writes every output of an optimization into `dir`.
-pub fn write_all(dir: &Path, p: &Problem, outcome: &Outcome, extra: serde_json::Value) -> Result<()> {
+pub fn write_all(
+    dir: &Path,
+    p: &Problem,
+    outcome: &Outcome,
+    extra: serde_json::Value,
+) -> Result<()> {
     let mut model = p.model.clone();
     p.design.apply(&mut model, &outcome.design);
     let mut controller = p.controller.clone();
     p.controls.apply(&mut controller, &outcome.controller);
-    write_atomic(&dir.join("history.csv"), history_csv(&outcome.history).as_bytes())?;
-    write_atomic(&dir.join("convergence.svg"), convergence_svg(&[("loss", &outcome.history)])?.as_bytes())?;
+    write_atomic(
+        &dir.join("history.csv"),
+        history_csv(&outcome.history).as_bytes(),
+    )?;
+    write_atomic(
+        &dir.join("convergence.svg"),
+        convergence_svg(&[("loss", &outcome.history)])?.as_bytes(),
+    )?;
     let spec = design_scene(&p.scene.spec, &model, &controller);
     let header = format!(
         "# Optimized by `sdrs optimize {}` — a complete scene: `sdrs simulate` runs it.\n",
         p.task_path.display()
     );
-    write_atomic(&dir.join("design.yaml"), (header + &serde_yaml::to_string(&spec)?).as_bytes())?;
+    write_atomic(
+        &dir.join("design.yaml"),
+        (header + &serde_yaml::to_string(&spec)?).as_bytes(),
+    )?;
     for (i, l) in model.links.iter().enumerate() {
         if model.robots[l.robot].name == crate::scene::environment::ENVIRONMENT {
             continue;
         }
         let name = format!("{}_{}.obj", model.robots[l.robot].name, l.name);
-        write_atomic(&dir.join("meshes").join(name), link_obj(&model, i).as_bytes())?;
+        write_atomic(
+            &dir.join("meshes").join(name),
+            link_obj(&model, i).as_bytes(),
+        )?;
     }
     let last = outcome.history.last();
     let n = outcome.history.len().max(1) as f64;
-    let fwd: f64 = outcome.history.iter().map(|r| r.forward_seconds).sum::<f64>() / n;
-    let bwd: f64 = outcome.history.iter().map(|r| r.backward_seconds).sum::<f64>() / n;
+    let fwd: f64 = outcome
+        .history
+        .iter()
+        .map(|r| r.forward_seconds)
+        .sum::<f64>()
+        / n;
+    let bwd: f64 = outcome
+        .history
+        .iter()
+        .map(|r| r.backward_seconds)
+        .sum::<f64>()
+        / n;
     let summary = serde_json::json!({
         "task": p.task_path.display().to_string(),
         "iterations": outcome.history.len() - 1,
@@ -203,6 +300,9 @@ pub fn write_all(dir: &Path, p: &Problem, outcome: &Outcome, extra: serde_json::
         "controller": outcome.controller.as_slice(),
         "extra": extra,
     });
-    write_atomic(&dir.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    write_atomic(
+        &dir.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     Ok(())
 }

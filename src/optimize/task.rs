@@ -163,6 +163,11 @@ pub struct OptimizerSpec {
 
 impl Default for OptimizerSpec {
     fn default() -> Self {
-        OptimizerSpec { method: Method::TrustRegion, iters: 60, step_design: 0.05, step_controller: 0.2 }
+        OptimizerSpec {
+            method: Method::TrustRegion,
+            iters: 60,
+            step_design: 0.05,
+            step_controller: 0.2,
+        }
     }
 }

@@ -409,14 +409,25 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
         }
         let explicit = l.hulls.iter().all(|h| h.vertex_masses.is_some());
         let vertex_mass = match (l.mass, l.vertex_mass) {
-            (Some(_), Some(_)) => return Err(Invalid::new(lel, "give either `mass` or `vertex_mass`, not both")),
+            (Some(_), Some(_)) => {
+                return Err(Invalid::new(
+                    lel,
+                    "give either `mass` or `vertex_mass`, not both",
+                ));
+            }
             (None, None) if explicit => 0.0,
             (None, None) => {
-                return Err(Invalid::new(lel, "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)"));
+                return Err(Invalid::new(
+                    lel,
+                    "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)",
+                ));
             }
             (Some(m), None) => {
                 if !(m > 0.0 && m.is_finite()) {
-                    return Err(Invalid::new(format!("{lel}.mass"), format!("must be positive and finite, got {m}")));
+                    return Err(Invalid::new(
+                        format!("{lel}.mass"),
+                        format!("must be positive and finite, got {m}"),
+                    ));
                 }
                 let nimplicit: usize = l
                     .hulls
@@ -459,8 +470,22 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
                     Hull::cuboid(Vector3::from(*size), Vector3::from(*center))
                 }
             };
-            hulls
-                .push(Hull::new(verts, vertex_mass).map_err(|e| Invalid::new(hel, e.to_string()))?);
+            let mut hull =
+                Hull::new(verts, vertex_mass).map_err(|e| Invalid::new(&hel, e.to_string()))?;
+            if let Some(ms) = &h.vertex_masses {
+                if ms.len() != hull.x_local.len() {
+                    let msg = format!(
+                        "{} vertex_masses for {} vertices",
+                        ms.len(),
+                        hull.x_local.len()
+                    );
+                    return Err(Invalid::new(hel, msg));
+                }
+                hull.vertex_mass = ms.clone();
+                hull.validate()
+                    .map_err(|e| Invalid::new(&hel, e.to_string()))?;
+            }
+            hulls.push(hull);
         }
         new_index[si] = out.len();
         out.push(Link {

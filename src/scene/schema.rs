@@ -310,11 +310,19 @@ pub struct BoxSpec {
 impl HullSpec {
     /// A hull from explicit vertices.
     pub fn from_vertices(v: Vec<[f64; 3]>) -> Self {
-        HullSpec { vertices: Some(v), cuboid: None, vertex_masses: None }
+        HullSpec {
+            vertices: Some(v),
+            cuboid: None,
+            vertex_masses: None,
+        }
     }
     /// A box hull.
     pub fn cuboid(size: [f64; 3], center: [f64; 3]) -> Self {
-        HullSpec { vertices: None, cuboid: Some(BoxSpec { size, center }), vertex_masses: None }
+        HullSpec {
+            vertices: None,
+            cuboid: Some(BoxSpec { size, center }),
+            vertex_masses: None,
+        }
     }
 }
 
