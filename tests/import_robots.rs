@@ -10,7 +10,6 @@ use nalgebra::Vector3;
 use sdrs::import::polytope::convex_hull;
 use sdrs::import::{ImportArgs, ImportOptions, import, run_import};
 use sdrs::scene::Scene;
-use sdrs::scene::schema::HullSpec;
 use std::collections::BTreeSet;
 
 #[derive(Parser)]

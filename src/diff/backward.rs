@@ -182,11 +182,11 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
                     force[par] += f;
                 }
             }
-            for c in 0..nl {
-                if let Some(par) = model.links[c].parent {
+            for (c, (link, f)) in model.links.iter().zip(&force).enumerate() {
+                if let Some(par) = link.parent {
                     let r = rot(&kin.pose[par]);
                     let sl = s_acc[par].fixed_view::<3, 3>(0, 0).into_owned();
-                    g.attachments[c] -= r.transpose() * sl.transpose() * force[c];
+                    g.attachments[c] -= r.transpose() * sl.transpose() * f;
                 }
             }
         }

@@ -94,7 +94,7 @@ impl Problem {
         let (design_space, controls) = {
             let ds = match (&task.design, design) {
                 (Some(d), true) => {
-                    if !(d.bound > 0.0) {
+                    if d.bound.is_nan() || d.bound <= 0.0 {
                         return Err(invalid(
                             "design.bound",
                             format!("must be positive, got {}", d.bound),

@@ -95,7 +95,10 @@ pub fn convergence_svg(series: &[(&str, &[IterRecord])]) -> Result<String> {
     Ok(svg)
 }
 
-fn joint_type(k: &JointKind) -> (JointType, Option<[f64; 3]>, Option<[[f64; 3]; 2]>) {
+/// Joint type with its `axis` / `axes` fields as written in scene files.
+type JointFields = (JointType, Option<[f64; 3]>, Option<[[f64; 3]; 2]>);
+
+fn joint_type(k: &JointKind) -> JointFields {
     match k {
         JointKind::Fixed => (JointType::Fixed, None, None),
         JointKind::Revolute { axis } => (JointType::Revolute, Some((*axis).into()), None),
