@@ -1,11 +1,11 @@
 //! The time step. Each step is an ordered list of named, timed stages:
 //!
-//! 1. `controller` — PD targets `u^t` at `t^{t+1}`;
-//! 2. `begin_step` — lagged per-term data (warm starts, friction frames);
-//! 3. Newton iterations, each timing `kinematics`, one stage per energy term
+//! 1. `begin_step` — PD targets `u^t` at `t^{t+1}`, lagged per-term data
+//!    (friction frames);
+//! 2. Newton iterations, each timing `kinematics`, one stage per energy term
 //!    (`inertia`, `gravity`, `pd`, …), `assembly`, `linear_solve`, and the
 //!    `line_search` as a whole;
-//! 4. `accept` — rotate the state, re-centre charts, diagnostics.
+//! 3. `accept` — rotate the state, re-centre charts, diagnostics.
 
 pub mod assemble;
 pub mod counters;
@@ -163,48 +163,9 @@ impl Simulator {
         }
     }
 
-    /// Evaluates the step objective for the *next* step at `q` (no state
-    /// change): value, gradient and Hessian. Used by tests and the adjoint.
-    pub fn objective(
-        &mut self,
-        q: &DVector<f64>,
-        need: Need,
-    ) -> Result<(f64, DVector<f64>, DMatrix<f64>), EnergyError> {
-        let n = self.model.ndof();
-        let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
-        let t_next = (self.state.step + 1) as f64 * self.settings.dt;
-        self.controller
-            .targets_at(t_next, &mut self.scratch.targets);
-        let ctx = make_context(
-            &self.model,
-            &self.settings,
-            &self.state,
-            &self.scratch.targets,
-            t_next,
-        );
-        let mut obj = StepObjective {
-            ctx,
-            charts: &self.state.charts,
-            energies: &mut self.energies,
-            kin: &mut self.scratch.kin,
-            acc: &mut self.scratch.acc,
-            assemble: &mut self.scratch.assemble,
-        };
-        let v = obj.eval(q, need, &mut g, &mut h, &mut self.timers)?;
-        Ok((v, g, h))
-    }
-
-    /// Re-creates the context of the step that follows `state` (targets,
-    /// lagged data) and returns the objective's gradient and Hessian at
-    /// `q`, with the kinematics and pose-space gradients left in
-    /// [`Simulator::kinematics`] / [`Simulator::pose_gradients`]. Used by the
-    /// backward pass; `state` becomes the simulator's state.
-    pub fn linearize(
-        &mut self,
-        state: &SimState,
-        q: &DVector<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>), EnergyError> {
-        self.state = state.clone();
+    /// Sets the PD targets of the next step and runs every term's
+    /// `begin_step` (lagged data); returns `t^{t+1}`.
+    fn begin_next_step(&mut self) -> Result<f64, EnergyError> {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         self.controller
             .targets_at(t_next, &mut self.scratch.targets);
@@ -224,17 +185,37 @@ impl Simulator {
         for e in self.energies.iter_mut() {
             e.begin_step(&ctx, &self.scratch.kin)?;
         }
+        Ok(t_next)
+    }
+
+    /// Evaluates the step objective for the *next* step at `q` (no state
+    /// change): value, gradient and Hessian. Used by tests and the adjoint.
+    pub fn objective(
+        &mut self,
+        q: &DVector<f64>,
+        need: Need,
+    ) -> Result<(f64, DVector<f64>, DMatrix<f64>), EnergyError> {
+        let t_next = self.begin_next_step()?;
         let n = self.model.ndof();
         let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
-        let mut obj = StepObjective {
-            ctx,
-            charts: &self.state.charts,
-            energies: &mut self.energies,
-            kin: &mut self.scratch.kin,
-            acc: &mut self.scratch.acc,
-            assemble: &mut self.scratch.assemble,
-        };
-        let v = obj.eval(q, Need::Hessian, &mut g, &mut h, &mut self.timers)?;
+        let (mut obj, _) = step_objective(self, t_next);
+        let mut timers = StageTimers::default();
+        let v = obj.eval(q, need, &mut g, &mut h, &mut timers)?;
+        Ok((v, g, h))
+    }
+
+    /// Re-creates the context of the step that follows `state` (targets,
+    /// lagged data) and returns the objective's gradient and Hessian at
+    /// `q`, with the kinematics and pose-space gradients left in
+    /// [`Simulator::kinematics`] / [`Simulator::pose_gradients`]. Used by the
+    /// backward pass; `state` becomes the simulator's state.
+    pub fn linearize(
+        &mut self,
+        state: &SimState,
+        q: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>), EnergyError> {
+        self.state = state.clone();
+        let (v, g, h) = self.objective(q, Need::Hessian)?;
         if !v.is_finite() {
             return Err(EnergyError::Failed {
                 term: "objective",
@@ -285,45 +266,17 @@ impl Simulator {
             cause,
         };
         let t0 = Instant::now();
-        self.controller
-            .targets_at(t_next, &mut self.scratch.targets);
-        self.timers.add("controller", t0.elapsed());
-
+        self.begin_next_step().map_err(|e| fail(e.into()))?;
+        self.timers.add("begin_step", t0.elapsed());
         let mut q = self.state.q.clone();
         let report = {
-            let ctx = make_context(
-                &self.model,
-                &self.settings,
-                &self.state,
-                &self.scratch.targets,
-                t_next,
-            );
-            let t0 = Instant::now();
-            self.scratch.kin.update(
-                &self.model,
-                &self.state.q,
-                &self.state.charts,
-                KinOrder::Pose,
-            );
-            for e in self.energies.iter_mut() {
-                e.begin_step(&ctx, &self.scratch.kin)
-                    .map_err(|e| fail(e.into()))?;
-            }
-            self.timers.add("begin_step", t0.elapsed());
-            let mut obj = StepObjective {
-                ctx,
-                charts: &self.state.charts,
-                energies: &mut self.energies,
-                kin: &mut self.scratch.kin,
-                acc: &mut self.scratch.acc,
-                assemble: &mut self.scratch.assemble,
-            };
+            let (mut obj, parts) = step_objective(self, t_next);
             newton::minimize(
                 &mut obj,
                 &mut q,
-                &self.settings.newton,
-                &mut self.scratch.newton,
-                &mut self.timers,
+                &parts.settings.newton,
+                parts.newton,
+                parts.timers,
             )
             .map_err(fail)?
         };
@@ -385,4 +338,49 @@ fn make_context<'a>(
         q_prev: &state.q,
         targets,
     }
+}
+
+/// Fields of the simulator the Newton solve needs besides the objective.
+struct SolverParts<'a> {
+    settings: &'a SimSettings,
+    newton: &'a mut NewtonScratch,
+    timers: &'a mut StageTimers,
+}
+
+/// The objective of the step following `sim.state` (after
+/// [`Simulator::begin_next_step`]), borrowing the simulator field by field.
+fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, SolverParts<'_>) {
+    let Simulator {
+        model,
+        settings,
+        energies,
+        state,
+        timers,
+        scratch,
+        ..
+    } = sim;
+    let StepScratch {
+        kin,
+        acc,
+        assemble,
+        newton,
+        targets,
+    } = scratch;
+    let ctx = make_context(model, settings, state, targets, t_next);
+    let obj = StepObjective {
+        ctx,
+        charts: &state.charts,
+        energies,
+        kin,
+        acc,
+        assemble,
+    };
+    (
+        obj,
+        SolverParts {
+            settings,
+            newton,
+            timers,
+        },
+    )
 }
