@@ -271,3 +271,156 @@ fn trajectory_gradients_match_finite_differences_with_contact_and_friction() {
         t0.elapsed().as_secs_f64()
     );
 }
+
+/// First step (1-based) at which the finger–box pair is within the barrier
+/// support, if any; and the loss.
+fn onset_and_loss(setup: &Setup, loss: &Loss) -> (Option<usize>, f64) {
+    let mut sim = setup.simulator();
+    let tape = sdrs::diff::record(&mut sim, setup.steps).unwrap();
+    let model = &setup.model;
+    let (finger, bx) = (setup.link("pusher"), setup.link("box"));
+    let s = setup.scene.contact.as_ref().unwrap().s;
+    let params = ContactParams::with_width(s);
+    let mut kin = sdrs::kinematics::Kinematics::new(model);
+    let mut first = None;
+    for k in 1..=tape.len() {
+        let (q, charts) = tape.coords(k as isize);
+        kin.update(model, q, charts, sdrs::kinematics::KinOrder::Pose);
+        let world = |l: usize| -> Vec<Vector3<f64>> {
+            model.links[l].hulls[0]
+                .x_local
+                .iter()
+                .map(|x| transform_point(&kin.pose[l], x))
+                .collect()
+        };
+        let mut sc = ContactScratch::new();
+        let out = contact_vertices(&world(finger), &world(bx), &params, None, &mut sc).unwrap();
+        if matches!(out, VertexOutcome::Separated(_)) {
+            first = Some(k);
+            break;
+        }
+    }
+    (first, sdrs::diff::loss_of(model, &tape, loss))
+}
+
+fn finger_setup(x: f64, steps: usize, z: f64) -> Setup {
+    Setup::new(&scene_text(KAPPA, x, z), steps)
+}
+
+/// Sweeps the finger's attachment coordinate `x` through the value `x₀` at
+/// which finger–box contact first occurs within the horizon. `dL/dx` (central
+/// differences, and the adjoint) must vary continuously: on the sweep the
+/// change between neighbours across `x₀` is no outlier, and at `x₀` itself
+/// `|D(x₀ + δ) − D(x₀ − δ)|` shrinks with `δ` (a jump would not).
+#[test]
+fn trajectory_loss_is_c1_through_contact_onset() {
+    let steps = 100;
+    let z = rest_height(KAPPA);
+    let base = finger_setup(-0.17, steps, z);
+    let loss = push_loss(&base);
+    let finger = base.link("pusher");
+    let onset = |x: f64| onset_and_loss(&finger_setup(x, steps, z), &loss).0;
+    // Bracket and bisect x₀.
+    let (mut lo, mut hi) = (-0.2, -0.14);
+    assert!(onset(lo).is_none(), "contact already at x = {lo}");
+    assert!(onset(hi).is_some(), "no contact at x = {hi}");
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if onset(mid).is_some() {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let x0 = 0.5 * (lo + hi);
+    eprintln!(
+        "contact onset within {steps} steps at finger x0 = {x0:.12} (bracket {:.1e})",
+        hi - lo
+    );
+    let deriv = |x: f64| {
+        let s = finger_setup(x, steps, z);
+        let h = 1e-6;
+        let d_fd = fd(&s, &loss, h, |p, d| {
+            p.model.links[finger].attach[(0, 3)] += d
+        });
+        let g = s.gradients(&loss);
+        (d_fd, g.attachments[finger][0], g.loss)
+    };
+    // The table.
+    let dx = 1e-3;
+    let mut rows = Vec::new();
+    let mut csv = String::from(
+        "x,x_minus_x0,first_contact_step,loss,dL_dx_fd,dL_dx_adjoint,dL_dx_minus_free_line\n",
+    );
+    eprintln!(
+        "{:>10} {:>10} {:>6} {:>16} {:>16} {:>16} {:>11}",
+        "x", "x-x0", "onset", "loss", "dL/dx (FD)", "dL/dx (adjoint)", "D - free"
+    );
+    // Before onset the loss is the contact-free one; its derivative is
+    // extrapolated linearly from the two sweep points just below x₀ to show
+    // how the contact contribution grows from zero.
+    let free_a = x0 - 1.75 * dx;
+    let free_b = x0 - 0.75 * dx;
+    let (_, da, _) = deriv(free_a);
+    let (_, db, _) = deriv(free_b);
+    let free_line = |x: f64| da + (x - free_a) * (db - da) / (free_b - free_a);
+    for k in -8..=12 {
+        // Offset by a quarter step so no sweep point sits exactly on x₀.
+        let x = x0 + (k as f64 + 0.25) * dx;
+        let (first, l) = onset_and_loss(&finger_setup(x, steps, z), &loss);
+        let (dfd, dadj, _) = deriv(x);
+        let first_s = first.map_or("-".to_string(), |k| k.to_string());
+        let dev = dadj - free_line(x);
+        eprintln!(
+            "{x:>10.6} {:>10.6} {first_s:>6} {l:>16.9e} {dfd:>16.9e} {dadj:>16.9e} {dev:>11.3e}",
+            x - x0
+        );
+        csv += &format!("{x},{},{first_s},{l:e},{dfd:e},{dadj:e},{dev:e}\n", x - x0);
+        assert!(
+            (dfd - dadj).abs() <= 1e-4 * dfd.abs().max(dadj.abs()),
+            "x = {x}: FD {dfd} vs adjoint {dadj}"
+        );
+        rows.push((x, first, dfd));
+    }
+    let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("contact_onset_sweep.csv");
+    std::fs::write(&path, &csv).unwrap();
+    eprintln!("sweep written to {}", path.display());
+    // Contact starts inside the sweep, at the last step for x just above x₀
+    // and earlier further on.
+    assert!(rows.iter().any(|r| r.1.is_none()) && rows.iter().any(|r| r.1.is_some()));
+    // Neighbouring variation of the FD derivative: the interval containing x₀
+    // is no outlier.
+    let var: Vec<(bool, f64)> = rows
+        .windows(2)
+        .map(|w| {
+            (
+                w[0].1.is_none() && w[1].1.is_some(),
+                (w[1].2 - w[0].2).abs(),
+            )
+        })
+        .collect();
+    let across = var.iter().find(|v| v.0).unwrap().1;
+    let elsewhere = var.iter().filter(|v| !v.0).map(|v| v.1).fold(0.0, f64::max);
+    eprintln!("|ΔD| across onset {across:.3e}, largest elsewhere {elsewhere:.3e}");
+    assert!(
+        across <= 2.0 * elsewhere,
+        "derivative jump at onset: {across} vs {elsewhere}"
+    );
+    // Refinement at x₀: D(x₀ + δ) − D(x₀ − δ) → 0 (adjoint derivatives); the
+    // contact part D(x₀ + δ) − (free line) vanishes faster than δ.
+    let mut prev: Option<(f64, f64)> = None;
+    for delta in [1e-3, 1e-4, 1e-5, 1e-6] {
+        let (_, dp, _) = deriv(x0 + delta);
+        let (_, dm, _) = deriv(x0 - delta);
+        let jump = (dp - dm).abs();
+        let dev = (dp - free_line(x0 + delta)).abs();
+        eprintln!(
+            "δ = {delta:.0e}: |D(x0+δ) − D(x0−δ)| = {jump:.3e}, contact part |D(x0+δ) − free line| = {dev:.3e}"
+        );
+        if let Some((pj, pd)) = prev {
+            assert!(jump <= 0.2 * pj + 1e-9, "no convergence: {jump} after {pj}");
+            assert!(dev <= 0.1 * pd + 1e-10, "contact part: {dev} after {pd}");
+        }
+        prev = Some((jump, dev));
+    }
+}

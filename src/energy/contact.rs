@@ -8,6 +8,11 @@
 //! energy `+∞`, so Newton's line search rejects the trial point and an
 //! interpenetrating state is never accepted. Each pair's optimal plane warm
 //! starts its next solve (used only when still strictly feasible).
+//!
+//! Adjoint ([`Energy::vjp`]): per separated pair, the world-vertex
+//! Hessian–vector product of `U_c` (implicit-function-theorem Schur
+//! complement, `O(M)`) and `∂(∇_X U_c·δX)/∂s` from
+//! [`contact::contact_vjp`], scattered to pose and local-vertex space.
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};

@@ -11,6 +11,12 @@
 //! Normal forces include the stiffness `κ`, so `U_f` is not multiplied by
 //! `κ` again (the paper's eq. `SDRS` scales both sums by one constant; the
 //! two conventions agree for forces ≫ `√ε_f`).
+//!
+//! Adjoint ([`Energy::vjp`]): [`contact::friction_vjp`] differentiates `Φ`
+//! w.r.t. the current vertices, the lagged vertices — directly and through
+//! the lagged plane solve (normal, basis, normal forces) — and `μ`, `κ`, `s`.
+//! The lagged plane `p*` is kept with each pair for that purpose; the
+//! backward pass re-runs [`Energy::begin_step`] of the step before `vjp`.
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
