@@ -178,7 +178,17 @@ fn trajectory_gradients_match_finite_differences_with_contact_and_friction() {
         check(&format!("qdot0[{k}]"), g.qdot0[k], b, tol, &mut worst);
     }
     // Attachment points: the finger's slide origin and the box's free-joint origin.
-    for (c, e) in [(finger, 0), (finger, 1), (finger, 2), (bx, 0), (bx, 2)] {
+    // The ground is static: its gradients come only from the contact and
+    // friction terms' products at static links.
+    let ground = setup.link("ground");
+    for (c, e) in [
+        (finger, 0),
+        (finger, 1),
+        (finger, 2),
+        (bx, 0),
+        (bx, 2),
+        (ground, 2),
+    ] {
         let a = fd(&setup, &loss, h, |s, d| {
             s.model.links[c].attach[(e, 3)] += d
         });
@@ -190,6 +200,9 @@ fn trajectory_gradients_match_finite_differences_with_contact_and_friction() {
             &mut worst,
         );
     }
+    let ground_local = &setup.model.links[ground].hulls[0].x_local;
+    let top = ground_local.iter().map(|x| x.z).fold(f64::MIN, f64::max);
+    let top_corner = ground_local.iter().position(|x| x.z == top).unwrap();
     // Hull vertices: finger front face (touching the box), finger back, box
     // bottom (on the ground) and box face (touched by the finger).
     for (l, v, e) in [
@@ -201,6 +214,7 @@ fn trajectory_gradients_match_finite_differences_with_contact_and_friction() {
         (bx, 3, 0),
         (bx, 4, 0),
         (bx, 6, 1),
+        (ground, top_corner, 2),
     ] {
         let a = fd(&setup, &loss, h, |s, d| {
             s.model.links[l].hulls[0].x_local[v][e] += d;

@@ -115,6 +115,8 @@ struct Term {
     e: Vector3<f64>,
     g: Vector2<f64>,
     d: Vector3<f64>,
+    /// `Bᵀ(X' − X)/Δt`.
+    v: Vector2<f64>,
     rho: Vector2<f64>,
     big_phi: Matrix2<f64>,
     /// `Bᵀ δX'/Δt`.
@@ -153,6 +155,77 @@ fn inner_solve(h: &Matrix3<f64>, v: &Vector3<f64>, spin_free: bool) -> Vector3<f
     x
 }
 
+/// `J_m = [I₂ | g_m]`.
+fn jacobian(g: &Vector2<f64>) -> SMatrix<f64, 2, 3> {
+    SMatrix::<f64, 2, 3>::new(1.0, 0.0, g.x, 0.0, 1.0, g.y)
+}
+
+/// `U*(q)`, `∇_q U*`, `∇²_q U*` and the force scale `Σ w |ρ| (1 + ‖g‖)` of the inner problem
+/// (the `ω` row and column zeroed when spin-free).
+fn inner(
+    terms: &[Term],
+    q: &Vector3<f64>,
+    eps: f64,
+    spin_free: bool,
+) -> (f64, Vector3<f64>, Matrix3<f64>, f64) {
+    let (mut value, mut grad, mut hess, mut scale) = (0.0, Vector3::zeros(), Matrix3::zeros(), 0.0);
+    for t in terms {
+        let r = t.v - Vector2::new(q.x, q.y) - t.g * q.z;
+        let ph = (r.norm_squared() + eps).sqrt();
+        let rho = r / ph;
+        let big_phi = (Matrix2::identity() - rho * rho.transpose()) / ph;
+        let j = jacobian(&t.g);
+        value += t.w * ph;
+        grad -= j.transpose() * rho * t.w;
+        hess += j.transpose() * big_phi * j * t.w;
+        scale += t.w * rho.norm() * (1.0 + t.g.norm());
+    }
+    if spin_free {
+        grad.z = 0.0;
+        for i in 0..3 {
+            hess[(i, 2)] = 0.0;
+            hess[(2, i)] = 0.0;
+        }
+    }
+    (value, grad, hess, scale)
+}
+
+/// Newton iterations on the inner problem from `q` until its gradient meets the forward
+/// solver's tolerance. The forward solution refers to the forward solver's rotation centre;
+/// it is recomputed here by the same rule, so normally no iteration is taken, but the adjoint
+/// does not rely on that.
+fn polish(
+    terms: &[Term],
+    mut q: Vector3<f64>,
+    params: &FrictionParams,
+    spin_free: bool,
+) -> Vector3<f64> {
+    let eps = params.eps_velocity;
+    for _ in 0..50 {
+        let (value, grad, hess, scale) = inner(terms, &q, eps, spin_free);
+        if grad.norm() <= params.inner_tol.min(params.inner_rtol * scale) {
+            break;
+        }
+        let dq = -inner_solve(&hess, &grad, spin_free);
+        let mut alpha = 1.0;
+        let accepted = loop {
+            let trial = q + dq * alpha;
+            if inner(terms, &trial, eps, spin_free).0 <= value {
+                break Some(trial);
+            }
+            alpha *= 0.5;
+            if alpha < 1e-10 {
+                break None;
+            }
+        };
+        match accepted {
+            Some(t) => q = t,
+            None => break, // no decrease left above rounding
+        }
+    }
+    q
+}
+
 /// Adjoint products of the friction potential of one pair.
 ///
 /// `lag` and `plane` come from the step-`t` contact solve of this pair (`plane` is the
@@ -176,18 +249,48 @@ pub fn friction_vjp(
     assert_eq!(xa_next.len(), dxa.len(), "friction_vjp: δX'_a length");
     assert_eq!(xb_next.len(), dxb.len(), "friction_vjp: δX'_b length");
     let fv = friction_vertices(&lag.frame(), xa_next, xb_next, params, scratch)?;
-    let (na, nb) = (xa_next.len(), xb_next.len());
-    let phi = fv
-        .grad_a
-        .iter()
-        .zip(dxa)
-        .chain(fv.grad_b.iter().zip(dxb))
-        .map(|(g, d)| g.dot(d))
-        .sum();
+    let start = Vector3::new(fv.u.x, fv.u.y, fv.omega);
+    let pair = Pair {
+        lag,
+        plane,
+        s,
+        kappa,
+        next: [xa_next, xb_next],
+        dirs: [dxa, dxb],
+    };
+    Ok(vjp_from(&pair, params, start, fv.spin_free))
+}
+
+/// The inputs of [`friction_vjp`].
+struct Pair<'a> {
+    lag: &'a LaggedContact,
+    plane: &'a Vector4<f64>,
+    s: f64,
+    kappa: f64,
+    next: [&'a [Vector3<f64>]; 2],
+    dirs: [&'a [Vector3<f64>]; 2],
+}
+
+/// [`friction_vjp`] from an approximate inner solution `start = (u, ω)` (polished here).
+fn vjp_from(
+    pair: &Pair<'_>,
+    params: &FrictionParams,
+    start: Vector3<f64>,
+    spin_free: bool,
+) -> FrictionVjp {
+    let Pair {
+        lag,
+        plane,
+        s,
+        kappa,
+        next,
+        dirs,
+    } = *pair;
+    let (na, nb) = (next[0].len(), next[1].len());
     let mut out = FrictionVjp {
-        phi,
-        grad_a: fv.grad_a.clone(),
-        grad_b: fv.grad_b.clone(),
+        phi: 0.0,
+        grad_a: vec![Vector3::zeros(); na],
+        grad_b: vec![Vector3::zeros(); nb],
         next_a: vec![Vector3::zeros(); na],
         next_b: vec![Vector3::zeros(); nb],
         prev_a: vec![Vector3::zeros(); na],
@@ -195,7 +298,7 @@ pub fn friction_vjp(
         mu: 0.0,
         kappa: 0.0,
         s: 0.0,
-        spin_free: fv.spin_free,
+        spin_free,
     };
     let dt = params.dt;
     let eps = params.eps_velocity;
@@ -203,12 +306,10 @@ pub fn friction_vjp(
     let nh = lag.normal;
     let prev = [&lag.x_prev_a[..], &lag.x_prev_b[..]];
     let forces = [&lag.normal_force_a[..], &lag.normal_force_b[..]];
-    let next = [xa_next, xb_next];
-    let dirs = [dxa, dxb];
 
-    // Rotation centre: any fixed point will do (U_f does not depend on it), but the inner
-    // solution (u*, ω*) returned above refers to the forward solver's centre, the
-    // contact-weighted centroid of X; recompute it by the same rule.
+    // Rotation centre: any fixed point will do (U_f does not depend on it); the forward
+    // solver's (u*, ω*) refer to its centre, the contact-weighted centroid of X, so the same
+    // rule gives a start that needs no polishing.
     let mut wsum = 0.0;
     let mut c = Vector3::zeros();
     for h in 0..2 {
@@ -221,16 +322,18 @@ pub fn friction_vjp(
         }
     }
     if wsum.is_nan() || wsum <= 0.0 {
-        return Ok(out); // no normal force: U_f ≡ 0 near here
+        return out; // no normal force: U_f ≡ 0 near here
     }
     c /= wsum;
-    let spin = !fv.spin_free;
-    let (u, omega) = (fv.u, if spin { fv.omega } else { 0.0 });
+    let spin = !spin_free;
+    let start = if spin {
+        start
+    } else {
+        Vector3::new(start.x, start.y, 0.0)
+    };
 
-    // Pass 1: active terms, U*_qq and U*_{qX'} δX'.
+    // Pass 1: the vertices carrying a normal force.
     let mut terms = Vec::new();
-    let mut hqq = Matrix3::zeros();
-    let mut rq = Vector3::zeros();
     let bt = bm.transpose();
     for h in 0..2 {
         for (index, (x, f)) in prev[h].iter().zip(forces[h]).enumerate() {
@@ -241,42 +344,44 @@ pub fn friction_vjp(
             if af <= 0.0 {
                 continue;
             }
-            let w = params.mu * dt * af;
             let e = x - c;
-            let g = if spin {
-                bt * nh.cross(&e)
-            } else {
-                Vector2::zeros()
-            };
             let d = next[h][index] - x;
-            let r = bt * d / dt - u - g * omega;
-            let ph = (r.norm_squared() + eps).sqrt();
-            let rho = r / ph;
-            let big_phi = (Matrix2::identity() - rho * rho.transpose()) / ph;
-            let mut j = SMatrix::<f64, 2, 3>::zeros();
-            j[(0, 0)] = 1.0;
-            j[(1, 1)] = 1.0;
-            j[(0, 2)] = g.x;
-            j[(1, 2)] = g.y;
-            hqq += j.transpose() * big_phi * j * w;
-            let bdx = bt * dirs[h][index] / dt;
-            rq -= j.transpose() * (big_phi * bdx) * w;
             terms.push(Term {
                 hull: h,
                 index,
                 f: *f,
                 af,
-                w,
+                w: params.mu * dt * af,
                 e,
-                g,
+                g: if spin {
+                    bt * nh.cross(&e)
+                } else {
+                    Vector2::zeros()
+                },
                 d,
-                rho,
-                big_phi,
-                bdx,
+                v: bt * d / dt,
+                rho: Vector2::zeros(),
+                big_phi: Matrix2::zeros(),
+                bdx: bt * dirs[h][index] / dt,
             });
         }
     }
-    let z = inner_solve(&hqq, &rq, fv.spin_free);
+    // The inner solution for this centre (normally the forward solution as is).
+    let q = polish(&terms, start, params, spin_free);
+    let omega = q.z;
+    // U*_qq and U*_{qX'} δX' at q*.
+    let mut hqq = Matrix3::zeros();
+    let mut rq = Vector3::zeros();
+    for t in &mut terms {
+        let r = t.v - Vector2::new(q.x, q.y) - t.g * q.z;
+        let ph = (r.norm_squared() + eps).sqrt();
+        t.rho = r / ph;
+        t.big_phi = (Matrix2::identity() - t.rho * t.rho.transpose()) / ph;
+        let j = jacobian(&t.g);
+        hqq += j.transpose() * t.big_phi * j * t.w;
+        rq -= j.transpose() * (t.big_phi * t.bdx) * t.w;
+    }
+    let z = inner_solve(&hqq, &rq, spin_free);
     let zu = Vector2::new(z.x, z.y);
     let zw = z.z;
 
@@ -288,6 +393,14 @@ pub fn friction_vjp(
         let alpha = t.rho.dot(&a);
         let bb = bm * (t.big_phi * a) * t.w; // B β
         let bg = bm * t.rho * t.w; // B γ
+        let dxn = dirs[t.hull][t.index];
+        // ∂U_f/∂X'_m = B γ/Δt; Φ = Σ its product with δX'.
+        if t.hull == 0 {
+            out.grad_a[t.index] = bg / dt;
+        } else {
+            out.grad_b[t.index] = bg / dt;
+        }
+        out.phi += bg.dot(&dxn) / dt;
         let nx = if t.hull == 0 {
             &mut out.next_a[t.index]
         } else {
@@ -301,7 +414,6 @@ pub fn friction_vjp(
         };
         *px += -bb / dt + nh.cross(&bb) * omega - nh.cross(&bg) * zw;
         gf[t.hull][t.index] = alpha * params.mu * dt * t.f / (t.f * t.f + params.eps_force).sqrt();
-        let dxn = dirs[t.hull][t.index];
         gn += -bb * (nh.dot(&t.d) / dt) - t.e.cross(&bb) * omega - bg * (nh.dot(&dxn) / dt)
             + t.e.cross(&bg) * zw;
         out.mu += alpha * dt * t.af;
@@ -340,7 +452,7 @@ pub fn friction_vjp(
     ds += opt.pull_back(&zeta, prev_a, prev_b);
     out.s = ds;
     out.kappa = dk;
-    Ok(out)
+    out
 }
 
 #[cfg(test)]
@@ -533,6 +645,65 @@ mod tests {
         for (k, frac) in [0.1, 0.4, 0.9].into_iter().enumerate() {
             fd_check(Features::VertexFace, frac, 30 + k as u64, 2e-3);
         }
+    }
+
+    #[test]
+    fn friction_vjp_does_not_rely_on_the_forward_rotation_centre() {
+        // From a start far from (u*, ω*) — as if the forward solver had used another
+        // rotation centre — the polished inner solution gives the same products.
+        let p = Phys {
+            s: 0.05,
+            kappa: 10.0,
+            mu: 0.4,
+        };
+        let mut r = rng(5);
+        let thr = ContactParams::with_width(p.s).support_distance();
+        let (la, pa, lb, pb) = configuration(Features::FaceFace, 0.3 * thr, &mut r);
+        let (xa, xb) = (world(&pa, &la), world(&pb, &lb));
+        let xan = world(&moved(&pa, &mut r, 2e-3), &la);
+        let xbn = world(&moved(&pb, &mut r, 2e-3), &lb);
+        let d: Vec<Vector3<f64>> = (0..xa.len() + xb.len())
+            .map(|k| Vector3::new((k as f64).sin(), (2.0 * k as f64).cos(), 0.3))
+            .collect();
+        let (lag, plane) = lag_of(&xa, &xb, p).unwrap();
+        let fp = fparams(p.mu);
+        let mut sc = FrictionScratch::new();
+        let fv = friction_vertices(&lag.frame(), &xan, &xbn, &fp, &mut sc).unwrap();
+        let pair = Pair {
+            lag: &lag,
+            plane: &plane,
+            s: p.s,
+            kappa: p.kappa,
+            next: [&xan, &xbn],
+            dirs: [&d[..xa.len()], &d[xa.len()..]],
+        };
+        let exact = vjp_from(&pair, &fp, Vector3::new(fv.u.x, fv.u.y, fv.omega), false);
+        let off = vjp_from(
+            &pair,
+            &fp,
+            Vector3::new(fv.u.x + 0.05, fv.u.y - 0.03, fv.omega + 0.4),
+            false,
+        );
+        let all = |v: &FrictionVjp| {
+            let mut x = flatten(&[v.grad_a.clone(), v.grad_b.clone()].concat());
+            for part in [&v.next_a, &v.next_b, &v.prev_a, &v.prev_b] {
+                x = DVector::from_iterator(
+                    x.len() + 3 * part.len(),
+                    x.iter().copied().chain(flatten(part).iter().copied()),
+                );
+            }
+            DVector::from_iterator(
+                x.len() + 4,
+                x.iter().copied().chain([v.phi, v.mu, v.kappa, v.s]),
+            )
+        };
+        let e = relv(&all(&exact), &all(&off));
+        report("friction vjp from an offset start", e);
+        assert!(e <= 1e-9, "{e:e}");
+        // And the exact start matches the forward gradient.
+        let g = flatten(&[fv.grad_a, fv.grad_b].concat());
+        let ge = flatten(&[exact.grad_a, exact.grad_b].concat());
+        assert!(relv(&g, &ge) <= 1e-12);
     }
 
     #[test]
