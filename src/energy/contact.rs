@@ -2,7 +2,7 @@
 //! `contact.tex`) over every hull pair on different, non-excluded links.
 //!
 //! Stages per evaluation: world vertices → broad phase (boxes inflated by
-//! `2s/(1−s)`) → narrow phase, one [`contact_pair`] per candidate, in
+//! `2s/(1−s)`) → narrow phase, one [`contact_pair`](crate::contact::contact_pair) per candidate, in
 //! parallel (rayon), results reduced in pair order (deterministic for any
 //! thread count) → scatter into pose space. An intersecting pair makes the
 //! energy `+∞`, so Newton's line search rejects the trial point and an
