@@ -1,88 +1,15 @@
 //! Whole-trajectory gradients by the adjoint method against central finite
 //! differences of the loss (re-simulating the whole trajectory).
 
-use nalgebra::{DVector, Matrix3, Vector3};
-use sdrs::control::Controller;
-use sdrs::diff::{Gradients, Loss, LossTerm, When, backward, loss_of, record};
+mod common;
+
+use common::adjoint::{Setup, fd};
+use nalgebra::Vector3;
+use sdrs::diff::{Loss, LossTerm, When};
 use sdrs::model::Model;
-use sdrs::scene::Scene;
-use sdrs::sim::{SimSettings, SimState, Simulator};
-use std::path::Path;
-
-/// Everything a trajectory depends on, so a test can perturb any of it.
-#[derive(Clone)]
-struct Setup {
-    scene: Scene,
-    model: Model,
-    settings: SimSettings,
-    controller: Controller,
-    q0: DVector<f64>,
-    qdot0: DVector<f64>,
-    charts: Vec<Matrix3<f64>>,
-    steps: usize,
-}
-
-impl Setup {
-    fn new(text: &str, steps: usize) -> Self {
-        let scene = Scene::from_str(text, Path::new("adjoint.yaml")).unwrap();
-        Setup {
-            model: scene.model.clone(),
-            settings: scene.settings.clone(),
-            controller: scene.controller.clone(),
-            q0: scene.q0.clone(),
-            qdot0: scene.qdot0.clone(),
-            charts: scene.charts.clone(),
-            steps,
-            scene,
-        }
-    }
-
-    fn simulator(&self) -> Simulator {
-        let mut sc = self.scene.clone();
-        sc.model = self.model.clone();
-        sc.settings = self.settings.clone();
-        sc.controller = self.controller.clone();
-        let mut sim = sc.simulator();
-        sim.state = SimState::new(
-            &self.model,
-            self.q0.clone(),
-            &self.qdot0,
-            self.charts.clone(),
-            self.settings.dt,
-        );
-        sim
-    }
-
-    fn loss(&self, loss: &Loss) -> f64 {
-        let mut sim = self.simulator();
-        let tape = record(&mut sim, self.steps).unwrap();
-        loss_of(&self.model, &tape, loss)
-    }
-
-    fn gradients(&self, loss: &Loss) -> Gradients {
-        let mut sim = self.simulator();
-        let tape = record(&mut sim, self.steps).unwrap();
-        backward(&mut sim, &tape, loss).unwrap()
-    }
-}
-
-/// Central difference of the loss under a perturbation `f(setup, ±h)`.
-fn fd(setup: &Setup, loss: &Loss, h: f64, f: impl Fn(&mut Setup, f64)) -> f64 {
-    let mut p = setup.clone();
-    f(&mut p, h);
-    let mut m = setup.clone();
-    f(&mut m, -h);
-    (p.loss(loss) - m.loss(loss)) / (2.0 * h)
-}
 
 fn check(name: &str, adjoint: f64, finite: f64, worst: &mut f64) {
-    let rel = (adjoint - finite).abs() / adjoint.abs().max(finite.abs()).max(1e-8);
-    eprintln!("{name:<28} adjoint {adjoint:+.9e}  fd {finite:+.9e}  rel {rel:.1e}");
-    *worst = worst.max(rel);
-    assert!(
-        rel <= 1e-4,
-        "{name}: adjoint {adjoint} vs finite difference {finite}"
-    );
+    common::adjoint::check(name, adjoint, finite, 1e-4, worst);
 }
 
 const ARM: &str = r#"

@@ -39,6 +39,8 @@
 //!   call); [`ContactPair::normal_forces_into`] and [`LaggedContact::from_contact`] compute
 //!   them from `p*` in one pass.
 
+pub mod adjoint_contact;
+pub mod adjoint_friction;
 pub mod barrier;
 mod error;
 pub mod friction;
@@ -52,6 +54,8 @@ mod separation;
 #[cfg(test)]
 mod test_util;
 
+pub use adjoint_contact::{ContactVjp, PlaneOptimum, barrier_d1_ds, contact_vjp};
+pub use adjoint_friction::{FrictionVjp, friction_vjp};
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
 pub use friction::{

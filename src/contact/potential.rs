@@ -326,7 +326,7 @@ fn solve_core(
 /// is numerically definite, otherwise an eigenvalue pseudo-inverse. The latter only happens
 /// when the potential is numerically zero (all `P''` vanish or underflow), where the Schur
 /// term it multiplies vanishes as well (paper Lemma `contactHessianVanish`).
-fn plane_hessian_inverse(h: &Matrix4<f64>) -> Matrix4<f64> {
+pub(crate) fn plane_hessian_inverse(h: &Matrix4<f64>) -> Matrix4<f64> {
     if let Some(ch) = h.cholesky() {
         let inv = ch.inverse();
         if inv.iter().all(|v| v.is_finite()) {

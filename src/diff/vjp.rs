@@ -62,7 +62,8 @@ pub struct VjpAccumulator {
     /// `(∂Φ/∂θ*, ∂Φ/∂θ̇*, ∂Φ/∂k_p, ∂Φ/∂k_d)` per controller channel.
     pub channels: Vec<[f64; 4]>,
     pub physical: PhysicalGrad,
-    /// Quantities some term could not differentiate (e.g. `"contact.s"`);
+    /// Quantities some term could not differentiate (a term without a `vjp`
+    /// names itself);
     /// gradients that depend on them are not reported.
     pub unavailable: Vec<&'static str>,
 }

@@ -2,14 +2,19 @@
 //! `contact.tex`) over every hull pair on different, non-excluded links.
 //!
 //! Stages per evaluation: world vertices → broad phase (boxes inflated by
-//! `2s/(1−s)`) → narrow phase, one [`contact_pair`] per candidate, in
+//! `2s/(1−s)`) → narrow phase, one [`contact_pair`](crate::contact::contact_pair) per candidate, in
 //! parallel (rayon), results reduced in pair order (deterministic for any
 //! thread count) → scatter into pose space. An intersecting pair makes the
 //! energy `+∞`, so Newton's line search rejects the trial point and an
 //! interpenetrating state is never accepted. Each pair's optimal plane warm
 //! starts its next solve (used only when still strictly feasible).
+//!
+//! Adjoint ([`Energy::vjp`]): per separated pair, the world-vertex
+//! Hessian–vector product of `U_c` (implicit-function-theorem Schur
+//! complement, `O(M)`) and `∂(∇_X U_c·δX)/∂s` from
+//! [`contact::contact_vjp`], scattered to pose and local-vertex space.
 
-use super::pairs::scatter_pair;
+use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::{self, ContactParams, ContactScratch, HullPose, PairOutcome};
 use crate::geometry::{BroadPhase, WorldHulls};
@@ -160,9 +165,11 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
-    /// `∂Φ/∂A^t = κ H δA` (pose Hessian of the pairs); `∂Φ/∂κ = Φ/κ`.
-    /// Not yet available: vertex gradients (they need the world-vertex
-    /// Hessian of each pair) and `∂/∂s`.
+    /// Per separated pair, with `Φ = κ Σ_m ⟨∂U_c/∂X_m, δX_m⟩` (`δX_m = δA x̃_m`), from
+    /// [`contact::contact_vjp`] (world-vertex Hessian–vector product by the IFT Schur
+    /// complement, and `∂/∂s`): `∂Φ/∂A^t = κ Σ_m (∂²U_c/∂X² δX)_m x̃_mᵀ` for both links
+    /// (static ones included, for their attachment gradient), `∂Φ/∂x_m = κ (Rᵀ(∂²U_c/∂X² δX)_m
+    /// + δRᵀ ∂U_c/∂X_m)`, `∂Φ/∂κ = Φ/κ`, `∂Φ/∂s = κ ∂(∇_X U_c·δX)/∂s`.
     fn vjp(
         &mut self,
         ctx: &StepContext,
@@ -171,20 +178,48 @@ impl Energy for ContactEnergy {
         dir: &crate::diff::AdjointDirection,
         out: &mut crate::diff::VjpAccumulator,
     ) -> Result<(), EnergyError> {
-        let mut tmp = EnergyAccumulator::new(ctx.model);
-        self.accumulate(ctx, q, kin, Need::Hessian, &mut tmp)?;
+        let model = ctx.model;
+        let mut tmp = EnergyAccumulator::new(model);
+        // Re-solves the planes at θ^t (warm started: typically no inner iteration).
+        self.accumulate(ctx, q, kin, Need::Value, &mut tmp)?;
         if !tmp.value.is_finite() {
             return Err(EnergyError::Failed {
                 term: "contact",
                 msg: "intersecting state in the backward pass".into(),
             });
         }
-        super::pairs::hessian_times(&tmp, dir.dpose, &mut out.pose);
-        out.physical.kappa += super::pairs::directional(&tmp, dir.dpose) / self.settings.kappa;
-        if self.last_active > 0 {
-            out.unavailable.push("contact.s");
-            if out.want_vertices {
-                out.unavailable.push("contact.vertices");
+        let kappa = self.settings.kappa;
+        let s = self.params.s;
+        let want_vertices = out.want_vertices;
+        for (k, res) in self.results.iter().enumerate() {
+            let Ok(PairOutcome::Separated(c)) = res else {
+                continue;
+            };
+            let (a, b) = self.pairs[k];
+            let ids = [self.hulls.ids[a], self.hulls.ids[b]];
+            let local = |h: usize| &model.links[ids[h].link].hulls[ids[h].hull].x_local;
+            let (xa, dxa) =
+                vertices_and_directions(local(0), &kin.pose[ids[0].link], &dir.dpose[ids[0].link]);
+            let (xb, dxb) =
+                vertices_and_directions(local(1), &kin.pose[ids[1].link], &dir.dpose[ids[1].link]);
+            let v = contact::contact_vjp(&xa, &xb, &c.plane, s, &dxa, &dxb);
+            out.physical.kappa += v.phi;
+            out.physical.s += kappa * v.ds;
+            for (h, (hvp, grad)) in [(&v.hvp_a, &v.grad_a), (&v.hvp_b, &v.grad_b)]
+                .into_iter()
+                .enumerate()
+            {
+                let id = ids[h];
+                scatter_vertex_products(
+                    local(h),
+                    &kin.pose[id.link],
+                    Some(&dir.dpose[id.link]),
+                    hvp,
+                    Some(grad),
+                    kappa,
+                    &mut out.pose[id.link],
+                    want_vertices.then(|| &mut out.vertex[id.link][id.hull][..]),
+                );
             }
         }
         Ok(())

@@ -11,8 +11,14 @@
 //! Normal forces include the stiffness `κ`, so `U_f` is not multiplied by
 //! `κ` again (the paper's eq. `SDRS` scales both sums by one constant; the
 //! two conventions agree for forces ≫ `√ε_f`).
+//!
+//! Adjoint ([`Energy::vjp`]): [`contact::friction_vjp`] differentiates `Φ`
+//! w.r.t. the current vertices, the lagged vertices — directly and through
+//! the lagged plane solve (normal, basis, normal forces) — and `μ`, `κ`, `s`.
+//! The lagged plane `p*` is kept with each pair for that purpose; the
+//! backward pass re-runs [`Energy::begin_step`] of the step before `vjp`.
 
-use super::pairs::scatter_pair;
+use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::{
     self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch, HullPose,
@@ -26,8 +32,9 @@ use nalgebra::{DVector, Vector4};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 
-/// A hull pair (indices into the world hulls) with its lagged data.
-type LaggedPair = ((usize, usize), LaggedContact);
+/// A hull pair (indices into the world hulls) with its lagged data and the
+/// step-`t` plane `p*` it came from.
+type LaggedPair = ((usize, usize), LaggedContact, Vector4<f64>);
 
 /// The friction term.
 pub struct FrictionEnergy {
@@ -38,8 +45,9 @@ pub struct FrictionEnergy {
     broad: BroadPhase,
     pairs: Vec<(usize, usize)>,
     warm: HashMap<(usize, usize), Vector4<f64>>,
-    /// Lagged data of the pairs in contact at step `t`.
-    lagged: Vec<((usize, usize), LaggedContact)>,
+    /// Lagged data of the pairs in contact at step `t`, with the optimal world plane `p*`
+    /// it was built from (needed by the adjoint).
+    lagged: Vec<LaggedPair>,
     results: Vec<Result<contact::FrictionPair, contact::FrictionError>>,
     pair_slots: BTreeMap<(usize, usize), usize>,
 }
@@ -114,6 +122,7 @@ impl Energy for FrictionEnergy {
                     Ok(PairOutcome::Separated(c)) => Ok(Some((
                         (a, b),
                         LaggedContact::from_contact(&c, pa, pb, &this.contact, kappa),
+                        c.plane,
                     ))),
                     Ok(_) => Ok(None),
                     Err(e) => Err(EnergyError::Failed {
@@ -126,8 +135,8 @@ impl Energy for FrictionEnergy {
         self.lagged.clear();
         self.warm.clear();
         for item in lagged {
-            if let Some((key, lag)) = item? {
-                self.lagged.push((key, lag));
+            if let Some(lag) = item? {
+                self.lagged.push(lag);
             }
         }
         Ok(())
@@ -157,7 +166,7 @@ impl Energy for FrictionEnergy {
         };
         self.lagged
             .par_iter()
-            .map_init(FrictionScratch::new, |scratch, ((a, b), lag)| {
+            .map_init(FrictionScratch::new, |scratch, ((a, b), lag, _)| {
                 contact::friction_pair(&lag.frame(), pose(*a), pose(*b), friction, fneed, scratch)
             })
             .collect_into_vec(&mut self.results);
@@ -184,27 +193,79 @@ impl Energy for FrictionEnergy {
         Ok(())
     }
 
-    /// `∂Φ/∂A^t = H δA`, `∂Φ/∂μ = Φ/μ`. The dependence on the previous
-    /// state runs through the lagged plane, basis and normal forces as well
-    /// as `X^t`; until that derivative exists the term reports
-    /// `friction.previous_state` as unavailable (so no trajectory gradient
-    /// is produced through friction).
+    /// Per lagged pair, with `Φ = Σ_m ⟨∂U_f/∂X'_m, δX'_m⟩`, from
+    /// [`contact::friction_vjp`]: `∂Φ/∂A^t` and `∂Φ/∂x_local` through the current vertices
+    /// (Hessian–vector product and the `δX' = δA x̃` term), `∂Φ/∂A^{t−1}` and `∂Φ/∂x_local`
+    /// through the lagged vertices — directly and through the lagged plane, normal and
+    /// normal forces (implicit function theorem on the step-`t−1` plane solve) — and
+    /// `∂Φ/∂μ`, `∂Φ/∂κ`, `∂Φ/∂s`. Static links receive pose gradients too (for their
+    /// attachment gradient).
     fn vjp(
         &mut self,
         ctx: &StepContext,
-        q: &DVector<f64>,
+        _q: &DVector<f64>,
         kin: &Kinematics,
         dir: &crate::diff::AdjointDirection,
         out: &mut crate::diff::VjpAccumulator,
     ) -> Result<(), EnergyError> {
-        let mut tmp = EnergyAccumulator::new(ctx.model);
-        self.accumulate(ctx, q, kin, Need::Hessian, &mut tmp)?;
-        super::pairs::hessian_times(&tmp, dir.dpose, &mut out.pose);
-        if self.settings.mu > 0.0 {
-            out.physical.mu += super::pairs::directional(&tmp, dir.dpose) / self.settings.mu;
-        }
-        if !self.lagged.is_empty() {
-            out.unavailable.push("friction.previous_state");
+        let model = ctx.model;
+        let s = self.contact.s;
+        let kappa = self.settings.kappa;
+        let want_vertices = out.want_vertices;
+        let mut scratch = FrictionScratch::new();
+        for ((a, b), lag, plane) in &self.lagged {
+            let ids = [self.hulls.ids[*a], self.hulls.ids[*b]];
+            let local = |h: usize| &model.links[ids[h].link].hulls[ids[h].hull].x_local;
+            let (xa, dxa) =
+                vertices_and_directions(local(0), &kin.pose[ids[0].link], &dir.dpose[ids[0].link]);
+            let (xb, dxb) =
+                vertices_and_directions(local(1), &kin.pose[ids[1].link], &dir.dpose[ids[1].link]);
+            let v = contact::friction_vjp(
+                lag,
+                plane,
+                s,
+                kappa,
+                &xa,
+                &xb,
+                &self.friction,
+                &dxa,
+                &dxb,
+                &mut scratch,
+            )
+            .map_err(|e| EnergyError::Failed {
+                term: "friction",
+                msg: format!("backward pass: {e}"),
+            })?;
+            out.physical.mu += v.mu;
+            out.physical.kappa += v.kappa;
+            out.physical.s += v.s;
+            let sides = [
+                (&v.next_a, &v.grad_a, &v.prev_a),
+                (&v.next_b, &v.grad_b, &v.prev_b),
+            ];
+            for (h, (next, grad, prev)) in sides.into_iter().enumerate() {
+                let id = ids[h];
+                scatter_vertex_products(
+                    local(h),
+                    &kin.pose[id.link],
+                    Some(&dir.dpose[id.link]),
+                    next,
+                    Some(grad),
+                    1.0,
+                    &mut out.pose[id.link],
+                    want_vertices.then(|| &mut out.vertex[id.link][id.hull][..]),
+                );
+                scatter_vertex_products(
+                    local(h),
+                    &ctx.poses_prev[id.link],
+                    None,
+                    prev,
+                    None,
+                    1.0,
+                    &mut out.pose_prev[id.link],
+                    want_vertices.then(|| &mut out.vertex[id.link][id.hull][..]),
+                );
+            }
         }
         Ok(())
     }

@@ -92,3 +92,57 @@ pub fn directional(acc: &EnergyAccumulator, dpose: &[crate::math::Pose]) -> f64 
         .map(|(g, d)| g.component_mul(d).sum())
         .sum()
 }
+
+/// Scatters world-vertex adjoint products of one hull into pose and local-vertex space.
+///
+/// The hull's vertices are `X_m = A x̃_m` (`x̃ = [x_local; 1]`), moved along `δX_m = δA x̃_m`.
+/// Given `∂Φ/∂X_m` (`d_phi`, at fixed `δX`) and, for a hull on the current state, the
+/// gradient `∂E/∂X_m` (`grad`, whose product with `δX` defines `Φ`), this adds
+/// `scale·Σ_m (∂Φ/∂X_m) x̃_mᵀ` to `pose_out` (`∂Φ/∂A` at fixed `δA`) and
+/// `scale·(Rᵀ ∂Φ/∂X_m + δRᵀ ∂E/∂X_m)` to `vertex_out[m]` (`∂Φ/∂x_local`: through `X_m`
+/// and through `δX_m`), with `R`, `δR` the rotation blocks of `A`, `δA`.
+#[allow(clippy::too_many_arguments)]
+pub fn scatter_vertex_products(
+    x_local: &[nalgebra::Vector3<f64>],
+    pose: &crate::math::Pose,
+    dpose: Option<&crate::math::Pose>,
+    d_phi: &[nalgebra::Vector3<f64>],
+    grad: Option<&[nalgebra::Vector3<f64>]>,
+    scale: f64,
+    pose_out: &mut Matrix3x4<f64>,
+    vertex_out: Option<&mut [nalgebra::Vector3<f64>]>,
+) {
+    let r = pose.fixed_view::<3, 3>(0, 0);
+    let mut acc = Matrix3x4::<f64>::zeros();
+    for (x, g) in x_local.iter().zip(d_phi) {
+        let xt = nalgebra::Vector4::new(x.x, x.y, x.z, 1.0);
+        acc += g * xt.transpose();
+    }
+    *pose_out += acc * scale;
+    if let Some(vo) = vertex_out {
+        for (m, (v, g)) in vo.iter_mut().zip(d_phi).enumerate() {
+            let mut t = r.transpose() * g;
+            if let (Some(da), Some(gr)) = (dpose, grad) {
+                t += da.fixed_view::<3, 3>(0, 0).transpose() * gr[m];
+            }
+            *v += t * scale;
+        }
+    }
+}
+
+/// World positions `A x̃_m` and directions `δA x̃_m` of a hull's vertices.
+pub fn vertices_and_directions(
+    x_local: &[nalgebra::Vector3<f64>],
+    pose: &crate::math::Pose,
+    dpose: &crate::math::Pose,
+) -> (Vec<nalgebra::Vector3<f64>>, Vec<nalgebra::Vector3<f64>>) {
+    x_local
+        .iter()
+        .map(|x| {
+            (
+                crate::math::transform_point(pose, x),
+                crate::math::transform_point(dpose, x),
+            )
+        })
+        .unzip()
+}
