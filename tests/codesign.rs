@@ -99,3 +99,43 @@ fn optimize_cli_writes_outputs_and_the_design_reproduces_the_loss() {
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("not empty"));
 }
+
+#[test]
+fn imported_shared_vertex_ties_are_one_design_variable_and_hold_while_optimizing() {
+    // Import the spider (overlapping hulls of its body get shared vertices),
+    // then optimize the body's vertices for a few iterations.
+    let dir = scratch_dir("ties");
+    let design = dir.join("spider.yaml");
+    let out = sdrs()
+        .args(["import", "--quiet", "--out"])
+        .arg(&design)
+        .arg(robots("spider/spider.urdf"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let task = dir.join("task.yaml");
+    std::fs::write(
+        &task,
+        "scene: spider.yaml\nhorizon: 20\nloss:\n  - {type: link_point, link: spider/body, point: [0.1, 0, 0], target: [0.2, 0.1, 0.5], when: final}\ndesign: {vertices: [spider/body], bound: 0.02}\noptimizer: {iters: 3, step_design: 0.005}\n",
+    )
+    .unwrap();
+    let p = Problem::load(&task, true).unwrap();
+    let tied = p.design.vars.iter().filter(|v| v.targets.len() > 1).count();
+    assert!(
+        tied >= 3,
+        "the body's shared vertices must be tied ({tied} tied variables)"
+    );
+    let mut checked = 0;
+    optimize(&p, 3, |_, d| {
+        let mut model = p.model.clone();
+        p.design.apply(&mut model, d);
+        p.design.check(&model).unwrap();
+        checked += 1;
+    })
+    .unwrap();
+    assert_eq!(checked, 4);
+}

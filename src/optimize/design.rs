@@ -97,11 +97,17 @@ impl DesignSpace {
     /// vertices of `vertex_links` (names `robot/link`), with box half-width
     /// `bound`. Adds the connectivity vertices to `model` (see the module
     /// docs).
+    ///
+    /// `ties` are groups of `(link index, hull, vertex)` that must stay one
+    /// point (shared vertices of overlapping hulls, from the robots'
+    /// `design.ties`): a designable vertex in a group becomes one variable
+    /// written to every member.
     pub fn build(
         model: &mut Model,
         attachments: &[String],
         vertex_links: &[String],
         bound: f64,
+        ties: &[Vec<(usize, usize, usize)>],
     ) -> Result<Self, NameError> {
         let mut vars: Vec<DesignVar> = Vec::new();
         let label = |m: &Model, l: usize| {
@@ -151,6 +157,8 @@ impl DesignSpace {
                 });
             }
         }
+        let group_of = |key: (usize, usize, usize)| ties.iter().position(|g| g.contains(&key));
+        let mut done_groups: Vec<usize> = Vec::new();
         for name in vertex_links {
             let l = names::link(model, name)?;
             for (h, hull) in model.links[l].hulls.iter().enumerate() {
@@ -158,14 +166,36 @@ impl DesignSpace {
                     if claimed.contains(&(l, h, m)) {
                         continue;
                     }
+                    let members = match group_of((l, h, m)) {
+                        Some(g) if done_groups.contains(&g) => continue,
+                        Some(g) => {
+                            done_groups.push(g);
+                            let x = hull.x_local[m];
+                            for &(l2, h2, m2) in &ties[g] {
+                                let y = model.links[l2].hulls[h2].x_local[m2];
+                                if (x - y).norm() > 1e-9 {
+                                    return Err(NameError {
+                                        what: "tie",
+                                        name: format!("{} hull {h} vertex {m}", label(model, l)),
+                                        msg: format!("tied vertices differ: {x:?} vs {y:?}"),
+                                    });
+                                }
+                            }
+                            ties[g].clone()
+                        }
+                        None => vec![(l, h, m)],
+                    };
                     for axis in 0..3 {
                         vars.push(DesignVar {
-                            targets: vec![Target::Vertex {
-                                link: l,
-                                hull: h,
-                                vertex: m,
-                                axis,
-                            }],
+                            targets: members
+                                .iter()
+                                .map(|&(link, hull, vertex)| Target::Vertex {
+                                    link,
+                                    hull,
+                                    vertex,
+                                    axis,
+                                })
+                                .collect(),
                             lower: 0.0,
                             upper: 0.0,
                             name: format!(

@@ -100,7 +100,9 @@ impl Problem {
                             format!("must be positive, got {}", d.bound),
                         ));
                     }
-                    DesignSpace::build(&mut model, &d.attachments, &d.vertices, d.bound)
+                    let ties = robot_ties(&scene, &model)
+                        .map_err(|e| invalid("robots[].design.ties", e))?;
+                    DesignSpace::build(&mut model, &d.attachments, &d.vertices, d.bound, &ties)
                         .map_err(|e| invalid("design", e.to_string()))?
                 }
                 _ => DesignSpace::default(),
@@ -237,6 +239,34 @@ impl Problem {
             model,
         })
     }
+}
+
+/// Tie groups of every robot's `design.ties`, as `(link, hull, vertex)`.
+fn robot_ties(scene: &Scene, model: &Model) -> Result<Vec<Vec<(usize, usize, usize)>>, String> {
+    let mut out = Vec::new();
+    for r in &scene.spec.robots {
+        let Some(d) = &r.design else { continue };
+        for (k, group) in d.ties.iter().enumerate() {
+            let mut g = Vec::new();
+            for v in group {
+                let l = names::link(model, &format!("{}/{}", r.name, v.link))
+                    .map_err(|e| format!("{k}: {e}"))?;
+                let ok = model.links[l]
+                    .hulls
+                    .get(v.hull)
+                    .is_some_and(|h| v.vertex < h.x_local.len());
+                if !ok {
+                    return Err(format!(
+                        "robot {} tie {k}: no vertex {} in hull {} of {}",
+                        r.name, v.vertex, v.hull, v.link
+                    ));
+                }
+                g.push((l, v.hull, v.vertex));
+            }
+            out.push(g);
+        }
+    }
+    Ok(out)
 }
 
 /// One forward + backward evaluation.
