@@ -95,7 +95,7 @@ use super::error::{FrictionError, Hull};
 use super::potential::{ContactPair, ContactParams, HullPose};
 
 /// Parameters of the friction potential.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrictionParams {
     /// Coulomb friction coefficient `μ ≥ 0` (dimensionless). Default `0.5`.
     pub mu: f64,

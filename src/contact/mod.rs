@@ -40,6 +40,7 @@
 //!   them from `p*` in one pass.
 
 pub mod barrier;
+pub mod capture;
 mod error;
 pub mod friction;
 #[cfg(test)]

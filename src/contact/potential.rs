@@ -65,7 +65,7 @@ use super::plane::{self, PlaneSolution, PlaneSolveSettings};
 use super::separation::{Separation, separate, supports_along};
 
 /// Parameters of the contact potential.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactParams {
     /// Barrier width `s ∈ (0, 1)`, a length in scene units. It is also the bound on
     /// `1 − ‖n‖`, so scenes must be scaled such that `s < 1` is meaningful (e.g. metres with

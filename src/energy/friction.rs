@@ -113,10 +113,21 @@ impl Energy for FrictionEnergy {
                         LaggedContact::from_contact(&c, pa, pb, &this.contact, kappa),
                     ))),
                     Ok(_) => Ok(None),
-                    Err(e) => Err(EnergyError::Failed {
-                        term: "friction",
-                        msg: format!("lagged contact: {e}"),
-                    }),
+                    Err(e) => {
+                        let case = contact::capture::ContactCase::new(
+                            pa,
+                            pb,
+                            &this.contact,
+                            warm,
+                            contact::Need::Value,
+                            &e,
+                        );
+                        contact::capture::dump("contact", &case);
+                        Err(EnergyError::Failed {
+                            term: "friction",
+                            msg: format!("lagged contact: {e}"),
+                        })
+                    }
                 }
             })
             .collect();
@@ -155,7 +166,21 @@ impl Energy for FrictionEnergy {
         self.lagged
             .par_iter()
             .map_init(FrictionScratch::new, |scratch, ((a, b), lag)| {
-                contact::friction_pair(&lag.frame(), pose(*a), pose(*b), friction, fneed, scratch)
+                let frame = lag.frame();
+                let res =
+                    contact::friction_pair(&frame, pose(*a), pose(*b), friction, fneed, scratch);
+                if let Err(e) = &res {
+                    let case = contact::capture::FrictionCase::new(
+                        &frame,
+                        pose(*a),
+                        pose(*b),
+                        friction,
+                        fneed,
+                        e,
+                    );
+                    contact::capture::dump("friction", &case);
+                }
+                res
             })
             .collect_into_vec(&mut self.results);
         self.pair_slots.clear();
