@@ -476,7 +476,8 @@ fn extrapolate(
             break;
         }
         let v = value(xa, xb, &(p + dir * a), s);
-        if !(v < best_value) {
+        // Stop at the first value that is not lower (or not a number).
+        if v.is_nan() || v >= best_value {
             break;
         }
         (best_alpha, best_value) = (a, v);

@@ -26,6 +26,9 @@ use nalgebra::{DVector, Vector4};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 
+/// A hull pair (indices into the world hulls) in contact at step `t` and its lagged data.
+type LaggedPair = ((usize, usize), LaggedContact);
+
 /// The friction term.
 pub struct FrictionEnergy {
     pub settings: ContactSettings,
@@ -91,7 +94,7 @@ impl Energy for FrictionEnergy {
         );
         let this = &*self;
         let kappa = self.settings.kappa;
-        let lagged: Vec<Result<Option<((usize, usize), LaggedContact)>, EnergyError>> = self
+        let lagged: Vec<Result<Option<LaggedPair>, EnergyError>> = self
             .pairs
             .par_iter()
             .map_init(ContactScratch::new, |scratch, &(a, b)| {
