@@ -913,7 +913,7 @@ fn solve_inner(
                     next = Some((qm, vm));
                 }
             }
-            // And the best point on the kink of the vertex closest to sticking.
+            // And the best point on the kink of a vertex that can hold the plane there.
             if let Some((qk, vk)) = kink_candidate(act, &q, eps, spin_free, ev.value_noise)
                 && vk < next.map_or(ev.value, |(_, v)| v)
             {
