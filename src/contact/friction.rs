@@ -71,13 +71,35 @@
 //!
 //! # Inner solve
 //!
-//! Newton's method on `q` from `u = Σ w ẋ / Σ w`, `ω = 0`, with an Armijo backtracking line
-//! search. Far from the solution, where relative speeds are many times `√ε_v`, the radial
-//! curvature `ε_v/φ³` is tiny and Newton overshoots; whenever the line search needs a step
-//! below 1/8, the majorize–minimize (Weiszfeld/IRLS) step, which never increases `U*`, is
-//! tried as well and the better point is kept. Stopping rule as for the contact plane:
-//! `‖∇_q U*‖ ≤ max(noise, min(tol, rtol · Σ w |ρ| (1 + ‖g‖)))`. Typical iteration counts are
-//! 3–12; relative speeds of 10⁵–10⁶ `√ε_v` need up to ~75 (see the robustness test).
+//! Newton's method on `q` from `u = Σ w ẋ / Σ w`, `ω = 0`. The full Newton step is taken when
+//! it satisfies Armijo (local quadratic convergence); otherwise the step length is found by a
+//! safeguarded minimisation of the convex `α ↦ U*(q + α d)` (bracketing, then secant and
+//! tangent-intersection candidates; see `line_minimize`), and two more candidates are tried,
+//! keeping the best point: the majorize–minimize (Weiszfeld/IRLS) step, which never
+//! increases `U*`, and the best point on the "kink" of a vertex (the line of plane motions
+//! that move exactly with it; see `kink_candidate`), taken only where that vertex can hold
+//! the plane against the pull of all the others.
+//!
+//! Why a line *minimisation*: when the hulls slide at relative speeds `V ≫ √ε_v`, every
+//! `√(‖r‖² + ε_v)` is an almost exact norm, and the contact plane's force balance makes the
+//! total weights `Σ_a w` and `Σ_b w` of the two sides nearly equal. `U*` is then nearly flat
+//! along the plane velocities between the two hulls' velocities (curvature `~ w ε_v/V³`,
+//! slope `~ |Σ_a w − Σ_b w|`), and its minimiser sits in a kink of width `√ε_v` where the
+//! plane sticks to the heavier side. Newton's model there proposes steps `~V³/ε_v` (10⁸ m/s
+//! for `V` = 100 m/s), a backtracking search with a bounded number of halvings cannot reach
+//! the kink, and majorize–minimize crawls along the valley (`~ 10⁻² m/s` per iteration).
+//! Minimising along the Newton direction lands in the kink in one or two iterations, after
+//! which Newton converges quadratically. When the plane must also spin (two heavy vertices on
+//! different hulls near each other), the iterate can instead slide along one vertex's kink
+//! while creeping towards it; minimising on the kink itself removes that crawl. `Φ_m` is evaluated as `(ε_v/φ² I + τ τᵀ)/φ`
+//! (`τ ⊥ ρ`, `‖τ‖ = ‖ρ‖`), which keeps the valley curvature `ε_v/φ³` accurate where
+//! `I − ρρᵀ` would cancel.
+//!
+//! Stopping rule as for the contact plane: `‖∇_q U*‖ ≤ max(noise, min(tol, rtol · Σ w |ρ|
+//! (1 + ‖g‖)))`, or — when no step decreases `U*` any more — Newton's predicted decrease
+//! `½ gᵀH⁻¹g` below the rounding of `U*` (noise floor). Anything else that stops progress is
+//! an error. Typical iteration counts are 3–12; fast sliding (10⁵–10⁷ `√ε_v`) needs up to
+//! ~30 (the stress scenes: mean 6–8, max 29 over 10⁵ solves).
 //!
 //! # Not covered
 //!
@@ -95,7 +117,7 @@ use super::error::{FrictionError, Hull};
 use super::potential::{ContactPair, ContactParams, HullPose};
 
 /// Parameters of the friction potential.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrictionParams {
     /// Coulomb friction coefficient `μ ≥ 0` (dimensionless). Default `0.5`.
     pub mu: f64,
@@ -386,7 +408,11 @@ fn vertex_terms(
     let r = a.v - Vector2::new(q.x, q.y) - a.g * q.z;
     let phi = (r.norm_squared() + eps).sqrt();
     let rho = r / phi;
-    let big_phi = (Matrix2::identity() - rho * rho.transpose()) / phi;
+    // Φ = (I − ρρᵀ)/φ written without cancellation: its eigenvalue along r is ε/φ³, which
+    // `1 − ‖ρ‖²` would lose entirely once ‖r‖ ≳ 10⁸ √ε (and partly long before). With
+    // τ = (−ρ_y, ρ_x): Φ = (ε/φ² I + τ τᵀ)/φ.
+    let tau = Vector2::new(-rho.y, rho.x);
+    let big_phi = (Matrix2::identity() * (eps / (phi * phi)) + tau * tau.transpose()) / phi;
     (r, phi, rho, big_phi)
 }
 
@@ -613,6 +639,218 @@ fn mm_step(act: &[Active], q: &Vector3<f64>, eps: f64, spin_free: bool) -> Optio
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
+/// `U*(q + α d)` and its derivative `d/dα`.
+fn line_eval(act: &[Active], q: &Vector3<f64>, d: &Vector3<f64>, alpha: f64, eps: f64) -> LinePt {
+    let qt = q + d * alpha;
+    let (mut f, mut df) = (0.0, 0.0);
+    for t in act {
+        let r = t.v - Vector2::new(qt.x, qt.y) - t.g * qt.z;
+        let a = Vector2::new(d.x, d.y) + t.g * d.z;
+        let phi = (r.norm_squared() + eps).sqrt();
+        f += t.w * phi;
+        df -= t.w * a.dot(&r) / phi;
+    }
+    LinePt { alpha, f, df }
+}
+
+/// A point of the search line `q + α d`: step, `φ(α) = U*(q + α d)`, `φ'(α)`.
+#[derive(Clone, Copy, Debug)]
+struct LinePt {
+    alpha: f64,
+    f: f64,
+    df: f64,
+}
+
+/// Evaluation budget of one line minimisation (each costs one pass over the active vertices).
+const LINE_MAX_EVALS: usize = 60;
+
+/// Safeguarded minimisation of the convex `φ(α) = U*(q + α d)` over `α > 0`, given
+/// `φ'(0) < 0`; returns the best point found (`α = 0` if none decreased `φ`).
+///
+/// The full step `α = 1` is taken as soon as it satisfies Armijo (Newton's local quadratic
+/// convergence). Otherwise the minimiser is bracketed (`φ'(lo) < 0 ≤ φ'(hi)`, expanding by 4
+/// when the step undershoots) and the bracket is shrunk with two candidates per round: the
+/// secant root of `φ'` (exact for a quadratic) and the intersection of the tangents at `lo`
+/// and `hi` (exact for a V; for a convex `φ` it lies in the bracket and the tangents' value
+/// there is a lower bound on `min φ`). This matters because `√(‖r‖² + ε_v)` is a smoothed
+/// norm: for relative speeds `≫ √ε_v` the inner objective is piecewise almost linear, and
+/// its minimiser sits in a kink of width `√ε_v` (the plane sticking to one hull), which
+/// Newton's quadratic model overshoots by orders of magnitude. It stops when the gap between
+/// the best value and the lower bound is below 1% of the decrease achievable along the line,
+/// or below the rounding of `U*`.
+fn line_minimize(
+    act: &[Active],
+    q: &Vector3<f64>,
+    d: &Vector3<f64>,
+    f0: f64,
+    df0: f64,
+    eps: f64,
+    value_noise: f64,
+) -> LinePt {
+    let start = LinePt {
+        alpha: 0.0,
+        f: f0,
+        df: df0,
+    };
+    let mut best = start;
+    let mut lo = start;
+    let mut evals = 0;
+    let mut alpha = 1.0;
+    let mut hi = loop {
+        let p = line_eval(act, q, d, alpha, eps);
+        evals += 1;
+        if alpha == 1.0 && p.f < f0 && p.f <= f0 + 1e-4 * df0 {
+            return p;
+        }
+        if p.f < best.f {
+            best = p;
+        }
+        if !p.f.is_finite() || !p.df.is_finite() || p.df >= 0.0 {
+            break p;
+        }
+        lo = p;
+        alpha *= 4.0;
+        if evals >= LINE_MAX_EVALS || !alpha.is_finite() {
+            return best;
+        }
+    };
+    while evals < LINE_MAX_EVALS {
+        let tangents = (hi.f - lo.f + lo.df * lo.alpha - hi.df * hi.alpha) / (lo.df - hi.df);
+        let lower = lo.f + lo.df * (tangents - lo.alpha);
+        if best.f - lower <= value_noise.max(0.01 * (f0 - lower)) {
+            break;
+        }
+        if hi.alpha - lo.alpha <= 4.0 * f64::EPSILON * hi.alpha {
+            break;
+        }
+        let secant = lo.alpha - lo.df * (hi.alpha - lo.alpha) / (hi.df - lo.df);
+        for c in [tangents, secant] {
+            // Non-finite or outside the (possibly already shrunk) bracket: bisect.
+            let c = if c > lo.alpha && c < hi.alpha {
+                c
+            } else {
+                0.5 * (lo.alpha + hi.alpha)
+            };
+            if c <= lo.alpha || c >= hi.alpha {
+                break;
+            }
+            let p = line_eval(act, q, d, c, eps);
+            evals += 1;
+            if p.f < best.f {
+                best = p;
+            }
+            if p.df < 0.0 {
+                lo = p;
+            } else {
+                hi = p;
+            }
+        }
+    }
+    best
+}
+
+/// The best point on the "kink" of vertex `mi`: the set where the plane moves exactly with it
+/// (`r_m = 0`, i.e. `u = ẋ_m − ω g_m`, a line in `(u, ω)`; a single point when spin-free),
+/// provided the vertex can stick there.
+///
+/// `U*` restricted to the line is convex; it is minimised from the projection of `q` with
+/// [`line_minimize`], started at the 1-D Newton step. Sticking to `m` is consistent only if
+/// `m` can hold the plane against all the others: their net pull on `u`, `Σ_{k≠m} w_k ρ_k`,
+/// must be weaker than `w_m` (the most `m` can exert, `‖w_m ρ_m‖ < w_m`). Otherwise the
+/// minimiser is off this kink, and a point on it is a poor start for Newton (leaving a kink of
+/// width `√ε_v` takes many steps), so `None` is returned.
+fn kink_point(
+    act: &[Active],
+    mi: usize,
+    q: &Vector3<f64>,
+    eps: f64,
+    spin_free: bool,
+    value_noise: f64,
+) -> Option<(Vector3<f64>, f64)> {
+    let m = &act[mi];
+    let sticks = |qk: &Vector3<f64>| {
+        let pull: Vector2<f64> = act
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != mi)
+            .map(|(_, t)| {
+                let r = t.v - Vector2::new(qk.x, qk.y) - t.g * qk.z;
+                r * (t.w / (r.norm_squared() + eps).sqrt())
+            })
+            .sum();
+        pull.norm() < m.w
+    };
+    let omega = if spin_free { 0.0 } else { q.z };
+    let q0 = Vector3::new(m.v.x - m.g.x * omega, m.v.y - m.g.y * omega, omega);
+    let f0 = line_eval(act, &q0, &Vector3::zeros(), 0.0, eps);
+    if spin_free {
+        return (f0.f.is_finite() && sticks(&q0)).then_some((q0, f0.f));
+    }
+    // Along the kink: d = (−g_m, 1). Curvature φ'' = Σ w (ε‖a‖² + (a × r)²)/φ³.
+    let d = Vector3::new(-m.g.x, -m.g.y, 1.0);
+    let (mut df, mut ddf) = (0.0, 0.0);
+    for t in act {
+        let r = t.v - Vector2::new(q0.x, q0.y) - t.g * q0.z;
+        let a = Vector2::new(d.x, d.y) + t.g * d.z;
+        let phi = (r.norm_squared() + eps).sqrt();
+        df -= t.w * a.dot(&r) / phi;
+        let cross = a.x * r.y - a.y * r.x;
+        ddf += t.w * (eps * a.norm_squared() + cross * cross) / (phi * phi * phi);
+    }
+    let mut best = (q0, f0.f);
+    if df != 0.0 && ddf > 0.0 && df.is_finite() && ddf.is_finite() {
+        let d = d * (-df / ddf);
+        let p = line_minimize(act, &q0, &d, f0.f, -df * df / ddf, eps, value_noise);
+        if p.f < best.1 {
+            best = (q0 + d * p.alpha, p.f);
+        }
+    }
+    (best.1.is_finite() && sticks(&best.0)).then_some(best)
+}
+
+/// Kink candidates of [`kink_point`] for the two vertices most likely to hold the plane: the
+/// one closest to sticking relative to its weight (largest `w_m/φ_m`) and the heaviest one
+/// (under fast sliding the plane ends up sticking to the heavier side). Returns the better.
+///
+/// Under fast sliding the minimiser of `U*` typically sits on such a kink, within `√ε_v`.
+/// Approaching it, Newton's model of the nearly conical `w √(‖r‖² + ε_v)` is poor across the
+/// kink, and the iterate creeps towards it while sliding along it.
+fn kink_candidate(
+    act: &[Active],
+    q: &Vector3<f64>,
+    eps: f64,
+    spin_free: bool,
+    value_noise: f64,
+) -> Option<(Vector3<f64>, f64)> {
+    let argmax = |key: &dyn Fn(&Active) -> f64| {
+        act.iter()
+            .enumerate()
+            .max_by(|x, y| key(x.1).total_cmp(&key(y.1)))
+            .map(|(i, _)| i)
+    };
+    let closest = argmax(&|a: &Active| {
+        let r = a.v - Vector2::new(q.x, q.y) - a.g * q.z;
+        a.w / (r.norm_squared() + eps).sqrt()
+    })?;
+    let heaviest = argmax(&|a: &Active| a.w)?;
+    let first = kink_point(act, closest, q, eps, spin_free, value_noise);
+    if heaviest == closest {
+        return first;
+    }
+    let second = kink_point(act, heaviest, q, eps, spin_free, value_noise);
+    match (first, second) {
+        (Some(a), Some(b)) => Some(if b.1 < a.1 { b } else { a }),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Newton's method on `q = (u, ω)` with a safeguarded line minimisation (see
+/// [`line_minimize`]) and the majorize–minimize step as a second, monotone candidate.
+///
+/// Stops when `‖∇U*‖ ≤ max(noise, min(tol, rtol · Σ w‖ρ‖(1 + ‖g‖)))`, or when no decrease of
+/// `U*` is detectable any more *and* Newton's predicted decrease `½ gᵀH⁻¹g` is below the
+/// rounding of `U*` (the iterate is at the noise floor: no representable step can improve
+/// it). Anything else that stops progress is reported as non-convergence.
 fn solve_inner(
     act: &[Active],
     spin_free: bool,
@@ -634,19 +872,20 @@ fn solve_inner(
     let mut q = Vector3::new(ubar.x, ubar.y, 0.0);
     let mut ev = inner_eval(act, &q, eps, spin_free);
     let mut iterations = 0;
+    let done = |q: Vector3<f64>, ev: &InnerEval, iterations: usize| Core {
+        q,
+        spin_free,
+        value: ev.value,
+        hinv: inner_hessian_inverse(&ev.hess, spin_free),
+        iterations,
+    };
     loop {
         let gnorm = ev.grad.norm();
         let tol = ev
             .noise
             .max(params.inner_tol.min(params.inner_rtol * ev.scale));
         if gnorm <= tol {
-            return Ok(Core {
-                q,
-                spin_free,
-                value: ev.value,
-                hinv: inner_hessian_inverse(&ev.hess, spin_free),
-                iterations,
-            });
+            return Ok(done(q, &ev, iterations));
         }
         if iterations >= params.inner_max_iters {
             return Err(FrictionError::NotConverged {
@@ -658,48 +897,48 @@ fn solve_inner(
         iterations += 1;
         let mut dir = inner_direction(&ev.hess, &ev.grad, spin_free);
         let mut slope = ev.grad.dot(&dir);
-        if slope.is_nan() || slope >= 0.0 {
+        let newton = !(slope.is_nan() || slope >= 0.0);
+        if !newton {
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }
-        // Newton with a short backtracking line search; when it needs a small step (far from
-        // the solution, where the radial curvature ε_v/φ³ of √(‖r‖² + ε_v) makes Newton
-        // overshoot), also try the majorize–minimize step below and keep the better point.
-        let mut alpha = 1.0;
-        let mut next = None;
-        while alpha >= 1.0 / 4096.0 {
-            let trial = q + dir * alpha;
-            let vt = inner_value(act, &trial, eps);
-            if vt <= ev.value + 1e-4 * alpha * slope {
-                next = Some((trial, vt));
-                break;
-            }
-            if (alpha * slope).abs() <= ev.value_noise && vt <= ev.value + ev.value_noise {
-                let et = inner_eval(act, &trial, eps, spin_free);
-                if et.grad.norm() < gnorm {
-                    next = Some((trial, vt));
-                    break;
+        let p = line_minimize(act, &q, &dir, ev.value, slope, eps, ev.value_noise);
+        let mut next = (p.alpha > 0.0 && p.f < ev.value).then(|| (q + dir * p.alpha, p.f));
+        if p.alpha != 1.0 {
+            // The full step failed: also try the majorize–minimize step (never increases U*)
+            // and keep the better point.
+            if let Some(qm) = mm_step(act, &q, eps, spin_free) {
+                let vm = inner_value(act, &qm, eps);
+                if vm < next.map_or(ev.value, |(_, v)| v) {
+                    next = Some((qm, vm));
                 }
             }
-            alpha *= 0.5;
-        }
-        if alpha < 0.125
-            && let Some(qm) = mm_step(act, &q, eps, spin_free)
-        {
-            let vm = inner_value(act, &qm, eps);
-            let better = match next {
-                Some((_, vn)) => vm < vn,
-                None => vm <= ev.value + ev.value_noise,
-            };
-            if better {
-                next = Some((qm, vm));
+            // And the best point on the kink of a vertex that can hold the plane there.
+            if let Some((qk, vk)) = kink_candidate(act, &q, eps, spin_free, ev.value_noise)
+                && vk < next.map_or(ev.value, |(_, v)| v)
+            {
+                next = Some((qk, vk));
             }
         }
-        let next = next.map(|(nq, _)| (nq, inner_eval(act, &nq, eps, spin_free)));
+        if next.is_none() && (slope.abs() <= ev.value_noise) {
+            // Predicted decrease below the rounding of U*: Armijo cannot decide. Accept the
+            // full step if it does not increase U* beyond rounding and reduces the gradient.
+            let trial = q + dir;
+            let et = inner_eval(act, &trial, eps, spin_free);
+            if et.value <= ev.value + ev.value_noise && et.grad.norm() < gnorm - ev.noise {
+                q = trial;
+                ev = et;
+                continue;
+            }
+        }
         match next {
-            Some((nq, nev)) => {
+            Some((nq, _)) => {
                 q = nq;
-                ev = nev;
+                ev = inner_eval(act, &nq, eps, spin_free);
+            }
+            None if newton && -0.5 * slope <= ev.value_noise => {
+                // At the noise floor: Newton predicts a decrease below the rounding of U*.
+                return Ok(done(q, &ev, iterations));
             }
             None => {
                 return Err(FrictionError::NotConverged {

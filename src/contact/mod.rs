@@ -34,7 +34,14 @@
 //! - Inner solves stop on `max(noise, min(tol, rtol · force scale))`: the absolute tolerance
 //!   of the brief where it is attainable, a relative one where the potential is tiny (near
 //!   the support edge), and a rounding-noise floor where the barrier is astronomically stiff
-//!   (near contact, `P_s' ~ y⁻⁶`).
+//!   (near contact, `P_s' ~ y⁻⁶`). When no step can decrease the inner objective any more,
+//!   the solve also ends (successfully) if Newton's predicted decrease is below the rounding
+//!   of the objective; only a stall above that floor, or the iteration cap, is an error.
+//! - The friction inner solve minimises along the Newton direction instead of only
+//!   backtracking: under fast sliding its objective is a nearly flat valley ending in a
+//!   `√ε_v`-wide kink (see [`friction`](mod@friction), "Inner solve").
+//! - Failing pair evaluations can be captured from a simulation and replayed bit for bit
+//!   ([`capture`]); the regression tests of the inner solves are such captures.
 //! - Per-vertex normal forces are not stored in the contact outcome (that would allocate per
 //!   call); [`ContactPair::normal_forces_into`] and [`LaggedContact::from_contact`] compute
 //!   them from `p*` in one pass.
@@ -42,6 +49,7 @@
 pub mod adjoint_contact;
 pub mod adjoint_friction;
 pub mod barrier;
+pub mod capture;
 mod error;
 pub mod friction;
 #[cfg(test)]
@@ -50,6 +58,8 @@ mod plane;
 pub mod potential;
 #[cfg(test)]
 mod potential_tests;
+#[cfg(test)]
+mod regression_tests;
 mod separation;
 #[cfg(test)]
 mod test_util;

@@ -31,10 +31,38 @@
 //!
 //! where `scale = Σ_m |P'(y_m)| ‖x̃_m‖ + |P'(q)|` is the total magnitude of the forces acting on
 //! the massless plane (the gradient is their net sum), and `noise` is a rounding-error bound on
-//! the computed gradient (`64 ε_mach Σ (|P'| + |P''| |y|) ‖x̃‖`, the second term accounting for
-//! the rounding of `y_m` itself). So the absolute tolerance is honoured whenever it is
-//! meaningful, the relative one guarantees accuracy when the potential is tiny, and the noise
-//! floor prevents chasing rounding errors when the potential is huge.
+//! the computed gradient, `64 ε_mach Σ (|P'| + |P''| e_y) ‖x̃‖` with `e_y = Σ_i |n_i x_i| + |o|`:
+//! the second term is the rounding of `y_m` itself, amplified by `P''`. (`e_y` must be the sum
+//! of the magnitudes of the products, not `|n·x| + |o|`: when the optimal plane passes near the
+//! shift origin — two equal hulls in mirror-symmetric contact, as in the chain scenes —
+//! `y ~ 1e-6` arises from products `~ 1e-1` that cancel, and the smaller bound was exceeded by
+//! the actual rounding, leaving the solve stuck above its own floor.) So the absolute tolerance
+//! is honoured whenever it is meaningful, the relative one guarantees accuracy when the
+//! potential is tiny, and the noise floor prevents chasing rounding errors when the potential
+//! is huge.
+//!
+//! Safeguards, for the regime where `U*` spans 30 decades (pairs 1e-9 apart, `P' ~ 1e45`):
+//!
+//! - Armijo requires a *strict* decrease (with `1e-4 α slope` below the last bit of `U*`, an
+//!   unchanged value would pass `≤`) and the backtracking stops once `p + α d == p`; below the
+//!   value's rounding a step is accepted only if it lowers `‖∇U*‖` by more than the gradient's
+//!   rounding bound.
+//! - When the full step is accepted but the slope is still steep there, the step is extended
+//!   by doubling (Newton undershoots the power barrier: for `P ~ y⁻⁵` a step only takes `y` to
+//!   `7y/6`).
+//! - When the full step is cut short or its model is poor, the Newton step on the *resolvable*
+//!   components (eigen-directions of the unit-scaled `U*_pp` whose gradient part exceeds its
+//!   rounding bound; see `resolvable_newton_direction`) is tried as well and the better point
+//!   kept: turning the plane about a contact point is flat to working precision, and the plain
+//!   Newton step turns rounding there into arbitrary rotations.
+//! - When no step is acceptable, the solve has reached the noise floor if Newton's predicted
+//!   decrease `½ gᵀH⁻¹g` (on the resolvable components) is below the rounding of `U*`: no
+//!   representable step can be told apart from `p`, and this test does not rely on the
+//!   worst-case `noise` bound. Otherwise the diagonally scaled gradient, a descent direction
+//!   regardless of rounding in `U*_pp`, is tried before reporting a stall.
+//!
+//! The caller shifts the vertices to the starting plane's centre of stiffness (`potential`),
+//! which removes the `P'' ℓ` coupling of `n` and `o` through a lever `ℓ` to the contact.
 
 use nalgebra::{Matrix4, Vector3, Vector4};
 
@@ -52,8 +80,10 @@ pub struct PlaneEval {
     pub hess: Matrix4<f64>,
     /// `Σ |P'| ‖x̃‖ + |P'(q)|`: total force magnitude on the plane.
     pub scale: f64,
-    /// Rounding-error bound on `grad`.
+    /// Rounding-error bound on `grad` (on its Euclidean norm).
     pub noise: f64,
+    /// Per-component rounding-error bounds on `grad` (`‖noise_vec‖ ≤ noise`).
+    pub noise_vec: Vector4<f64>,
     /// Rounding-error bound on `value` (dominated by the rounding of the barrier arguments
     /// amplified by `P'`: near contact `P ~ y⁻⁵`, so a relative error `δy/y` in an argument
     /// becomes `5 δy/y` in the value).
@@ -92,7 +122,9 @@ pub fn value(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64)
     if norm >= 1.0 {
         return f64::INFINITY;
     }
-    let mut v = barrier(1.0 - norm, s);
+    // Same summation order as `eval` (vertices, then the norm term), so that both return the
+    // same bits at the same plane.
+    let mut v = 0.0;
     for x in xa {
         let y = -(n.dot(x) + o);
         if y <= 0.0 {
@@ -111,19 +143,18 @@ pub fn value(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64)
             v += barrier(y, s);
         }
     }
-    v
+    v + barrier(1.0 - norm, s)
 }
 
 /// Accumulator layout: 0 value, 1..5 gradient, 5..15 upper Hessian
 /// (00 01 02 03 11 12 13 22 23 33), 15 force scale, 16 gradient rounding bound, 17 value
-/// rounding bound.
-type Acc = [f64; 18];
+/// rounding bound, 18..22 per-component gradient rounding bounds.
+type Acc = [f64; 22];
 
 /// Accumulates one vertex term `P(y)` with `y = σ (n·x + o)` into value, gradient, Hessian.
 #[inline(always)]
 fn accumulate(x: &Vector3<f64>, sigma: f64, n: &Vector3<f64>, o: f64, s: f64, acc: &mut Acc) {
-    let nx = n.dot(x);
-    let y = sigma * (nx + o);
+    let y = sigma * (n.dot(x) + o);
     if y >= s {
         return;
     }
@@ -148,17 +179,25 @@ fn accumulate(x: &Vector3<f64>, sigma: f64, n: &Vector3<f64>, o: f64, s: f64, ac
     acc[14] += d2;
     let xn = (px * px + py * py + pz * pz + 1.0).sqrt();
     acc[15] += d1.abs() * xn;
-    // Rounding of P' itself plus the rounding of y (≲ ε(|n·x| + |o|)) amplified by P''.
-    let yerr = nx.abs() + o.abs();
-    acc[16] += (d1.abs() + d2 * yerr) * xn;
+    // Rounding of P' itself plus the rounding of y amplified by P''. The dot product n·x is
+    // computed from its three products, so its rounding is ≲ ε Σ|n_i x_i| — not ε |n·x|, which
+    // is far smaller when the products cancel (a contact point near the shift origin with a
+    // tilted normal: y ~ 1e-6 from products ~ 1e-1).
+    let yerr = (n.x * px).abs() + (n.y * py).abs() + (n.z * pz).abs() + o.abs();
+    let gerr = d1.abs() + d2 * yerr;
+    acc[16] += gerr * xn;
     acc[17] += v - d1 * yerr;
+    acc[18] += gerr * px.abs();
+    acc[19] += gerr * py.abs();
+    acc[20] += gerr * pz.abs();
+    acc[21] += gerr;
 }
 
 /// Full evaluation at a feasible plane.
 pub fn eval(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64) -> PlaneEval {
     let n = Vector3::new(p.x, p.y, p.z);
     let o = p.w;
-    let mut acc: Acc = [0.0; 18];
+    let mut acc: Acc = [0.0; 22];
     for x in xa {
         accumulate(x, -1.0, &n, o, s, &mut acc);
     }
@@ -167,6 +206,7 @@ pub fn eval(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64) 
     }
     let mut noise = acc[16];
     let mut value_noise = acc[17];
+    let mut noise_vec = Vector4::new(acc[18], acc[19], acc[20], acc[21]);
     let norm = n.norm();
     let q = 1.0 - norm;
     let (vq, d1q, d2q) = barrier_d2(q, s);
@@ -188,7 +228,11 @@ pub fn eval(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64) 
             }
         }
         scale += d1q.abs();
-        noise += d1q.abs() + d2q * (norm + q);
+        let gerr = d1q.abs() + d2q * (norm + q);
+        noise += gerr;
+        for i in 0..3 {
+            noise_vec[i] += gerr * nh[i].abs();
+        }
         value_noise += vq + d1q.abs() * (norm + q);
     }
     PlaneEval {
@@ -197,6 +241,7 @@ pub fn eval(xa: &[Vector3<f64>], xb: &[Vector3<f64>], p: &Vector4<f64>, s: f64) 
         hess,
         scale,
         noise: 64.0 * f64::EPSILON * noise,
+        noise_vec: noise_vec * (64.0 * f64::EPSILON),
         value_noise: 64.0 * f64::EPSILON * value_noise,
     }
 }
@@ -264,11 +309,98 @@ pub fn newton_direction(h: &Matrix4<f64>, g: &Vector4<f64>) -> Vector4<f64> {
     -g
 }
 
+/// `−D⁻¹ g` with `D` the positive part of the Hessian's diagonal (the gradient where a
+/// diagonal entry is not positive): a descent direction for any `g ≠ 0`.
+fn diagonal_scaled_descent(h: &Matrix4<f64>, g: &Vector4<f64>) -> Vector4<f64> {
+    Vector4::from_fn(|i, _| {
+        let d = h[(i, i)];
+        if d > 0.0 && d.is_finite() {
+            -g[i] / d
+        } else {
+            -g[i]
+        }
+    })
+}
+
+/// Outcome of [`resolvable_newton_direction`].
+enum Resolvable {
+    /// No usable direction (non-finite or not a descent direction).
+    Unchanged,
+    /// Every eigen-component of the gradient is within its rounding bound.
+    Nothing,
+    /// The Newton step on the resolvable components.
+    Truncated(Vector4<f64>),
+}
+
+/// Newton step restricted to what the computed gradient and Hessian can resolve.
+///
+/// `U*_pp` is strongly graded near contact: `∂²/∂o² = Σ P''` while the `n` block carries
+/// `Σ P'' x xᵀ` with the levers `x` of the stiff vertices (1e-9 after re-centring), so its
+/// entries span ~30 decades and an eigen-decomposition or a shifted solve of the raw matrix
+/// loses the `n` block entirely. The scaling `S = diag(s_n, s_n, s_n, s_o)` with
+/// `s_n = (tr H_nn / 3)^(-1/2)`, `s_o = H_oo^(-1/2)` fixes the units (`n` is dimensionless, `o`
+/// a length; in effect the length unit becomes the stiffness-weighted lever) while keeping the
+/// `n` block isotropic, so that among the steps in a numerically flat subspace the smallest
+/// one is chosen in the natural metric of `n` (a per-entry Jacobi scaling would favour the
+/// axes along which the lever happens to be short). The step is `S Σₖ −(vₖ·Sg/λ̂ₖ) vₖ` over
+/// the eigenpairs of `Ĥ = S H S` whose gradient part exceeds its rounding bound
+/// (`|δgᵢ| ≤ noiseᵢ`, so `|vₖ·S δg| ≤ Σᵢ |vₖᵢ| sᵢ noiseᵢ`), with eigenvalues floored at the
+/// rounding of `Ĥ`. Directions in which `U*` is flat to working precision — turning the plane
+/// about a single contact point, whose curvature comes only from the norm barrier and distant
+/// vertices, 20 decades below the stiff entries — carry only rounding in the gradient; the
+/// plain Newton step turns that noise into arbitrary rotations, which either only the
+/// feasibility limit stops or which swamp the useful part of the step.
+fn resolvable_newton_direction(
+    h: &Matrix4<f64>,
+    g: &Vector4<f64>,
+    noise: &Vector4<f64>,
+) -> Resolvable {
+    let inv_sqrt = |d: f64| {
+        if d > 0.0 && d.is_finite() {
+            1.0 / d.sqrt()
+        } else {
+            1.0
+        }
+    };
+    let sn = inv_sqrt((h[(0, 0)] + h[(1, 1)] + h[(2, 2)]) / 3.0);
+    let sc = Vector4::new(sn, sn, sn, inv_sqrt(h[(3, 3)]));
+    let hs = Matrix4::from_fn(|i, j| h[(i, j)] * sc[i] * sc[j]);
+    let gs = g.component_mul(&sc);
+    if !hs.iter().all(|v| v.is_finite()) || !gs.iter().all(|v| v.is_finite()) {
+        return Resolvable::Unchanged;
+    }
+    let eig = hs.symmetric_eigen();
+    let lmax = eig.eigenvalues.iter().fold(0.0f64, |m, v| m.max(*v));
+    let lfloor = 64.0 * f64::EPSILON * lmax;
+    let mut ds = Vector4::zeros();
+    let (mut kept, mut unresolved) = (0, 0);
+    for k in 0..4 {
+        let v = eig.eigenvectors.column(k);
+        let gk = v.dot(&gs);
+        let bound = (0..4).map(|i| v[i].abs() * sc[i] * noise[i]).sum::<f64>();
+        if gk.abs() <= bound {
+            unresolved += 1;
+            continue;
+        }
+        // Resolvable gradient: Newton on this component, with the curvature floored at the
+        // rounding of Ĥ (a flat direction with a real slope gets a long step that the
+        // feasibility limit and the line search then bound).
+        ds -= v * (gk / eig.eigenvalues[k].max(lfloor));
+        kept += 1;
+    }
+    let d = ds.component_mul(&sc);
+    match (kept, unresolved) {
+        (0, _) => Resolvable::Nothing,
+        _ if d.iter().all(|v| v.is_finite()) && g.dot(&d) < 0.0 => Resolvable::Truncated(d),
+        _ => Resolvable::Unchanged,
+    }
+}
+
 /// Result of one line search.
 #[allow(clippy::large_enum_variant)] // short-lived stack value
 enum LineSearch {
-    /// New iterate and its full evaluation.
-    Accepted(Vector4<f64>, PlaneEval),
+    /// New iterate, its full evaluation and the step fraction `α` taken.
+    Accepted(Vector4<f64>, PlaneEval, f64),
     /// No acceptable step size.
     Stalled,
 }
@@ -288,23 +420,74 @@ fn line_search(
     let mut alpha = if amax > 1.0 { 1.0 } else { 0.99 * amax };
     while alpha > 1e-18 {
         let trial = p + dir * alpha;
+        if trial == *p {
+            // The step is below the resolution of p: nothing left to try.
+            break;
+        }
         let vt = value(xa, xb, &trial, s);
         if vt.is_finite() {
-            if vt <= ev.value + 1e-4 * alpha * slope {
-                return LineSearch::Accepted(trial, eval(xa, xb, &trial, s));
+            // Armijo with a strict decrease: when `1e-4 α slope` is below the last bit of U*,
+            // an unchanged value would pass `≤`, and the iterate could stand still (trial == p
+            // to the last bit) until the iteration cap.
+            if vt < ev.value && vt <= ev.value + 1e-4 * alpha * slope {
+                let et = eval(xa, xb, &trial, s);
+                if alpha == 1.0 && et.grad.dot(dir) < 0.25 * slope {
+                    return extrapolate(xa, xb, p, dir, amax, (trial, et), s);
+                }
+                return LineSearch::Accepted(trial, et, alpha);
             }
             // Predicted decrease below the rounding of U* itself: Armijo cannot decide. Accept a
-            // step that does not increase U* beyond rounding if it reduces the gradient.
+            // step that does not increase U* beyond rounding if it reduces the gradient by more
+            // than the gradient's own rounding (a smaller change is not progress, and accepting
+            // it would let the iterate wander at the noise floor until the iteration cap).
             if (alpha * slope).abs() <= ev.value_noise && vt <= ev.value + ev.value_noise {
                 let et = eval(xa, xb, &trial, s);
-                if et.grad.norm() < gnorm {
-                    return LineSearch::Accepted(trial, et);
+                if et.grad.norm() < gnorm - ev.noise {
+                    return LineSearch::Accepted(trial, et, alpha);
                 }
             }
         }
         alpha *= 0.5;
     }
     LineSearch::Stalled
+}
+
+/// The full step was accepted but `U*` still falls steeply beyond it (the slope at `α = 1` is
+/// more than a quarter of the slope at `α = 0`; it vanishes for a quadratic). This is how
+/// Newton behaves on the power barrier when the solution is far on the scale of the smallest
+/// barrier argument: for `P ~ y⁻⁵` its step only moves `y` to `7y/6`, so a start plane 20×
+/// too close to a vertex (GJK's direction is only accurate to ~5e-8 of the hull size, so the
+/// certified slab of a pair 1e-9 apart can be much thinner than the gap) takes ~20 iterations.
+/// Doubles `α` (staying strictly feasible) while `U*` keeps decreasing; returns the best point.
+fn extrapolate(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    p: &Vector4<f64>,
+    dir: &Vector4<f64>,
+    amax: f64,
+    full: (Vector4<f64>, PlaneEval),
+    s: f64,
+) -> LineSearch {
+    let (mut best_alpha, mut best_value) = (1.0, full.1.value);
+    let mut alpha: f64 = 2.0;
+    for _ in 0..60 {
+        let a = alpha.min(0.99 * amax);
+        if a <= best_alpha {
+            break;
+        }
+        let v = value(xa, xb, &(p + dir * a), s);
+        // Stop at the first value that is not lower (or not a number).
+        if v.is_nan() || v >= best_value {
+            break;
+        }
+        (best_alpha, best_value) = (a, v);
+        alpha *= 2.0;
+    }
+    if best_alpha == 1.0 {
+        return LineSearch::Accepted(full.0, full.1, 1.0);
+    }
+    let trial = p + dir * best_alpha;
+    LineSearch::Accepted(trial, eval(xa, xb, &trial, s), best_alpha)
 }
 
 /// Newton's method with a feasibility-preserving Armijo backtracking line search from a
@@ -339,12 +522,65 @@ pub fn solve(
         iterations += 1;
         let mut dir = newton_direction(&ev.hess, &ev.grad);
         let mut slope = ev.grad.dot(&dir);
-        if slope.is_nan() || slope >= 0.0 {
+        let newton = !(slope.is_nan() || slope >= 0.0);
+        if !newton {
             dir = -ev.grad;
             slope = -gnorm * gnorm;
         }
-        match line_search(xa, xb, &p, &ev, &dir, slope, s) {
-            LineSearch::Accepted(np, nev) => {
+        let mut step = line_search(xa, xb, &p, &ev, &dir, slope, s);
+        // The quadratic model was adequate if the full step was taken and the slope along the
+        // direction has dropped to less than a quarter there (it vanishes for a quadratic).
+        let model_ok = matches!(&step, LineSearch::Accepted(_, e, a)
+            if *a >= 1.0 && e.grad.dot(&dir) >= 0.25 * slope);
+        // Newton decrement of the step that ends the solve at the noise floor if nothing is
+        // accepted (the smallest one of the directions tried).
+        let mut decrement = if newton { -0.5 * slope } else { f64::INFINITY };
+        if newton && !model_ok {
+            // The Newton step was cut short (feasibility or Armijo) or its model was poor.
+            // When U*_pp is numerically flat in some direction (turning the plane about a
+            // contact point: the curvature there is below the rounding of the stiff entries),
+            // rounding in the gradient becomes an arbitrary step there, which either only the
+            // feasibility limit stops or which swamps the useful part of the step. Also try
+            // the Newton step on the resolvable components, and keep the better point.
+            match resolvable_newton_direction(&ev.hess, &ev.grad, &ev.noise_vec) {
+                Resolvable::Unchanged => {}
+                Resolvable::Nothing => decrement = 0.0,
+                Resolvable::Truncated(dt) => {
+                    let slope_t = ev.grad.dot(&dt);
+                    decrement = decrement.min(-0.5 * slope_t);
+                    let st = line_search(xa, xb, &p, &ev, &dt, slope_t, s);
+                    step = match (step, st) {
+                        (LineSearch::Accepted(p1, e1, a1), LineSearch::Accepted(p2, e2, a2)) => {
+                            if e2.value < e1.value {
+                                LineSearch::Accepted(p2, e2, a2)
+                            } else {
+                                LineSearch::Accepted(p1, e1, a1)
+                            }
+                        }
+                        (LineSearch::Stalled, st) => st,
+                        (step, LineSearch::Stalled) => step,
+                    };
+                }
+            }
+        }
+        if matches!(step, LineSearch::Stalled) && newton {
+            if decrement <= ev.value_noise {
+                // Noise floor: Newton's predicted decrease ½ gᵀH⁻¹g (on the resolvable
+                // components) is below the rounding of U*, so no representable step can be told
+                // apart from p (this test does not rely on the worst-case gradient bound).
+                return Ok(PlaneSolution {
+                    p,
+                    eval: ev,
+                    iterations,
+                });
+            }
+            // Newton's direction can be spoiled by rounding when U*_pp spans many decades;
+            // the diagonally scaled gradient is a descent direction regardless.
+            let dg = diagonal_scaled_descent(&ev.hess, &ev.grad);
+            step = line_search(xa, xb, &p, &ev, &dg, ev.grad.dot(&dg), s);
+        }
+        match step {
+            LineSearch::Accepted(np, nev, _) => {
                 p = np;
                 ev = nev;
             }

@@ -65,7 +65,7 @@ use super::plane::{self, PlaneSolution, PlaneSolveSettings};
 use super::separation::{Separation, separate, supports_along};
 
 /// Parameters of the contact potential.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactParams {
     /// Barrier width `s ∈ (0, 1)`, a length in scene units. It is also the bound on
     /// `1 − ‖n‖`, so scenes must be scaled such that `s < 1` is meaningful (e.g. metres with
@@ -258,15 +258,22 @@ enum Core {
     Separated { sol: PlaneSolution, distance: f64 },
 }
 
-/// Separation test, initial plane choice and inner Newton on shifted vertex buffers.
-fn solve_core(
+/// Outcome of the separation test: the starting plane of the inner solve, in the shifted frame.
+enum Start {
+    Intersecting,
+    OutOfRange { distance: f64 },
+    Plane { p: Vector4<f64>, distance: f64 },
+}
+
+/// Separation test and initial plane choice on shifted vertex buffers.
+fn start_plane(
     xa: &[Vector3<f64>],
     xb: &[Vector3<f64>],
     c0: &Vector3<f64>,
     params: &ContactParams,
     warm_plane: Option<Vector4<f64>>,
     simplex: &mut VoronoiSimplex,
-) -> Result<Core, ContactError> {
+) -> Result<Start, ContactError> {
     let s = params.s;
     let hint = warm_plane.map(|p| Vector3::new(p.x, p.y, p.z));
     // A strictly feasible warm plane (shifted into the local frame:
@@ -284,7 +291,7 @@ fn solve_core(
             distance,
         } => {
             if min_b - max_a >= params.support_distance() {
-                return Ok(Core::OutOfRange { distance });
+                return Ok(Start::OutOfRange { distance });
             }
             // Cold start: the mid-plane of the certified slab with ‖n‖ = 1 − s (strictly
             // feasible: every barrier argument is ≥ (1 − s)(min_b − max_a)/2 > 0).
@@ -300,7 +307,7 @@ fn solve_core(
                 let (max_a, min_b) = supports_along(xa, xb, &d);
                 (None, min_b - max_a)
             }
-            None => return Ok(Core::Intersecting),
+            None => return Ok(Start::Intersecting),
         },
     };
     // Start from the better of the cold plane and the (strictly feasible) warm plane.
@@ -316,10 +323,93 @@ fn solve_core(
         (None, Some((w, _))) => w,
         // Not reachable (an intersecting pair without a feasible warm plane returned above);
         // kept total so that this function cannot panic.
-        (None, None) => return Ok(Core::Intersecting),
+        (None, None) => return Ok(Start::Intersecting),
     };
-    let sol = plane::solve(xa, xb, start, &params.settings())?;
-    Ok(Core::Separated { sol, distance })
+    Ok(Start::Plane { p: start, distance })
+}
+
+/// `P''`-weighted centroid of the vertices at plane `p` (shifted frame): the "centre of
+/// stiffness" of the barrier terms. `None` if no vertex is within the support or the weights
+/// overflow.
+fn stiffness_centre(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    p: &Vector4<f64>,
+    s: f64,
+) -> Option<Vector3<f64>> {
+    let n = Vector3::new(p.x, p.y, p.z);
+    let (mut w, mut c) = (0.0, Vector3::zeros());
+    for (xs, sigma) in [(xa, -1.0), (xb, 1.0)] {
+        for x in xs {
+            let y = sigma * (n.dot(x) + p.w);
+            if y < s {
+                let (_, _, d2) = barrier_d2(y, s);
+                w += d2;
+                c += x * d2;
+            }
+        }
+    }
+    let c = c / w;
+    (w > 0.0 && c.iter().all(|v| v.is_finite())).then_some(c)
+}
+
+/// Separation test, initial plane, re-centring and inner Newton. Fills `scratch` with the
+/// world vertices shifted by the returned origin `c0`, the frame of the returned plane.
+///
+/// Re-centring: the vertices are first shifted by the midpoint of the two vertex centroids
+/// (for GJK), then — once the starting plane is known — by its centre of stiffness
+/// (`stiffness_centre`). Near contact the barrier curvature `P''(y) x̃ x̃ᵀ` of the few closest
+/// vertices exceeds everything else by many decades; with an origin a lever `ℓ` away from
+/// them it couples `n` and `o` by `P'' ℓ`, and a plane that must turn about the contact point
+/// asks Newton to resolve that coupling to the last bits (it crawled, hitting the feasibility
+/// boundary, on mirror-symmetric vertex–vertex contacts 0.1 m from the centroids). About the
+/// centre of stiffness the coupling vanishes to first order. `U_c` and its derivatives do not
+/// depend on the origin; it only changes rounding.
+fn solve_core<IA, IB>(
+    scratch: &mut ContactScratch,
+    world_a: impl Fn() -> IA,
+    world_b: impl Fn() -> IB,
+    params: &ContactParams,
+    warm_plane: Option<Vector4<f64>>,
+) -> Result<(Core, Vector3<f64>), ContactError>
+where
+    IA: Iterator<Item = Vector3<f64>>,
+    IB: Iterator<Item = Vector3<f64>>,
+{
+    let c0 = fill_shifted(scratch, world_a(), world_b())?;
+    let mut simplex = scratch.simplex.take().unwrap_or_default();
+    let start = start_plane(
+        &scratch.xa,
+        &scratch.xb,
+        &c0,
+        params,
+        warm_plane,
+        &mut simplex,
+    );
+    scratch.simplex = Some(simplex);
+    let (mut p, distance) = match start? {
+        Start::Intersecting => return Ok((Core::Intersecting, c0)),
+        Start::OutOfRange { distance } => return Ok((Core::OutOfRange { distance }, c0)),
+        Start::Plane { p, distance } => (p, distance),
+    };
+    let s = params.s;
+    let mut c0 = c0;
+    if let Some(c) = stiffness_centre(&scratch.xa, &scratch.xb, &p, s) {
+        let c1 = c0 + c;
+        shift(scratch, world_a(), world_b(), &c1);
+        // n·(X − c0) + o = n·(X − c1) + (o + n·(c1 − c0)).
+        let n = Vector3::new(p.x, p.y, p.z);
+        let p1 = Vector4::new(p.x, p.y, p.z, p.w + n.dot(&(c1 - c0)));
+        if plane::value(&scratch.xa, &scratch.xb, &p1, s).is_finite() {
+            (p, c0) = (p1, c1);
+        } else {
+            // Rounding of the new shift made a barely feasible start infeasible: keep the
+            // original frame (same arithmetic, same bits).
+            shift(scratch, world_a(), world_b(), &c0);
+        }
+    }
+    let sol = plane::solve(&scratch.xa, &scratch.xb, p, &params.settings())?;
+    Ok((Core::Separated { sol, distance }, c0))
 }
 
 /// Inverse of the (symmetric positive semi-definite) plane Hessian `U*_pp`: Cholesky when it
@@ -387,6 +477,19 @@ fn fill_shifted(
     Ok(c0)
 }
 
+/// Refills the scratch with the (already checked) world vertices shifted by `c0`.
+fn shift(
+    scratch: &mut ContactScratch,
+    a: impl Iterator<Item = Vector3<f64>>,
+    b: impl Iterator<Item = Vector3<f64>>,
+    c0: &Vector3<f64>,
+) {
+    scratch.xa.clear();
+    scratch.xa.extend(a.map(|x| x - c0));
+    scratch.xb.clear();
+    scratch.xb.extend(b.map(|x| x - c0));
+}
+
 /// World positions `R x + t` of a posed hull.
 fn world_iter<'a>(h: HullPose<'a>) -> impl Iterator<Item = Vector3<f64>> + 'a {
     let r = h.pose.fixed_columns::<3>(0).into_owned();
@@ -428,9 +531,13 @@ pub fn contact_pair(
     scratch: &mut ContactScratch,
 ) -> Result<PairOutcome, ContactError> {
     params.validate()?;
-    let c0 = fill_shifted(scratch, world_iter(a), world_iter(b))?;
-    let simplex = scratch.simplex.get_or_insert_with(VoronoiSimplex::new);
-    let core = solve_core(&scratch.xa, &scratch.xb, &c0, params, warm_plane, simplex)?;
+    let (core, c0) = solve_core(
+        scratch,
+        || world_iter(a),
+        || world_iter(b),
+        params,
+        warm_plane,
+    )?;
     let (sol, distance) = match core {
         Core::Intersecting => return Ok(PairOutcome::Intersecting),
         Core::OutOfRange { distance } => return Ok(PairOutcome::OutOfRange { distance }),
@@ -590,9 +697,13 @@ pub fn contact_vertices(
     scratch: &mut ContactScratch,
 ) -> Result<VertexOutcome, ContactError> {
     params.validate()?;
-    let c0 = fill_shifted(scratch, xa_world.iter().copied(), xb_world.iter().copied())?;
-    let simplex = scratch.simplex.get_or_insert_with(VoronoiSimplex::new);
-    let core = solve_core(&scratch.xa, &scratch.xb, &c0, params, warm_plane, simplex)?;
+    let (core, c0) = solve_core(
+        scratch,
+        || xa_world.iter().copied(),
+        || xb_world.iter().copied(),
+        params,
+        warm_plane,
+    )?;
     let (sol, distance) = match core {
         Core::Intersecting => return Ok(VertexOutcome::Intersecting),
         Core::OutOfRange { distance } => return Ok(VertexOutcome::OutOfRange { distance }),

@@ -108,14 +108,14 @@ impl Energy for ContactEnergy {
         self.pairs
             .par_iter()
             .map_init(ContactScratch::new, |scratch, &(a, b)| {
-                contact::contact_pair(
-                    pose(a),
-                    pose(b),
-                    params,
-                    warm.get(&(a, b)).copied(),
-                    cneed,
-                    scratch,
-                )
+                let w = warm.get(&(a, b)).copied();
+                let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
+                if let Err(e) = &res {
+                    let case =
+                        contact::capture::ContactCase::new(pose(a), pose(b), params, w, cneed, e);
+                    contact::capture::dump("contact", &case);
+                }
+                res
             })
             .collect_into_vec(&mut self.results);
 

@@ -32,8 +32,8 @@ use nalgebra::{DVector, Vector4};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 
-/// A hull pair (indices into the world hulls) with its lagged data and the
-/// step-`t` plane `p*` it came from.
+/// A hull pair (indices into the world hulls) in contact at step `t`, its
+/// lagged data and the step-`t` plane `p*` it came from (for the adjoint).
 type LaggedPair = ((usize, usize), LaggedContact, Vector4<f64>);
 
 /// The friction term.
@@ -125,10 +125,21 @@ impl Energy for FrictionEnergy {
                         c.plane,
                     ))),
                     Ok(_) => Ok(None),
-                    Err(e) => Err(EnergyError::Failed {
-                        term: "friction",
-                        msg: format!("lagged contact: {e}"),
-                    }),
+                    Err(e) => {
+                        let case = contact::capture::ContactCase::new(
+                            pa,
+                            pb,
+                            &this.contact,
+                            warm,
+                            contact::Need::Value,
+                            &e,
+                        );
+                        contact::capture::dump("contact", &case);
+                        Err(EnergyError::Failed {
+                            term: "friction",
+                            msg: format!("lagged contact: {e}"),
+                        })
+                    }
                 }
             })
             .collect();
@@ -167,7 +178,21 @@ impl Energy for FrictionEnergy {
         self.lagged
             .par_iter()
             .map_init(FrictionScratch::new, |scratch, ((a, b), lag, _)| {
-                contact::friction_pair(&lag.frame(), pose(*a), pose(*b), friction, fneed, scratch)
+                let frame = lag.frame();
+                let res =
+                    contact::friction_pair(&frame, pose(*a), pose(*b), friction, fneed, scratch);
+                if let Err(e) = &res {
+                    let case = contact::capture::FrictionCase::new(
+                        &frame,
+                        pose(*a),
+                        pose(*b),
+                        friction,
+                        fneed,
+                        e,
+                    );
+                    contact::capture::dump("friction", &case);
+                }
+                res
             })
             .collect_into_vec(&mut self.results);
         self.pair_slots.clear();
