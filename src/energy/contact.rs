@@ -228,6 +228,10 @@ impl Energy for ContactEnergy {
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
         d.contact_pairs = self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
-        timers.add("broad_phase", std::mem::take(&mut self.broad_time));
+        timers.transfer(
+            "contact",
+            "broad_phase",
+            std::mem::take(&mut self.broad_time),
+        );
     }
 }

@@ -1,4 +1,7 @@
 //! Stage timers of the time step (fed into the summary JSON and reports).
+//! Stages partition the step's wall time: no stage's time is counted in
+//! another (enclosing spans hand nested time over with [`StageTimers::transfer`]
+//! or exclude it).
 
 use serde::Serialize;
 use std::time::{Duration, Instant};
@@ -34,6 +37,15 @@ impl StageTimers {
         let out = f();
         self.add(name, t0.elapsed());
         out
+    }
+
+    /// Moves `d` from stage `from` (which timed an enclosing span) to stage
+    /// `to`, so stages stay a partition of the step's time.
+    pub fn transfer(&mut self, from: &'static str, to: &'static str, d: Duration) {
+        if let Some(s) = self.stages.iter_mut().find(|s| s.0 == from) {
+            s.1 = s.1.saturating_sub(d);
+        }
+        self.add(to, d);
     }
 
     /// The breakdown, in first-run order.
