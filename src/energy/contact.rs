@@ -121,6 +121,14 @@ impl Energy for ContactEnergy {
 
         self.pair_slots.clear();
         let (mut active, mut min_d) = (0, f64::INFINITY);
+        // A value-only evaluation is a line-search trial point: if a pair's
+        // inner solve fails there, the point is rejected like an infeasible
+        // one (+∞) and the search backtracks. Where derivatives are needed
+        // (accepted iterates) a failure is an error.
+        if need == Need::Value && self.results.iter().any(|r| r.is_err()) {
+            acc.value = f64::INFINITY;
+            return Ok(());
+        }
         for (k, res) in self.results.iter().enumerate() {
             let (a, b) = self.pairs[k];
             let outcome = res.as_ref().map_err(|e| EnergyError::Failed {

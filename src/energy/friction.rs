@@ -196,6 +196,12 @@ impl Energy for FrictionEnergy {
             })
             .collect_into_vec(&mut self.results);
         self.pair_slots.clear();
+        // As in the contact term: an unsolvable inner problem at a
+        // line-search trial point rejects the point.
+        if need == Need::Value && self.results.iter().any(|r| r.is_err()) {
+            acc.value = f64::INFINITY;
+            return Ok(());
+        }
         for (k, res) in self.results.iter().enumerate() {
             let f = res.as_ref().map_err(|e| EnergyError::Failed {
                 term: "friction",
