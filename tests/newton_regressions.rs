@@ -36,25 +36,8 @@ fn newton_converges_when_value_roundoff_hides_the_remaining_decrease() {
 /// trial point now rejects the point; accepted iterates still solve exactly.
 #[test]
 fn unsolvable_inner_problem_at_a_trial_point_is_rejected_not_fatal() {
-    let text = r#"
-dt: 0.01
-ground: {height: 0}
-contact: {s: 0.01, kappa: 1.0, mu: 0.4}
-objects:
-  - name: box
-    mass: 1.0
-    hulls: [{box: {size: [0.5, 0.5, 0.5]}}]
-    initial: {q: [0, 0, 0.2695, 0, 0, 0], qdot: [0.05, 0.02, 0, 0, 0, 0.1]}
-robots:
-  - name: arm
-    base: {xyz: [-0.5, 0.05, 0.61]}
-    links:
-      - name: arm
-        joint: {name: hinge, type: revolute, axis: [0, 1, 0]}
-        mass: 0.5
-        hulls: [{box: {size: [0.5, 0.06, 0.06], center: [0.25, 0, 0]}}, {vertices: [[0.45,-0.03,-0.03],[0.55,-0.03,-0.03],[0.5,0.03,-0.03],[0.5,0,-0.0805]]}]
-"#;
-    let scene = Scene::from_str(text, Path::new("trial.yaml")).unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/stress/arm_on_spinning_box.yaml");
+    let scene = Scene::load(path).unwrap();
     let mut sim = scene.simulator();
     for _ in 0..30 {
         let d = sim.step().expect("the step must complete");

@@ -160,31 +160,12 @@ fn attachment_point_derivative_matches_finite_differences() {
     }
 }
 
-/// A box resting on the ground (inside the barrier's range) and an arm whose
-/// tip hovers inside the range above the box: contact (box–ground,
-/// arm–box) and friction are active.
-const CONTACT_SCENE: &str = r#"
-dt: 0.01
-ground: {height: 0}
-contact: {s: 0.01, kappa: 1.0, mu: 0.4}
-objects:
-  - name: box
-    mass: 1.0
-    hulls: [{box: {size: [0.5, 0.5, 0.5]}}]
-    initial: {q: [0, 0, 0.2695, 0, 0, 0], qdot: [0.05, 0.02, 0, 0, 0, 0.1]}
-robots:
-  - name: arm
-    base: {xyz: [-0.5, 0.05, 0.61]}
-    links:
-      - name: arm
-        joint: {name: hinge, type: revolute, axis: [0, 1, 0]}
-        mass: 0.5
-        hulls: [{box: {size: [0.5, 0.06, 0.06], center: [0.25, 0, 0]}}, {vertices: [[0.45,-0.03,-0.03],[0.55,-0.03,-0.03],[0.5,0.03,-0.03],[0.5,0,-0.0805]]}]
-"#;
-
 #[test]
 fn step_objective_derivatives_with_active_contact_and_friction_match_finite_differences() {
-    let scene = Scene::from_str(CONTACT_SCENE, Path::new("contact.yaml")).unwrap();
+    // A box resting on the ground (inside the barrier's range) and an arm
+    // whose tip lands on it: contact (box–ground, arm–box) and friction.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/stress/arm_on_spinning_box.yaml");
+    let scene = Scene::load(path).unwrap();
     let mut sim = scene.simulator();
     // One step (the arm's tip lands on the box): the next step's lagged
     // friction frames come from a moving state with both pairs in range.

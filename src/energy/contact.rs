@@ -16,7 +16,7 @@
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
-use crate::contact::{self, ContactParams, ContactScratch, HullPose, PairOutcome};
+use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::geometry::{BroadPhase, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
@@ -98,13 +98,7 @@ impl Energy for ContactEnergy {
             Need::Hessian => contact::Need::Hessian,
         };
         let (hulls, params, warm) = (&self.hulls, &self.params, &self.warm);
-        let pose = |h: usize| {
-            let id = hulls.ids[h];
-            HullPose {
-                pose: &kin.pose[id.link],
-                x_local: &model.links[id.link].hulls[id.hull].x_local,
-            }
-        };
+        let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
         self.pairs
             .par_iter()
             .map_init(ContactScratch::new, |scratch, &(a, b)| {

@@ -21,7 +21,7 @@
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::{
-    self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch, HullPose,
+    self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch,
     LaggedContact, PairOutcome,
 };
 use crate::geometry::{BroadPhase, WorldHulls};
@@ -70,19 +70,6 @@ impl FrictionEnergy {
             pair_slots: BTreeMap::new(),
         }
     }
-
-    fn hull_pose<'a>(
-        &self,
-        model: &'a Model,
-        poses: &'a [crate::math::Pose],
-        h: usize,
-    ) -> HullPose<'a> {
-        let id = self.hulls.ids[h];
-        HullPose {
-            pose: &poses[id.link],
-            x_local: &model.links[id.link].hulls[id.hull].x_local,
-        }
-    }
 }
 
 impl Energy for FrictionEnergy {
@@ -107,8 +94,8 @@ impl Energy for FrictionEnergy {
             .par_iter()
             .map_init(ContactScratch::new, |scratch, &(a, b)| {
                 let (pa, pb) = (
-                    this.hull_pose(model, poses, a),
-                    this.hull_pose(model, poses, b),
+                    this.hulls.hull_pose(model, poses, a),
+                    this.hulls.hull_pose(model, poses, b),
                 );
                 let warm = this.warm.get(&(a, b)).copied();
                 match contact::contact_pair(
@@ -168,13 +155,7 @@ impl Energy for FrictionEnergy {
             Need::Hessian => FrictionNeed::Hessian,
         };
         let (hulls, friction) = (&self.hulls, &self.friction);
-        let pose = |h: usize| {
-            let id = hulls.ids[h];
-            HullPose {
-                pose: &kin.pose[id.link],
-                x_local: &model.links[id.link].hulls[id.hull].x_local,
-            }
-        };
+        let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
         self.lagged
             .par_iter()
             .map_init(FrictionScratch::new, |scratch, ((a, b), lag, _)| {

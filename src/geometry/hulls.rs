@@ -52,6 +52,21 @@ impl WorldHulls {
         }
     }
 
+    /// Hull `h` as the contact functions take it: its link's pose in
+    /// `poses` and its link-frame vertices.
+    pub fn hull_pose<'a>(
+        &self,
+        model: &'a Model,
+        poses: &'a [Pose],
+        h: usize,
+    ) -> crate::contact::HullPose<'a> {
+        let id = self.ids[h];
+        crate::contact::HullPose {
+            pose: &poses[id.link],
+            x_local: &model.links[id.link].hulls[id.hull].x_local,
+        }
+    }
+
     /// World vertices of hull `h`.
     pub fn hull(&self, h: usize) -> &[Vector3<f64>] {
         &self.vertices[self.ranges[h].clone()]

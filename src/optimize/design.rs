@@ -17,6 +17,9 @@ use crate::diff::Gradients;
 use crate::model::Model;
 use nalgebra::{DVector, Vector3};
 
+/// Vertices `(link, hull, vertex)` that are one point.
+pub type TieGroup = Vec<(usize, usize, usize)>;
+
 /// Where a design variable is written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Target {
@@ -107,7 +110,7 @@ impl DesignSpace {
         attachments: &[String],
         vertex_links: &[String],
         bound: f64,
-        ties: &[Vec<(usize, usize, usize)>],
+        ties: &[TieGroup],
     ) -> Result<Self, NameError> {
         let mut vars: Vec<DesignVar> = Vec::new();
         let label = |m: &Model, l: usize| {

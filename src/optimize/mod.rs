@@ -242,7 +242,7 @@ impl Problem {
 }
 
 /// Tie groups of every robot's `design.ties`, as `(link, hull, vertex)`.
-fn robot_ties(scene: &Scene, model: &Model) -> Result<Vec<Vec<(usize, usize, usize)>>, String> {
+fn robot_ties(scene: &Scene, model: &Model) -> Result<Vec<design::TieGroup>, String> {
     let mut out = Vec::new();
     for r in &scene.spec.robots {
         let Some(d) = &r.design else { continue };

@@ -241,10 +241,10 @@ pub fn minimize(
 fn clamped_block_solve(block: DMatrix<f64>, g: &DVector<f64>, clamp: f64) -> DVector<f64> {
     let m = block.nrows();
     let shifted = &block - DMatrix::identity(m, m) * clamp;
-    if shifted.cholesky().is_some() {
-        if let Some(ch) = block.clone().cholesky() {
-            return -ch.solve(g);
-        }
+    if shifted.cholesky().is_some()
+        && let Some(ch) = block.clone().cholesky()
+    {
+        return -ch.solve(g);
     }
     let eig = block.symmetric_eigen();
     let mut coeff = eig.eigenvectors.transpose() * g;
