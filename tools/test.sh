@@ -7,4 +7,4 @@ cd "$(dirname "$0")/.."
 if [ -f tools/setup_python.sh ]; then
   bash tools/setup_python.sh
 fi
-cargo test --all-targets
+cargo test --workspace --all-targets

@@ -6,9 +6,13 @@ pub mod adjoint;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Repository root.
+/// Repository root (the workspace root: these helpers are shared by the
+/// core's tests and the CLI member's tests).
 pub fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    here.ancestors()
+        .find(|d| d.join("robots").is_dir() && d.join("tools").is_dir())
+        .unwrap_or(here)
 }
 
 /// A bundled scene.
@@ -35,9 +39,4 @@ pub fn python() -> Command {
         py.display()
     );
     Command::new(py)
-}
-
-/// The `sdrs` binary.
-pub fn sdrs() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sdrs"))
 }

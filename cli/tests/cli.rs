@@ -1,23 +1,8 @@
 //! End-to-end checks of the `sdrs` binary.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
 
-fn sdrs() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_sdrs"))
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sdrs-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn robots(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("robots")
-        .join(name)
-}
+use support::{robots, scratch_dir, sdrs};
 
 #[test]
 fn determinism_same_scene_twice_gives_byte_identical_csv() {

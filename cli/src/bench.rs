@@ -1,0 +1,71 @@
+//! `sdrs bench`: per-step cost of the rotating-chain scene against the
+//! number of links per chain, with the stage breakdown.
+
+use anyhow::{Context, Result};
+use sdrs::output::{Summary, write_atomic};
+use sdrs::scene::Scene;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scene to benchmark; every robot with a `chain` gets `--links` links.
+    #[arg(long, default_value = "robots/four_chains.yaml")]
+    pub scene: PathBuf,
+    /// Links per chain, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "2,4,8,16,32")]
+    pub links: Vec<usize>,
+    /// Steps per measurement.
+    #[arg(long, default_value_t = 200)]
+    pub steps: usize,
+    /// Write the table as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn run(a: BenchArgs) -> Result<()> {
+    if cfg!(debug_assertions) {
+        eprintln!("warning: debug build; benchmark with `cargo run --release -- bench`");
+    }
+    let text = std::fs::read_to_string(&a.scene)
+        .with_context(|| format!("reading {}", a.scene.display()))?;
+    let base: sdrs::scene::SceneSpec =
+        serde_yaml::from_str(&text).with_context(|| format!("parsing {}", a.scene.display()))?;
+    let mut rows = Vec::new();
+    println!("| links/chain | dof | ms/step | Newton it/step | stage breakdown (ms/step) |");
+    println!("|---:|---:|---:|---:|---|");
+    for &n in &a.links {
+        let mut spec = base.clone();
+        for r in &mut spec.robots {
+            if let Some(c) = &mut r.chain {
+                c.links = n;
+            }
+        }
+        let scene = Scene::from_spec(spec, &a.scene)?;
+        let mut sim = scene.simulator();
+        let t0 = Instant::now();
+        let traj = sdrs::sim::run::run(&mut sim, a.steps, |_| {})?;
+        let wall = t0.elapsed().as_secs_f64();
+        let s = Summary::new("bench", scene.settings.dt, &traj, wall, sim.timers.report());
+        let stages: Vec<String> = s
+            .stages
+            .iter()
+            .map(|st| format!("{} {:.3}", st.stage, 1e3 * st.seconds / a.steps as f64))
+            .collect();
+        println!(
+            "| {n} | {} | {:.3} | {:.2} | {} |",
+            scene.model.ndof(),
+            1e3 * s.seconds_per_step,
+            s.newton.mean_iterations,
+            stages.join(", ")
+        );
+        rows.push(serde_json::json!({
+            "links_per_chain": n, "dof": scene.model.ndof(), "ms_per_step": 1e3 * s.seconds_per_step,
+            "newton_iterations_per_step": s.newton.mean_iterations, "stages": s.stages,
+        }));
+    }
+    if let Some(p) = &a.json {
+        write_atomic(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;
+    }
+    Ok(())
+}
