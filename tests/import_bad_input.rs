@@ -298,3 +298,72 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     );
     cleanup(&dir);
 }
+
+// Reproducers of panics and silent repairs (shared/repro/urdf_*): every
+// number entering from a URDF or mesh is checked before geometry code sees it.
+
+#[test]
+fn huge_box_is_an_error_not_a_panic() {
+    let r = r#"<robot name="r"><link name="a"><collision><geometry><box size="1e308 1 1"/></geometry></collision></link></robot>"#;
+    let (e, dir) = fails("huge-box", &[("r.urdf", r)], "r.urdf");
+    assert!(
+        e.contains("link \"a\" collision[0]")
+            && e.contains("box dimensions")
+            && e.contains("1e308"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+#[test]
+fn non_finite_collision_origin_is_an_error_not_a_panic() {
+    let r = r#"<robot name="r"><link name="a"><collision><origin xyz="nan 0 0"/><geometry><mesh filename="t.obj"/></geometry></collision></link></robot>"#;
+    let (e, dir) = fails("nan-origin", &[("r.urdf", r), ("t.obj", TET)], "r.urdf");
+    assert!(
+        e.contains("link \"a\" collision[0]") && e.contains("origin") && e.contains("NaN"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+#[test]
+fn huge_mesh_scale_is_an_error_not_a_panic() {
+    let r = r#"<robot name="r"><link name="a"><collision><geometry><mesh filename="t.obj" scale="1e308 1e308 1e308"/></geometry></collision></link></robot>"#;
+    let (e, dir) = fails("huge-scale", &[("r.urdf", r), ("t.obj", TET)], "r.urdf");
+    assert!(
+        e.contains("link \"a\" collision[0]")
+            && e.contains("t.obj")
+            && e.contains("largest accepted"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+#[test]
+fn huge_joint_origin_names_the_joint() {
+    let r = urdf("revolute", "t.obj", "").replace("xyz=\"0 0 0.1\"", "xyz=\"1e308 0 0.1\"");
+    let (e, dir) = fails("huge-joint", &[("r.urdf", &r), ("t.obj", TET)], "r.urdf");
+    assert!(
+        e.contains("joint \"shoulder\"") && e.contains("largest accepted"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+#[test]
+fn non_finite_or_negative_mass_names_the_link() {
+    for (i, m) in ["nan", "inf", "-1"].iter().enumerate() {
+        let r = urdf("revolute", "t.obj", "")
+            .replace("mass value=\"1\"", &format!("mass value=\"{m}\""));
+        let (e, dir) = fails(
+            &format!("mass-{i}"),
+            &[("r.urdf", &r), ("t.obj", TET)],
+            "r.urdf",
+        );
+        assert!(
+            e.contains("link \"arm\" <inertial>") && e.contains("mass"),
+            "{m}: {e}"
+        );
+        cleanup(&dir);
+    }
+}

@@ -132,3 +132,55 @@ fn missing_file_is_an_io_error_naming_the_path() {
     assert!(matches!(err, SceneError::Io { .. }));
     assert!(err.to_string().contains("/nonexistent/scene.yaml"));
 }
+
+// Sizes (shared/repro/sim_chain_links_*): a documented maximum instead of
+// an allocation failure, a capacity-overflow panic or a hang.
+
+#[test]
+fn absurd_chain_lengths_are_rejected_with_the_maximum() {
+    for (i, n) in ["9223372036854775808", "1099511627776", "100000"]
+        .iter()
+        .enumerate()
+    {
+        let text = format!(
+            "version: 1\ndt: 0.005\nsteps: 5\nrobots:\n- name: c0\n  chain: {{links: {n}, link_length: 0.2, link_width: 0.05, link_mass: 0.1}}\n"
+        );
+        let t0 = std::time::Instant::now();
+        let (path, msg) = load(&format!("chain{i}.yaml"), &text);
+        assert!(t0.elapsed().as_secs_f64() < 5.0, "took {:?}", t0.elapsed());
+        assert_names(&msg, &path, &["robot \"c0\": chain.links", "maximum"]);
+    }
+}
+
+#[test]
+fn too_many_degrees_of_freedom_are_rejected_before_any_large_allocation() {
+    // Two robots of 3000 ball-jointed links: 12000 coordinates.
+    let chain = "chain: {links: 3000, link_length: 0.2, link_width: 0.05, link_mass: 0.1}";
+    let text = format!(
+        "version: 1\ndt: 0.005\nrobots:\n- name: a\n  {chain}\n- name: b\n  base: {{xyz: [5, 0, 0]}}\n  {chain}\n"
+    );
+    let (path, msg) = load("dof.yaml", &text);
+    assert_names(&msg, &path, &["12000 degrees of freedom", "maximum"]);
+}
+
+/// Scene building is linear in the number of links: a 5000-link chain
+/// (10000 coordinates, the maximum) builds in well under a second per
+/// thousand links (the old quadratic-per-link topological sort took
+/// minutes at this size).
+#[test]
+fn building_a_long_chain_is_linear_time() {
+    let mut times = Vec::new();
+    for n in [1250, 5000] {
+        let text = format!(
+            "version: 1\ndt: 0.005\nrobots:\n- name: c\n  chain: {{links: {n}, link_length: 0.2, link_width: 0.05, link_mass: 0.1}}\n"
+        );
+        let t0 = std::time::Instant::now();
+        let scene = sdrs::scene::Scene::from_str(&text, std::path::Path::new("long.yaml")).unwrap();
+        times.push(t0.elapsed().as_secs_f64());
+        assert_eq!(scene.model.ndof(), 2 * n);
+    }
+    eprintln!("build times for 1250 and 5000 links: {times:?} s");
+    assert!(times[1] < 10.0, "{times:?}");
+    // Four times the links may cost at most ~8× (linear plus noise), not 64×.
+    assert!(times[1] < 8.0 * times[0] + 0.5, "{times:?}");
+}

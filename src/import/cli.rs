@@ -46,7 +46,7 @@ pub struct ImportArgs {
     #[arg(long)]
     pub no_bridge: bool,
     /// No progress bar or summary.
-    #[arg(long)]
+    #[arg(long, short)]
     pub quiet: bool,
 }
 

@@ -21,6 +21,7 @@ pub mod decompose;
 pub mod error;
 pub mod fkcheck;
 pub mod interior;
+pub mod limits;
 pub mod mass;
 pub mod mesh;
 pub mod polytope;
@@ -182,6 +183,16 @@ fn link_geometry(
             element: g.element.clone(),
             msg,
         };
+        limits::check_coordinates(
+            "origin",
+            g.rotation
+                .iter()
+                .chain(g.translation.iter())
+                .copied()
+                .collect::<Vec<_>>()
+                .as_slice(),
+        )
+        .map_err(geom_err)?;
         let place = |v: &Vector3<f64>| g.rotation * v + g.translation;
         let prim = match &g.shape {
             SourceShape::Box { size } => Some(primitives::box_hull(*size)),
@@ -219,6 +230,15 @@ fn link_geometry(
             element: g.element.clone(),
         };
         let m = mesh::load_mesh(path, &ctx)?.transformed(*scale, &g.rotation, &g.translation);
+        limits::check_coordinates(
+            &format!("mesh {} placed with scale {scale:?}", path.display()),
+            m.vertices
+                .iter()
+                .flat_map(|v| v.iter().copied())
+                .collect::<Vec<_>>()
+                .as_slice(),
+        )
+        .map_err(geom_err)?;
         volume = match (volume, m.volume()) {
             (Some(a), Some(b)) => Some(a + b),
             _ => None,

@@ -132,22 +132,47 @@ fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usi
         if initial.contains(&p) {
             continue;
         }
-        let visible: Vec<usize> = (0..faces.len())
-            .filter(|&f| faces[f].alive && faces[f].n.dot(&x) - faces[f].b > eps)
-            .collect();
-        if visible.is_empty() {
+        // The visible region is grown from the face that sees `x` best,
+        // through shared edges only: a connected region has a single
+        // horizon loop even when round-off makes a far face's visibility
+        // test disagree with its neighbours' (which would otherwise open
+        // the surface).
+        let Some(seed) = (0..faces.len())
+            .filter(|&f| faces[f].alive)
+            .map(|f| (f, faces[f].n.dot(&x) - faces[f].b))
+            .filter(|&(_, d)| d > eps)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(f, _)| f)
+        else {
             continue;
+        };
+        let mut in_region = std::collections::HashSet::from([seed]);
+        let mut visible = vec![seed];
+        let mut k_next = 0;
+        while k_next < visible.len() {
+            let v = faces[visible[k_next]].v;
+            k_next += 1;
+            for k in 0..3 {
+                let (a, b) = (v[k], v[(k + 1) % 3]);
+                let Some(&o) = edge.get(&(b, a)) else {
+                    return Err("convex hull failed: open surface".into());
+                };
+                if faces[o].alive
+                    && !in_region.contains(&o)
+                    && faces[o].n.dot(&x) - faces[o].b > eps
+                {
+                    in_region.insert(o);
+                    visible.push(o);
+                }
+            }
         }
         let mut horizon = Vec::new();
         for &f in &visible {
             let v = faces[f].v;
             for k in 0..3 {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
-                let opp = edge.get(&(b, a)).copied();
-                match opp {
-                    Some(o) if faces[o].alive && faces[o].n.dot(&x) - faces[o].b > eps => {}
-                    Some(_) => horizon.push((a, b)),
-                    None => return Err("convex hull failed: open surface".into()),
+                if !in_region.contains(&edge[&(b, a)]) {
+                    horizon.push((a, b));
                 }
             }
         }

@@ -35,11 +35,10 @@ pub struct PrimitiveHull {
 }
 
 fn check(name: &str, vals: &[f64]) -> Result<(), String> {
-    if vals.iter().all(|v| *v > 0.0 && v.is_finite()) {
-        Ok(())
-    } else {
-        Err(format!("{name} dimensions must be positive, got {vals:?}"))
+    if !vals.iter().all(|v| *v > 0.0 && v.is_finite()) {
+        return Err(format!("{name} dimensions must be positive, got {vals:?}"));
     }
+    super::limits::check_coordinates(&format!("{name} dimensions"), vals)
 }
 
 fn hull_mesh(points: &[Vector3<f64>]) -> TriMesh {

@@ -28,6 +28,7 @@
 
 use super::ImportOptions;
 use super::error::ImportError;
+use super::limits;
 use super::source::*;
 use crate::math::rpy_to_matrix;
 use crate::scene::schema::{JointType, Origin};
@@ -411,6 +412,7 @@ fn convert(
 
     // Initial links.
     let mut tmp: Vec<SourceLink> = Vec::new();
+    let mut massless = Vec::new();
     let mut pos = vec![usize::MAX; robot.links.len()];
     for &li in &order {
         let l = &robot.links[li];
@@ -449,12 +451,34 @@ fn convert(
             Some(ji) => {
                 let j = &robot.joints[ji];
                 let pi = pos[index[j.parent.link.as_str()]];
+                let origin = origin_of(&j.origin);
+                limits::check_coordinates(
+                    "origin",
+                    &[origin.xyz.as_slice(), origin.rpy.as_slice()].concat(),
+                )
+                .map_err(|m| invalid(format!("joint \"{}\"", j.name), m))?;
+                // The axis matters only for joints that move along or about
+                // it: fixed and floating joints ignore it (URDFs often give
+                // them a zero axis).
+                let moves_on_axis = matches!(
+                    j.joint_type,
+                    urdf_rs::JointType::Revolute
+                        | urdf_rs::JointType::Continuous
+                        | urdf_rs::JointType::Prismatic
+                );
                 let axis = {
                     let a = Vector3::from(j.axis.xyz.0);
-                    if !(a.norm() > 1e-12) {
-                        return Err(invalid(format!("joint \"{}\"", j.name), "zero axis".into()));
+                    if moves_on_axis && !(a.norm() > 1e-12 && a.iter().all(|c| c.is_finite())) {
+                        return Err(invalid(
+                            format!("joint \"{}\"", j.name),
+                            format!("axis {:?} must be finite and non-zero", j.axis.xyz.0),
+                        ));
                     }
-                    let a = a.normalize();
+                    let a = if moves_on_axis {
+                        a.normalize()
+                    } else {
+                        Vector3::z()
+                    };
                     [a.x, a.y, a.z]
                 };
                 let (kind, axis) = match j.joint_type {
@@ -484,23 +508,34 @@ fn convert(
                         kind,
                         axis,
                         axes: None,
-                        origin: origin_of(&j.origin),
+                        origin,
                         input_joints,
                     },
                 )
             }
         };
+        limits::check_mass(l.inertial.mass.value)
+            .map_err(|m| invalid(format!("link \"{}\" <inertial>", l.name), m))?;
+        if l.inertial.mass.value == 0.0 && !geometry.is_empty() {
+            massless.push(l.name.clone());
+        }
         pos[li] = tmp.len();
         tmp.push(SourceLink {
             name: l.name.clone(),
             parent,
             joint,
             geometry,
-            mass: Some(l.inertial.mass.value).filter(|m| *m > 0.0 && m.is_finite()),
+            mass: Some(l.inertial.mass.value).filter(|m| *m > 0.0),
         });
     }
     let mut links: Vec<Option<SourceLink>> = tmp.into_iter().map(Some).collect();
     let mut notes = Vec::new();
+    if !massless.is_empty() {
+        notes.push(format!(
+            "links with <mass value=\"0\"> get the mass of their hulls at the default density: {}",
+            massless.join(", ")
+        ));
+    }
     let n = links.len();
 
     // 1. Geometry-less root with children: dropped.

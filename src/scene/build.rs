@@ -26,6 +26,13 @@ pub(super) fn check_finite(element: &str, what: &str, v: &[f64]) -> Result<(), I
 }
 
 /// Builds a scene from its specification.
+/// Most degrees of freedom a scene may have: the step Hessian is a dense
+/// `|θ|×|θ|` matrix (800 MB at this size).
+pub const MAX_DOF: usize = 10_000;
+
+/// Most links one robot (or generated chain) may have.
+pub const MAX_LINKS: usize = 10_000;
+
 pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
     if spec.version != 1 {
         return Err(Invalid::new(
@@ -87,6 +94,16 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         });
     }
     let model = Model::new(links, robots);
+    if model.ndof() > MAX_DOF {
+        return Err(Invalid::new(
+            "robots",
+            format!(
+                "the scene has {} degrees of freedom; the maximum is {MAX_DOF} (the step Hessian is a dense |θ|×|θ| matrix: {:.1} GB here)",
+                model.ndof(),
+                (model.ndof() as f64).powi(2) * 8e-9
+            ),
+        ));
+    }
 
     // Controller and initial state, by joint name per robot.
     let n = model.ndof();
@@ -303,35 +320,59 @@ fn topo_order(robot: &str, links: &[LinkSpec]) -> Result<Vec<usize>, Invalid> {
             parent[i] = Some(pi);
         }
     }
-    // Cycle detection: follow parents; a walk longer than the link count loops.
+    // Cycle detection in O(n): walk up from each unvisited link, marking the
+    // walk; reaching a link marked by the same walk closes a cycle, reaching
+    // one finished earlier ends the walk.
+    const UNSEEN: usize = usize::MAX;
+    const DONE: usize = usize::MAX - 1;
+    let mut mark = vec![UNSEEN; links.len()];
     for start in 0..links.len() {
-        let mut path = vec![start];
         let mut cur = start;
-        while let Some(p) = parent[cur] {
-            if let Some(pos) = path.iter().position(|&x| x == p) {
-                let names: Vec<&str> = path[pos..]
-                    .iter()
-                    .rev()
-                    .map(|&k| links[k].name.as_str())
-                    .collect();
-                return Err(Invalid::new(
-                    format!("robot \"{robot}\": link \"{}\"", links[start].name),
-                    format!("kinematic cycle: {} → {}", names.join(" → "), links[p].name),
-                ));
+        while mark[cur] == UNSEEN {
+            mark[cur] = start;
+            match parent[cur] {
+                Some(p) if mark[p] == start => {
+                    // Parent to child around the cycle, back to `p`.
+                    let mut names = vec![links[p].name.as_str()];
+                    let mut k = parent[p].expect("on the cycle");
+                    while k != p {
+                        names.push(links[k].name.as_str());
+                        k = parent[k].expect("on the cycle");
+                    }
+                    names.push(links[p].name.as_str());
+                    names.reverse();
+                    return Err(Invalid::new(
+                        format!("robot \"{robot}\": link \"{}\"", links[start].name),
+                        format!("kinematic cycle: {}", names.join(" → ")),
+                    ));
+                }
+                Some(p) => cur = p,
+                None => break,
             }
-            path.push(p);
-            cur = p;
+        }
+        let mut k = start;
+        while mark[k] == start {
+            mark[k] = DONE;
+            match parent[k] {
+                Some(p) => k = p,
+                None => break,
+            }
         }
     }
-    let mut order = Vec::with_capacity(links.len());
-    let mut placed = vec![false; links.len()];
-    while order.len() < links.len() {
-        for i in 0..links.len() {
-            if !placed[i] && parent[i].is_none_or(|p| placed[p]) {
-                placed[i] = true;
-                order.push(i);
-            }
+    // Parents before children, in O(n): breadth first from the roots, with
+    // children in file order.
+    let mut children = vec![Vec::new(); links.len()];
+    for (i, p) in parent.iter().enumerate() {
+        if let Some(p) = p {
+            children[*p].push(i);
         }
+    }
+    let mut order: Vec<usize> = (0..links.len()).filter(|&i| parent[i].is_none()).collect();
+    let mut k = 0;
+    while k < order.len() {
+        let i = order[k];
+        order.extend_from_slice(&children[i]);
+        k += 1;
     }
     Ok(order)
 }
@@ -344,6 +385,12 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             return Err(Invalid::new(el, "give either `links` or `chain`, not both"));
         }
         (Some(c), true) => {
+            if c.links > MAX_LINKS {
+                return Err(Invalid::new(
+                    format!("{el}: chain.links"),
+                    format!("{} links: the maximum is {MAX_LINKS} per robot", c.links),
+                ));
+            }
             if c.links == 0 || !(c.link_length > 0.0 && c.link_width > 0.0 && c.link_mass > 0.0) {
                 return Err(Invalid::new(
                     format!("{el}: chain"),
@@ -360,6 +407,15 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             &generated
         }
         (None, true) => return Err(Invalid::new(el, "the robot has no links")),
+        (None, false) if r.links.len() > MAX_LINKS => {
+            return Err(Invalid::new(
+                format!("{el}: links"),
+                format!(
+                    "{} links: the maximum is {MAX_LINKS} per robot",
+                    r.links.len()
+                ),
+            ));
+        }
         (None, false) => &r.links,
     };
     check_finite(
