@@ -97,6 +97,9 @@ pub struct NewtonStats {
     pub max_iterations: usize,
     pub total_iterations: usize,
     pub max_final_gradient: f64,
+    /// Steps whose tolerance lay below the gradient's round-off floor and
+    /// that were accepted at that floor (see `sim::newton`).
+    pub steps_at_roundoff_floor: usize,
 }
 
 /// Energy diagnostics (J).
@@ -170,6 +173,7 @@ impl Summary {
             max_iterations: d.iter().map(|x| x.newton.iters).max().unwrap_or(0),
             total_iterations: total,
             max_final_gradient: d.iter().map(|x| x.newton.grad_inf).fold(0.0, f64::max),
+            steps_at_roundoff_floor: d.iter().filter(|x| x.newton.at_floor).count(),
         };
         let final_state = traj
             .states

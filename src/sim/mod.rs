@@ -130,6 +130,32 @@ impl Objective for StepObjective<'_> {
         }
         Ok(self.acc.value)
     }
+
+    /// Gravity's `Σ ρ g·X` dominates the round-off of the step objective
+    /// near rest: each link contributes `m_i ‖g‖ ε (‖x_i‖ + 1)` (J), with
+    /// `x_i` its position at the last evaluation; a safety factor of 64
+    /// covers the summation over vertices and the kinematic chain.
+    fn value_noise(&self) -> f64 {
+        let g = self.ctx.gravity.norm();
+        let sum: f64 = self
+            .ctx
+            .model
+            .first_moment
+            .iter()
+            .zip(&self.kin.pose)
+            .map(|(m1, a)| m1[3].abs() * g * (a.column(3).norm() + 1.0))
+            .sum();
+        64.0 * f64::EPSILON * sum
+    }
+
+    fn length_scale(&self) -> f64 {
+        1.0 + self
+            .kin
+            .pose
+            .iter()
+            .map(|a| a.column(3).amax())
+            .fold(0.0, f64::max)
+    }
 }
 
 impl Simulator {

@@ -5,7 +5,12 @@
 //! objective values (an infeasible, interpenetrating trial point has `+∞`
 //! energy and is rejected). Stops when `‖∇O‖∞ < tol`. When the objective's
 //! round-off hides the remaining decrease, the gradient norm decides (see
-//! [`minimize`]).
+//! [`minimize`]). Round-off is judged from the terms' magnitudes
+//! ([`Objective::value_noise`]), not from the value, which is tiny near rest.
+//! A solve that cannot reach `tol` because `tol` is below the gradient's own
+//! round-off floor (`64 ε ‖H‖∞ (‖θ‖∞ + L)`) accepts its point and says so
+//! ([`NewtonReport::at_floor`], counted in the run summary) instead of
+//! failing.
 
 use super::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
@@ -76,6 +81,13 @@ pub struct NewtonReport {
     /// Iterations accepted by the gradient-norm merit (value below round-off).
     pub gradient_merit_steps: usize,
     pub value: f64,
+    /// The solve stalled above `tol` but within the gradient's round-off
+    /// floor (`grad_floor`), and its point was accepted (see [`minimize`]).
+    pub at_floor: bool,
+    /// The gradient's round-off floor at the last iterate,
+    /// `64 ε ‖H‖∞ (‖θ‖∞ + L)` (J per unit coordinate; `L` the scene's length
+    /// scale from [`Objective::length_scale`]).
+    pub grad_floor: f64,
 }
 
 /// An objective with value, gradient and Hessian.
@@ -89,6 +101,21 @@ pub trait Objective {
         hess: &mut DMatrix<f64>,
         timers: &mut StageTimers,
     ) -> Result<f64, EnergyError>;
+
+    /// Absolute round-off of the value at the point last evaluated (J): two
+    /// values closer than this cannot be ranked. It comes from the terms'
+    /// magnitudes, not from the value, which is small near rest while its
+    /// parts are not (gravity's `ρ g·X` carries `ε|X|` of noise whatever
+    /// it is measured from). Default: none beyond the relative test.
+    fn value_noise(&self) -> f64 {
+        0.0
+    }
+
+    /// Largest world coordinate involved (m), plus one: sets the gradient's
+    /// round-off floor. Default 1.
+    fn length_scale(&self) -> f64 {
+        1.0
+    }
 }
 
 /// Scratch buffers of the solver.
@@ -137,6 +164,8 @@ pub fn minimize(
         if grad_inf < opts.tol {
             return Ok(report);
         }
+        report.grad_floor =
+            64.0 * f64::EPSILON * max_row_sum(&scratch.hess) * (q.amax() + obj.length_scale());
         if iter == opts.max_iters {
             break;
         }
@@ -151,10 +180,11 @@ pub fn minimize(
         });
         // Predicted decrease of the quadratic model, −gᵀΔ > 0.
         let predicted = -scratch.grad.dot(&scratch.dir);
-        // Below ~1e-9 of the objective's magnitude the value cannot rank
-        // trial points: its round-off (world coordinates of metres carry
-        // ~1e-15 m of noise, times stiffness) is larger than the decrease.
-        let resolvable = predicted > 1e-9 * value.abs();
+        // Below ~1e-9 of the objective's magnitude, or near its absolute
+        // round-off floor (from the terms' magnitudes), the value cannot
+        // rank trial points: the decrease is smaller than the noise.
+        let floor = 1e-9 * value.abs() + obj.value_noise();
+        let resolvable = predicted > 10.0 * floor;
         let t0 = std::time::Instant::now();
         // Time spent in the search's objective evaluations is counted by
         // their own stages; `line_search` gets only the remainder.
@@ -164,6 +194,12 @@ pub fn minimize(
             // Backtracking with Armijo sufficient decrease on a finite value.
             let mut alpha = 1.0;
             for _ in 0..=opts.max_backtracks {
+                if alpha * predicted <= 10.0 * floor {
+                    // Shorter steps cannot be ranked by value either; an
+                    // Armijo test passed on round-off would accept a step
+                    // that changes nothing.
+                    break;
+                }
                 scratch.trial.clone_from(q);
                 scratch.trial.axpy(alpha, &scratch.dir, 1.0);
                 let te = std::time::Instant::now();
@@ -175,7 +211,7 @@ pub fn minimize(
                     timers,
                 )?;
                 in_evals += te.elapsed();
-                if v.is_finite() && v <= value - 1e-4 * alpha * predicted {
+                if v.is_finite() && v < value - 1e-4 * alpha * predicted {
                     accepted = true;
                     break;
                 }
@@ -211,6 +247,12 @@ pub fn minimize(
             }
         }
         timers.add("line_search", t0.elapsed().saturating_sub(in_evals));
+        if !accepted && grad_inf <= report.grad_floor {
+            // No trial point can be ranked and the gradient is within its
+            // own round-off: this is the solution to working precision.
+            report.at_floor = true;
+            return Ok(report);
+        }
         if !accepted {
             return Err(NewtonError::LineSearch {
                 iter,
@@ -227,11 +269,22 @@ pub fn minimize(
             timers,
         )?;
     }
+    if report.grad_inf <= report.grad_floor {
+        report.at_floor = true;
+        return Ok(report);
+    }
     Err(NewtonError::NotConverged {
         iters: opts.max_iters,
         grad_inf: report.grad_inf,
         tol: opts.tol,
     })
+}
+
+/// `‖H‖∞`, the largest absolute row sum.
+fn max_row_sum(h: &DMatrix<f64>) -> f64 {
+    h.row_iter()
+        .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max)
 }
 
 /// `−Ĥ⁻¹ g` for one symmetric block. If `H − clamp·I` has a Cholesky
