@@ -212,3 +212,23 @@ fn stack_of_ten_boxes_stays_stacked_without_interpenetration() {
     assert!(sink < 10.0 * s);
     assert!(slide < 1e-9, "a symmetric stack must not slide sideways");
 }
+
+/// An intersecting start names the pair, the hull indices and the depth, and
+/// says how to fix it (shared/repro/ground_a1_intersect_at_start).
+#[test]
+fn intersecting_start_names_the_pair_and_its_depth() {
+    let text = "version: 1\ndt: 0.001\ngravity: [0, 0, 0]\ncontact: {s: 0.01, kappa: 1, mu: 0}\nobjects:\n  - {name: a, mass: 1, hulls: [{box: {size: [1, 1, 1]}}], initial: {q: [0, 0, 0, 0, 0, 0]}}\n  - {name: b, mass: 1, hulls: [{box: {size: [1, 1, 1]}}], initial: {q: [0.9, 0.2, 0, 0, 0, 0]}}\n";
+    let scene = Scene::from_str(text, Path::new("overlap.yaml")).unwrap();
+    let mut sim = scene.simulator();
+    let msg = sim.step().unwrap_err().to_string();
+    for part in ["step 1", "a/a hull 0", "b/b hull 0", "exclude", "initial pose"] {
+        assert!(msg.contains(part), "{part:?} missing: {msg}");
+    }
+    let depth: f64 = msg
+        .split("penetration depth ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no depth in {msg}"));
+    assert!((depth - 0.1).abs() < 1e-6, "depth {depth} (overlap 0.1 m): {msg}");
+}

@@ -60,7 +60,7 @@ pub mod potential;
 mod potential_tests;
 #[cfg(test)]
 mod regression_tests;
-mod separation;
+pub mod separation;
 #[cfg(test)]
 mod test_util;
 

@@ -151,3 +151,26 @@ pub fn separate(
         }
     }
 }
+
+/// Penetration depth of two intersecting hulls (m): the length of the
+/// shortest translation that separates them (EPA on the Minkowski
+/// difference). `None` when the hulls are disjoint or EPA does not converge.
+pub fn penetration_depth(xa: &[Vector3<f64>], xb: &[Vector3<f64>]) -> Option<f64> {
+    use parry3d_f64::query::contact::contact_support_map_support_map_with_params;
+    let (ga, gb) = (PointCloud(xa), PointCloud(xb));
+    let mut simplex = VoronoiSimplex::new();
+    match contact_support_map_support_map_with_params(
+        &PPose::IDENTITY,
+        &ga,
+        &gb,
+        0.0,
+        &mut simplex,
+        None,
+    ) {
+        GJKResult::ClosestPoints(pa, pb, n) => {
+            let dist = (pb - pa).dot(n);
+            (dist <= 0.0 && dist.is_finite()).then_some(-dist)
+        }
+        _ => None,
+    }
+}

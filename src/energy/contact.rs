@@ -42,6 +42,8 @@ pub struct ContactEnergy {
     /// Statistics of the last evaluation.
     last_active: usize,
     last_min_distance: f64,
+    /// The first intersecting pair of the last evaluation.
+    last_intersecting: Option<(usize, usize)>,
 }
 
 impl ContactEnergy {
@@ -58,6 +60,7 @@ impl ContactEnergy {
             broad_time: Duration::ZERO,
             last_active: 0,
             last_min_distance: f64::INFINITY,
+            last_intersecting: None,
         }
     }
 
@@ -71,6 +74,24 @@ impl ContactEnergy {
 impl Energy for ContactEnergy {
     fn name(&self) -> &'static str {
         "contact"
+    }
+
+    fn explain_infeasible(&self, model: &Model) -> Option<String> {
+        let (a, b) = self.last_intersecting?;
+        let depth = contact::separation::penetration_depth(self.hulls.hull(a), self.hulls.hull(b))
+            .map(|d| format!("penetration depth {d:.3e} m"))
+            .unwrap_or_else(|| "touching".into());
+        let name = |h: usize| {
+            let l = &model.links[self.hulls.ids[h].link];
+            format!("{}/{}", model.robots[l.robot].name, l.name)
+        };
+        Some(format!(
+            "{} and {} intersect ({depth}); if they overlap by design, exclude the pair (`contact: {{exclude: [[\"{}\", \"{}\"]]}}`), otherwise change the initial pose",
+            self.describe(model, a),
+            self.describe(model, b),
+            name(a),
+            name(b),
+        ))
     }
 
     fn accumulate(
@@ -114,6 +135,7 @@ impl Energy for ContactEnergy {
             .collect_into_vec(&mut self.results);
 
         self.pair_slots.clear();
+        self.last_intersecting = None;
         let (mut active, mut min_d) = (0, f64::INFINITY);
         // A value-only evaluation is a line-search trial point: if a pair's
         // inner solve fails there, the point is rejected like an infeasible
@@ -135,6 +157,7 @@ impl Energy for ContactEnergy {
             })?;
             match outcome {
                 PairOutcome::Intersecting => {
+                    self.last_intersecting = Some((a, b));
                     acc.value = f64::INFINITY;
                     return Ok(());
                 }

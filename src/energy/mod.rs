@@ -162,6 +162,12 @@ pub trait Energy: Send + Sync {
     ) {
     }
 
+    /// Why the last evaluation was infeasible (`+∞`), naming the elements
+    /// involved and how to fix it; `None` when this term was finite.
+    fn explain_infeasible(&self, _model: &Model) -> Option<String> {
+        None
+    }
+
     /// Adjoint product: adds `∂Φ/∂x` for `Φ = Σ_i ⟨δA_i, ∂E/∂A_i⟩ + λᵀ∂E/∂θ`
     /// (see [`crate::diff::vjp`]) at `θ^t = q`, with `begin_step` already run
     /// for this step. Terms that cannot differentiate a quantity name it in

@@ -29,6 +29,10 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use newton::{NewtonScratch, Objective};
 use std::time::Instant;
 
+/// Largest change of a rotation-vector coordinate in one Newton iteration
+/// (rad); see [`Objective::step_limit`].
+pub const MAX_ROTATION_STEP: f64 = 1.0;
+
 /// A step that could not be completed.
 #[derive(Debug, Clone, thiserror::Error)]
 #[error("step {step} (t = {time:.6} s): {cause}")]
@@ -146,6 +150,26 @@ impl Objective for StepObjective<'_> {
             .map(|(m1, a)| m1[3].abs() * g * (a.column(3).norm() + 1.0))
             .sum();
         64.0 * f64::EPSILON * sum
+    }
+
+    /// A rotation-vector coordinate moves at most [`MAX_ROTATION_STEP`] per
+    /// Newton iteration: far from its chart centre (‖φ‖ → 2π) the chart is
+    /// singular and Newton, started there by one long step along a flat
+    /// rotational direction, crawls (piles of boxes once took > 100
+    /// iterations). Charts are re-centred between steps.
+    fn step_limit(&self, _q: &DVector<f64>, dir: &DVector<f64>) -> f64 {
+        let mut limit: f64 = 1.0;
+        for link in &self.ctx.model.links {
+            if link.chart.is_none() {
+                continue;
+            }
+            let o = link.dof_offset + link.joint.chart_offset();
+            let d = Vector3::new(dir[o], dir[o + 1], dir[o + 2]).norm();
+            if d > MAX_ROTATION_STEP {
+                limit = limit.min(MAX_ROTATION_STEP / d);
+            }
+        }
+        limit
     }
 
     fn length_scale(&self) -> f64 {
@@ -304,6 +328,20 @@ impl Simulator {
                 parts.newton,
                 parts.timers,
             )
+            .map_err(|e| match e {
+                NewtonError::InfeasibleStart { value, detail } => {
+                    let why: Vec<String> = parts_explain(&self.energies, &self.model);
+                    NewtonError::InfeasibleStart {
+                        value,
+                        detail: if why.is_empty() {
+                            detail
+                        } else {
+                            why.join("; ")
+                        },
+                    }
+                }
+                e => e,
+            })
             .map_err(fail)?
         };
 
@@ -345,6 +383,14 @@ impl Simulator {
         d.momentum = [p.x, p.y, p.z];
         d
     }
+}
+
+/// Every term's explanation of an infeasible last evaluation.
+fn parts_explain(energies: &[Box<dyn Energy>], model: &Model) -> Vec<String> {
+    energies
+        .iter()
+        .filter_map(|e| e.explain_infeasible(model))
+        .collect()
 }
 
 fn make_context<'a>(

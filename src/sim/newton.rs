@@ -62,10 +62,13 @@ pub enum NewtonError {
         grad_inf: f64,
         tol: f64,
     },
-    #[error(
-        "the objective is not finite at the starting point (value {value}): hulls intersect in the current state"
-    )]
-    InfeasibleStart { value: f64 },
+    #[error("the objective is not finite at the starting point (value {value}): {detail}")]
+    InfeasibleStart {
+        value: f64,
+        /// What makes it infeasible (filled by the simulator from the
+        /// terms' [`crate::energy::Energy::explain_infeasible`]).
+        detail: String,
+    },
     #[error("non-finite gradient or Hessian at Newton iteration {iter}")]
     NonFinite { iter: usize },
     #[error(transparent)]
@@ -116,6 +119,14 @@ pub trait Objective {
     fn length_scale(&self) -> f64 {
         1.0
     }
+
+    /// Largest step `α ≤ 1` along `dir` from `q` that the parametrization
+    /// supports (e.g. rotation charts: a rotation vector is a good chart
+    /// only well inside `‖φ‖ < 2π`). The line search starts there.
+    /// Default 1.
+    fn step_limit(&self, _q: &DVector<f64>, _dir: &DVector<f64>) -> f64 {
+        1.0
+    }
 }
 
 /// Scratch buffers of the solver.
@@ -151,7 +162,10 @@ pub fn minimize(
         timers,
     )?;
     if !value.is_finite() {
-        return Err(NewtonError::InfeasibleStart { value });
+        return Err(NewtonError::InfeasibleStart {
+            value,
+            detail: "hulls intersect in the current state".into(),
+        });
     }
     for iter in 0..=opts.max_iters {
         let grad_inf = scratch.grad.amax();
@@ -185,6 +199,7 @@ pub fn minimize(
         // rank trial points: the decrease is smaller than the noise.
         let floor = 1e-9 * value.abs() + obj.value_noise();
         let resolvable = predicted > 10.0 * floor;
+        let alpha0 = obj.step_limit(q, &scratch.dir).min(1.0);
         let t0 = std::time::Instant::now();
         // Time spent in the search's objective evaluations is counted by
         // their own stages; `line_search` gets only the remainder.
@@ -192,7 +207,7 @@ pub fn minimize(
         let mut accepted = false;
         if resolvable {
             // Backtracking with Armijo sufficient decrease on a finite value.
-            let mut alpha = 1.0;
+            let mut alpha = alpha0;
             for _ in 0..=opts.max_backtracks {
                 if alpha * predicted <= 10.0 * floor {
                     // Shorter steps cannot be ranked by value either; an
@@ -224,7 +239,7 @@ pub fn minimize(
         // beyond noise and whose ‖∇O‖∞ is smaller.
         if !accepted {
             let noise = 1e-10 * value.abs().max(1.0);
-            let mut alpha = 1.0;
+            let mut alpha = alpha0;
             for _ in 0..8 {
                 scratch.trial.clone_from(q);
                 scratch.trial.axpy(alpha, &scratch.dir, 1.0);
