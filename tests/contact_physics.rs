@@ -221,7 +221,13 @@ fn intersecting_start_names_the_pair_and_its_depth() {
     let scene = Scene::from_str(text, Path::new("overlap.yaml")).unwrap();
     let mut sim = scene.simulator();
     let msg = sim.step().unwrap_err().to_string();
-    for part in ["step 1", "a/a hull 0", "b/b hull 0", "exclude", "initial pose"] {
+    for part in [
+        "step 1",
+        "a/a hull 0",
+        "b/b hull 0",
+        "exclude",
+        "initial pose",
+    ] {
         assert!(msg.contains(part), "{part:?} missing: {msg}");
     }
     let depth: f64 = msg
@@ -230,5 +236,8 @@ fn intersecting_start_names_the_pair_and_its_depth() {
         .and_then(|s| s.split(' ').next())
         .and_then(|s| s.parse().ok())
         .unwrap_or_else(|| panic!("no depth in {msg}"));
-    assert!((depth - 0.1).abs() < 1e-6, "depth {depth} (overlap 0.1 m): {msg}");
+    assert!(
+        (depth - 0.1).abs() < 1e-6,
+        "depth {depth} (overlap 0.1 m): {msg}"
+    );
 }

@@ -2,6 +2,7 @@
 
 use super::decompose::Decomposer;
 use super::mass::MassMode;
+use super::ready::{BaseMode, ReadyOptions, make_ready};
 use super::write::{OutputPaths, check_outputs, write_outputs};
 use super::{ImportOptions, import};
 use std::path::PathBuf;
@@ -48,6 +49,35 @@ pub struct ImportArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Base: `auto` floats the robot unless its root link is massless or
+    /// `world` (pybullet's convention for a static base).
+    #[arg(long, value_enum, default_value_t = BaseMode::Auto)]
+    pub base: BaseMode,
+    /// Add a ground plane and place the robot on it.
+    #[arg(long)]
+    pub ground: bool,
+    /// Leave contact off (by default it is on, with exclusions for link
+    /// pairs that overlap in the initial pose, listed in the report).
+    #[arg(long)]
+    pub no_contact: bool,
+    /// Write no PD gains (by default every joint holds its initial pose
+    /// against gravity).
+    #[arg(long)]
+    pub no_hold: bool,
+    /// Initial pose: `joint=value,…` (rad or m); the PD targets hold it.
+    #[arg(long, value_delimiter = ',', value_parser = parse_pose)]
+    pub pose: Vec<(String, f64)>,
+}
+
+fn parse_pose(s: &str) -> Result<(String, f64), String> {
+    let (j, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected joint=value, got \"{s}\""))?;
+    let v: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{v}\" is not a number (in \"{s}\")"))?;
+    Ok((j.trim().to_string(), v))
 }
 
 impl ImportArgs {
@@ -88,7 +118,21 @@ pub fn run_import(args: &ImportArgs) -> anyhow::Result<()> {
     );
     let paths = OutputPaths::new(&args.out, args.report.as_deref());
     check_outputs(&args.input, &paths, args.force)?;
-    let imported = import(&args.input, &opts)?;
+    let mut imported = import(&args.input, &opts)?;
+    let ready_opts = ReadyOptions {
+        base: args.base,
+        ground: args.ground,
+        contact: !args.no_contact,
+        hold: !args.no_hold,
+        pose: args.pose.iter().cloned().collect(),
+    };
+    let ready = make_ready(
+        &mut imported.scene,
+        &args.input,
+        imported.root_static,
+        &ready_opts,
+    )?;
+    imported.report.ready = Some(ready);
     write_outputs(&imported, &args.input, &paths, args.force)?;
     if !args.quiet {
         let r = &imported.report;
@@ -116,6 +160,18 @@ pub fn run_import(args: &ImportArgs) -> anyhow::Result<()> {
         }
         for n in &r.notes {
             eprintln!("  note: {n}");
+        }
+        if let Some(ready) = &r.ready {
+            eprintln!("  base: {}", ready.base);
+            if !ready.excluded_pairs.is_empty() {
+                eprintln!(
+                    "  contact: {} link pairs overlap in the initial pose and are excluded (see the report)",
+                    ready.excluded_pairs.len()
+                );
+            }
+            if let Some(lift) = ready.ground_lift {
+                eprintln!("  ground: robot lifted by {lift:.4} m onto the plane z = 0");
+            }
         }
     }
     Ok(())

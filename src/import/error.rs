@@ -25,7 +25,7 @@ pub enum ImportError {
         msg: String,
     },
     #[error(
-        "{}: joint \"{joint}\": unsupported joint type \"{kind}\" (supported: revolute, continuous, prismatic, fixed, floating)",
+        "{}: joint \"{joint}\": unsupported joint type \"{kind}\" (supported: revolute, continuous, prismatic, fixed, floating, spherical)",
         path.display()
     )]
     UnsupportedJoint {

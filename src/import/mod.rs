@@ -27,6 +27,7 @@ pub mod mesh;
 pub mod polytope;
 pub mod primitives;
 pub mod python;
+pub mod ready;
 pub mod report;
 pub mod source;
 pub mod urdf;
@@ -127,6 +128,8 @@ pub struct Imported {
     pub scene: SceneSpec,
     pub links: Vec<ImportedLink>,
     pub report: ImportReport,
+    /// The input marks its root link as static (see [`ready::root_is_static`]).
+    pub root_static: bool,
 }
 
 /// Input kinds by extension.
@@ -484,11 +487,14 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         total_vertices,
         disconnected_links: disconnected,
         notes,
+        ready: None,
         seconds: t0.elapsed().as_secs_f64(),
     };
+    let root = src.links.iter().find(|l| l.parent.is_none());
     Ok(Imported {
         scene,
         links: imported_links,
         report,
+        root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
     })
 }

@@ -74,6 +74,10 @@ pub struct ImportReport {
     pub disconnected_links: Vec<String>,
     /// Simplifications and fallbacks, in words.
     pub notes: Vec<String>,
+    /// Base, contact exclusions, ground placement and gains written by
+    /// `sdrs import` (see [`super::ready`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ready: Option<super::ready::ReadyReport>,
     /// Wall time of the whole import (s).
     pub seconds: f64,
 }

@@ -109,7 +109,7 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
             let kind = attr("type").unwrap_or_default();
             if !matches!(
                 kind.as_str(),
-                "revolute" | "continuous" | "prismatic" | "fixed" | "floating"
+                "revolute" | "continuous" | "prismatic" | "fixed" | "floating" | "spherical"
             ) {
                 return Err(ImportError::UnsupportedJoint {
                     path: path.to_path_buf(),
@@ -332,10 +332,7 @@ fn convert(
                 ));
             }
         }
-        if matches!(
-            j.joint_type,
-            urdf_rs::JointType::Planar | urdf_rs::JointType::Spherical
-        ) {
+        if matches!(j.joint_type, urdf_rs::JointType::Planar) {
             return Err(ImportError::UnsupportedJoint {
                 path: path.to_path_buf(),
                 joint: j.name.clone(),
@@ -488,7 +485,10 @@ fn convert(
                     urdf_rs::JointType::Prismatic => (JointType::Prismatic, Some(axis)),
                     urdf_rs::JointType::Fixed => (JointType::Fixed, None),
                     urdf_rs::JointType::Floating => (JointType::Free, None),
-                    _ => unreachable!("rejected above"),
+                    // pybullet's extension: a 3-DOF ball joint (rotation
+                    // vector in a re-centred chart: no gimbal lock).
+                    urdf_rs::JointType::Spherical => (JointType::Spherical, None),
+                    urdf_rs::JointType::Planar => unreachable!("rejected above"),
                 };
                 let (lower, upper) = limits(j);
                 let input_joints = if kind == JointType::Fixed {

@@ -1,0 +1,347 @@
+//! Turns an imported design into a scene that *does something*: the base
+//! fixed or floating, the robot on the ground, contact on with exclusions
+//! for link pairs that overlap in the rest pose, and PD gains that hold the
+//! initial pose under gravity.
+//!
+//! - **Base** ([`BaseMode::Auto`], the default): floating when the input's
+//!   root is a floating joint, or when the root link has a positive mass;
+//!   fixed when the root link is massless or missing an `<inertial>` (the
+//!   convention of pybullet's URDF loader, where a massless base is
+//!   static) or is named `world`. A floating root becomes a `free` joint.
+//! - **Pose** (`--pose joint=value,…`): initial coordinates of revolute and
+//!   prismatic joints (rad or m); the PD targets hold this pose.
+//! - **Contact** (on by default): `s = 0.01`, `κ = 1`, `μ = 0.5`; every pair
+//!   of links whose hulls intersect or lie within `1.5 × 2s/(1−s)` of each
+//!   other in the initial pose is excluded (listed in the report): the
+//!   barrier could never start from such a state, and a designed overlap is
+//!   not a collision.
+//! - **Ground** (`--ground`): a plane at height 0; the robot is lifted so
+//!   that its lowest hull vertex starts at the edge of the barrier's range
+//!   `2s/(1−s)`: no contact force yet, and a drop of millimetres to where
+//!   the barrier carries the weight (starting deeper inside the range
+//!   launches robots whose feet have many low vertices).
+//! - **Gains** per actuated joint `j` (paper convention, restoring force
+//!   `2 k_p (θ* − θ)`, damping `(2 k_d/Δt) θ̇`):
+//!   `k_p,j = max(k_min, T_j / (2 θ_hold))` with `T_j = m_j g r_j` the
+//!   largest gravity torque the joint can see in any pose (`m_j` the mass
+//!   and `r_j` the reach of the subtree it moves), plus, for a floating
+//!   robot, `m g r_j / 2` (a leg carrying half the body's weight `m g`);
+//!   `θ_hold = 0.02 rad` (or m), `k_min = 1`. The joint then deflects by
+//!   at most `θ_hold` under gravity, and its stiffness `2 k_p` exceeds
+//!   gravity's destabilizing `m_j g r_j` (an upright arm stays up).
+//!   `k_d,j = Δt √(2 k_p,j M_jj)` damps the joint's own inertia `M_jj`
+//!   (from the step Hessian at rest, `M = Δt² ∂²O/∂θ²`) critically.
+
+use super::error::ImportError;
+use crate::contact::ContactParams;
+use crate::contact::separation::{Separation, separate};
+use crate::control::Signal;
+use crate::energy::Need;
+use crate::geometry::WorldHulls;
+use crate::scene::Scene;
+use crate::scene::schema::{
+    ContactSpec, Gains, GroundSpec, InitialSpec, JointType, SceneSpec, SignalList,
+};
+use serde::Serialize;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// How the robot's base is attached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum BaseMode {
+    /// Floating unless the input says the base is static (see module doc).
+    Auto,
+    /// Bolted to the world at the root joint's origin.
+    Fixed,
+    /// A free 6-DOF body.
+    Floating,
+}
+
+/// Options of [`make_ready`]; every default is in the module doc.
+#[derive(Clone, Debug)]
+pub struct ReadyOptions {
+    pub base: BaseMode,
+    /// Add a ground plane and place the robot on it. Default false.
+    pub ground: bool,
+    /// Turn contact on (with rest-pose exclusions). Default true.
+    pub contact: bool,
+    /// Add PD gains and targets holding the initial pose. Default true.
+    pub hold: bool,
+    /// Initial coordinates by joint name.
+    pub pose: BTreeMap<String, f64>,
+}
+
+impl Default for ReadyOptions {
+    fn default() -> Self {
+        ReadyOptions {
+            base: BaseMode::Auto,
+            ground: false,
+            contact: true,
+            hold: true,
+            pose: BTreeMap::new(),
+        }
+    }
+}
+
+/// Angle (rad) or displacement (m) by which gravity may deflect a held joint.
+pub const HOLD_ERROR: f64 = 0.02;
+
+/// What [`make_ready`] did, for the import report.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReadyReport {
+    /// `fixed` or `floating`, and why.
+    pub base: String,
+    /// Link pairs excluded from contact because they overlap (or nearly) in
+    /// the initial pose, as `robot/link` names.
+    pub excluded_pairs: Vec<[String; 2]>,
+    /// Height by which the robot was lifted onto the ground (m), if any.
+    pub ground_lift: Option<f64>,
+    /// PD gains per joint: `[k_p, k_d]`.
+    pub gains: BTreeMap<String, [f64; 2]>,
+}
+
+/// Whether the input marks its root as static (see module doc).
+pub fn root_is_static(root_name: &str, root_mass: Option<f64>) -> bool {
+    root_name == "world" || !root_mass.is_some_and(|m| m > 0.0)
+}
+
+/// Applies the options to the imported scene (one robot); `file` names the
+/// input in errors, `root_static` is [`root_is_static`] of the input.
+pub fn make_ready(
+    scene: &mut SceneSpec,
+    file: &Path,
+    root_static: bool,
+    opts: &ReadyOptions,
+) -> Result<ReadyReport, ImportError> {
+    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+        path: file.to_path_buf(),
+        element,
+        msg,
+    };
+    let robot = &mut scene.robots[0];
+    let root = robot
+        .links
+        .iter()
+        .position(|l| l.parent.is_none())
+        .expect("an imported robot has a root");
+    let root_free = robot.links[root].joint.kind == JointType::Free;
+    let floating = match opts.base {
+        BaseMode::Fixed => false,
+        BaseMode::Floating => true,
+        BaseMode::Auto => root_free || !root_static,
+    };
+    let base = match (opts.base, floating) {
+        (BaseMode::Auto, true) if root_free => "floating (the input's root joint is floating)",
+        (BaseMode::Auto, true) => "floating (the root link has a mass; --base fixed bolts it down)",
+        (BaseMode::Auto, false) => {
+            "fixed (the root link is massless or `world`; --base floating frees it)"
+        }
+        (_, true) => "floating (--base floating)",
+        (_, false) => "fixed (--base fixed)",
+    }
+    .to_string();
+    if floating && !root_free {
+        let j = &mut robot.links[root].joint;
+        j.kind = JointType::Free;
+        j.axis = None;
+        j.axes = None;
+    } else if !floating && root_free {
+        robot.links[root].joint.kind = JointType::Fixed;
+    }
+    // Pose.
+    for (joint, value) in &opts.pose {
+        let Some(link) = robot
+            .links
+            .iter()
+            .find(|l| l.joint.name.as_deref().unwrap_or(&l.name) == joint)
+        else {
+            let known: Vec<&str> = robot
+                .links
+                .iter()
+                .filter(|l| matches!(l.joint.kind, JointType::Revolute | JointType::Prismatic))
+                .map(|l| l.joint.name.as_deref().unwrap_or(&l.name))
+                .collect();
+            return Err(invalid(
+                format!("--pose {joint}"),
+                format!(
+                    "no revolute or prismatic joint of that name (joints: {})",
+                    known.join(", ")
+                ),
+            ));
+        };
+        if !matches!(link.joint.kind, JointType::Revolute | JointType::Prismatic)
+            || !value.is_finite()
+        {
+            return Err(invalid(
+                format!("--pose {joint}"),
+                format!("needs a revolute or prismatic joint and a finite value, got {value}"),
+            ));
+        }
+        robot.initial.insert(
+            joint.clone(),
+            InitialSpec {
+                q: vec![*value],
+                qdot: Vec::new(),
+            },
+        );
+    }
+    let robot_name = robot.name.clone();
+
+    // The scene as it stands, for geometry and gains.
+    let load = |spec: &SceneSpec| {
+        Scene::from_spec(spec.clone(), file).map_err(|e| ImportError::Invalid {
+            path: file.to_path_buf(),
+            msg: e.to_string(),
+        })
+    };
+    let mut report = ReadyReport {
+        base,
+        excluded_pairs: Vec::new(),
+        ground_lift: None,
+        gains: BTreeMap::new(),
+    };
+    let contact = ContactSpec {
+        mu: 0.5,
+        ..ContactSpec::default()
+    };
+    let range = ContactParams::with_width(contact.s).support_distance();
+    let plain = load(scene)?;
+    let model = &plain.model;
+    let mut hulls = WorldHulls::new(model);
+    let poses = crate::sim::SimState::new(
+        model,
+        plain.q0.clone(),
+        &plain.qdot0,
+        plain.charts.clone(),
+        plain.settings.dt,
+    )
+    .poses;
+    hulls.update(model, &poses);
+
+    if opts.contact {
+        let mut close = BTreeSet::new();
+        let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
+        for a in 0..hulls.ids.len() {
+            for b in a + 1..hulls.ids.len() {
+                let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+                if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
+                    continue;
+                }
+                let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
+                    Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
+                    _ => true,
+                };
+                if near {
+                    close.insert((la.min(lb), la.max(lb)));
+                }
+            }
+        }
+        let mut exclude = Vec::new();
+        for (la, lb) in close {
+            let name = |l: usize| format!("{robot_name}/{}", model.links[l].name);
+            exclude.push([name(la), name(lb)]);
+        }
+        report.excluded_pairs = exclude.clone();
+        scene.contact = Some(ContactSpec { exclude, ..contact });
+    }
+    if opts.ground {
+        let min_z = (0..hulls.ids.len())
+            .flat_map(|h| hulls.hull(h).iter().map(|x| x.z))
+            .fold(f64::INFINITY, f64::min);
+        let lift = range - min_z;
+        scene.robots[0].base.xyz[2] += lift;
+        scene.ground = Some(serde_yaml::from_str::<GroundSpec>("height: 0").expect("static"));
+        report.ground_lift = Some(lift);
+    }
+    if opts.hold {
+        report.gains = hold_gains(scene, file, floating, &load)?;
+        let robot = &mut scene.robots[0];
+        for (joint, [kp, kd]) in &report.gains {
+            let q = robot
+                .initial
+                .get(joint)
+                .and_then(|i| i.q.first())
+                .copied()
+                .unwrap_or(0.0);
+            robot.controller.gains.insert(
+                joint.clone(),
+                Gains {
+                    kp: Some(*kp),
+                    kd: Some(*kd),
+                },
+            );
+            robot.controller.targets.insert(
+                joint.clone(),
+                SignalList::One(Signal::Constant { value: q }),
+            );
+        }
+    }
+    load(scene)?;
+    Ok(report)
+}
+
+/// Gains of every revolute/prismatic joint (see the module doc).
+fn hold_gains(
+    scene: &SceneSpec,
+    file: &Path,
+    floating: bool,
+    load: &dyn Fn(&SceneSpec) -> Result<Scene, ImportError>,
+) -> Result<BTreeMap<String, [f64; 2]>, ImportError> {
+    // Gravity torques and joint inertias with the base fixed and no contact.
+    let mut fixed = scene.clone();
+    fixed.contact = None;
+    fixed.ground = None;
+    let root = fixed.robots[0]
+        .links
+        .iter()
+        .position(|l| l.parent.is_none())
+        .expect("root");
+    fixed.robots[0].links[root].joint.kind = JointType::Fixed;
+    let s = load(&fixed)?;
+    let mut sim = s.simulator();
+    let (_, _, hess) = sim
+        .objective(&s.q0, Need::Hessian)
+        .map_err(|e| ImportError::Invalid {
+            path: file.to_path_buf(),
+            msg: format!("evaluating the imported robot at its initial pose: {e}"),
+        })?;
+    let model = &s.model;
+    let dt = s.settings.dt;
+    let g = s.settings.gravity.norm();
+    let total_mass: f64 = model.first_moment.iter().map(|m| m[3]).sum();
+    let poses = &sim.state.poses;
+    let mut gains = BTreeMap::new();
+    for (li, link) in model.links.iter().enumerate() {
+        if !matches!(link.joint.type_name(), "revolute" | "prismatic") {
+            continue;
+        }
+        let j = link.dof_offset;
+        // Mass and reach of the subtree moved by this joint.
+        let origin = poses[li].column(3).into_owned();
+        let (mut mass, mut reach) = (0.0, 0.0f64);
+        for (lk, other) in model.links.iter().enumerate() {
+            if !model.ancestor_dofs[lk].contains(&j) {
+                continue;
+            }
+            mass += model.first_moment[lk][3];
+            for h in &other.hulls {
+                for x in &h.x_local {
+                    let w = poses[lk].fixed_columns::<3>(0) * x + poses[lk].column(3);
+                    reach = reach.max((w - origin).norm());
+                }
+            }
+        }
+        // The largest gravity torque in any pose, plus (floating) a leg's
+        // share of the body's weight.
+        let mut torque = mass * g * reach;
+        if floating {
+            torque += 0.5 * total_mass * g * reach;
+        }
+        let kp = (torque / (2.0 * HOLD_ERROR)).max(1.0);
+        let inertia = (hess[(j, j)] * dt * dt).max(0.0);
+        let kd = dt * (2.0 * kp * inertia).sqrt();
+        gains.insert(link.joint_name.clone(), [kp, kd]);
+    }
+    Ok(gains)
+}
