@@ -147,14 +147,14 @@ fn coacd(
         element: ctx.element.clone(),
         msg,
     };
-    let dir = std::env::temp_dir().join(format!(
+    let tmp = super::child::TempDir::create(std::env::temp_dir().join(format!(
         "sdrs-coacd-{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-    ));
-    std::fs::create_dir_all(&dir).map_err(|e| fail(format!("temporary directory: {e}")))?;
-    let input = dir.join("mesh.obj");
-    let output = dir.join("hulls.json");
+    )))
+    .map_err(|e| fail(format!("temporary directory: {e}")))?;
+    let input = tmp.path().join("mesh.obj");
+    let output = tmp.path().join("hulls.json");
     let result = (|| {
         std::fs::write(&input, mesh.to_obj()).map_err(|e| fail(e.to_string()))?;
         let args: Vec<std::ffi::OsString> = vec![
@@ -191,7 +191,7 @@ fn coacd(
         }
         Ok(hulls)
     })();
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(tmp);
     result
 }
 

@@ -15,6 +15,7 @@
 // Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod child;
 pub mod cli;
 pub mod connectivity;
 pub mod decompose;

@@ -60,7 +60,9 @@ pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput,
             ),
         });
     }
-    let out = Command::new(&py).arg(&path).args(args).output().map_err(|e| ImportError::Python {
+    let mut cmd = Command::new(&py);
+    cmd.arg(&path).args(args);
+    let out = super::child::spawn_output(cmd).map_err(|e| ImportError::Python {
         msg: format!(
             "cannot run Python ({}): {e}; install the helpers' environment with `{SETUP_COMMAND}` (from the sdrs source tree)",
             py.display()
