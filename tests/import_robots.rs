@@ -221,8 +221,22 @@ fn authored_robots_and_objects_write_outputs_that_simulate() {
 #[test]
 fn make_robots_output_is_reproducible() {
     let dir = temp_dir("make-robots");
+    // Same profile as this test, so the suite builds the project once.
+    let profile = if cfg!(debug_assertions) {
+        "dev"
+    } else {
+        "release"
+    };
     let status = std::process::Command::new(env!("CARGO"))
-        .args(["run", "--quiet", "--example", "make_robots", "--"])
+        .args([
+            "run",
+            "--quiet",
+            "--profile",
+            profile,
+            "--example",
+            "make_robots",
+            "--",
+        ])
         .arg(&dir)
         .current_dir(root())
         .status()

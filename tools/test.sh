@@ -7,4 +7,6 @@ cd "$(dirname "$0")/.."
 if [ -f tools/setup_python.sh ]; then
   bash tools/setup_python.sh
 fi
-cargo test --workspace --all-targets
+# The release profile: the same build as the README's main command
+# (`cargo run --release`), so a fresh clone compiles the project once.
+cargo test --release --workspace --all-targets
