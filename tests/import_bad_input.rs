@@ -367,3 +367,33 @@ fn non_finite_or_negative_mass_names_the_link() {
         cleanup(&dir);
     }
 }
+
+#[test]
+fn a_malformed_number_names_the_line_the_element_and_the_attribute() {
+    let r = "<robot name=\"r\">\n  <link name=\"a\">\n    <collision><geometry><box size=\"1 x 1\"/></geometry></collision>\n  </link>\n</robot>\n";
+    let (e, dir) = fails("bad-number", &[("r.urdf", r)], "r.urdf");
+    for part in [
+        "line 3",
+        "<link name=\"a\">",
+        "<box>",
+        "size=\"1 x 1\"",
+        "\"x\" is not a number",
+    ] {
+        assert!(e.contains(part), "{part:?} missing: {e}");
+    }
+    cleanup(&dir);
+    let r = "<robot name=\"r\">\n  <link name=\"a\">\n    <visual><origin xyz=\"0 0\"/><geometry><sphere radius=\"1\"/></geometry></visual>\n  </link>\n</robot>\n";
+    let (e, dir) = fails("bad-count", &[("r.urdf", r)], "r.urdf");
+    assert!(
+        e.contains("line 3") && e.contains("must be 3 numbers, got 2"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+#[test]
+fn an_empty_urdf_says_so() {
+    let (e, dir) = fails("empty-urdf", &[("r.urdf", "")], "r.urdf");
+    assert!(e.contains("the file is empty"), "{e}");
+    cleanup(&dir);
+}

@@ -184,3 +184,17 @@ fn building_a_long_chain_is_linear_time() {
     // Four times the links may cost at most ~8× (linear plus noise), not 64×.
     assert!(times[1] < 8.0 * times[0] + 0.5, "{times:?}");
 }
+
+#[test]
+fn an_empty_file_says_so() {
+    let (path, msg) = load("empty.yaml", "  \n");
+    assert_names(&msg, &path, &["the file is empty"]);
+    assert!(!msg.contains("missing field"), "{msg}");
+}
+
+#[test]
+fn a_missing_file_names_its_cause_once() {
+    let err = Scene::load("/nonexistent/dir/scene.yaml").unwrap_err();
+    let chain = format!("{:#}", anyhow::Error::from(err));
+    assert_eq!(chain.matches("No such file").count(), 1, "{chain}");
+}

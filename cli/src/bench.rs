@@ -9,9 +9,11 @@ use std::time::Instant;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scene to benchmark; every robot with a `chain` gets `--links` links.
-    #[arg(long, default_value = "robots/four_chains.yaml")]
-    pub scene: PathBuf,
+    /// Scene to benchmark; every robot with a `chain` gets `--links` links
+    /// [default: the bundled robots/four_chains.yaml, found from the current
+    /// directory or from the binary's location in a source tree].
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
     /// Links per chain, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "2,4,8,16,32")]
     pub links: Vec<usize>,
@@ -27,10 +29,14 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build; benchmark with `cargo run --release -- bench`");
     }
-    let text = std::fs::read_to_string(&a.scene)
-        .with_context(|| format!("reading {}", a.scene.display()))?;
+    let path = match &a.scene {
+        Some(s) => s.clone(),
+        None => bundled_scene()?,
+    };
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
     let base: sdrs::scene::SceneSpec =
-        serde_yaml::from_str(&text).with_context(|| format!("parsing {}", a.scene.display()))?;
+        serde_yaml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let mut rows = Vec::new();
     println!("| links/chain | dof | ms/step | Newton it/step | stage breakdown (ms/step) |");
     println!("|---:|---:|---:|---:|---|");
@@ -41,7 +47,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
                 c.links = n;
             }
         }
-        let scene = Scene::from_spec(spec, &a.scene)?;
+        let scene = Scene::from_spec(spec, &path)?;
         let mut sim = scene.simulator();
         let t0 = Instant::now();
         let traj = sdrs::sim::run::run(&mut sim, a.steps, |_| {})?;
@@ -68,4 +74,23 @@ pub fn run(a: BenchArgs) -> Result<()> {
         write_atomic(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;
     }
     Ok(())
+}
+
+/// `robots/four_chains.yaml` in the current directory or above the binary
+/// (`target/release/sdrs` in a source tree).
+fn bundled_scene() -> Result<PathBuf> {
+    let rel = std::path::Path::new("robots/four_chains.yaml");
+    let cwd = std::env::current_dir().ok();
+    let exe = std::env::current_exe().ok();
+    cwd.iter()
+        .chain(exe.iter())
+        .flat_map(|p| p.ancestors())
+        .map(|d| d.join(rel))
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "the bundled scene {} was not found from the current directory or the binary's location; pass --scene PATH",
+                rel.display()
+            )
+        })
 }

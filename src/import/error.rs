@@ -6,12 +6,10 @@ use std::path::PathBuf;
 /// Why an import failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
-    #[error("{}: cannot read the file: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The cause is part of the message (not a separate `source`), so a
+    /// cause chain prints it once.
+    #[error("{}: cannot read the file: {err}", path.display())]
+    Io { path: PathBuf, err: std::io::Error },
     #[error("{}: malformed URDF XML{}: {msg}", path.display(), at_line(*line))]
     MalformedXml {
         path: PathBuf,

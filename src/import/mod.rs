@@ -146,7 +146,7 @@ pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
     if !input.is_file() {
         return Err(ImportError::Io {
             path: input.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+            err: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
     let src = if is_urdf(input) {

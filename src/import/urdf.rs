@@ -39,10 +39,17 @@ use std::path::{Path, PathBuf};
 
 /// Reads a URDF file.
 pub fn read_urdf(path: &Path, opts: &ImportOptions) -> Result<SourceRobot, ImportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ImportError::Io {
+    let text = std::fs::read_to_string(path).map_err(|err| ImportError::Io {
         path: path.to_path_buf(),
-        source,
+        err,
     })?;
+    if text.trim().is_empty() {
+        return Err(ImportError::MalformedXml {
+            path: path.to_path_buf(),
+            line: None,
+            msg: "the file is empty".into(),
+        });
+    }
     prescan(path, &text)?;
     let robot = urdf_rs::read_from_string(&text).map_err(|e| ImportError::MalformedXml {
         path: path.to_path_buf(),
@@ -60,10 +67,31 @@ fn line_of(text: &str, pos: usize) -> usize {
         + 1
 }
 
-/// Well-formedness and joint types.
+/// How many numbers a URDF attribute holds, for the attributes read as
+/// numbers (`None`: not numeric).
+fn numeric_count(element: &str, attribute: &str) -> Option<usize> {
+    match (element, attribute) {
+        ("origin", "xyz" | "rpy") | ("axis", "xyz") | ("box", "size") | ("mesh", "scale") => {
+            Some(3)
+        }
+        ("color", "rgba") => Some(4),
+        ("cylinder" | "capsule", "radius" | "length")
+        | ("sphere", "radius")
+        | ("mass", "value")
+        | ("inertia", "ixx" | "ixy" | "ixz" | "iyy" | "iyz" | "izz")
+        | ("limit", "lower" | "upper" | "effort" | "velocity")
+        | ("dynamics", "damping" | "friction")
+        | ("mimic", "multiplier" | "offset") => Some(1),
+        _ => None,
+    }
+}
+
+/// Well-formedness, joint types and numeric attributes.
 fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
     let mut reader = quick_xml::Reader::from_str(text);
     let mut stack: Vec<String> = Vec::new();
+    // `<link name="arm">`-style labels of the open elements, for messages.
+    let mut labels: Vec<String> = Vec::new();
     let malformed = |line: usize, msg: String| ImportError::MalformedXml {
         path: path.to_path_buf(),
         line: Some(line),
@@ -83,6 +111,7 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
             Event::Empty(e) => (e, true),
             Event::End(_) => {
                 stack.pop();
+                labels.pop();
                 continue;
             }
             Event::Eof => break,
@@ -118,7 +147,49 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
                 });
             }
         }
+        // Numeric attributes: the count and the numbers, with the line and
+        // the element (urdf-rs reports neither).
+        let label = |e: &quick_xml::events::BytesStart, name: &str| -> String {
+            match e
+                .try_get_attribute("name")
+                .ok()
+                .flatten()
+                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+            {
+                Some(n) => format!("<{name} name=\"{n}\">"),
+                None => format!("<{name}>"),
+            }
+        };
+        for attr in e.attributes().flatten() {
+            let key = String::from_utf8_lossy(attr.key.as_ref()).into_owned();
+            let Some(count) = numeric_count(&name, &key) else {
+                continue;
+            };
+            let value = attr
+                .unescape_value()
+                .map(|v| v.into_owned())
+                .unwrap_or_default();
+            let tokens: Vec<&str> = value.split_whitespace().collect();
+            let bad = tokens.iter().find(|s| s.parse::<f64>().is_err());
+            if tokens.len() != count || bad.is_some() {
+                let mut path: Vec<String> = labels.clone();
+                path.push(label(e, &name));
+                return Err(malformed(
+                    line_of(text, pos),
+                    format!(
+                        "{}: attribute {key}=\"{value}\" must be {count} number{}{}",
+                        path.join(" "),
+                        if count == 1 { "" } else { "s" },
+                        match bad {
+                            Some(b) => format!(" (\"{b}\" is not a number)"),
+                            None => format!(", got {}", tokens.len()),
+                        }
+                    ),
+                ));
+            }
+        }
         if !empty {
+            labels.push(label(e, &name));
             stack.push(name);
         }
     }

@@ -18,12 +18,10 @@ use std::path::{Path, PathBuf};
 /// A problem with a scene file.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{}: cannot read the file: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    /// The cause is part of the message (not a separate `source`), so a
+    /// cause chain prints it once.
+    #[error("{}: cannot read the file: {err}", path.display())]
+    Io { path: PathBuf, err: std::io::Error },
     #[error("{}: malformed scene: {msg}", path.display())]
     Parse { path: PathBuf, msg: String },
     #[error("{}: {element}: {msg}", path.display())]
@@ -100,15 +98,21 @@ impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|err| SceneError::Io {
             path: path.to_path_buf(),
-            source,
+            err,
         })?;
         Self::from_str(&text, path)
     }
 
     /// Parses and validates scene text; `path` is used in messages only.
     pub fn from_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        if text.trim().is_empty() {
+            return Err(SceneError::Parse {
+                path: path.to_path_buf(),
+                msg: "the file is empty (a scene needs at least `dt` and `robots` or `objects`; see README, \"Scene files\")".into(),
+            });
+        }
         let spec: SceneSpec = serde_yaml::from_str(text).map_err(|e| SceneError::Parse {
             path: path.to_path_buf(),
             msg: e.to_string(),
