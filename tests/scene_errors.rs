@@ -17,6 +17,8 @@ fn load(name: &str, text: &str) -> (PathBuf, String) {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     let err = Scene::load(&path).expect_err("the scene must be rejected");
+    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_dir(&dir); // only once empty (tests run in parallel)
     (path, err.to_string())
 }
 

@@ -21,11 +21,42 @@ pub fn robots(name: &str) -> PathBuf {
 }
 
 /// A fresh scratch directory for one test.
-pub fn scratch_dir(name: &str) -> PathBuf {
+pub fn scratch_dir(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("sdrs-test-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
+}
+
+/// A test's scratch directory: removed when the test passes, kept (for
+/// inspection) when it panics.
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// The project's Python (`.venv`, made by `tools/setup_python.sh`). Panics
