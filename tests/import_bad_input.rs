@@ -118,22 +118,35 @@ fn empty_mesh_names_the_mesh() {
     cleanup(&dir);
 }
 
+/// Non-manifold meshes import (see `tests/import_robustness.rs`) except
+/// with `--decomposer none`, which needs a closed convex mesh.
 #[test]
-fn non_manifold_mesh_names_the_mesh() {
+fn non_manifold_mesh_with_decomposer_none_names_the_mesh() {
     // A tetrahedron with a fin: edge 1-2 carries three triangles.
     let fin = format!("{TET}v 0.5 -1 0\nf 1 2 5\n");
-    let (e, dir) = fails(
-        "nonmanifold",
-        &[
-            ("r.urdf", &urdf("revolute", "arm.obj", "")),
-            ("arm.obj", &fin),
-        ],
-        "r.urdf",
+    let dir = temp_dir("nonmanifold-none");
+    std::fs::write(dir.join("r.urdf"), urdf("revolute", "arm.obj", "")).unwrap();
+    std::fs::write(dir.join("arm.obj"), &fin).unwrap();
+    let inp = dir.join("r.urdf");
+    let out = dir.join("out/design.yaml");
+    let cli = Cli::parse_from([
+        "import".as_ref(),
+        inp.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--decomposer".as_ref(),
+        "none".as_ref(),
+        "--quiet".as_ref(),
+    ]);
+    let e = format!(
+        "{:#}",
+        run_import(&cli.args).expect_err("none needs a closed convex mesh")
     );
     assert!(
-        e.contains("arm.obj") && e.contains("not manifold") && e.contains("link \"arm\""),
+        e.contains("link \"arm\"") && e.contains("closed convex"),
         "{e}"
     );
+    assert!(!out.exists());
     cleanup(&dir);
 }
 

@@ -73,3 +73,43 @@ fn a_fixed_joint_with_a_zero_axis_imports() {
     assert_eq!(tool.joint.kind, sdrs::scene::schema::JointType::Fixed);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A convex decomposition needs no manifold input (laikago, mini_cheetah,
+/// the mugs, pr2_gripper and samurai in pybullet_data have non-manifold
+/// collision meshes): the import succeeds, says so in the report, and the
+/// hulls still cover every vertex of the mesh.
+#[test]
+fn a_non_manifold_mesh_imports_with_a_note() {
+    // A tetrahedron with a fin: edge 1-2 carries three triangles.
+    let fin = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0.5 -1 0\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 2 5\n";
+    for decomposer in [Decomposer::Hull, Decomposer::Vhacd] {
+        let dir = temp_dir("non-manifold");
+        std::fs::write(dir.join("fin.obj"), fin).unwrap();
+        let r = r#"<robot name="r"><link name="arm"><collision><geometry><mesh filename="fin.obj"/></geometry></collision></link></robot>"#;
+        std::fs::write(dir.join("r.urdf"), r).unwrap();
+        let imported = import(&dir.join("r.urdf"), &options(decomposer))
+            .unwrap_or_else(|e| panic!("{decomposer:?}: {e}"));
+        assert!(
+            imported
+                .report
+                .notes
+                .iter()
+                .any(|n| n.contains("not manifold")),
+            "{:?}",
+            imported.report.notes
+        );
+        let hulls: Vec<_> = imported.links[0]
+            .hulls
+            .iter()
+            .map(|h| convex_hull(h).unwrap())
+            .collect();
+        for v in [[0.5, -1.0, 0.0], [0.0, 0.0, 1.0]] {
+            let p = nalgebra::Vector3::from(v);
+            let inside = hulls
+                .iter()
+                .any(|h| h.planes.iter().all(|(n, b)| n.dot(&p) - b <= 0.02));
+            assert!(inside, "{decomposer:?}: vertex {v:?} is not covered");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -55,16 +55,6 @@ pub enum ImportError {
         mesh: PathBuf,
     },
     #[error(
-        "{}: {element}: mesh {} is not manifold: {msg} (repair it, e.g. with trimesh `mesh.process(validate=True)` or MeshLab's \"Repair non-manifold edges\")",
-        path.display(), mesh.display()
-    )]
-    NonManifoldMesh {
-        path: PathBuf,
-        element: String,
-        mesh: PathBuf,
-        msg: String,
-    },
-    #[error(
         "{}: {element}: mesh format \".{ext}\" of {} is not supported (supported: .obj, .stl); convert it first, e.g. `python -c \"import trimesh; trimesh.load('{}', force='mesh').export('{}.obj')\"`, or with MeshLab/Blender (File → Export → OBJ)",
         path.display(), mesh.display(), file_name(mesh), file_stem(mesh)
     )]

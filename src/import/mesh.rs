@@ -157,8 +157,9 @@ impl TriMesh {
 }
 
 /// Reads a mesh file (`.obj` or `.stl`, case-insensitive), welds it and
-/// checks that it is non-empty and manifold (no edge with more than two
-/// triangles). Open meshes are accepted (their volume is then unknown).
+/// checks that it is non-empty. Open and non-manifold meshes are accepted: a
+/// convex decomposition needs only the surface (the caller reports them;
+/// their volume is then unknown).
 pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError> {
     let ext = mesh
         .extension()
@@ -198,15 +199,6 @@ pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError>
             path: ctx.file.clone(),
             element: ctx.element.clone(),
             mesh: mesh.to_path_buf(),
-        });
-    }
-    let nm = m.non_manifold_edges();
-    if nm > 0 {
-        return Err(ImportError::NonManifoldMesh {
-            path: ctx.file.clone(),
-            element: ctx.element.clone(),
-            mesh: mesh.to_path_buf(),
-            msg: format!("{nm} edge(s) are shared by more than two triangles"),
         });
     }
     Ok(m)

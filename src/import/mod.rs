@@ -158,6 +158,8 @@ pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
 }
 
 struct LinkGeometry {
+    /// What was repaired or worked around, for the report.
+    notes: Vec<String>,
     hulls: Vec<DesignHull>,
     sources: Vec<TriMesh>,
     source_volume: Option<f64>,
@@ -180,6 +182,7 @@ fn link_geometry(
     let per_mesh = (opts.max_hulls / nmesh).max(1);
     let mut hulls = Vec::new();
     let mut sources = Vec::new();
+    let mut notes = Vec::new();
     let mut volume = Some(0.0);
     for g in &link.geometry {
         let geom_err = |msg: String| ImportError::Geometry {
@@ -247,12 +250,34 @@ fn link_geometry(
             (Some(a), Some(b)) => Some(a + b),
             _ => None,
         };
-        for p in decompose::decompose(&m, opts, per_mesh, &ctx)? {
+        let non_manifold = m.non_manifold_edges();
+        let parts = if non_manifold > 0 {
+            notes.push(format!(
+                "{}: mesh {} is not manifold ({non_manifold} edge(s) shared by more than two triangles); decomposed as a surface",
+                g.element,
+                path.display()
+            ));
+            match decompose::decompose(&m, opts, per_mesh, &ctx) {
+                Ok(p) => p,
+                Err(e) if opts.decomposer != decompose::Decomposer::None => {
+                    notes.push(format!(
+                        "{}: {e}; used the convex hull of the mesh's points instead",
+                        g.element
+                    ));
+                    vec![polytope::convex_hull(&m.vertices).map_err(geom_err)?]
+                }
+                Err(e) => return Err(e),
+            }
+        } else {
+            decompose::decompose(&m, opts, per_mesh, &ctx)?
+        };
+        for p in parts {
             hulls.push(DesignHull::new(p));
         }
         sources.push(m);
     }
     Ok(LinkGeometry {
+        notes,
         hulls,
         sources,
         source_volume: volume,
@@ -360,6 +385,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     let mut link_reports = Vec::with_capacity(n);
     let mut imported_links = Vec::with_capacity(n);
     let mut notes = src.notes.clone();
+    notes.extend(geoms.iter().flat_map(|g| g.notes.iter().cloned()));
     let mut joints = BTreeMap::new();
     for (li, l) in src.links.iter().enumerate() {
         let g = &geoms[li];
