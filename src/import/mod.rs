@@ -31,6 +31,7 @@ pub mod python;
 pub mod ready;
 pub mod report;
 pub mod source;
+pub mod tolerant;
 pub mod urdf;
 pub mod write;
 

@@ -51,12 +51,25 @@ pub fn read_urdf(path: &Path, opts: &ImportOptions) -> Result<SourceRobot, Impor
         });
     }
     prescan(path, &text)?;
-    let robot = urdf_rs::read_from_string(&text).map_err(|e| ImportError::MalformedXml {
-        path: path.to_path_buf(),
-        line: None,
-        msg: e.to_string(),
+    let (fixed, repairs) = super::tolerant::normalize(&text);
+    let robot = urdf_rs::read_from_string(&fixed).map_err(|e| {
+        let msg = e.to_string();
+        let msg = match msg.split("unknown variant `").nth(1).and_then(|s| s.split('`').next()) {
+            Some(shape) if msg.contains("expected one of `box`") => format!(
+                "geometry <{shape}> is not supported (supported: box, cylinder, capsule, sphere, mesh){}",
+                if shape == "plane" { "; for an infinite ground plane use the scene's `ground:`" } else { "" }
+            ),
+            _ => msg,
+        };
+        ImportError::MalformedXml {
+            path: path.to_path_buf(),
+            line: None,
+            msg,
+        }
     })?;
-    convert(path, &robot, opts)
+    let mut src = convert(path, &robot, opts)?;
+    src.notes.extend(repairs);
+    Ok(src)
 }
 
 fn line_of(text: &str, pos: usize) -> usize {
@@ -65,25 +78,6 @@ fn line_of(text: &str, pos: usize) -> usize {
         .filter(|&&c| c == b'\n')
         .count()
         + 1
-}
-
-/// How many numbers a URDF attribute holds, for the attributes read as
-/// numbers (`None`: not numeric).
-fn numeric_count(element: &str, attribute: &str) -> Option<usize> {
-    match (element, attribute) {
-        ("origin", "xyz" | "rpy") | ("axis", "xyz") | ("box", "size") | ("mesh", "scale") => {
-            Some(3)
-        }
-        ("color", "rgba") => Some(4),
-        ("cylinder" | "capsule", "radius" | "length")
-        | ("sphere", "radius")
-        | ("mass", "value")
-        | ("inertia", "ixx" | "ixy" | "ixz" | "iyy" | "iyz" | "izz")
-        | ("limit", "lower" | "upper" | "effort" | "velocity")
-        | ("dynamics", "damping" | "friction")
-        | ("mimic", "multiplier" | "offset") => Some(1),
-        _ => None,
-    }
 }
 
 /// Well-formedness, joint types and numeric attributes.
@@ -162,7 +156,7 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
         };
         for attr in e.attributes().flatten() {
             let key = String::from_utf8_lossy(attr.key.as_ref()).into_owned();
-            let Some(count) = numeric_count(&name, &key) else {
+            let Some(count) = super::tolerant::numeric_count(&name, &key) else {
                 continue;
             };
             let value = attr
@@ -171,7 +165,7 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
                 .unwrap_or_default();
             let tokens: Vec<&str> = value.split_whitespace().collect();
             let bad = tokens.iter().find(|s| s.parse::<f64>().is_err());
-            if tokens.len() != count || bad.is_some() {
+            if super::tolerant::normalize_value(&value, count).is_none() {
                 let mut path: Vec<String> = labels.clone();
                 path.push(label(e, &name));
                 return Err(malformed(
@@ -181,8 +175,10 @@ fn prescan(path: &Path, text: &str) -> Result<(), ImportError> {
                         path.join(" "),
                         if count == 1 { "" } else { "s" },
                         match bad {
-                            Some(b) => format!(" (\"{b}\" is not a number)"),
-                            None => format!(", got {}", tokens.len()),
+                            Some(b) if b.trim_end_matches('.').parse::<f64>().is_err() => {
+                                format!(" (\"{b}\" is not a number)")
+                            }
+                            _ => format!(", got {}", tokens.len()),
                         }
                     ),
                 ));
