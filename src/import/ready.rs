@@ -126,12 +126,17 @@ pub fn make_ready(
         .position(|l| l.parent.is_none())
         .expect("an imported robot has a root");
     let root_free = robot.links[root].joint.kind == JointType::Free;
+    let root_kind = robot.links[root].joint.kind;
     let floating = match opts.base {
+        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => false,
         BaseMode::Fixed => false,
         BaseMode::Floating => true,
         BaseMode::Auto => root_free || !root_static,
     };
     let base = match (opts.base, floating) {
+        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => {
+            "attached to the world by the root link's own joint"
+        }
         (BaseMode::Auto, true) if root_free => "floating (the input's root joint is floating)",
         (BaseMode::Auto, true) => "floating (the root link has a mass; --base fixed bolts it down)",
         (BaseMode::Auto, false) => {
@@ -141,11 +146,11 @@ pub fn make_ready(
         (_, false) => "fixed (--base fixed)",
     }
     .to_string();
-    if floating && !root_free {
-        let j = &mut robot.links[root].joint;
-        j.kind = JointType::Free;
-        j.axis = None;
-        j.axes = None;
+    // Only a fixed or free root changes: a root on a revolute or prismatic
+    // joint (a robot on a rail or a hinge to the world) keeps its joint.
+    let root_fixed = robot.links[root].joint.kind == JointType::Fixed;
+    if floating && root_fixed {
+        robot.links[root].joint.kind = JointType::Free;
     } else if !floating && root_free {
         robot.links[root].joint.kind = JointType::Fixed;
     }
@@ -297,7 +302,9 @@ fn hold_gains(
         .iter()
         .position(|l| l.parent.is_none())
         .expect("root");
-    fixed.robots[0].links[root].joint.kind = JointType::Fixed;
+    if fixed.robots[0].links[root].joint.kind == JointType::Free {
+        fixed.robots[0].links[root].joint.kind = JointType::Fixed;
+    }
     let s = load(&fixed)?;
     let mut sim = s.simulator();
     let (_, _, hess) = sim

@@ -1,0 +1,151 @@
+//! Every URDF that pybullet ships in `pybullet_data` (outside its 1000
+//! `random_urdfs` objects) imports with the default options and simulates
+//! 200 steps on the ground, with the base fixed and floating, with no
+//! interpenetration (our GJK at every step, python-fcl on every 20th step of
+//! the export). The only refusals allowed are listed in `REFUSED`, each with
+//! the reason the message must give.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use support::{python, root, scratch_dir, sdrs};
+
+/// Files refused, and the reason their error must name.
+const REFUSED: &[(&str, &str)] = &[
+    // The file names meshes/coarse/*.stl, which the package does not ship.
+    ("kuka_iiwa/model_for_sdf.urdf", "not found"),
+    // pybullet-only geometry types without a mesh or primitive equivalent.
+    ("plane_implicit.urdf", "geometry <plane> is not supported"),
+    ("toys/concave_box.urdf", "geometry <cdf> is not supported"),
+    // A deformable body (its geometry lives in a <deformable> element).
+    ("torus_deform.urdf", "has no <link>"),
+];
+
+fn pybullet_data() -> PathBuf {
+    let out = python()
+        .args([
+            "-c",
+            "import pybullet_data; print(pybullet_data.getDataPath())",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "pybullet_data missing: run tools/setup_python.sh"
+    );
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+}
+
+fn urdfs(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                if !p.ends_with("random_urdfs") {
+                    stack.push(p);
+                }
+            } else if p.extension().is_some_and(|x| x == "urdf") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn run_all(base: &str) {
+    let data = pybullet_data();
+    let files = urdfs(&data);
+    assert!(
+        files.len() >= 90,
+        "only {} URDFs found in {}",
+        files.len(),
+        data.display()
+    );
+    let dir = scratch_dir(&format!("pybullet-data-{base}"));
+    let (mut imported, mut refused) = (0, Vec::new());
+    for (k, urdf) in files.iter().enumerate() {
+        let rel = urdf
+            .strip_prefix(&data)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let scene = dir.join(format!("r{k}.yaml"));
+        let out = sdrs()
+            .args(["import", "-q", "--ground", "--base", base, "--out"])
+            .arg(&scene)
+            .arg(urdf)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!err.contains("panicked"), "{rel}: {err}");
+        if !out.status.success() {
+            let reason = REFUSED
+                .iter()
+                .find(|(f, _)| *f == rel)
+                .unwrap_or_else(|| panic!("{rel} was refused: {err}"));
+            assert!(
+                err.contains(reason.1),
+                "{rel}: expected \"{}\" in: {err}",
+                reason.1
+            );
+            assert!(
+                err.contains(&rel),
+                "{rel}: the error must name the file: {err}"
+            );
+            refused.push(rel);
+            continue;
+        }
+        imported += 1;
+        let export = dir.join(format!("r{k}_export"));
+        let json = dir.join(format!("r{k}.json"));
+        let out = sdrs()
+            .args(["simulate", "-q", "--steps", "200", "--json"])
+            .arg(&json)
+            .arg("--export")
+            .arg(&export)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{rel} ({base} base): {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        if let Some(d) = summary["contact"]["min_distance"].as_f64() {
+            assert!(d > 0.0, "{rel}: min distance {d}");
+        }
+        let check = python()
+            .arg(root().join("tools/check_separation.py"))
+            .arg(&export)
+            .args(["--every", "20"])
+            .output()
+            .unwrap();
+        assert!(
+            check.status.success(),
+            "{rel} ({base} base): python-fcl: {}{}",
+            String::from_utf8_lossy(&check.stdout),
+            String::from_utf8_lossy(&check.stderr)
+        );
+        let _ = std::fs::remove_dir_all(&export);
+    }
+    eprintln!(
+        "pybullet_data, {base} base: {imported} of {} URDFs imported and simulated 200 steps on the ground; refused: {refused:?}",
+        files.len()
+    );
+    assert_eq!(refused.len(), REFUSED.len(), "{refused:?}");
+}
+
+#[test]
+fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_fixed_base() {
+    run_all("fixed");
+}
+
+#[test]
+fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_floating_base() {
+    run_all("floating");
+}
