@@ -27,6 +27,9 @@ pub struct SimulateArgs {
     /// independent checks (`tools/check_separation.py`).
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// Also write a velocity column `<name>:v` per coordinate (rad/s, m/s).
+    #[arg(long)]
+    pub velocities: bool,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -57,7 +60,12 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         sim.timers.report(),
     );
     if let Some(out) = &a.out {
-        write_atomic(out, traj.to_csv().as_bytes())?;
+        let csv = if a.velocities {
+            traj.to_csv_with_velocities(scene.settings.dt, &scene.qdot0)
+        } else {
+            traj.to_csv()
+        };
+        write_atomic(out, csv.as_bytes())?;
     }
     if let Some(js) = &a.json {
         write_atomic(js, serde_json::to_string_pretty(&summary)?.as_bytes())?;
@@ -75,7 +83,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
         )?;
         write_atomic(
             &dir.join("poses.csv"),
-            sdrs::output::poses_csv(&traj).as_bytes(),
+            sdrs::output::poses_csv(&traj, &scene.model).as_bytes(),
         )?;
     }
     eprintln!(

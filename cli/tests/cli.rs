@@ -105,3 +105,44 @@ fn simulate_refuses_to_overwrite_its_input() {
     assert!(!out.status.success());
     assert_eq!(std::fs::read(&scene).unwrap(), before);
 }
+
+#[test]
+fn velocity_columns_units_and_link_names_are_written() {
+    let dir = scratch_dir("readable");
+    let (csv, json, export) = (dir.join("t.csv"), dir.join("s.json"), dir.join("exp"));
+    let status = sdrs()
+        .args(["simulate", "-q", "--steps", "20", "--velocities", "--out"])
+        .arg(&csv)
+        .arg("--json")
+        .arg(&json)
+        .arg("--export")
+        .arg(&export)
+        .arg(robots("pendulum.yaml"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(text.lines().next().unwrap(), "t,hinge,hinge:v");
+    let dt = rows[1][0] - rows[0][0];
+    for k in 1..rows.len() {
+        // The velocity column is the backward difference of the position.
+        let v = (rows[k][1] - rows[k - 1][1]) / dt;
+        assert!((rows[k][2] - v).abs() <= 1e-9 * v.abs().max(1.0), "row {k}");
+    }
+    assert_eq!(rows[0][2], 0.0, "initial velocity of the pendulum scene");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(summary["units"]["dt"], "s");
+    assert_eq!(summary["units"]["contact.min_distance"], "m");
+    let poses = std::fs::read_to_string(export.join("poses.csv")).unwrap();
+    assert!(poses.starts_with("step,t,link,link_name,"), "{poses:.80}");
+    assert!(
+        poses.lines().nth(1).unwrap().contains(",pendulum/bob,"),
+        "{poses:.200}"
+    );
+}

@@ -73,16 +73,43 @@ impl Trajectory {
     /// CSV text: a `t` column, then one column per coordinate. Numbers use
     /// Rust's shortest round-trip formatting (bit-exact and deterministic).
     pub fn to_csv(&self) -> String {
+        self.csv(None)
+    }
+
+    /// [`Trajectory::to_csv`] plus one velocity column `<name>:v` per
+    /// coordinate: `(q_k − q_{k−1})/Δt`, the velocity the position-level
+    /// integrator carries (rad/s or m/s; for rotation vectors, the rate of
+    /// the reported vector); the first row holds the initial velocity `qdot0`.
+    pub fn to_csv_with_velocities(&self, dt: f64, qdot0: &DVector<f64>) -> String {
+        self.csv(Some((dt, qdot0)))
+    }
+
+    fn csv(&self, velocities: Option<(f64, &DVector<f64>)>) -> String {
         let mut s = String::from("t");
         for n in &self.names {
             s.push(',');
             s.push_str(n);
         }
+        if velocities.is_some() {
+            for n in &self.names {
+                s.push_str(&format!(",{n}:v"));
+            }
+        }
         s.push('\n');
-        for (t, q) in self.times.iter().zip(&self.states) {
+        for (k, (t, q)) in self.times.iter().zip(&self.states).enumerate() {
             s.push_str(&format!("{t}"));
             for v in q.iter() {
                 s.push_str(&format!(",{v}"));
+            }
+            if let Some((dt, qdot0)) = velocities {
+                for i in 0..q.len() {
+                    let v = if k == 0 {
+                        qdot0[i]
+                    } else {
+                        (q[i] - self.states[k - 1][i]) / dt
+                    };
+                    s.push_str(&format!(",{v}"));
+                }
             }
             s.push('\n');
         }
@@ -127,6 +154,8 @@ pub struct MomentumStats {
 /// The summary JSON of `sdrs simulate`.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    /// Units of every numeric field (SI; see [`Summary::units`]).
+    pub units: BTreeMap<&'static str, &'static str>,
     pub scene: String,
     pub steps: usize,
     pub dt: f64,
@@ -154,6 +183,30 @@ pub struct ContactStats {
 }
 
 impl Summary {
+    /// The unit of each field, by its JSON path (`*` for every key).
+    pub fn units() -> BTreeMap<&'static str, &'static str> {
+        BTreeMap::from([
+            ("dt", "s"),
+            ("wall_seconds", "s"),
+            ("seconds_per_step", "s"),
+            (
+                "newton.max_final_gradient",
+                "J per unit coordinate (J/rad or J/m)",
+            ),
+            (
+                "final_state.*",
+                "rad for revolute and rotation coordinates, m for prismatic and translation ones",
+            ),
+            (
+                "energy.*",
+                "J (kinetic + gravity potential of the lumped vertex masses; driven, frictional or contact scenes exchange energy with the controller, friction and barrier, so a change is not an error)",
+            ),
+            ("linear_momentum.*", "kg m/s"),
+            ("contact.min_distance", "m"),
+            ("stages.*.seconds", "s (whole run)"),
+        ])
+    }
+
     pub fn new(
         scene: &str,
         dt: f64,
@@ -218,6 +271,7 @@ impl Summary {
             min_distance: min_d.is_finite().then_some(min_d),
         };
         Summary {
+            units: Self::units(),
             scene: scene.to_string(),
             steps,
             dt,
@@ -278,11 +332,17 @@ impl HullExport {
 
 /// Link poses as CSV: `step,t,link,a00,a10,a20,a01,…,a23` (column-major
 /// `[R | t]`, shortest round-trip numbers).
-pub fn poses_csv(traj: &Trajectory) -> String {
-    let mut s = String::from("step,t,link,a00,a10,a20,a01,a11,a21,a02,a12,a22,t0,t1,t2\n");
+pub fn poses_csv(traj: &Trajectory, model: &Model) -> String {
+    let names: Vec<String> = model
+        .links
+        .iter()
+        .map(|l| format!("{}/{}", model.robots[l.robot].name, l.name))
+        .collect();
+    let mut s =
+        String::from("step,t,link,link_name,a00,a10,a20,a01,a11,a21,a02,a12,a22,t0,t1,t2\n");
     for (k, (t, poses)) in traj.times.iter().zip(&traj.poses).enumerate() {
         for (i, a) in poses.iter().enumerate() {
-            s.push_str(&format!("{k},{t},{i}"));
+            s.push_str(&format!("{k},{t},{i},{}", names[i]));
             for v in a.as_slice() {
                 s.push_str(&format!(",{v}"));
             }
