@@ -73,8 +73,11 @@ pub struct Scene {
     pub charts: Vec<Matrix3<f64>>,
     /// Default number of steps.
     pub steps: usize,
-    /// Contact settings, when the scene enables contact.
+    /// Contact settings, when the scene enables contact (without the
+    /// scene's contact effects; [`Scene::simulator`] applies them).
     pub contact: Option<ContactSettings>,
+    /// Extra physical effects (`effects:`), validated.
+    pub effects: Vec<crate::calibrate::effects::Effect>,
     /// The parsed specification (kept for writing designs back).
     pub spec: SceneSpec,
 }
@@ -136,7 +139,11 @@ impl Scene {
             self.controller.clone(),
             state,
         );
-        if let Some(c) = &self.contact {
+        let contact = self
+            .contact
+            .clone()
+            .map(|c| crate::calibrate::effects::contact_settings(&self.effects, c));
+        if let Some(c) = &contact {
             sim.energies
                 .push(Box::new(crate::energy::ContactEnergy::new(
                     &self.model,
@@ -148,6 +155,7 @@ impl Scene {
                 sim.energies.push(Box::new(friction));
             }
         }
+        crate::calibrate::effects::install(&self.effects, &mut sim);
         sim
     }
 }
