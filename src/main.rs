@@ -29,6 +29,8 @@ enum Command {
     Optimize(OptimizeArgs),
     /// Import a robot (URDF, OBJ or STL) as a convex-hull design space.
     Import(sdrs::import::ImportArgs),
+    /// Calibration: name the physical effect missing from a scene, given measured data.
+    Calibrate(sdrs::calibrate::CalibrateArgs),
 }
 
 #[derive(clap::Args)]
@@ -100,11 +102,30 @@ fn main() {
         Command::Bench(a) => bench(a),
         Command::Optimize(a) => optimize(a),
         Command::Import(a) => sdrs::import::run_import(&a),
+        Command::Calibrate(a) => calibrate(&a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
+}
+
+fn calibrate(a: &sdrs::calibrate::CalibrateArgs) -> Result<()> {
+    let opts = sdrs::calibrate::CalibrateOptions::from_args(a)?;
+    let r = sdrs::calibrate::run(&opts)?;
+    eprintln!(
+        "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
+        a.measured.display(),
+        r.verdict,
+        r.candidate.as_ref().map(|c| format!(" ({c})")).unwrap_or_default(),
+        r.gap_before.overall,
+        r.gap_after.overall,
+        r.ranking.len(),
+        r.simulations,
+        r.seconds,
+        a.out.display()
+    );
+    Ok(())
 }
 
 fn progress(n: usize, quiet: bool) -> ProgressBar {
