@@ -117,7 +117,10 @@ fn calibrate(a: &sdrs::calibrate::CalibrateArgs) -> Result<()> {
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
         a.measured.display(),
         r.verdict,
-        r.candidate.as_ref().map(|c| format!(" ({c})")).unwrap_or_default(),
+        r.candidate
+            .as_ref()
+            .map(|c| format!(" ({c})"))
+            .unwrap_or_default(),
         r.gap_before.overall,
         r.gap_after.overall,
         r.ranking.len(),

@@ -150,7 +150,11 @@ pub fn analyse(m: &Measured, sim: &Simulated, split: usize) -> Analysis {
             share: win[w] / total,
         })
         .collect();
-    windows.sort_by(|a, b| b.share.total_cmp(&a.share).then(a.t_start.total_cmp(&b.t_start)));
+    windows.sort_by(|a, b| {
+        b.share
+            .total_cmp(&a.share)
+            .then(a.t_start.total_cmp(&b.t_start))
+    });
     windows.truncate(3);
     Analysis {
         channels,

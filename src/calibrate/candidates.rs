@@ -11,6 +11,13 @@
 //! `[0, 10 × total mass]` at positions within the link's hull box grown by
 //! half its size (at least 5 cm), `μ ∈ [0, 5]`, `κ ∈ [κ₀/100, 100κ₀]`,
 //! `s ∈ [s₀/10, min(0.5, 10s₀)]`.
+//!
+//! Starts: one for single-parameter candidates (their least-squares
+//! problems are close to monotone in the parameter: `0.2 ×` typical for
+//! coefficients, the nominal value for gains, scales, offsets and contact
+//! parameters); two for payloads (at the link's centre of mass and at a
+//! corner of its box), whose position makes the problem multi-modal; pairs
+//! start from the two single fits.
 
 use super::effects::{self, EffectKind, EffectSpec, Scope};
 use super::problem::{Candidate, Template};
@@ -29,7 +36,14 @@ pub fn effective_inertia(scene: &Scene) -> Vec<f64> {
     }
 }
 
-fn single(kind: EffectKind, on: String, lower: f64, upper: f64, typical: f64, starts: &[f64]) -> Candidate {
+fn single(
+    kind: EffectKind,
+    on: String,
+    lower: f64,
+    upper: f64,
+    typical: f64,
+    starts: &[f64],
+) -> Candidate {
     Candidate {
         label: format!("{}/{on}", kind.name()),
         templates: vec![Template {
@@ -51,17 +65,17 @@ fn joint_candidate(kind: EffectKind, on: String, inertia: f64) -> Candidate {
     match kind {
         EffectKind::JointDamping => {
             let t = 2.0 * inertia;
-            single(kind, on, 0.0, 1e4 * t, t, &[0.05 * t, t])
+            single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
         EffectKind::JointFriction => {
             let t = 5.0 * inertia;
-            single(kind, on, 0.0, 1e4 * t, t, &[0.05 * t, t])
+            single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
         EffectKind::Armature => {
             let t = 0.2 * inertia;
-            single(kind, on, 0.0, 1e4 * t, t, &[0.05 * t, t])
+            single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
-        EffectKind::ActuatorGain => single(kind, on, 0.05, 20.0, 1.0, &[1.0, 0.7]),
+        EffectKind::ActuatorGain => single(kind, on, 0.05, 20.0, 1.0, &[1.0]),
         _ => single(kind, on, -0.5, 0.5, 0.05, &[0.0]),
     }
 }
@@ -82,18 +96,22 @@ pub fn candidates(scene: &Scene, kinds: &[EffectKind]) -> Vec<Candidate> {
                 out.push(joint_candidate(kind, "all".into(), mean));
                 if dofs.len() > 1 {
                     for &k in &dofs {
-                        out.push(joint_candidate(kind, model.dofs[k].name.clone(), inertia[k]));
+                        out.push(joint_candidate(
+                            kind,
+                            model.dofs[k].name.clone(),
+                            inertia[k],
+                        ));
                     }
                 }
             }
             Scope::Links => {
                 let links = effects::massive_links(model);
                 if kind == EffectKind::LinkMassScale {
-                    out.push(single(kind, "all".into(), 0.05, 20.0, 1.0, &[1.0, 1.3]));
+                    out.push(single(kind, "all".into(), 0.05, 20.0, 1.0, &[1.0]));
                     if links.len() > 1 {
                         for &i in &links {
                             let on = effects::link_label(model, i);
-                            out.push(single(kind, on, 0.05, 20.0, 1.0, &[1.0, 1.3]));
+                            out.push(single(kind, on, 0.05, 20.0, 1.0, &[1.0]));
                         }
                     }
                     continue;
@@ -143,19 +161,12 @@ pub fn candidates(scene: &Scene, kinds: &[EffectKind]) -> Vec<Candidate> {
                 let v = effects::contact_params::value(&cs, kind);
                 let cand = match kind {
                     EffectKind::ContactMu => {
-                        single(kind, "all".into(), 0.0, 5.0, v.max(0.1), &[v, 1.5 * v + 0.05])
+                        single(kind, "all".into(), 0.0, 5.0, v.max(0.1), &[v.max(0.05)])
                     }
                     EffectKind::ContactKappa => {
-                        single(kind, "all".into(), v / 100.0, 100.0 * v, v, &[v, 2.0 * v])
+                        single(kind, "all".into(), v / 100.0, 100.0 * v, v, &[v])
                     }
-                    _ => single(
-                        kind,
-                        "all".into(),
-                        v / 10.0,
-                        (10.0 * v).min(0.5),
-                        v,
-                        &[v, 1.5 * v],
-                    ),
+                    _ => single(kind, "all".into(), v / 10.0, (10.0 * v).min(0.5), v, &[v]),
                 };
                 out.push(cand);
             }
@@ -186,11 +197,7 @@ fn link_box(link: &crate::model::Link) -> ([f64; 3], [f64; 3]) {
 /// started from both fits' values.
 pub fn pair(a: &Candidate, pa: &[f64], b: &Candidate, pb: &[f64]) -> Candidate {
     let cat = |x: &[f64], y: &[f64]| [x, y].concat();
-    let start = cat(pa, pb);
-    let mut starts = vec![start];
-    let mut neutral = a.starts[0].clone();
-    neutral.extend_from_slice(&b.starts[0]);
-    starts.push(neutral);
+    let starts = vec![cat(pa, pb)];
     Candidate {
         label: format!("{} + {}", a.label, b.label),
         templates: [a.templates.clone(), b.templates.clone()].concat(),

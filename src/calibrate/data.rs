@@ -159,7 +159,10 @@ impl Measured {
         if times.len() < MIN_SAMPLES {
             return Err(CalibrateError::TooShort {
                 path: p(),
-                what: format!("{} time sample(s), at least {MIN_SAMPLES} needed", times.len()),
+                what: format!(
+                    "{} time sample(s), at least {MIN_SAMPLES} needed",
+                    times.len()
+                ),
             });
         }
         for (_, ch) in &cols {

@@ -2,7 +2,9 @@
 //!
 //! Minimizes `½‖r(p)‖²` over the training window within box bounds:
 //! `(JᵀJ + λ diag(JᵀJ)) δ = −Jᵀr`, `p ← clamp(p + δ)` when the cost
-//! decreases (`λ ← λ/3`), otherwise `λ ← 4λ`. The Jacobian `J = ∂r/∂p` is
+//! decreases (`λ ← λ/3`), otherwise `λ ← 4λ`; converged when the
+//! decrease predicted by the Gauss–Newton model, or the achieved one, is
+//! below `rel_tol` of the cost. The Jacobian `J = ∂r/∂p` is
 //! built from forward finite-difference columns (one extra simulation per
 //! parameter; candidates have 1–4 parameters, and the residual count is far
 //! larger than the parameter count, so adjoint rows would cost more). The
@@ -22,7 +24,7 @@ use nalgebra::{DMatrix, DVector};
 /// Options of the fit (defaults in [`FitOptions::default`]).
 #[derive(Clone, Debug)]
 pub struct FitOptions {
-    /// Levenberg–Marquardt iterations per start. Default 15.
+    /// Levenberg–Marquardt iterations per start. Default 20.
     pub max_iters: usize,
     /// Stop when an accepted step lowers the cost by less than this
     /// fraction. Default 1e-7.
@@ -35,7 +37,7 @@ pub struct FitOptions {
 impl Default for FitOptions {
     fn default() -> Self {
         FitOptions {
-            max_iters: 15,
+            max_iters: 20,
             rel_tol: 1e-7,
             fd_step: 1e-5,
         }
@@ -116,7 +118,8 @@ fn fit_from(
         let a = j.transpose() * &j;
         let g = j.transpose() * DVector::from_column_slice(&r);
         let mut accepted = false;
-        for _ in 0..12 {
+        let k = p.len();
+        for _ in 0..8 {
             let mut m = a.clone();
             for d in 0..m.nrows() {
                 m[(d, d)] += lambda * a[(d, d)].max(1e-300) + 1e-300;
@@ -127,8 +130,12 @@ fn fit_from(
             };
             let mut q: Vec<f64> = p.iter().zip(delta.iter()).map(|(a, b)| a + b).collect();
             clamp(cand, &mut q);
-            if q == p {
-                break;
+            // Decrease predicted by the Gauss–Newton model for the
+            // projected step; converged when it is negligible.
+            let d = DVector::from_iterator(k, q.iter().zip(&p).map(|(a, b)| a - b));
+            let predicted = -(g.dot(&d) + 0.5 * d.dot(&(&a * &d)));
+            if q == p || predicted <= opts.rel_tol * cost {
+                return Some((p, cost, r));
             }
             *sims += 1;
             if let Some(rq) = pb.train_residuals(cand, &q) {
@@ -166,10 +173,25 @@ pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
             }
         }
     }
-    let (p, rss, r) = best?;
-    let n = r.len();
-    let k = p.len();
-    let half_width = match jacobian(pb, cand, &p, &r, opts, &mut sims) {
+    let (params, rss, r) = best?;
+    Some(Fit {
+        n: r.len(),
+        half_width: vec![None; params.len()],
+        params,
+        rss,
+        simulations: sims,
+    })
+}
+
+/// Fills `fit.half_width` (95 % intervals from the Gauss–Newton Hessian at
+/// the fitted values; see the module doc). Costs `1 + k` simulations.
+pub fn confidence(pb: &Problem, cand: &Candidate, fit: &mut Fit, opts: &FitOptions) {
+    let (p, rss, n, k) = (&fit.params, fit.rss, fit.n, fit.params.len());
+    let mut sims = 1;
+    let Some(r) = pb.train_residuals(cand, p) else {
+        return;
+    };
+    fit.half_width = match jacobian(pb, cand, p, &r, opts, &mut sims) {
         Some(j) => {
             let a = j.transpose() * &j;
             let s2 = rss / (n.saturating_sub(k).max(1)) as f64;
@@ -177,8 +199,7 @@ pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
                 Some(inv) => (0..k)
                     .map(|d| {
                         let v = inv[(d, d)] * s2;
-                        (v.is_finite() && v >= 0.0 && a[(d, d)] > 0.0)
-                            .then(|| 1.96 * v.sqrt())
+                        (v.is_finite() && v >= 0.0 && a[(d, d)] > 0.0).then(|| 1.96 * v.sqrt())
                     })
                     .collect(),
                 None => vec![None; k],
@@ -186,11 +207,5 @@ pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
         }
         None => vec![None; k],
     };
-    Some(Fit {
-        params: p,
-        rss,
-        n,
-        half_width,
-        simulations: sims,
-    })
+    fit.simulations += sims;
 }

@@ -24,7 +24,13 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Measured vs simulated vs calibrated for channel `c` of `m`.
-pub fn channel_svg(m: &Measured, c: usize, before: &Simulated, after: &Simulated, split_t: f64) -> PlotResult {
+pub fn channel_svg(
+    m: &Measured,
+    c: usize,
+    before: &Simulated,
+    after: &Simulated,
+    split_t: f64,
+) -> PlotResult {
     let ch = &m.channels[c];
     let t_end = m.duration();
     let grid: Vec<f64> = (0..=400).map(|k| t_end * k as f64 / 400.0).collect();
@@ -42,7 +48,10 @@ pub fn channel_svg(m: &Measured, c: usize, before: &Simulated, after: &Simulated
         let root = SVGBackend::with_string(&mut svg, (800, 420)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
         let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{}: measured vs simulated", ch.name), ("sans-serif", 18))
+            .caption(
+                format!("{}: measured vs simulated", ch.name),
+                ("sans-serif", 18),
+            )
             .margin(12)
             .x_label_area_size(36)
             .y_label_area_size(64)
@@ -61,18 +70,28 @@ pub fn channel_svg(m: &Measured, c: usize, before: &Simulated, after: &Simulated
             )))
             .map_err(err)?
             .label("held-out window")
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], RGBColor(220, 220, 220).filled()));
+            .legend(|(x, y)| {
+                Rectangle::new(
+                    [(x, y - 5), (x + 18, y + 5)],
+                    RGBColor(220, 220, 220).filled(),
+                )
+            });
         chart
             .draw_series(meas.iter().map(|p| Circle::new(*p, 2, BLACK.filled())))
             .map_err(err)?
             .label("measured")
             .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.filled()));
-        for (pts, color, label) in [(&sb, RED, "simulated (as given)"), (&sa, BLUE, "calibrated")] {
+        for (pts, color, label) in [
+            (&sb, RED, "simulated (as given)"),
+            (&sa, BLUE, "calibrated"),
+        ] {
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
                 .map_err(err)?
                 .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
         }
         chart
             .configure_series_labels()
@@ -110,13 +129,26 @@ pub fn residuals_svg(m: &Measured, before: &Simulated, after: &Simulated) -> Plo
             .y_label_area_size(72)
             .build_cartesian_2d(0f64..m.duration().max(1e-9), lo..hi)
             .map_err(err)?;
-        chart.configure_mesh().x_desc("t (s)").y_desc("residual (SI)").draw().map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("t (s)")
+            .y_desc("residual (SI)")
+            .draw()
+            .map_err(err)?;
         let palette = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
         for (k, pts) in all.iter().enumerate() {
             let c = k / 2;
             let color = palette[c % palette.len()];
-            let style = if k % 2 == 0 { color.mix(0.35).stroke_width(1) } else { color.stroke_width(2) };
-            let label = format!("{} ({})", m.channels[c].name, if k % 2 == 0 { "as given" } else { "calibrated" });
+            let style = if k % 2 == 0 {
+                color.mix(0.35).stroke_width(1)
+            } else {
+                color.stroke_width(2)
+            };
+            let label = format!(
+                "{} ({})",
+                m.channels[c].name,
+                if k % 2 == 0 { "as given" } else { "calibrated" }
+            );
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), style))
                 .map_err(err)?
@@ -137,6 +169,12 @@ pub fn residuals_svg(m: &Measured, before: &Simulated, after: &Simulated) -> Plo
 /// A file-name-safe version of a channel name (`arm/elbow` → `arm_elbow`).
 pub fn file_stem(name: &str) -> String {
     name.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }

@@ -119,13 +119,8 @@ impl Problem<'_> {
         let mut sc = self.scene.clone();
         let mut specs: Vec<EffectSpec> = sc.spec.effects.clone();
         specs.extend_from_slice(extra);
-        let resolved: Vec<Effect> = effects::resolve(
-            &specs,
-            &sc.model,
-            sc.contact.is_some(),
-            "effects",
-        )
-        .ok()?;
+        let resolved: Vec<Effect> =
+            effects::resolve(&specs, &sc.model, sc.contact.is_some(), "effects").ok()?;
         sc.effects = resolved;
         sc.spec.effects = specs;
         Some(sc)

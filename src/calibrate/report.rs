@@ -10,6 +10,7 @@
 //! gap_before     {"channels": {name: held-out RMS}, "overall": RMS}  the scene as given
 //! gap_after      same, with the chosen effect (= gap_before for "none")
 //! gap_reduction  1 − overall_after/overall_before
+//! indistinguishable  single candidates within ΔC < 2 of the chosen one
 //! ranking        [{candidate, effects, parameters, rms_train, rms_holdout,
 //!                  criterion, delta_criterion (vs none, > 0 is better), explained}]
 //! baseline       {rms_train, rms_holdout, criterion}
@@ -83,6 +84,10 @@ pub struct CalibrationResult {
     pub gap_after: Gap,
     pub gap_reduction: f64,
     pub ranking: Vec<Ranked>,
+    /// Other single candidates whose criterion is within 2 of the chosen
+    /// one's: the data cannot tell them apart (e.g. a gain on every joint of
+    /// a contact-free robot is exactly a mass scale of every link by 1/g).
+    pub indistinguishable: Vec<String>,
     pub baseline: Baseline,
     pub residuals_before: Analysis,
     pub residuals_after: Analysis,
@@ -144,7 +149,12 @@ pub fn result(
         .iter()
         .map(|s| Ranked {
             candidate: s.candidate.label.clone(),
-            effects: s.candidate.kinds().iter().map(|k| k.name().into()).collect(),
+            effects: s
+                .candidate
+                .kinds()
+                .iter()
+                .map(|k| k.name().into())
+                .collect(),
             parameters: parameters(pb, s),
             rms_train: s.rms_train(),
             rms_holdout: s.rms_holdout(),
@@ -194,6 +204,19 @@ pub fn result(
         gap_reduction: 1.0 - gap_after.overall / gap_before.overall.max(1e-300),
         gap_before,
         gap_after,
+        indistinguishable: match chosen {
+            Some(c) => sel
+                .ranking
+                .iter()
+                .filter(|s| {
+                    s.candidate.label != c.candidate.label
+                        && s.candidate.templates.len() == 1
+                        && (s.criterion - c.criterion).abs() < 2.0
+                })
+                .map(|s| s.candidate.label.clone())
+                .collect(),
+            None => Vec::new(),
+        },
         ranking,
         baseline: Baseline {
             rms_train: base.rms_train(),
@@ -223,44 +246,144 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
         s.push('\n');
     };
     w(&mut s, "# Calibration report\n".into());
-    w(&mut s, format!("Scene `{scene}`, measured data `{measured}`: {} samples, training window up to t = {:.4} s ({} residuals), held-out window after it ({} residuals, holdout {}).\n",
-        r.samples.times, r.split_time, r.samples.train, r.samples.holdout, r.holdout));
+    w(
+        &mut s,
+        format!(
+            "Scene `{scene}`, measured data `{measured}`: {} samples, training window up to t = {:.4} s ({} residuals), held-out window after it ({} residuals, holdout {}).\n",
+            r.samples.times, r.split_time, r.samples.train, r.samples.holdout, r.holdout
+        ),
+    );
     match &r.candidate {
-        Some(c) => w(&mut s, format!("**Verdict: missing effect `{}`** (candidate `{c}`); the held-out RMS error shrinks from {:.4e} to {:.4e} ({:.1} %).\n",
-            r.effect.clone().unwrap_or_default(), r.gap_before.overall, r.gap_after.overall, 100.0 * r.gap_reduction)),
-        None => w(&mut s, format!("**Verdict: no missing effect found**: no candidate improves the held-out error beyond the noise (held-out RMS {:.4e}).\n", r.gap_before.overall)),
+        Some(c) => w(
+            &mut s,
+            format!(
+                "**Verdict: missing effect `{}`** (candidate `{c}`); the held-out RMS error shrinks from {:.4e} to {:.4e} ({:.1} %).\n",
+                r.effect.clone().unwrap_or_default(),
+                r.gap_before.overall,
+                r.gap_after.overall,
+                100.0 * r.gap_reduction
+            ),
+        ),
+        None => w(
+            &mut s,
+            format!(
+                "**Verdict: no missing effect found**: no candidate improves the held-out error beyond the noise (held-out RMS {:.4e}).\n",
+                r.gap_before.overall
+            ),
+        ),
+    }
+    if !r.indistinguishable.is_empty() {
+        w(
+            &mut s,
+            format!(
+                "Indistinguishable on these data (criterion within 2): {}.\n",
+                r.indistinguishable
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
     }
     if !r.parameters.is_empty() {
-        w(&mut s, "| parameter | value | 95 % interval |\n|---|---:|---|".into());
+        w(
+            &mut s,
+            "| parameter | value | 95 % interval |\n|---|---:|---|".into(),
+        );
         for (k, v) in &r.parameters {
             let ci = r.confidence.get(k).and_then(|c| Some((c.low?, c.high?)));
-            w(&mut s, format!("| `{k}` | {v:.6e} | {} |", match ci {
-                Some((a, b)) => format!("[{a:.4e}, {b:.4e}]"),
-                None => "not identifiable".into(),
-            }));
+            w(
+                &mut s,
+                format!(
+                    "| `{k}` | {v:.6e} | {} |",
+                    match ci {
+                        Some((a, b)) => format!("[{a:.4e}, {b:.4e}]"),
+                        None => "not identifiable".into(),
+                    }
+                ),
+            );
         }
         w(&mut s, String::new());
     }
-    w(&mut s, "## Where the model disagrees (before calibration)\n".into());
+    w(
+        &mut s,
+        "## Where the model disagrees (before calibration)\n".into(),
+    );
     w(&mut s, "| channel | RMS | train | held-out | free | contact | moving | at rest | accelerating | braking | corr sign θ̇ | corr θ̇ | corr θ̈ |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
-    for (a, label) in [(&r.residuals_before, "before"), (&r.residuals_after, "after")] {
+    for (a, label) in [
+        (&r.residuals_before, "before"),
+        (&r.residuals_after, "after"),
+    ] {
         for c in &a.channels {
-            w(&mut s, format!("| {} ({label}) | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2} | {:+.2} | {:+.2} |",
-                c.channel, c.all.rms, c.train.rms, c.holdout.rms, c.free.rms, c.contact.rms, c.moving.rms, c.at_rest.rms,
-                c.accelerating.rms, c.braking.rms, c.corr_velocity_sign, c.corr_velocity, c.corr_acceleration));
+            w(
+                &mut s,
+                format!(
+                    "| {} ({label}) | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2} | {:+.2} | {:+.2} |",
+                    c.channel,
+                    c.all.rms,
+                    c.train.rms,
+                    c.holdout.rms,
+                    c.free.rms,
+                    c.contact.rms,
+                    c.moving.rms,
+                    c.at_rest.rms,
+                    c.accelerating.rms,
+                    c.braking.rms,
+                    c.corr_velocity_sign,
+                    c.corr_velocity,
+                    c.corr_acceleration
+                ),
+            );
         }
     }
-    w(&mut s, "\nWindows where the error concentrates (before):\n".into());
+    w(
+        &mut s,
+        "\nWindows where the error concentrates (before):\n".into(),
+    );
     for win in &r.residuals_before.worst_windows {
-        w(&mut s, format!("- t ∈ [{:.3}, {:.3}] s: RMS {:.3e}, {:.1} % of the squared error", win.t_start, win.t_end, win.rms, 100.0 * win.share));
+        w(
+            &mut s,
+            format!(
+                "- t ∈ [{:.3}, {:.3}] s: RMS {:.3e}, {:.1} % of the squared error",
+                win.t_start,
+                win.t_end,
+                win.rms,
+                100.0 * win.share
+            ),
+        );
     }
     w(&mut s, "\n## Ranking\n\nCriterion `C = BIC(train) + n_ho ln(RSS_ho/n_ho)`; ΔC > 0 is better than the model as given.\n".into());
     w(&mut s, "| # | candidate | ΔC | held-out RMS | train RMS | explained | parameters |\n|---:|---|---:|---:|---:|---:|---|".into());
     for (i, c) in r.ranking.iter().enumerate() {
-        let p: Vec<String> = c.parameters.iter().map(|(k, v)| format!("{k} = {v:.4e}")).collect();
-        w(&mut s, format!("| {} | `{}` | {:.1} | {:.3e} | {:.3e} | {:.3} | {} |", i + 1, c.candidate, c.delta_criterion, c.rms_holdout, c.rms_train, c.explained, p.join(", ")));
+        let p: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4e}"))
+            .collect();
+        w(
+            &mut s,
+            format!(
+                "| {} | `{}` | {:.1} | {:.3e} | {:.3e} | {:.3} | {} |",
+                i + 1,
+                c.candidate,
+                c.delta_criterion,
+                c.rms_holdout,
+                c.rms_train,
+                c.explained,
+                p.join(", ")
+            ),
+        );
     }
-    w(&mut s, format!("\nBaseline (no effect): train RMS {:.3e}, held-out RMS {:.3e}. Simulations: {}.\n", r.baseline.rms_train, r.baseline.rms_holdout, r.simulations));
-    w(&mut s, "Plots: `channel_<name>.svg` (measured, simulated, calibrated) and `residuals.svg`.".into());
+    w(
+        &mut s,
+        format!(
+            "\nBaseline (no effect): train RMS {:.3e}, held-out RMS {:.3e}. Simulations: {}.\n",
+            r.baseline.rms_train, r.baseline.rms_holdout, r.simulations
+        ),
+    );
+    w(
+        &mut s,
+        "Plots: `channel_<name>.svg` (measured, simulated, calibrated) and `residuals.svg`.".into(),
+    );
     s
 }

@@ -171,7 +171,10 @@ pub fn calibrate(
         opts.scene.display(),
         opts.measured.display()
     );
-    files.push(("calibrated.yaml".into(), format!("{header}{yaml}").into_bytes()));
+    files.push((
+        "calibrated.yaml".into(),
+        format!("{header}{yaml}").into_bytes(),
+    ));
     let json = serde_json::to_string_pretty(&res).map_err(|e| CalibrateError::Output {
         path: opts.out.join("calibration.json"),
         msg: e.to_string(),
@@ -191,7 +194,10 @@ pub fn calibrate(
         msg,
     };
     for c in 0..measured.channels.len() {
-        let name = format!("channel_{}.svg", plots::file_stem(&measured.channels[c].name));
+        let name = format!(
+            "channel_{}.svg",
+            plots::file_stem(&measured.channels[c].name)
+        );
         let svg = plots::channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
             .map_err(|m| plot_err(&name, m))?;
         files.push((name, svg.into_bytes()));

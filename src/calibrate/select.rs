@@ -18,7 +18,7 @@
 //! in list order, so results do not depend on the thread count.
 
 use super::candidates;
-use super::fit::{Fit, FitOptions, fit};
+use super::fit::{Fit, FitOptions, confidence, fit};
 use super::problem::{Candidate, Problem, Simulated};
 use rayon::prelude::*;
 
@@ -80,9 +80,8 @@ pub fn score(pb: &Problem, cand: Candidate, fit: Fit) -> Option<Scored> {
     pb.residuals(&sim, pb.split..end, &mut r);
     let rss_holdout: f64 = r.iter().map(|x| x * x).sum();
     let k = fit.params.len() as f64;
-    let criterion = deviance(fit.rss, fit.n)
-        + k * (fit.n.max(2) as f64).ln()
-        + deviance(rss_holdout, r.len());
+    let criterion =
+        deviance(fit.rss, fit.n) + k * (fit.n.max(2) as f64).ln() + deviance(rss_holdout, r.len());
     Some(Scored {
         candidate: cand,
         rss_holdout,
@@ -202,12 +201,16 @@ pub fn select(
         on_done();
     }
     sort(&mut ranking);
-    let simulations = 1 + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
     let chosen = ranking.first().and_then(|best| {
         let better = base.criterion - best.criterion > opts.min_delta;
         let gain = best.rms_holdout() <= (1.0 - opts.min_gain) * base.rms_holdout();
         (better && gain).then_some(0)
     });
+    if let Some(i) = chosen {
+        let s = &mut ranking[i];
+        confidence(pb, &s.candidate, &mut s.fit, &opts.fit);
+    }
+    let simulations = 1 + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
     Some(Selection {
         baseline: base,
         ranking,
