@@ -82,7 +82,7 @@ fn calibrate_writes_a_runnable_scene_and_the_documented_json() {
             "simulate",
             out.join("calibrated.yaml").to_str().unwrap(),
             "--steps",
-            "600",
+            "610",
             "--out",
             traj.to_str().unwrap(),
             "-q",
