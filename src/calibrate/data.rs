@@ -140,15 +140,13 @@ impl Measured {
                     msg: format!("time {t} is negative (the scene starts at t = 0)"),
                 });
             }
-            if let Some(&prev) = times.last() {
-                if t <= prev {
-                    return Err(CalibrateError::NonMonotonicTime {
-                        path: p(),
-                        line,
-                        t,
-                        prev,
-                    });
-                }
+            if let Some(&prev) = times.last().filter(|&&prev| t <= prev) {
+                return Err(CalibrateError::NonMonotonicTime {
+                    path: p(),
+                    line,
+                    t,
+                    prev,
+                });
             }
             times.push(t);
             for (col, ch) in cols.iter_mut() {

@@ -167,10 +167,10 @@ pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
     let mut sims = 0;
     let mut best: Option<(Vec<f64>, f64, Vec<f64>)> = None;
     for s in &cand.starts {
-        if let Some(res) = fit_from(pb, cand, s, opts, &mut sims) {
-            if best.as_ref().is_none_or(|b| res.1 < b.1) {
-                best = Some(res);
-            }
+        if let Some(res) = fit_from(pb, cand, s, opts, &mut sims)
+            .filter(|res| best.as_ref().is_none_or(|b| res.1 < b.1))
+        {
+            best = Some(res);
         }
     }
     let (params, rss, r) = best?;

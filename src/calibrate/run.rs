@@ -89,11 +89,12 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// Output files: name in the output directory and contents.
+pub type Files = Vec<(String, Vec<u8>)>;
+
 /// Computes the calibration without writing anything; returns the result
-/// and the output files (name, bytes).
-pub fn calibrate(
-    opts: &CalibrateOptions,
-) -> Result<(CalibrationResult, Vec<(String, Vec<u8>)>), CalibrateError> {
+/// and the output files.
+pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), CalibrateError> {
     let t0 = Instant::now();
     if !(opts.holdout > 0.0 && opts.holdout < 1.0) {
         return Err(CalibrateError::Holdout(opts.holdout));
@@ -159,7 +160,7 @@ pub fn calibrate(
     let mut res = report::result(&pb, &sel, before, after, opts.holdout);
 
     // Files.
-    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut files: Files = Vec::new();
     let mut spec = scene.spec.clone();
     spec.effects.extend(res.effects.iter().cloned());
     let yaml = serde_yaml::to_string(&spec).map_err(|e| CalibrateError::Output {

@@ -77,8 +77,8 @@ pub fn measured_csv(scene_text: &str, s: &Sampling) -> String {
             continue;
         }
         out.push_str(&format!("{t}"));
-        for k in 0..traj.names.len() {
-            let v = sdrs::calibrate::data::interpolate(&traj.states, dt, k, t) + offsets[k];
+        for (k, b) in offsets.iter().enumerate() {
+            let v = sdrs::calibrate::data::interpolate(&traj.states, dt, k, t) + b;
             // Box–Muller.
             let (u1, u2): (f64, f64) = (rng.random_range(1e-12..1.0), rng.random_range(0.0..1.0));
             let g = (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos();
