@@ -208,3 +208,32 @@ pub fn interpolate(states: &[nalgebra::DVector<f64>], dt: f64, dof: usize, t: f6
     let w = x - k as f64;
     (1.0 - w) * states[k][dof] + w * states[k + 1][dof]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DVector;
+
+    #[test]
+    fn interpolation_is_exact_for_linear_motion_and_clamped_at_the_ends() {
+        let dt = 0.01;
+        let states: Vec<DVector<f64>> = (0..=10)
+            .map(|k| DVector::from_vec(vec![2.0 * k as f64 * dt - 0.3]))
+            .collect();
+        for t in [0.0, 0.003, 0.05, 0.0999, 0.1] {
+            assert!((interpolate(&states, dt, 0, t) - (2.0 * t - 0.3)).abs() < 1e-14);
+        }
+        assert_eq!(interpolate(&states, dt, 0, 5.0), states[10][0]);
+    }
+
+    #[test]
+    fn split_holds_out_the_last_fraction_by_time() {
+        let m = Measured {
+            path: "m.csv".into(),
+            times: (0..=100).map(|k| k as f64 * 0.01).collect(),
+            channels: Vec::new(),
+        };
+        let s = m.split(0.3);
+        assert!(m.times[s] >= 0.7 - 1e-12 && m.times[s - 1] < 0.7);
+    }
+}
