@@ -1,7 +1,9 @@
 //! Bounded Levenberg–Marquardt fit of a candidate's parameters.
 //!
 //! Minimizes `½‖r(p)‖²` over the training window within box bounds:
-//! `(JᵀJ + λ diag(JᵀJ)) δ = −Jᵀr`, `p ← clamp(p + δ)` when the cost
+//! `(JᵀJ + λ diag(JᵀJ)) δ = −Jᵀr` over the free parameters (those at a
+//! bound whose descent direction points outside are held), `p ← clamp(p + δ)`
+//! when the cost
 //! decreases (`λ ← λ/3`), otherwise `λ ← 4λ`; converged when the
 //! decrease predicted by the Gauss–Newton model, or the achieved one, is
 //! below `rel_tol` of the cost. The Jacobian `J = ∂r/∂p` is
@@ -120,11 +122,23 @@ fn fit_from(
         let mut accepted = false;
         let k = p.len();
         for _ in 0..8 {
+            // Active set: a parameter at a bound whose descent direction
+            // points outside stays fixed; the step solves for the others.
             let mut m = a.clone();
-            for d in 0..m.nrows() {
-                m[(d, d)] += lambda * a[(d, d)].max(1e-300) + 1e-300;
+            let mut rhs = -&g;
+            for d in 0..k {
+                let at_lower = p[d] <= cand.lower[d] && g[d] > 0.0;
+                let at_upper = p[d] >= cand.upper[d] && g[d] < 0.0;
+                if at_lower || at_upper {
+                    m.row_mut(d).fill(0.0);
+                    m.column_mut(d).fill(0.0);
+                    m[(d, d)] = 1.0;
+                    rhs[d] = 0.0;
+                } else {
+                    m[(d, d)] += lambda * a[(d, d)].max(1e-300) + 1e-300;
+                }
             }
-            let Some(delta) = m.cholesky().map(|c| c.solve(&(-&g))) else {
+            let Some(delta) = m.cholesky().map(|c| c.solve(&rhs)) else {
                 lambda *= 4.0;
                 continue;
             };
