@@ -307,31 +307,39 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
     }
     w(
         &mut s,
-        "## Where the model disagrees (before calibration)\n".into(),
+        "## Where the model disagrees\n\nRMS of simulated − measured (SI units of each channel) overall, per window and per regime (–: no samples), before and after calibration.\n".into(),
     );
     w(&mut s, "| channel | RMS | train | held-out | free | contact | moving | at rest | accelerating | braking | corr sign θ̇ | corr θ̇ | corr θ̈ |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
+    let cell = |x: &super::analysis::Rms| {
+        if x.samples == 0 {
+            "–".to_string()
+        } else {
+            format!("{:.3e}", x.rms)
+        }
+    };
     for (a, label) in [
         (&r.residuals_before, "before"),
         (&r.residuals_after, "after"),
     ] {
         for c in &a.channels {
+            let cells = [
+                &c.all,
+                &c.train,
+                &c.holdout,
+                &c.free,
+                &c.contact,
+                &c.moving,
+                &c.at_rest,
+                &c.accelerating,
+                &c.braking,
+            ]
+            .map(cell)
+            .join(" | ");
             w(
                 &mut s,
                 format!(
-                    "| {} ({label}) | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2} | {:+.2} | {:+.2} |",
-                    c.channel,
-                    c.all.rms,
-                    c.train.rms,
-                    c.holdout.rms,
-                    c.free.rms,
-                    c.contact.rms,
-                    c.moving.rms,
-                    c.at_rest.rms,
-                    c.accelerating.rms,
-                    c.braking.rms,
-                    c.corr_velocity_sign,
-                    c.corr_velocity,
-                    c.corr_acceleration
+                    "| {} ({label}) | {cells} | {:+.2} | {:+.2} | {:+.2} |",
+                    c.channel, c.corr_velocity_sign, c.corr_velocity, c.corr_acceleration
                 ),
             );
         }
