@@ -8,6 +8,7 @@
 //! - [`data`]: measured CSV files, validation, alignment by interpolation.
 //! - [`problem`]: the least-squares problem of a candidate on a window.
 //! - [`candidates`]: the candidate list with bounds and starts.
+//! - [`adjoint`]: the exact gradient `Jᵀr` of a candidate's residuals.
 //! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
 //! - [`select`]: fits in parallel, pairs, the criterion, the verdict.
 //! - [`analysis`]: residuals per channel, regime and time window.
@@ -16,6 +17,7 @@
 //!
 //! Outputs and their schema: [`report`] and the README.
 
+pub mod adjoint;
 pub mod analysis;
 pub mod candidates;
 pub mod data;

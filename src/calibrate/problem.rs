@@ -109,7 +109,7 @@ pub struct Problem<'a> {
 
 impl Problem<'_> {
     /// Steps needed to reach sample `end − 1`.
-    fn steps_to(&self, end: usize) -> usize {
+    pub fn steps_to(&self, end: usize) -> usize {
         let t = self.measured.times[end - 1];
         (t / self.scene.settings.dt).ceil() as usize + 1
     }

@@ -283,10 +283,11 @@ pub fn link_label(model: &Model, i: usize) -> String {
     }
 }
 
-/// Links with mass.
+/// Links with mass that can move (some coordinate moves them; static
+/// obstacles and the ground are excluded).
 pub fn massive_links(model: &Model) -> Vec<usize> {
     (0..model.links.len())
-        .filter(|&i| model.first_moment[i][3] > 0.0)
+        .filter(|&i| model.first_moment[i][3] > 0.0 && !model.ancestor_dofs[i].is_empty())
         .collect()
 }
 
