@@ -9,9 +9,9 @@
 //! below `rel_tol` of the cost. The Jacobian `J = ∂r/∂p` is
 //! built from forward finite-difference columns (one extra simulation per
 //! parameter; candidates have 1–4 parameters, and the residual count is far
-//! larger than the parameter count, so adjoint rows would cost more). The
-//! adjoint gradient `Jᵀr = ∂(½‖r‖²)/∂p` of every effect is tested against
-//! finite differences in `tests/calibrate_effects.rs`. Several starts;
+//! larger than the parameter count, so adjoint rows would cost more); the
+//! right-hand side `Jᵀr = ∂(½‖r‖²)/∂p` is exact, from one adjoint pass
+//! ([`super::adjoint`], FD-tested in `tests/calibrate_fit_gradient.rs`). Several starts;
 //! the best end point wins (ties: the first start, so results are
 //! deterministic).
 //!
@@ -34,6 +34,11 @@ pub struct FitOptions {
     /// Finite-difference step per parameter, relative to
     /// `max(|p|, typical)`. Default 1e-5.
     pub fd_step: f64,
+    /// Use the exact gradient `Jᵀr` from the adjoint pass
+    /// ([`super::adjoint`]) as the right-hand side of each step (the
+    /// finite-difference `J` then only supplies the curvature `JᵀJ`), so the
+    /// fit stops at an exact stationary point. Default true.
+    pub adjoint_gradient: bool,
 }
 
 impl Default for FitOptions {
@@ -42,6 +47,7 @@ impl Default for FitOptions {
             max_iters: 20,
             rel_tol: 1e-7,
             fd_step: 1e-5,
+            adjoint_gradient: true,
         }
     }
 }
@@ -118,7 +124,13 @@ fn fit_from(
             break;
         };
         let a = j.transpose() * &j;
-        let g = j.transpose() * DVector::from_column_slice(&r);
+        let exact = if opts.adjoint_gradient {
+            *sims += 1;
+            super::adjoint::residual_gradient(pb, cand, &p).map(|(_, g)| DVector::from_vec(g))
+        } else {
+            None
+        };
+        let g = exact.unwrap_or_else(|| j.transpose() * DVector::from_column_slice(&r));
         let mut accepted = false;
         let k = p.len();
         for _ in 0..8 {
