@@ -11,6 +11,7 @@
 //!
 //! The method is the SDRS paper (`shared/paper/sdrs-paper.tex`).
 
+pub mod calibrate;
 pub mod contact;
 pub mod control;
 pub mod diff;

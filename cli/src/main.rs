@@ -3,6 +3,7 @@
 //! exit code 1; nothing here panics on bad input.
 
 mod bench;
+mod calibrate;
 mod optimize;
 mod simulate;
 mod util;
@@ -30,6 +31,8 @@ enum Command {
     Optimize(optimize::OptimizeArgs),
     /// Import a robot (URDF, OBJ or STL) as a convex-hull design space.
     Import(sdrs::import::ImportArgs),
+    /// Calibration: name the physical effect missing from a scene, given measured data.
+    Calibrate(sdrs::calibrate::CalibrateArgs),
 }
 
 fn main() {
@@ -39,6 +42,7 @@ fn main() {
         Command::Bench(a) => bench::run(a),
         Command::Optimize(a) => optimize::run(a),
         Command::Import(a) => sdrs::import::run_import(&a),
+        Command::Calibrate(a) => calibrate::run(&a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");

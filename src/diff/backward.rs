@@ -37,6 +37,10 @@ pub struct Gradients {
     /// Per controller channel.
     pub channels: Vec<ChannelGrad>,
     pub physical: PhysicalGrad,
+    /// `dL/dp_j` for the parameters of calibration effects installed as
+    /// energy terms, by parameter slot (see
+    /// [`super::vjp::VjpAccumulator::effects`]); empty without such terms.
+    pub effects: Vec<f64>,
     /// Quantities some term could not differentiate; gradients that depend
     /// on them are incomplete (see [`super::vjp::VjpAccumulator::unavailable`]).
     pub unavailable: Vec<&'static str>,
@@ -222,6 +226,12 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
             }
         }
         g.physical.axpy(-1.0, &acc.physical);
+        if g.effects.len() < acc.effects.len() {
+            g.effects.resize(acc.effects.len(), 0.0);
+        }
+        for (gl, al) in g.effects.iter_mut().zip(&acc.effects) {
+            *gl -= al;
+        }
         // Earlier levels: ā_{t−1}, ā_{t−2} −= (∂g_t/∂θ^{t−1,t−2})ᵀ λ_t.
         for (gl, al) in pose_lvl[t].iter_mut().zip(&acc.pose_prev) {
             *gl -= al;
@@ -230,6 +240,7 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
             *gl -= al;
         }
         q_lvl[t] -= &acc.q_prev;
+        q_lvl[t - 1] -= &acc.q_prev2;
     }
     // Levels 0 and −1 map onto the initial state: θ^{−1} = θ^0 − Δt θ̇^0.
     for k in [0isize, -1] {

@@ -43,6 +43,11 @@ pub enum LossTerm {
         weight: f64,
         when: When,
     },
+    /// A linear functional `coef · θ_dof^level` at one time level (no
+    /// square): with `coef = ∂L/∂θ_dof^level` of an outer loss, its gradient
+    /// w.r.t. any parameter is that loss's gradient through the trajectory
+    /// (used by calibration to get `Jᵀr` of interpolated residuals).
+    JointLinear { dof: usize, level: usize, coef: f64 },
     /// `e = X_a − X_b − offset` for points on two links (object relative
     /// to a gripper).
     Relative {
@@ -86,11 +91,21 @@ impl Loss {
     ) -> f64 {
         let mut value = 0.0;
         for term in &self.terms {
+            if let LossTerm::JointLinear { dof, level, coef } = term {
+                if k == *level {
+                    value += coef * q[*dof];
+                    if let Some(o) = out.as_deref_mut() {
+                        o.q[*dof] += coef;
+                    }
+                }
+                continue;
+            }
             let when = match term {
                 LossTerm::Joint { when, .. }
                 | LossTerm::LinkPoint { when, .. }
                 | LossTerm::CenterOfMass { when, .. }
                 | LossTerm::Relative { when, .. } => *when,
+                LossTerm::JointLinear { .. } => continue,
             };
             let scale = match when {
                 When::Final if k == horizon => 1.0,
@@ -98,6 +113,7 @@ impl Loss {
                 _ => continue,
             };
             match term {
+                LossTerm::JointLinear { .. } => {}
                 LossTerm::Joint {
                     dof,
                     target,

@@ -55,6 +55,8 @@ pub struct VjpAccumulator {
     pub pose_prev2: Vec<Matrix3x4<f64>>,
     /// `∂Φ/∂θ^{t−1}` from terms written in coordinates.
     pub q_prev: DVector<f64>,
+    /// `∂Φ/∂θ^{t−2}` from terms written in coordinates (armature).
+    pub q_prev2: DVector<f64>,
     /// `∂Φ/∂x_local` per link, hull, vertex (link frame).
     pub vertex: Vec<Vec<Vec<Vector3<f64>>>>,
     /// Whether vertex gradients are wanted (terms may skip them otherwise).
@@ -62,6 +64,10 @@ pub struct VjpAccumulator {
     /// `(∂Φ/∂θ*, ∂Φ/∂θ̇*, ∂Φ/∂k_p, ∂Φ/∂k_d)` per controller channel.
     pub channels: Vec<[f64; 4]>,
     pub physical: PhysicalGrad,
+    /// `∂Φ/∂p_j` for the parameters of calibration effects installed as
+    /// energy terms (`crate::calibrate::effects`), indexed by each effect's
+    /// parameter slot; grown on demand by [`VjpAccumulator::effect`].
+    pub effects: Vec<f64>,
     /// Quantities some term could not differentiate (a term without a `vjp`
     /// names itself);
     /// gradients that depend on them are not reported.
@@ -76,6 +82,7 @@ impl VjpAccumulator {
             pose_prev: vec![Matrix3x4::zeros(); n],
             pose_prev2: vec![Matrix3x4::zeros(); n],
             q_prev: DVector::zeros(model.ndof()),
+            q_prev2: DVector::zeros(model.ndof()),
             vertex: model
                 .links
                 .iter()
@@ -89,6 +96,7 @@ impl VjpAccumulator {
             want_vertices: true,
             channels: vec![[0.0; 4]; nchannels],
             physical: PhysicalGrad::default(),
+            effects: Vec::new(),
             unavailable: Vec::new(),
         }
     }
@@ -98,6 +106,8 @@ impl VjpAccumulator {
             v.iter_mut().for_each(|g| g.fill(0.0));
         }
         self.q_prev.fill(0.0);
+        self.q_prev2.fill(0.0);
+        self.effects.fill(0.0);
         self.vertex
             .iter_mut()
             .flatten()
@@ -105,5 +115,16 @@ impl VjpAccumulator {
             .for_each(|g| g.fill(0.0));
         self.channels.iter_mut().for_each(|c| *c = [0.0; 4]);
         self.physical = PhysicalGrad::default();
+    }
+}
+
+impl VjpAccumulator {
+    /// The entry `∂Φ/∂p_slot` of the effect-parameter channel (grown with
+    /// zeros when `slot` is new).
+    pub fn effect(&mut self, slot: usize) -> &mut f64 {
+        if self.effects.len() <= slot {
+            self.effects.resize(slot + 1, 0.0);
+        }
+        &mut self.effects[slot]
     }
 }

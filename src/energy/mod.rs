@@ -8,7 +8,7 @@
 //! derivatives, so a term never sees the kinematic tree.
 //!
 //! Inertia, gravity and PD are here; contact, friction and calibration
-//! effects plug in the same way.
+//! effects (`crate::calibrate::effects`) plug in the same way.
 
 pub mod contact;
 pub mod friction;
@@ -61,6 +61,8 @@ pub struct StepContext<'a> {
     pub poses_prev2: &'a [Pose],
     /// Coordinates at `t` (`θ^t`).
     pub q_prev: &'a DVector<f64>,
+    /// Coordinates at `t−1` (`θ^{t−1}`, in the charts of `q_prev`).
+    pub q_prev2: &'a DVector<f64>,
     /// PD targets for this step (`u^t`).
     pub targets: &'a [PdTarget],
 }

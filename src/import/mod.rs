@@ -496,6 +496,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         ground: None,
         obstacles: Vec::new(),
         contact: None,
+        effects: Vec::new(),
     };
     // The design must load as a scene.
     crate::scene::Scene::from_spec(scene.clone(), &src.file).map_err(|e| ImportError::Invalid {

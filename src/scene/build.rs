@@ -217,6 +217,8 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         .as_ref()
         .map(|c| environment::contact_settings(c, &model))
         .transpose()?;
+    let effects =
+        crate::calibrate::effects::resolve(&spec.effects, &model, contact.is_some(), "effects")?;
     let settings = SimSettings {
         dt: spec.dt,
         gravity: Vector3::from(spec.gravity),
@@ -232,6 +234,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         charts,
         steps: spec.steps,
         contact,
+        effects,
         spec,
     })
 }

@@ -71,8 +71,11 @@ pub struct Scene {
     pub charts: Vec<Matrix3<f64>>,
     /// Default number of steps.
     pub steps: usize,
-    /// Contact settings, when the scene enables contact.
+    /// Contact settings, when the scene enables contact (without the
+    /// scene's contact effects; [`Scene::simulator`] applies them).
     pub contact: Option<ContactSettings>,
+    /// Extra physical effects (`effects:`), validated.
+    pub effects: Vec<crate::calibrate::effects::Effect>,
     /// The parsed specification (kept for writing designs back).
     pub spec: SceneSpec,
 }
@@ -140,7 +143,11 @@ impl Scene {
             self.controller.clone(),
             state,
         );
-        if let Some(c) = &self.contact {
+        let contact = self
+            .contact
+            .clone()
+            .map(|c| crate::calibrate::effects::contact_settings(&self.effects, c));
+        if let Some(c) = &contact {
             sim.energies
                 .push(Box::new(crate::energy::ContactEnergy::new(
                     &self.model,
@@ -152,6 +159,7 @@ impl Scene {
                 sim.energies.push(Box::new(friction));
             }
         }
+        crate::calibrate::effects::install(&self.effects, &mut sim);
         sim
     }
 }

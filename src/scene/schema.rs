@@ -38,7 +38,24 @@
 //!         shoulder: {type: sine, offset: 0, terms: [{amplitude: 0.5, frequency: 1, phase: 0}]}
 //!     initial:               # per joint (default zeros)
 //!       shoulder: {q: [0.1], qdot: [0.0]}
+//! effects:                   # optional extra physics (default none; written by `sdrs calibrate`)
+//!   - {effect: joint_damping, on: all, values: [0.05]}      # c (N·m·s/rad), every joint coordinate
+//!   - {effect: joint_friction, on: shoulder, values: [0.2], eps: 1.0e-4}  # f (N·m); ε ((rad/s)², default 1e-4)
+//!   - {effect: armature, on: all, values: [0.01]}           # a (kg·m²)
+//!   - {effect: actuator_gain, on: all, values: [0.8]}       # g: k_p, k_d → g·k_p, g·k_d
+//!   - {effect: joint_offset, on: shoulder, values: [0.02]}  # encoder bias (rad); measurement only,
+//!                            #   `sdrs simulate` writes physical coordinates
+//!   - {effect: payload, on: upper, values: [0.5, 0.1, 0, 0]}  # m (kg), x y z (m, link frame)
+//!   - {effect: link_mass_scale, on: all, values: [1.1]}     # σ (link name or all)
+//!   - {effect: contact_mu, values: [0.6]}                   # μ; also contact_kappa (J·m),
+//!                            #   contact_s (m); override `contact:` (needs it)
 //! ```
+//!
+//! `on` is `all` (default: one value shared by every revolute, prismatic
+//! and ball coordinate, or every link with mass), a coordinate's column name
+//! as in the trajectory CSV, or a link name (`robot/link` when the scene
+//! has several robots or objects). Units and formulas: the module docs of
+//! `crate::calibrate::effects::*`.
 
 use crate::control::Signal;
 use crate::sim::NewtonOptions;
@@ -83,6 +100,10 @@ pub struct SceneSpec {
     /// Contact and friction parameters; contact is off when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSpec>,
+    /// Extra physical effects (written by `sdrs calibrate`; default none).
+    /// See [`crate::calibrate::effects`].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<crate::calibrate::effects::EffectSpec>,
 }
 
 /// A free rigid object: one link on a 6-DOF free joint named after the

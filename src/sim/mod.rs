@@ -408,6 +408,7 @@ fn make_context<'a>(
         poses_prev: &state.poses,
         poses_prev2: &state.poses_prev,
         q_prev: &state.q,
+        q_prev2: &state.q_prev,
         targets,
     }
 }

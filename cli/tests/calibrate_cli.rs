@@ -1,0 +1,190 @@
+//! `sdrs calibrate` end to end: outputs and their schema, the calibrated
+//! scene runs in `sdrs simulate` and reproduces the data, the result is
+//! bitwise the same for 1 and 2 threads.
+
+#[path = "../../tests/calibrate_support/mod.rs"]
+mod calibrate_support;
+mod support;
+use support as common;
+
+use calibrate_support::{Sampling, measured_csv, with_effects};
+
+fn setup(name: &str) -> (common::Scratch, std::path::PathBuf, std::path::PathBuf) {
+    let dir = common::scratch_dir(name);
+    let scene = common::robots("calibrate/arm2.yaml");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let data = measured_csv(
+        &with_effects(&text, &["{effect: joint_friction, on: all, values: [0.4]}"]),
+        &Sampling::default(),
+    );
+    let m = dir.join("measured.csv");
+    std::fs::write(&m, data).unwrap();
+    (dir, scene, m)
+}
+
+fn calibrate(scene: &std::path::Path, m: &std::path::Path, out: &std::path::Path, threads: &str) {
+    let o = common::sdrs()
+        .env("RAYON_NUM_THREADS", threads)
+        .args([
+            "calibrate",
+            scene.to_str().unwrap(),
+            "--measured",
+            m.to_str().unwrap(),
+        ])
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--effects",
+            "joint_damping,joint_friction,armature,payload",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn calibrate_writes_a_runnable_scene_and_the_documented_json() {
+    let (dir, scene, m) = setup("calibrate-cli");
+    let out = dir.join("out");
+    calibrate(&scene, &m, &out, "2");
+    for f in [
+        "calibrated.yaml",
+        "calibration.json",
+        "report.md",
+        "residuals.svg",
+        "channel_shoulder.svg",
+        "channel_elbow.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(j["verdict"], "effect");
+    assert_eq!(j["effect"], "joint_friction");
+    let f = j["parameters"]["joint_friction/all"].as_f64().unwrap();
+    assert!((f - 0.4).abs() < 0.02, "fitted {f}");
+    let c = &j["confidence"]["joint_friction/all"];
+    assert!(c["low"].as_f64().unwrap() < f && f < c["high"].as_f64().unwrap());
+    for k in ["gap_before", "gap_after"] {
+        assert!(j[k]["overall"].as_f64().unwrap() > 0.0);
+        assert!(j[k]["channels"]["shoulder"].is_number() && j[k]["channels"]["elbow"].is_number());
+    }
+    assert!(
+        j["gap_after"]["overall"].as_f64().unwrap()
+            < 0.1 * j["gap_before"]["overall"].as_f64().unwrap()
+    );
+    let ranking = j["ranking"].as_array().unwrap();
+    assert!(ranking.len() >= 4);
+    assert_eq!(ranking[0]["candidate"], "joint_friction/all");
+    // The calibrated scene runs and reproduces the measured data to the noise.
+    let traj = dir.join("calibrated.csv");
+    let o = common::sdrs()
+        .args([
+            "simulate",
+            out.join("calibrated.yaml").to_str().unwrap(),
+            "--steps",
+            "610",
+            "--out",
+            traj.to_str().unwrap(),
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let sim: Vec<Vec<f64>> = std::fs::read_to_string(&traj)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let meas: Vec<Vec<f64>> = std::fs::read_to_string(&m)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let dt = 0.002;
+    let mut sq = 0.0;
+    let mut n = 0;
+    for row in &meas {
+        let x = row[0] / dt;
+        let k = x.floor() as usize;
+        let w = x - k as f64;
+        for c in 1..3 {
+            let v = (1.0 - w) * sim[k][c] + w * sim[k + 1][c];
+            sq += (v - row[c]).powi(2);
+            n += 1;
+        }
+    }
+    let rms = (sq / n as f64).sqrt();
+    assert!(
+        rms < 2e-4,
+        "calibrated scene vs measured: RMS {rms} (noise 1e-4)"
+    );
+}
+
+#[test]
+fn calibration_is_bitwise_deterministic_across_thread_counts() {
+    let (dir, scene, m) = setup("calibrate-det");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    calibrate(&scene, &m, &a, "1");
+    calibrate(&scene, &m, &b, "2");
+    for f in [
+        "calibration.json",
+        "calibrated.yaml",
+        "report.md",
+        "residuals.svg",
+    ] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f} differs"
+        );
+    }
+}
+
+/// The bad-input test's scene and a well-formed measured file.
+fn bad_input_scene() -> std::path::PathBuf {
+    common::robots("calibrate/arm2.yaml")
+}
+
+fn good_csv(n: usize) -> String {
+    let mut s = String::from("t,shoulder,elbow\n");
+    for i in 0..n {
+        let t = i as f64 * 0.02;
+        s.push_str(&format!("{t},{},{}\n", 0.2 + 0.1 * t, -0.3 + 0.2 * t));
+    }
+    s
+}
+
+#[test]
+fn cli_reports_errors_with_exit_code_1() {
+    let dir = common::scratch_dir("calibrate-cli-bad");
+    let m = dir.join("measured.csv");
+    std::fs::write(
+        &m,
+        good_csv(20).replace("t,shoulder,elbow", "t,shoulder,wrist"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = common::sdrs()
+        .args([
+            "calibrate",
+            bad_input_scene().to_str().unwrap(),
+            "--measured",
+            m.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("measured.csv") && err.contains("\"wrist\""),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

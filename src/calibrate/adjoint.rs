@@ -1,0 +1,93 @@
+//! The exact gradient of a candidate's training objective by the adjoint
+//! method: `g = Jᵀr = ∇_p ½‖r‖²` (paper, `differentiable.tex`; one forward
+//! and one backward pass, whatever the number of parameters).
+//!
+//! With interpolated residuals `r_i = (1 − w_i) θ_c^{k_i} + w_i θ_c^{k_i+1} +
+//! b_c − y_i`, `½‖r‖²` has the same parameter gradient as the linear
+//! functional `L = Σ_i r_i [(1 − w_i) θ_c^{k_i} + w_i θ_c^{k_i+1}]` with the
+//! coefficients frozen at the forward solution, which the backward pass
+//! differentiates ([`crate::diff::LossTerm::JointLinear`]); effect
+//! parameters map through [`effects::gradient`], and an encoder offset `b_c`
+//! (measurement side) gets `Σ_i r_i` over its channels. Charted rotation
+//! channels (free and spherical joints) are reported as absolute rotation
+//! vectors, not tape coordinates; for them `None` is returned and the fit
+//! falls back to `Jᵀr` from its finite-difference Jacobian.
+
+use super::effects::{self, EffectKind, Target};
+use super::problem::{Candidate, Problem};
+use crate::diff::{Loss, LossTerm, backward, record};
+use std::collections::BTreeMap;
+
+/// Training residuals and their exact gradient `Jᵀr` at `p`.
+pub fn residual_gradient(
+    pb: &Problem,
+    cand: &Candidate,
+    p: &[f64],
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let model = &pb.scene.model;
+    if pb
+        .measured
+        .channels
+        .iter()
+        .any(|c| model.links[model.dofs[c.dof].link].joint.has_chart())
+    {
+        return None;
+    }
+    let specs = cand.specs(p);
+    let sc = pb.scene_with(&specs)?;
+    let mut sim = sc.simulator();
+    let tape = record(&mut sim, pb.steps_to(pb.split)).ok()?;
+    let mut offset = vec![0.0; model.ndof()];
+    for (dofs, b) in effects::offsets(&sc.effects) {
+        for &k in dofs {
+            offset[k] += b;
+        }
+    }
+    let dt = sc.settings.dt;
+    let h = tape.len();
+    let mut coef: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    let mut r = Vec::new();
+    let mut sum_r = vec![0.0; model.ndof()];
+    for i in 0..pb.split {
+        let t = pb.measured.times[i];
+        let x = t / dt;
+        let k = (x.floor().max(0.0) as usize).min(h);
+        let w = if k >= h { 0.0 } else { x - k as f64 };
+        for ch in &pb.measured.channels {
+            let Some(y) = ch.values[i] else { continue };
+            let qa = tape.coords(k as isize).0[ch.dof];
+            let v = if w == 0.0 {
+                qa
+            } else {
+                (1.0 - w) * qa + w * tape.coords(k as isize + 1).0[ch.dof]
+            };
+            let ri = v + offset[ch.dof] - y;
+            r.push(ri);
+            sum_r[ch.dof] += ri;
+            *coef.entry((k, ch.dof)).or_default() += (1.0 - w) * ri;
+            if w != 0.0 {
+                *coef.entry((k + 1, ch.dof)).or_default() += w * ri;
+            }
+        }
+    }
+    let loss = Loss {
+        terms: coef
+            .into_iter()
+            .map(|((level, dof), coef)| LossTerm::JointLinear { dof, level, coef })
+            .collect(),
+    };
+    let grads = backward(&mut sim, &tape, &loss).ok()?;
+    if !grads.unavailable.is_empty() {
+        return None;
+    }
+    let all = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let first = sc.effects.len() - specs.len();
+    let mut g = Vec::with_capacity(p.len());
+    for e in &sc.effects[first..] {
+        match (e.kind, &e.target) {
+            (EffectKind::JointOffset, Target::Dofs(d)) => g.push(d.iter().map(|&k| sum_r[k]).sum()),
+            _ => g.extend_from_slice(&all[e.slot..e.slot + e.values.len()]),
+        }
+    }
+    Some((r, g))
+}

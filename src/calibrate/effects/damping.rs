@@ -1,0 +1,71 @@
+//! Viscous joint damping: a generalized force `τ = −c θ̇` on each coordinate.
+//!
+//! Position-level potential (paper, eq. `SDRS`, added to the step objective):
+//!
+//! ```text
+//! D(θ) = Σ_k c_k/(2Δt) · (θ_k − θ_k^t)²            (J)
+//! ∂D/∂θ_k = c_k (θ_k − θ_k^t)/Δt = c_k θ̇_k          (the damping force)
+//! ∂²D/∂θ_k² = c_k/Δt
+//! ```
+//!
+//! with `θ̇ = (θ − θ^t)/Δt` the backward-difference velocity of the step.
+//! Units: `c` in N·m·s/rad (revolute) or N·s/m (prismatic). Adjoint
+//! (`Φ = Σ_k λ_k c_k (θ_k − θ_k^t)/Δt`): `∂Φ/∂θ_k^t = −λ_k c_k/Δt`,
+//! `∂Φ/∂c_k = λ_k (θ_k − θ_k^t)/Δt`.
+
+use super::JointCoeffs;
+use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::kinematics::Kinematics;
+use nalgebra::DVector;
+
+/// The damping term over a set of coordinates.
+#[derive(Clone, Debug)]
+pub struct JointDamping(pub JointCoeffs);
+
+impl Energy for JointDamping {
+    fn name(&self) -> &'static str {
+        "joint_damping"
+    }
+
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        _kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt = 1.0 / ctx.dt;
+        for (k, c, _) in self.0.iter() {
+            let d = q[k] - ctx.q_prev[k];
+            acc.value += 0.5 * c * d * d * inv_dt;
+            if need >= Need::Gradient {
+                acc.dof_grad[k] += c * d * inv_dt;
+            }
+            if need >= Need::Hessian {
+                acc.dof_hess[(k, k)] += c * inv_dt;
+            }
+        }
+        Ok(())
+    }
+
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        _kin: &Kinematics,
+        dir: &AdjointDirection,
+        out: &mut VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt = 1.0 / ctx.dt;
+        for (k, c, slot) in self.0.iter() {
+            let l = dir.lambda[k];
+            out.q_prev[k] -= l * c * inv_dt;
+            if let Some(s) = slot {
+                *out.effect(s) += l * (q[k] - ctx.q_prev[k]) * inv_dt;
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,35 @@
+//! Calibration (`sdrs calibrate`): find where simulation and measurement
+//! disagree, name the missing physical effect, fit it, and show the gap
+//! shrink.
+//!
+//! - [`effects`]: the library of candidate effects (terms of the step
+//!   objective or parameters), each with its adjoint gradient; how to add
+//!   one is in its module doc.
+//! - [`data`]: measured CSV files, validation, alignment by interpolation.
+//! - [`problem`]: the least-squares problem of a candidate on a window.
+//! - [`candidates`]: the candidate list with bounds and starts.
+//! - [`adjoint`]: the exact gradient `Jᵀr` of a candidate's residuals.
+//! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
+//! - [`select`]: fits in parallel, pairs, the criterion, the verdict.
+//! - [`analysis`]: residuals per channel, regime and time window.
+//! - [`report`], [`plots`]: `calibration.json`, `report.md`, SVG plots.
+//! - [`run`]: options, command-line arguments, [`run()`].
+//!
+//! Outputs and their schema: [`report`] and the README.
+
+pub mod adjoint;
+pub mod analysis;
+pub mod candidates;
+pub mod data;
+pub mod effects;
+pub mod error;
+pub mod fit;
+pub mod plots;
+pub mod problem;
+pub mod report;
+pub mod run;
+pub mod select;
+
+pub use error::CalibrateError;
+pub use report::CalibrationResult;
+pub use run::{CalibrateArgs, CalibrateOptions, calibrate, run};

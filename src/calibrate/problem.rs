@@ -1,0 +1,171 @@
+//! The least-squares problem of one candidate: simulate the scene with the
+//! candidate's effects at parameter values `p`, and compare with the
+//! measured samples of a time window.
+//!
+//! Residuals `r_{i,c} = θ̂_c(t_i; p) + b_c − y_{i,c}` (SI units of each
+//! channel: rad or m), over samples `i` of the window and channels `c` with a
+//! measured value; `θ̂` is the simulation on the scene's Δt interpolated
+//! linearly at `t_i`, `b_c` the candidate's encoder offsets (0 otherwise).
+
+use super::data::{Measured, interpolate};
+use super::effects::{self, Effect, EffectKind, EffectSpec};
+use crate::scene::Scene;
+use nalgebra::DVector;
+
+/// One effect of a candidate, with the positions of its values in the
+/// candidate's parameter vector.
+#[derive(Clone, Debug)]
+pub struct Template {
+    pub spec: EffectSpec,
+}
+
+/// A candidate model change: one or more effects whose values are free.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// `joint_damping/all`, or `a + b` for pairs.
+    pub label: String,
+    pub templates: Vec<Template>,
+    /// Box bounds and a typical magnitude per parameter (SI).
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    pub typical: Vec<f64>,
+    /// Starting points of the fit.
+    pub starts: Vec<Vec<f64>>,
+}
+
+impl Candidate {
+    pub fn nparams(&self) -> usize {
+        self.lower.len()
+    }
+
+    /// The effects with values `p`.
+    pub fn specs(&self, p: &[f64]) -> Vec<EffectSpec> {
+        let mut k = 0;
+        self.templates
+            .iter()
+            .map(|t| {
+                let mut s = t.spec.clone();
+                for v in s.values.iter_mut() {
+                    *v = p[k];
+                    k += 1;
+                }
+                s
+            })
+            .collect()
+    }
+
+    /// Kinds of the effects (for pairing and reports).
+    pub fn kinds(&self) -> Vec<EffectKind> {
+        self.templates.iter().map(|t| t.spec.effect).collect()
+    }
+}
+
+/// A simulated trajectory on the scene's time grid.
+#[derive(Clone, Debug)]
+pub struct Simulated {
+    pub dt: f64,
+    /// Reported coordinates at `k·dt`.
+    pub states: Vec<DVector<f64>>,
+    /// Whether any contact pair was active at `k·dt` (false at `k = 0`).
+    pub contact: Vec<bool>,
+    /// Encoder offsets per coordinate.
+    pub offset: Vec<f64>,
+}
+
+impl Simulated {
+    /// The measured-side value of coordinate `dof` at time `t`.
+    pub fn at(&self, dof: usize, t: f64) -> f64 {
+        interpolate(&self.states, self.dt, dof, t) + self.offset[dof]
+    }
+
+    /// Velocity and acceleration of `dof` at `t` by central differences of
+    /// the interpolated trajectory (step `2Δt`).
+    pub fn rates(&self, dof: usize, t: f64) -> (f64, f64) {
+        let h = 2.0 * self.dt;
+        let t = t.max(h);
+        let (a, b, c) = (
+            interpolate(&self.states, self.dt, dof, t - h),
+            interpolate(&self.states, self.dt, dof, t),
+            interpolate(&self.states, self.dt, dof, t + h),
+        );
+        ((c - a) / (2.0 * h), (c - 2.0 * b + a) / (h * h))
+    }
+
+    /// Whether contact is active at `t` (nearest recorded step).
+    pub fn in_contact(&self, t: f64) -> bool {
+        let k = ((t / self.dt).round() as usize).min(self.contact.len() - 1);
+        self.contact[k]
+    }
+}
+
+/// Everything fixed while fitting: the scene (without the candidate), the
+/// data and the training window.
+pub struct Problem<'a> {
+    pub scene: &'a Scene,
+    pub measured: &'a Measured,
+    /// First held-out sample.
+    pub split: usize,
+}
+
+impl Problem<'_> {
+    /// Steps needed to reach sample `end − 1`.
+    pub fn steps_to(&self, end: usize) -> usize {
+        let t = self.measured.times[end - 1];
+        (t / self.scene.settings.dt).ceil() as usize + 1
+    }
+
+    /// The scene with extra effects (validated against the model).
+    pub fn scene_with(&self, extra: &[EffectSpec]) -> Option<Scene> {
+        let mut sc = self.scene.clone();
+        let mut specs: Vec<EffectSpec> = sc.spec.effects.clone();
+        specs.extend_from_slice(extra);
+        let resolved: Vec<Effect> =
+            effects::resolve(&specs, &sc.model, sc.contact.is_some(), "effects").ok()?;
+        sc.effects = resolved;
+        sc.spec.effects = specs;
+        Some(sc)
+    }
+
+    /// Simulates the scene with `extra` effects up to sample `end − 1`;
+    /// `None` when a step fails (the parameters are then rejected).
+    pub fn simulate(&self, extra: &[EffectSpec], end: usize) -> Option<Simulated> {
+        let sc = self.scene_with(extra)?;
+        let mut sim = sc.simulator();
+        let traj = crate::sim::run::run(&mut sim, self.steps_to(end), |_| {}).ok()?;
+        let n = sc.model.ndof();
+        let mut offset = vec![0.0; n];
+        for (dofs, b) in effects::offsets(&sc.effects) {
+            for &k in dofs {
+                offset[k] += b;
+            }
+        }
+        let mut contact = vec![false];
+        contact.extend(traj.diagnostics.iter().map(|d| d.contact_pairs > 0));
+        Some(Simulated {
+            dt: sc.settings.dt,
+            states: traj.states,
+            contact,
+            offset,
+        })
+    }
+
+    /// Residuals over samples `range` (appended to `out`).
+    pub fn residuals(&self, sim: &Simulated, range: std::ops::Range<usize>, out: &mut Vec<f64>) {
+        for i in range {
+            let t = self.measured.times[i];
+            for ch in &self.measured.channels {
+                if let Some(y) = ch.values[i] {
+                    out.push(sim.at(ch.dof, t) - y);
+                }
+            }
+        }
+    }
+
+    /// Training residuals of the candidate at `p` (`None`: simulation failed).
+    pub fn train_residuals(&self, cand: &Candidate, p: &[f64]) -> Option<Vec<f64>> {
+        let sim = self.simulate(&cand.specs(p), self.split)?;
+        let mut r = Vec::new();
+        self.residuals(&sim, 0..self.split, &mut r);
+        r.iter().all(|x| x.is_finite()).then_some(r)
+    }
+}

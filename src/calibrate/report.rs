@@ -1,0 +1,397 @@
+//! `calibration.json` (schema below; also in the README) and `report.md`.
+//!
+//! ```text
+//! verdict        "effect" | "none"
+//! effect         documented name of the chosen effect (pairs: "a+b"), null for none
+//! candidate      chosen candidate label ("joint_damping/all"), null for none
+//! parameters     {"<effect>/<joint|link|all>[:<param>]": value (SI)}
+//! confidence     {key: {value, low, high}}  95 % from the Gauss–Newton Hessian
+//!                (low/high null when the parameter is not identifiable)
+//! gap_before     {"channels": {name: held-out RMS}, "overall": RMS}  the scene as given
+//! gap_after      same, with the chosen effect (= gap_before for "none")
+//! gap_reduction  1 − overall_after/overall_before
+//! indistinguishable  single candidates within ΔC < 2 of the chosen one
+//! ranking        [{candidate, effects, parameters, rms_train, rms_holdout,
+//!                  criterion, delta_criterion (vs none, > 0 is better), explained}]
+//! baseline       {rms_train, rms_holdout, criterion}
+//! residuals_before / residuals_after   per channel: RMS overall, train, held-out,
+//!                free/contact, moving/at rest, accelerating/braking, correlations
+//!                with sign θ̇, θ̇, θ̈; the three worst of ten time windows
+//! holdout, split_time, samples, simulations
+//! ```
+
+use super::analysis::Analysis;
+use super::effects::{self, EffectSpec};
+use super::problem::Problem;
+use super::select::{Scored, Selection};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Held-out RMS per channel and overall.
+#[derive(Clone, Debug, Serialize)]
+pub struct Gap {
+    pub channels: BTreeMap<String, f64>,
+    pub overall: f64,
+}
+
+/// A 95 % interval.
+#[derive(Clone, Debug, Serialize)]
+pub struct Interval {
+    pub value: f64,
+    pub low: Option<f64>,
+    pub high: Option<f64>,
+}
+
+/// One entry of the ranking.
+#[derive(Clone, Debug, Serialize)]
+pub struct Ranked {
+    pub candidate: String,
+    pub effects: Vec<String>,
+    pub parameters: BTreeMap<String, f64>,
+    pub rms_train: f64,
+    pub rms_holdout: f64,
+    pub criterion: f64,
+    pub delta_criterion: f64,
+    /// `1 − RSS_train(fit)/RSS_train(none)`.
+    pub explained: f64,
+}
+
+/// The baseline's scores.
+#[derive(Clone, Debug, Serialize)]
+pub struct Baseline {
+    pub rms_train: f64,
+    pub rms_holdout: f64,
+    pub criterion: f64,
+}
+
+/// Sample counts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Samples {
+    pub times: usize,
+    pub train: usize,
+    pub holdout: usize,
+}
+
+/// Everything `calibration.json` holds.
+#[derive(Clone, Debug, Serialize)]
+pub struct CalibrationResult {
+    pub verdict: String,
+    pub effect: Option<String>,
+    pub candidate: Option<String>,
+    pub parameters: BTreeMap<String, f64>,
+    pub confidence: BTreeMap<String, Interval>,
+    pub gap_before: Gap,
+    pub gap_after: Gap,
+    pub gap_reduction: f64,
+    pub ranking: Vec<Ranked>,
+    /// Other single candidates whose criterion is within 2 of the chosen
+    /// one's: the data cannot tell them apart (e.g. a gain on every joint of
+    /// a contact-free robot is exactly a mass scale of every link by 1/g).
+    pub indistinguishable: Vec<String>,
+    pub baseline: Baseline,
+    pub residuals_before: Analysis,
+    pub residuals_after: Analysis,
+    pub holdout: f64,
+    pub split_time: f64,
+    pub samples: Samples,
+    pub simulations: usize,
+    /// The chosen effects as scene-file entries (also in `calibrated.yaml`).
+    pub effects: Vec<EffectSpec>,
+    /// Wall time (s); not written to the JSON (outputs are deterministic).
+    #[serde(skip)]
+    pub seconds: f64,
+}
+
+/// Parameters of a scored candidate by key.
+pub fn parameters(pb: &Problem, s: &Scored) -> BTreeMap<String, f64> {
+    param_list(pb, s).into_iter().collect()
+}
+
+/// Parameters of a scored candidate, in the order of its parameter vector.
+pub fn param_list(pb: &Problem, s: &Scored) -> Vec<(String, f64)> {
+    let mut out = Vec::new();
+    let specs = s.candidate.specs(&s.fit.params);
+    if let Some(sc) = pb.scene_with(&specs) {
+        let base = sc.effects.len() - specs.len();
+        for e in &sc.effects[base..] {
+            for (k, key) in effects::param_keys(e).into_iter().enumerate() {
+                out.push((key, e.values[k]));
+            }
+        }
+    }
+    out
+}
+
+fn gap(a: &Analysis, pb: &Problem, s: &Scored) -> Gap {
+    Gap {
+        channels: a
+            .channels
+            .iter()
+            .map(|c| (c.channel.clone(), c.holdout.rms))
+            .collect(),
+        overall: s.rms_holdout().max(0.0) * f64::from(pb.split < pb.measured.times.len()),
+    }
+}
+
+/// Assembles the result.
+pub fn result(
+    pb: &Problem,
+    sel: &Selection,
+    before: Analysis,
+    after: Analysis,
+    holdout: f64,
+) -> CalibrationResult {
+    let base = &sel.baseline;
+    let chosen = sel.chosen.map(|i| &sel.ranking[i]);
+    let after_scored = chosen.unwrap_or(base);
+    let ranking = sel
+        .ranking
+        .iter()
+        .map(|s| Ranked {
+            candidate: s.candidate.label.clone(),
+            effects: s
+                .candidate
+                .kinds()
+                .iter()
+                .map(|k| k.name().into())
+                .collect(),
+            parameters: parameters(pb, s),
+            rms_train: s.rms_train(),
+            rms_holdout: s.rms_holdout(),
+            criterion: s.criterion,
+            delta_criterion: base.criterion - s.criterion,
+            explained: 1.0 - s.fit.rss / base.fit.rss.max(1e-300),
+        })
+        .collect();
+    let (parameters, confidence, effects) = match chosen {
+        Some(s) => {
+            let list = param_list(pb, s);
+            let p = list.iter().cloned().collect();
+            let conf = list
+                .iter()
+                .map(|(k, _)| k)
+                .zip(s.fit.params.iter().zip(&s.fit.half_width))
+                .map(|(k, (v, hw))| {
+                    (
+                        k.clone(),
+                        Interval {
+                            value: *v,
+                            low: hw.map(|h| v - h),
+                            high: hw.map(|h| v + h),
+                        },
+                    )
+                })
+                .collect();
+            (p, conf, s.candidate.specs(&s.fit.params))
+        }
+        None => Default::default(),
+    };
+    let gap_before = gap(&before, pb, base);
+    let gap_after = gap(&after, pb, after_scored);
+    CalibrationResult {
+        verdict: if chosen.is_some() { "effect" } else { "none" }.into(),
+        effect: chosen.map(|s| {
+            s.candidate
+                .kinds()
+                .iter()
+                .map(|k| k.name())
+                .collect::<Vec<_>>()
+                .join("+")
+        }),
+        candidate: chosen.map(|s| s.candidate.label.clone()),
+        parameters,
+        confidence,
+        gap_reduction: 1.0 - gap_after.overall / gap_before.overall.max(1e-300),
+        gap_before,
+        gap_after,
+        indistinguishable: match chosen {
+            Some(c) => sel
+                .ranking
+                .iter()
+                .filter(|s| {
+                    s.candidate.label != c.candidate.label
+                        && s.candidate.templates.len() == 1
+                        && (s.criterion - c.criterion).abs() < 2.0
+                })
+                .map(|s| s.candidate.label.clone())
+                .collect(),
+            None => Vec::new(),
+        },
+        ranking,
+        baseline: Baseline {
+            rms_train: base.rms_train(),
+            rms_holdout: base.rms_holdout(),
+            criterion: base.criterion,
+        },
+        residuals_before: before,
+        residuals_after: after,
+        holdout,
+        split_time: pb.measured.times[pb.split.min(pb.measured.times.len() - 1)],
+        samples: Samples {
+            times: pb.measured.times.len(),
+            train: base.fit.n,
+            holdout: base.n_holdout,
+        },
+        simulations: sel.simulations,
+        effects,
+        seconds: 0.0,
+    }
+}
+
+/// `report.md`.
+pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
+    let mut s = String::new();
+    let w = |s: &mut String, t: String| {
+        s.push_str(&t);
+        s.push('\n');
+    };
+    w(&mut s, "# Calibration report\n".into());
+    w(
+        &mut s,
+        format!(
+            "Scene `{scene}`, measured data `{measured}`: {} samples, training window up to t = {:.4} s ({} residuals), held-out window after it ({} residuals, holdout {}).\n",
+            r.samples.times, r.split_time, r.samples.train, r.samples.holdout, r.holdout
+        ),
+    );
+    match &r.candidate {
+        Some(c) => w(
+            &mut s,
+            format!(
+                "**Verdict: missing effect `{}`** (candidate `{c}`); the held-out RMS error shrinks from {:.4e} to {:.4e} ({:.1} %).\n",
+                r.effect.clone().unwrap_or_default(),
+                r.gap_before.overall,
+                r.gap_after.overall,
+                100.0 * r.gap_reduction
+            ),
+        ),
+        None => w(
+            &mut s,
+            format!(
+                "**Verdict: no missing effect found**: no candidate improves the held-out error beyond the noise (held-out RMS {:.4e}).\n",
+                r.gap_before.overall
+            ),
+        ),
+    }
+    if !r.indistinguishable.is_empty() {
+        w(
+            &mut s,
+            format!(
+                "Indistinguishable on these data (criterion within 2): {}.\n",
+                r.indistinguishable
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        );
+    }
+    if !r.parameters.is_empty() {
+        w(
+            &mut s,
+            "| parameter | value | 95 % interval |\n|---|---:|---|".into(),
+        );
+        for (k, v) in &r.parameters {
+            let ci = r.confidence.get(k).and_then(|c| Some((c.low?, c.high?)));
+            w(
+                &mut s,
+                format!(
+                    "| `{k}` | {v:.6e} | {} |",
+                    match ci {
+                        Some((a, b)) => format!("[{a:.4e}, {b:.4e}]"),
+                        None => "not identifiable".into(),
+                    }
+                ),
+            );
+        }
+        w(&mut s, String::new());
+    }
+    w(
+        &mut s,
+        "## Where the model disagrees\n\nRMS of simulated − measured (SI units of each channel) overall, per window and per regime (–: no samples), before and after calibration.\n".into(),
+    );
+    w(&mut s, "| channel | RMS | train | held-out | free | contact | moving | at rest | accelerating | braking | corr sign θ̇ | corr θ̇ | corr θ̈ |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
+    let cell = |x: &super::analysis::Rms| {
+        if x.samples == 0 {
+            "–".to_string()
+        } else {
+            format!("{:.3e}", x.rms)
+        }
+    };
+    for (a, label) in [
+        (&r.residuals_before, "before"),
+        (&r.residuals_after, "after"),
+    ] {
+        for c in &a.channels {
+            let cells = [
+                &c.all,
+                &c.train,
+                &c.holdout,
+                &c.free,
+                &c.contact,
+                &c.moving,
+                &c.at_rest,
+                &c.accelerating,
+                &c.braking,
+            ]
+            .map(cell)
+            .join(" | ");
+            w(
+                &mut s,
+                format!(
+                    "| {} ({label}) | {cells} | {:+.2} | {:+.2} | {:+.2} |",
+                    c.channel, c.corr_velocity_sign, c.corr_velocity, c.corr_acceleration
+                ),
+            );
+        }
+    }
+    w(
+        &mut s,
+        "\nWindows where the error concentrates (before):\n".into(),
+    );
+    for win in &r.residuals_before.worst_windows {
+        w(
+            &mut s,
+            format!(
+                "- t ∈ [{:.3}, {:.3}] s: RMS {:.3e}, {:.1} % of the squared error",
+                win.t_start,
+                win.t_end,
+                win.rms,
+                100.0 * win.share
+            ),
+        );
+    }
+    w(&mut s, "\n## Ranking\n\nCriterion `C = BIC(train) + n_ho ln(RSS_ho/n_ho)`; ΔC > 0 is better than the model as given.\n".into());
+    w(&mut s, "| # | candidate | ΔC | held-out RMS | train RMS | explained | parameters |\n|---:|---|---:|---:|---:|---:|---|".into());
+    for (i, c) in r.ranking.iter().enumerate() {
+        let p: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4e}"))
+            .collect();
+        w(
+            &mut s,
+            format!(
+                "| {} | `{}` | {:.1} | {:.3e} | {:.3e} | {:.3} | {} |",
+                i + 1,
+                c.candidate,
+                c.delta_criterion,
+                c.rms_holdout,
+                c.rms_train,
+                c.explained,
+                p.join(", ")
+            ),
+        );
+    }
+    w(
+        &mut s,
+        format!(
+            "\nBaseline (no effect): train RMS {:.3e}, held-out RMS {:.3e}. Simulations: {}.\n",
+            r.baseline.rms_train, r.baseline.rms_holdout, r.simulations
+        ),
+    );
+    w(
+        &mut s,
+        "Plots: `channel_<name>.svg` (measured, simulated, calibrated) and `residuals.svg`.".into(),
+    );
+    s
+}

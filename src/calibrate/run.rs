@@ -1,0 +1,267 @@
+//! `sdrs calibrate`: options, command-line arguments and the whole run.
+
+use super::analysis::analyse;
+use super::data::{MIN_SAMPLES, Measured};
+use super::effects::EffectKind;
+use super::problem::Problem;
+use super::report::{self, CalibrationResult};
+use super::select::{SelectOptions, select};
+use super::{CalibrateError, candidates, plots};
+use crate::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Command-line arguments of `sdrs calibrate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CalibrateArgs {
+    /// Scene YAML: the model to calibrate (its controller is the commanded one).
+    pub scene: PathBuf,
+    /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
+    #[arg(long)]
+    pub measured: PathBuf,
+    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Candidate effects, comma separated (default: all applicable):
+    /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
+    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Option<Vec<String>>,
+    /// Fraction of the data (by time, at the end) held out for scoring.
+    #[arg(long, default_value_t = 0.3)]
+    pub holdout: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Options of a calibration run.
+#[derive(Clone, Debug)]
+pub struct CalibrateOptions {
+    pub scene: PathBuf,
+    pub measured: PathBuf,
+    /// Output directory (created; files in it are replaced atomically; no
+    /// file is written when the run fails).
+    pub out: PathBuf,
+    /// Candidate effect kinds (default: all of [`EffectKind::ALL`]).
+    pub effects: Vec<EffectKind>,
+    /// Held-out fraction, in (0, 1). Default 0.3.
+    pub holdout: f64,
+    /// Hide the progress bar. Default false.
+    pub quiet: bool,
+    /// Fitting and selection options (defaults: [`SelectOptions::default`]).
+    pub select: SelectOptions,
+}
+
+impl CalibrateOptions {
+    /// Options from command-line arguments (unknown effect names are errors).
+    pub fn from_args(a: &CalibrateArgs) -> Result<Self, CalibrateError> {
+        let effects = match &a.effects {
+            None => EffectKind::ALL.to_vec(),
+            Some(names) => names
+                .iter()
+                .map(|n| {
+                    EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
+                        msg: format!(
+                            "unknown effect \"{n}\" (effects: {})",
+                            EffectKind::ALL.map(|k| k.name()).join(", ")
+                        ),
+                    })
+                })
+                .collect::<Result<_, _>>()?,
+        };
+        Ok(CalibrateOptions {
+            scene: a.scene.clone(),
+            measured: a.measured.clone(),
+            out: a.out.clone(),
+            effects,
+            holdout: a.holdout,
+            quiet: a.quiet,
+            select: SelectOptions::default(),
+        })
+    }
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// Output files: name in the output directory and contents.
+pub type Files = Vec<(String, Vec<u8>)>;
+
+/// Computes the calibration without writing anything; returns the result
+/// and the output files.
+pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), CalibrateError> {
+    let t0 = Instant::now();
+    if !(opts.holdout > 0.0 && opts.holdout < 1.0) {
+        return Err(CalibrateError::Holdout(opts.holdout));
+    }
+    let scene = Scene::load(&opts.scene)?;
+    let measured = Measured::load(&opts.measured, &scene.model)?;
+    let split = measured.split(opts.holdout);
+    let n = measured.times.len();
+    if split < MIN_SAMPLES / 2 || n - split < 3 {
+        return Err(CalibrateError::TooShort {
+            path: opts.measured.clone(),
+            what: format!(
+                "{split} training and {} held-out sample time(s) with --holdout {}; at least {} and 3 needed",
+                n - split,
+                opts.holdout,
+                MIN_SAMPLES / 2
+            ),
+        });
+    }
+    // The scene as given must simulate over the whole data.
+    let steps = (measured.duration() / scene.settings.dt).ceil() as usize + 1;
+    crate::sim::run::run(&mut scene.simulator(), steps, |_| {}).map_err(|source| {
+        CalibrateError::Simulation {
+            path: opts.scene.clone(),
+            source,
+        }
+    })?;
+    let pb = Problem {
+        scene: &scene,
+        measured: &measured,
+        split,
+    };
+    let cands = candidates::candidates(&scene, &opts.effects);
+    let pbar = if opts.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let p = indicatif::ProgressBar::new(0);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
+        ) {
+            p.set_style(style);
+        }
+        p
+    };
+    let sel = select(
+        &pb,
+        cands,
+        &opts.select,
+        &|n| pbar.set_length(n as u64),
+        &|| pbar.inc(1),
+    )
+    .ok_or_else(|| CalibrateError::Output {
+        path: opts.scene.clone(),
+        msg: "the scene as given could not be simulated".into(),
+    })?;
+    pbar.finish_and_clear();
+    let after_sim = sel
+        .chosen
+        .map(|i| &sel.ranking[i].sim)
+        .unwrap_or(&sel.baseline.sim);
+    let before = analyse(&measured, &sel.baseline.sim, split);
+    let after = analyse(&measured, after_sim, split);
+    let mut res = report::result(&pb, &sel, before, after, opts.holdout);
+
+    // Files.
+    let mut files: Files = Vec::new();
+    let mut spec = scene.spec.clone();
+    spec.effects.extend(res.effects.iter().cloned());
+    let yaml = serde_yaml::to_string(&spec).map_err(|e| CalibrateError::Output {
+        path: opts.out.join("calibrated.yaml"),
+        msg: e.to_string(),
+    })?;
+    let header = format!(
+        "# Written by `sdrs calibrate` from {} and {}: the scene plus the fitted effects.\n",
+        opts.scene.display(),
+        opts.measured.display()
+    );
+    files.push((
+        "calibrated.yaml".into(),
+        format!("{header}{yaml}").into_bytes(),
+    ));
+    let json = serde_json::to_string_pretty(&res).map_err(|e| CalibrateError::Output {
+        path: opts.out.join("calibration.json"),
+        msg: e.to_string(),
+    })?;
+    files.push(("calibration.json".into(), json.into_bytes()));
+    files.push((
+        "report.md".into(),
+        report::markdown(
+            &res,
+            &opts.scene.display().to_string(),
+            &opts.measured.display().to_string(),
+        )
+        .into_bytes(),
+    ));
+    let plot_err = |name: &str, msg: String| CalibrateError::Output {
+        path: opts.out.join(name),
+        msg,
+    };
+    for c in 0..measured.channels.len() {
+        let name = format!(
+            "channel_{}.svg",
+            plots::file_stem(&measured.channels[c].name)
+        );
+        let svg = plots::channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
+            .map_err(|m| plot_err(&name, m))?;
+        files.push((name, svg.into_bytes()));
+    }
+    let svg = plots::residuals_svg(&measured, &sel.baseline.sim, after_sim)
+        .map_err(|m| plot_err("residuals.svg", m))?;
+    files.push(("residuals.svg".into(), svg.into_bytes()));
+    for (name, _) in &files {
+        let p = opts.out.join(name);
+        if same_file(&p, &opts.scene) || same_file(&p, &opts.measured) {
+            return Err(CalibrateError::WouldOverwriteInput { path: p });
+        }
+    }
+    res.seconds = t0.elapsed().as_secs_f64();
+    Ok((res, files))
+}
+
+/// Writes `files` into `dir`: a new directory is filled under a temporary
+/// name and renamed into place; in an existing one each file is replaced
+/// atomically.
+pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), CalibrateError> {
+    let io = |path: &Path, e: std::io::Error| CalibrateError::Output {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    };
+    if dir.exists() {
+        for (name, bytes) in files {
+            crate::output::write_atomic(&dir.join(name), bytes).map_err(|e| {
+                CalibrateError::Output {
+                    path: dir.join(name),
+                    msg: e.to_string(),
+                }
+            })?;
+        }
+        return Ok(());
+    }
+    let parent = dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+    let stem = dir
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "calibration".into());
+    let tmp = parent.join(format!(".{stem}.tmp{}", std::process::id()));
+    let res = (|| {
+        std::fs::create_dir_all(&tmp)?;
+        for (name, bytes) in files {
+            std::fs::write(tmp.join(name), bytes)?;
+        }
+        std::fs::rename(&tmp, dir)
+    })();
+    if let Err(e) = res {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(io(dir, e));
+    }
+    Ok(())
+}
+
+/// Runs a calibration and writes its outputs (nothing is written on error).
+pub fn run(opts: &CalibrateOptions) -> Result<CalibrationResult, CalibrateError> {
+    let (res, files) = calibrate(opts)?;
+    write_files(&opts.out, &files)?;
+    Ok(res)
+}

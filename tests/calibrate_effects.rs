@@ -1,0 +1,377 @@
+//! Calibration effects: each term's gradient and Hessian in θ against
+//! central finite differences of its value (including zero joint velocity
+//! and velocities near `√ε` for the smoothed Coulomb friction), and the
+//! whole-trajectory adjoint gradient w.r.t. every effect parameter against
+//! central differences of the re-simulated loss.
+
+mod common;
+
+use nalgebra::{DMatrix, DVector};
+use sdrs::calibrate::effects::{self, EffectKind, EffectSpec};
+use sdrs::diff::{Loss, LossTerm, When, backward, loss_of, record};
+use sdrs::energy::Need;
+use sdrs::scene::Scene;
+use std::path::Path;
+
+/// Three revolute/prismatic joints, so per-coordinate terms see several
+/// coordinates, and a payload off the link's axis.
+const ARM: &str = r#"
+dt: 0.01
+gravity: [0.4, -0.3, -9.81]
+solver: {tol: 1.0e-11}
+robots:
+  - name: arm
+    base: {xyz: [0, 0, 1]}
+    links:
+      - name: upper
+        joint: {name: shoulder, type: revolute, axis: [0, 1, 0]}
+        mass: 1.0
+        hulls: [{box: {size: [0.05, 0.05, 0.4], center: [0, 0, -0.2]}}]
+      - name: fore
+        parent: upper
+        joint: {name: elbow, type: revolute, axis: [0.6, 0.8, 0], origin: {xyz: [0, 0, -0.4]}}
+        mass: 0.5
+        hulls: [{box: {size: [0.04, 0.04, 0.3], center: [0, 0, -0.15]}}]
+      - name: tip
+        parent: fore
+        joint: {name: slide, type: prismatic, axis: [0, 0, -1], origin: {xyz: [0, 0, -0.3]}}
+        mass: 0.2
+        hulls: [{box: {size: [0.03, 0.03, 0.1], center: [0, 0, -0.05]}}]
+    controller:
+      kp: 6
+      kd: 0.003
+      targets:
+        shoulder: {type: sine, terms: [{amplitude: 0.6, frequency: 1.3}]}
+        elbow: {type: sine, terms: [{amplitude: 0.5, frequency: 0.9, phase: 1.0}]}
+        slide: {type: constant, value: 0.02}
+    initial:
+      shoulder: {q: [0.3], qdot: [0.5]}
+      elbow: {q: [-0.2], qdot: [-0.4]}
+"#;
+
+fn effects_yaml() -> &'static str {
+    r#"
+effects:
+  - {effect: joint_damping, on: all, values: [0.15]}
+  - {effect: joint_damping, on: elbow, values: [0.05]}
+  - {effect: joint_friction, on: all, values: [0.2], eps: 0.01}
+  - {effect: armature, on: all, values: [0.03]}
+  - {effect: armature, on: slide, values: [0.1]}
+  - {effect: actuator_gain, on: all, values: [0.8]}
+  - {effect: actuator_gain, on: shoulder, values: [1.2]}
+  - {effect: payload, on: fore, values: [0.3, 0.05, -0.02, -0.2]}
+  - {effect: link_mass_scale, on: all, values: [1.2]}
+  - {effect: link_mass_scale, on: upper, values: [0.9]}
+"#
+}
+
+fn scene(text: &str) -> Scene {
+    Scene::from_str(text, Path::new("calibrate_effects.yaml")).unwrap()
+}
+
+fn rel(a: f64, b: f64, floor: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs()).max(floor)
+}
+
+/// One effect alone in the objective: gradient and Hessian vs central
+/// differences at `q = θ^t + Δt·v` for the given joint velocities.
+fn check_term(spec: &str, name: &str, velocities: &[f64], tol: f64) -> f64 {
+    let text = format!("{ARM}\neffects:\n  - {spec}\n");
+    let sc = scene(&text);
+    let mut sim = sc.simulator();
+    for _ in 0..3 {
+        sim.step().unwrap();
+    }
+    sim.energies.retain(|e| e.name() == name);
+    assert_eq!(
+        sim.energies.len(),
+        if name == "link_mass_scale" { 3 } else { 1 }
+    );
+    let n = sim.model.ndof();
+    let dt = sim.settings.dt;
+    let mut worst: f64 = 0.0;
+    let q_t = sim.state.q.clone();
+    let point = |v: f64| &q_t + DVector::from_fn(n, |k, _| v * dt * (1.0 + 0.3 * k as f64));
+    // Scales: the largest gradient and Hessian entries over the sweep (the
+    // Hessian of the friction term spans orders of magnitude from v = 0 to
+    // |v| ≫ √ε; its far tail is below finite-difference resolution).
+    let (mut scale_g, mut scale_h) = (1e-6f64, 1e-6f64);
+    for &v in velocities {
+        let (_, g, h) = sim.objective(&point(v), Need::Hessian).unwrap();
+        scale_g = scale_g.max(g.amax());
+        scale_h = scale_h.max(h.amax());
+    }
+    for &v in velocities {
+        let q = point(v);
+        let (_, g, h) = sim.objective(&q, Need::Hessian).unwrap();
+        for k in 0..n {
+            let hstep = 1e-6 * dt;
+            let mut qp = q.clone();
+            qp[k] += hstep;
+            let mut qm = q.clone();
+            qm[k] -= hstep;
+            let (ep, gp, _) = sim.objective(&qp, Need::Gradient).unwrap();
+            let (em, gm, _) = sim.objective(&qm, Need::Gradient).unwrap();
+            let fd_g = (ep - em) / (2.0 * hstep);
+            let fd_h: DVector<f64> = (gp - gm) / (2.0 * hstep);
+            let eg = (g[k] - fd_g).abs() / scale_g;
+            let eh = (h.column(k) - &fd_h).amax() / scale_h;
+            worst = worst.max(eg).max(eh);
+            assert!(
+                eg < tol && eh < tol,
+                "{spec} at v = {v}: coordinate {k}: gradient {} vs fd {fd_g} ({eg:.1e}), \
+                 Hessian column {:?} vs fd {:?} ({eh:.1e})",
+                g[k],
+                h.column(k).as_slice(),
+                fd_h.as_slice()
+            );
+        }
+        // Symmetric Hessian.
+        let asym = (&h - h.transpose()).amax() / scale_h;
+        assert!(asym < 1e-12, "{spec}: Hessian not symmetric ({asym:.1e})");
+    }
+    eprintln!("{spec:<70} worst relative error {worst:.1e}");
+    worst
+}
+
+#[test]
+fn effect_terms_gradient_and_hessian_match_finite_differences() {
+    // Velocities (rad/s, m/s): zero, around √ε (0.1 for ε = 0.01) and large.
+    let vs = [0.0, 1e-3, 0.05, 0.1, 0.3, -2.0, 5.0];
+    check_term(
+        "{effect: joint_damping, on: all, values: [0.7]}",
+        "joint_damping",
+        &vs,
+        1e-6,
+    );
+    check_term(
+        "{effect: joint_friction, on: all, values: [0.4], eps: 0.01}",
+        "joint_friction",
+        &vs,
+        1e-6,
+    );
+    check_term(
+        "{effect: joint_friction, on: elbow, values: [0.4], eps: 1.0e-6}",
+        "joint_friction",
+        &[0.0, 1e-4, 1e-3, -0.01, 1.0],
+        1e-5,
+    );
+    check_term(
+        "{effect: armature, on: all, values: [0.05]}",
+        "armature",
+        &vs,
+        1e-6,
+    );
+    check_term(
+        "{effect: payload, on: fore, values: [0.3, 0.05, -0.02, -0.2]}",
+        "payload",
+        &vs,
+        1e-6,
+    );
+    check_term(
+        "{effect: link_mass_scale, on: all, values: [1.3]}",
+        "link_mass_scale",
+        &vs,
+        1e-6,
+    );
+}
+
+#[test]
+fn smoothed_abs_is_exact_near_zero_velocity() {
+    use sdrs::calibrate::effects::coulomb::smooth_abs;
+    for eps in [1e-8, 1e-4, 1.0] {
+        let (a, da, dda) = smooth_abs(0.0, eps);
+        assert_eq!((a, da), (0.0, 0.0));
+        assert!((dda - 1.0 / eps.sqrt()).abs() <= 1e-12 / eps.sqrt());
+        for v in [1e-9, 1e-5, 0.3, -7.0] {
+            let (a, da, dda) = smooth_abs(v, eps);
+            let h = 1e-6 * (v.abs() + eps.sqrt());
+            let fa = |x: f64| smooth_abs(x, eps).0;
+            let fd = |x: f64| smooth_abs(x, eps).1;
+            assert!(rel(da, (fa(v + h) - fa(v - h)) / (2.0 * h), 1e-9) < 1e-6);
+            let fdd = (fd(v + h) - fd(v - h)) / (2.0 * h);
+            // Relative to the largest value 1/√ε of A_ε''.
+            assert!(
+                (dda - fdd).abs() <= 1e-6 * dda.abs().max(1e-3 / eps.sqrt()),
+                "eps {eps} v {v}: {dda} vs {fdd}"
+            );
+            // A_ε(v) ≥ 0 and tends to |v| for |v| ≫ √ε.
+            assert!(a >= 0.0 && a <= v.abs());
+            assert!(da.abs() < 1.0);
+        }
+    }
+}
+
+fn loss(sc: &Scene) -> Loss {
+    let m = &sc.model;
+    let tip = m.links.iter().position(|l| l.name == "tip").unwrap();
+    let mut terms: Vec<LossTerm> = (0..m.ndof())
+        .map(|dof| LossTerm::Joint {
+            dof,
+            target: 0.1 * dof as f64,
+            weight: 1.0,
+            when: When::Running,
+        })
+        .collect();
+    terms.push(LossTerm::LinkPoint {
+        link: tip,
+        point: nalgebra::Vector3::new(0.0, 0.0, -0.1),
+        target: nalgebra::Vector3::new(0.2, 0.1, 0.3),
+        weight: 2.0,
+        when: When::Final,
+    });
+    Loss { terms }
+}
+
+fn simulate_loss(sc: &Scene, steps: usize, l: &Loss) -> f64 {
+    let mut sim = sc.simulator();
+    let tape = record(&mut sim, steps).unwrap();
+    loss_of(&sc.model, &tape, l)
+}
+
+/// Adjoint `dL/d(effect values)` vs central differences for every
+/// parameter of every effect in `text`.
+fn check_trajectory(text: &str, steps: usize, tol: f64) {
+    let sc = scene(text);
+    let l = loss(&sc);
+    let mut sim = sc.simulator();
+    let tape = record(&mut sim, steps).unwrap();
+    let grads = backward(&mut sim, &tape, &l).unwrap();
+    assert!(grads.unavailable.is_empty(), "{:?}", grads.unavailable);
+    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let mut worst: f64 = 0.0;
+    for (i, e) in sc.effects.iter().enumerate() {
+        for k in 0..e.values.len() {
+            let h = 1e-6 * e.values[k].abs().max(0.01);
+            let perturbed = |d: f64| {
+                let mut s = sc.clone();
+                s.effects[i].values[k] += d;
+                simulate_loss(&s, steps, &l)
+            };
+            let fd = (perturbed(h) - perturbed(-h)) / (2.0 * h);
+            let a = adj[e.slot + k];
+            let r = rel(a, fd, 1e-6);
+            let key = &effects::param_keys(e)[k];
+            eprintln!("{key:<36} adjoint {a:+.9e} fd {fd:+.9e} rel {r:.1e}");
+            worst = worst.max(r);
+            assert!(
+                r < tol,
+                "{key}: adjoint {a} vs finite difference {fd} ({r:.1e})"
+            );
+        }
+    }
+    eprintln!("worst {worst:.1e}");
+}
+
+#[test]
+fn whole_trajectory_effect_gradients_match_finite_differences() {
+    check_trajectory(&format!("{ARM}{}", effects_yaml()), 40, 1e-5);
+}
+
+#[test]
+fn joint_friction_gradient_through_stiction_and_zero_velocity() {
+    // Friction larger than the driving torques: the joints stick (velocity
+    // inside √ε), then a stronger target breaks them free.
+    let text = format!(
+        "{ARM}effects:\n  - {{effect: joint_friction, on: all, values: [3.0], eps: 1.0e-4}}\n"
+    );
+    check_trajectory(&text, 60, 1e-4);
+    let mut sc = scene(&text);
+    // At rest with no target: the velocity is exactly zero at the start.
+    sc.q0.fill(0.0);
+    sc.qdot0.fill(0.0);
+    sc.controller.channels.clear();
+    let l = loss(&sc);
+    let mut sim = sc.simulator();
+    let tape = record(&mut sim, 20).unwrap();
+    let grads = backward(&mut sim, &tape, &l).unwrap();
+    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    assert!(adj.iter().all(|g| g.is_finite()));
+}
+
+#[test]
+fn contact_parameter_effects_map_the_physical_gradients() {
+    let text = std::fs::read_to_string(common::robots("calibrate/slider_contact.yaml")).unwrap();
+    let text = format!(
+        "{text}\neffects:\n  - {{effect: contact_mu, values: [0.5]}}\n  - {{effect: contact_kappa, values: [1.3]}}\n  - {{effect: contact_s, values: [0.006]}}\n"
+    );
+    let sc = scene(&text);
+    let c = sc.simulator();
+    drop(c);
+    let m = &sc.model;
+    let l = Loss {
+        terms: (0..m.ndof())
+            .map(|dof| LossTerm::Joint {
+                dof,
+                target: 0.05,
+                weight: 1.0,
+                when: When::Running,
+            })
+            .collect(),
+    };
+    let steps = 40;
+    let mut sim = sc.simulator();
+    let tape = record(&mut sim, steps).unwrap();
+    let grads = backward(&mut sim, &tape, &l).unwrap();
+    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    for (i, e) in sc.effects.iter().enumerate() {
+        let h = 1e-6 * e.values[0];
+        let f = |d: f64| {
+            let mut s = sc.clone();
+            s.effects[i].values[0] += d;
+            simulate_loss(&s, steps, &l)
+        };
+        let fd = (f(h) - f(-h)) / (2.0 * h);
+        let r = rel(adj[e.slot], fd, 1e-8);
+        eprintln!(
+            "{} adjoint {} fd {fd} rel {r:.1e}",
+            e.kind.name(),
+            adj[e.slot]
+        );
+        assert!(
+            r < 1e-4,
+            "{}: adjoint {} vs fd {fd}",
+            e.kind.name(),
+            adj[e.slot]
+        );
+    }
+}
+
+#[test]
+fn effects_change_the_dynamics_as_documented() {
+    // Damping and friction dissipate, armature slows, gain 1 and scale 1 are
+    // neutral (bitwise: the same trajectory as no effect at all is not
+    // required, but within solver tolerance).
+    let base = scene(ARM);
+    let run = |sc: &Scene| {
+        let mut sim = sc.simulator();
+        sdrs::sim::run::run(&mut sim, 50, |_| {}).unwrap()
+    };
+    let b = run(&base);
+    for (spec, neutral) in [
+        ("{effect: actuator_gain, on: all, values: [1.0]}", true),
+        ("{effect: link_mass_scale, on: all, values: [1.0]}", true),
+        (
+            "{effect: payload, on: fore, values: [0.0, 0.1, 0, 0]}",
+            true,
+        ),
+        ("{effect: joint_damping, on: all, values: [0.0]}", true),
+        ("{effect: joint_damping, on: all, values: [0.5]}", false),
+    ] {
+        let t = run(&scene(&format!("{ARM}\neffects:\n  - {spec}\n")));
+        let d = b
+            .states
+            .iter()
+            .zip(&t.states)
+            .map(|(x, y)| (x - y).amax())
+            .fold(0.0, f64::max);
+        if neutral {
+            assert!(d < 1e-8, "{spec}: changed the trajectory by {d}");
+        } else {
+            assert!(d > 1e-3, "{spec}: no visible change ({d})");
+        }
+    }
+    let _ = EffectKind::ALL;
+    let _: Option<EffectSpec> = None;
+    let _ = DMatrix::<f64>::zeros(1, 1);
+}

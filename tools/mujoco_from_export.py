@@ -1,0 +1,234 @@
+"""Independent-engine data for `sdrs calibrate`: convert an SDRS robot to MJCF
+and simulate it with MuJoCo, optionally with one effect switched on.
+
+    python tools/mujoco_from_export.py SCENE.yaml EXPORT_DIR --out data.csv \
+        [--damping C] [--frictionloss F] [--armature A] [--gain G] \
+        [--duration 1.2] [--period 0.01] [--noise 1e-4] [--seed 1] [--timestep 1e-4] \
+        [--mjcf model.xml]
+
+EXPORT_DIR is written by `sdrs simulate SCENE.yaml --export EXPORT_DIR`: the
+hull vertices of every link come from its `hulls.json`, and `poses.csv`
+(step 0) checks the converted kinematics (link poses at θ^0 must agree to
+1e-9 m). Masses are the SDRS lumped vertex masses (a link's `mass` divided
+equally over its hull vertices, or `vertex_mass` per vertex); each MuJoCo
+body gets the exact mass, centre of mass and inertia tensor of its vertex
+masses, so both engines integrate the same rigid bodies.
+
+The controller is the scene's stable-PD in SDRS's convention, applied as a
+joint torque each MuJoCo step: τ = 2k_p(θ* − θ) + (2k_d/Δt_sdrs)(θ̇* − θ̇)
+(θ*, θ̇* from the scene's sine/constant targets). Effects, on every joint:
+`--damping` (MuJoCo joint damping, N·m·s/rad), `--frictionloss` (dry
+friction, N·m), `--armature` (kg·m²), `--gain` (the PD torque × G).
+
+Supported scenes: one robot, revolute and prismatic joints, sine and constant
+targets, no contact. Output: CSV `t,<joint>…` at `--period` (s) with
+Gaussian noise `--noise` (rad or m), the columns `sdrs simulate` writes.
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+import mujoco
+import numpy as np
+import yaml
+
+
+def rpy_matrix(r, p, y):
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def mat_quat(m):
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, m.reshape(-1))
+    return q
+
+
+def signal(sig, t):
+    """Target value and velocity of a scene signal at time t."""
+    kind = sig["type"]
+    if kind == "constant":
+        return sig["value"], 0.0
+    if kind == "sine":
+        v, d = sig.get("offset", 0.0), 0.0
+        for term in sig["terms"]:
+            w = 2 * math.pi * term["frequency"]
+            ph = term.get("phase", 0.0)
+            v += term["amplitude"] * math.sin(w * t + ph)
+            d += term["amplitude"] * w * math.cos(w * t + ph)
+        return v, d
+    sys.exit(f"unsupported target signal type {kind!r} (sine and constant only)")
+
+
+def fail(msg):
+    sys.exit(f"error: {msg}")
+
+
+def build(scene, hulls, args):
+    robots = scene.get("robots", [])
+    if len(robots) != 1 or scene.get("objects") or scene.get("contact") or scene.get("ground"):
+        fail("the converter supports one robot without contact, objects or ground")
+    robot = robots[0]
+    links = robot["links"]
+    exported = {l["name"]: l for l in hulls["links"] if l["robot"] == robot["name"]}
+    base = robot.get("base", {})
+    g = scene.get("gravity", [0, 0, -9.81])
+    dt_sdrs = scene["dt"]
+    lines = [
+        '<mujoco model="sdrs">',
+        f'  <option timestep="{args.timestep}" gravity="{g[0]} {g[1]} {g[2]}" integrator="implicitfast"/>',
+        "  <worldbody>",
+    ]
+    children = {}
+    for l in links:
+        children.setdefault(l.get("parent"), []).append(l)
+    joints = []
+
+    def body(l, indent):
+        name = l["name"]
+        if name not in exported:
+            fail(f"link {name!r} is not in hulls.json")
+        verts = np.array([v for h in exported[name]["hulls"] for v in h])
+        if "mass" in l:
+            rho = np.full(len(verts), l["mass"] / len(verts))
+        elif "vertex_mass" in l:
+            rho = np.full(len(verts), l["vertex_mass"])
+        else:
+            fail(f"link {name!r}: neither mass nor vertex_mass")
+        m = rho.sum()
+        com = (rho[:, None] * verts).sum(0) / m
+        r = verts - com
+        inertia = sum(w * (np.dot(x, x) * np.eye(3) - np.outer(x, x)) for w, x in zip(rho, r))
+        j = l["joint"]
+        o = j.get("origin", {})
+        xyz = o.get("xyz", [0, 0, 0])
+        q = mat_quat(rpy_matrix(*o.get("rpy", [0, 0, 0])))
+        jn = j.get("name", name)
+        pad = " " * indent
+        out = [f'{pad}<body name="{name}" pos="{xyz[0]} {xyz[1]} {xyz[2]}" quat="{q[0]} {q[1]} {q[2]} {q[3]}">']
+        fi = inertia
+        out.append(
+            f'{pad}  <inertial pos="{com[0]} {com[1]} {com[2]}" mass="{m}" '
+            f'fullinertia="{fi[0,0]} {fi[1,1]} {fi[2,2]} {fi[0,1]} {fi[0,2]} {fi[1,2]}"/>'
+        )
+        kind = j["type"]
+        if kind in ("revolute", "prismatic"):
+            a = j["axis"]
+            jt = "hinge" if kind == "revolute" else "slide"
+            out.append(
+                f'{pad}  <joint name="{jn}" type="{jt}" axis="{a[0]} {a[1]} {a[2]}" '
+                f'damping="{args.damping}" frictionloss="{args.frictionloss}" armature="{args.armature}" limited="false"/>'
+            )
+            joints.append(jn)
+        elif kind != "fixed":
+            fail(f"joint {jn!r}: type {kind} is not supported")
+        for c in children.get(name, []):
+            out += body(c, indent + 2)
+        out.append(f"{pad}</body>")
+        return out
+
+    bx = base.get("xyz", [0, 0, 0])
+    bq = mat_quat(rpy_matrix(*base.get("rpy", [0, 0, 0])))
+    lines.append(f'    <body name="base" pos="{bx[0]} {bx[1]} {bx[2]}" quat="{bq[0]} {bq[1]} {bq[2]} {bq[3]}">')
+    for l in children.get(None, []):
+        lines += body(l, 6)
+    lines += ["    </body>", "  </worldbody>", "  <actuator>"]
+    for jn in joints:
+        lines.append(f'    <motor name="{jn}" joint="{jn}" gear="1" ctrllimited="false"/>')
+    lines += ["  </actuator>", "</mujoco>"]
+    return "\n".join(lines), joints, dt_sdrs
+
+
+def check_poses(model, data, export_dir, robot_links):
+    """Link poses at θ^0 against the SDRS export (step 0 of poses.csv)."""
+    path = os.path.join(export_dir, "poses.csv")
+    worst = 0.0
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            if row["step"] != "0":
+                continue
+            name = robot_links[int(row["link"])]
+            b = model.body(name).id
+            t = np.array([float(row[k]) for k in ("t0", "t1", "t2")])
+            r = np.array([[float(row[f"a{i}{j}"]) for j in range(3)] for i in range(3)])
+            worst = max(worst, np.abs(data.xpos[b] - t).max(), np.abs(data.xmat[b].reshape(3, 3) - r).max())
+    if worst > 1e-9:
+        fail(f"converted kinematics disagree with {path}: {worst:.3e}")
+    return worst
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("scene")
+    ap.add_argument("export_dir")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--mjcf")
+    for k in ("damping", "frictionloss", "armature"):
+        ap.add_argument(f"--{k}", type=float, default=0.0)
+    ap.add_argument("--gain", type=float, default=1.0)
+    ap.add_argument("--duration", type=float, default=1.2)
+    ap.add_argument("--period", type=float, default=0.01)
+    ap.add_argument("--noise", type=float, default=1e-4)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--timestep", type=float, default=1e-4)
+    args = ap.parse_args()
+    with open(args.scene) as f:
+        scene = yaml.safe_load(f)
+    with open(os.path.join(args.export_dir, "hulls.json")) as f:
+        hulls = json.load(f)
+    xml, joints, dt_sdrs = build(scene, hulls, args)
+    if args.mjcf:
+        with open(args.mjcf, "w") as f:
+            f.write(xml)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    robot = scene["robots"][0]
+    init = robot.get("initial", {})
+    for jn in joints:
+        adr = model.joint(jn).qposadr[0]
+        dof = model.joint(jn).dofadr[0]
+        data.qpos[adr] = (init.get(jn, {}).get("q") or [0.0])[0]
+        data.qvel[dof] = (init.get(jn, {}).get("qdot") or [0.0])[0]
+    mujoco.mj_forward(model, data)
+    check_poses(model, data, args.export_dir, [l["name"] for l in hulls["links"]])
+    ctrl = robot.get("controller", {})
+    gains = ctrl.get("gains", {})
+    targets = ctrl.get("targets", {})
+    rng = np.random.default_rng(args.seed)
+    names = joints
+    rows = []
+    next_sample = 0.0
+    steps = int(round(args.duration / args.timestep))
+    for k in range(steps + 1):
+        t = k * args.timestep
+        if t >= next_sample - 1e-12:
+            rows.append([t] + [data.qpos[model.joint(j).qposadr[0]] + args.noise * rng.standard_normal() for j in names])
+            next_sample += args.period
+        if k == steps:
+            break
+        for jn in joints:
+            if jn not in targets:
+                continue
+            kp = gains.get(jn, {}).get("kp", ctrl.get("kp", 0.0))
+            kd = gains.get(jn, {}).get("kd", ctrl.get("kd", 0.0))
+            qs, vs = signal(targets[jn], t)
+            q = data.qpos[model.joint(jn).qposadr[0]]
+            v = data.qvel[model.joint(jn).dofadr[0]]
+            data.ctrl[model.actuator(jn).id] = args.gain * (2 * kp * (qs - q) + 2 * kd / dt_sdrs * (vs - v))
+        mujoco.mj_step(model, data)
+    with open(args.out, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t"] + names)
+        for r in rows:
+            w.writerow([repr(float(x)) for x in r])
+
+
+if __name__ == "__main__":
+    main()
