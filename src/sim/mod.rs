@@ -130,6 +130,20 @@ impl Objective for StepObjective<'_> {
         }
         Ok(self.acc.value)
     }
+
+    fn max_step(
+        &mut self,
+        q: &DVector<f64>,
+        dir: &DVector<f64>,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        // Terms time their own CCD and report it through `Energy::report`.
+        let mut alpha: f64 = 1.0;
+        for e in self.energies.iter_mut() {
+            alpha = alpha.min(e.max_step(&self.ctx, q, dir, self.kin, self.charts)?);
+        }
+        Ok(alpha)
+    }
 }
 
 impl Simulator {

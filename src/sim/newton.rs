@@ -89,6 +89,19 @@ pub trait Objective {
         hess: &mut DMatrix<f64>,
         timers: &mut StageTimers,
     ) -> Result<f64, EnergyError>;
+
+    /// Largest step fraction `α ≤ 1` along `dir` from `q` that keeps the
+    /// objective finite by construction (continuous collision detection; see
+    /// [`crate::energy::Energy::max_step`]). `q` is the point of the last
+    /// evaluation with derivatives. Default `1.0`.
+    fn max_step(
+        &mut self,
+        _q: &DVector<f64>,
+        _dir: &DVector<f64>,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        Ok(1.0)
+    }
 }
 
 /// Scratch buffers of the solver.
@@ -155,6 +168,8 @@ pub fn minimize(
         // trial points: its round-off (world coordinates of metres carry
         // ~1e-15 m of noise, times stiffness) is larger than the decrease.
         let resolvable = predicted > 1e-9 * value.abs();
+        // Collision-free bound on the step (1 unless a term implements CCD).
+        let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
         let t0 = std::time::Instant::now();
         // Time spent in the search's objective evaluations is counted by
         // their own stages; `line_search` gets only the remainder.
@@ -162,7 +177,7 @@ pub fn minimize(
         let mut accepted = false;
         if resolvable {
             // Backtracking with Armijo sufficient decrease on a finite value.
-            let mut alpha = 1.0;
+            let mut alpha = alpha_max;
             for _ in 0..=opts.max_backtracks {
                 scratch.trial.clone_from(q);
                 scratch.trial.axpy(alpha, &scratch.dir, 1.0);
@@ -188,7 +203,7 @@ pub fn minimize(
         // beyond noise and whose ‖∇O‖∞ is smaller.
         if !accepted {
             let noise = 1e-10 * value.abs().max(1.0);
-            let mut alpha = 1.0;
+            let mut alpha = alpha_max;
             for _ in 0..8 {
                 scratch.trial.clone_from(q);
                 scratch.trial.axpy(alpha, &scratch.dir, 1.0);
