@@ -132,10 +132,11 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
             format!("the barrier support must lie in (0, 1), got {}", c.s),
         ));
     }
-    if !(c.kappa > 0.0 && c.kappa.is_finite()) {
+    let kappa = c.kappa.unwrap_or_else(ContactSpec::default_kappa);
+    if !(kappa > 0.0 && kappa.is_finite()) {
         return Err(Invalid::new(
             "contact.kappa",
-            format!("must be positive and finite, got {}", c.kappa),
+            format!("must be positive and finite, got {kappa}"),
         ));
     }
     if !(c.mu >= 0.0 && c.mu.is_finite()) {
@@ -203,7 +204,8 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         dhat,
         eps_v,
         s: c.s,
-        kappa: c.kappa,
+        kappa,
+        kappa_given: c.kappa.is_some(),
         mu: c.mu,
         eps: c.eps,
         eps_force: c.eps_force,

@@ -93,6 +93,9 @@ pub struct ContactSettings {
     pub s: f64,
     /// Barrier stiffness `κ`.
     pub kappa: f64,
+    /// Whether the scene gave `κ` (otherwise the default; the IPC baseline
+    /// then chooses it adaptively).
+    pub kappa_given: bool,
     /// Friction coefficient `μ`.
     pub mu: f64,
     /// Friction velocity smoothing `ε` ((m/s)²).

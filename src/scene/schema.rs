@@ -174,8 +174,10 @@ pub struct ContactSpec {
     /// Barrier stiffness `κ` multiplying every `U_c` (J·m). Default 1.
     /// (The paper writes it as "μ" in eq. `SDRS`; it is not the friction
     /// coefficient.)
-    #[serde(default = "ContactSpec::default_kappa")]
-    pub kappa: f64,
+    /// With `model: ipc`, `κ` multiplies IPC's barrier on squared distances
+    /// (J/m⁴) and, when absent, is chosen adaptively by the baseline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
     /// Friction coefficient `μ`. Default 0 (frictionless).
     #[serde(default)]
     pub mu: f64,
@@ -224,7 +226,8 @@ impl ContactSpec {
     fn default_s() -> f64 {
         0.01
     }
-    fn default_kappa() -> f64 {
+    /// `κ` when the file gives none (SDRS model).
+    pub fn default_kappa() -> f64 {
         1.0
     }
     fn default_eps() -> f64 {
@@ -242,7 +245,7 @@ impl Default for ContactSpec {
             dhat: None,
             eps_v: None,
             s: Self::default_s(),
-            kappa: Self::default_kappa(),
+            kappa: None,
             mu: 0.0,
             eps: Self::default_eps(),
             eps_force: Self::default_eps(),

@@ -22,3 +22,15 @@ pub mod barrier;
 pub mod distance;
 pub mod mollifier;
 pub mod primitive;
+pub mod broad_phase;
+pub mod ccd;
+pub mod contact;
+pub mod factory;
+pub mod friction;
+pub mod friction_stencil;
+pub mod line_search;
+pub mod mesh;
+pub mod pair;
+
+pub use contact::{IpcContact, IpcParams};
+pub use factory::IpcFactory;

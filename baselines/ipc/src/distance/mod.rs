@@ -169,3 +169,42 @@ pub fn point_triangle_distance(x: &[V3<f64>; 4]) -> f64 {
 pub fn edge_edge_distance(x: &[V3<f64>; 4]) -> f64 {
     squared_distance(x, classify_edge_edge(x))
 }
+
+/// Closest-point weights `w` of a classified stencil: `Σ_k w_k x_k` is the
+/// vector from the closest point of the second primitive to that of the
+/// first (for point–triangle, triangle → point; for edge–edge, edge b →
+/// edge a), so its norm is the distance. Used for IPC's lagged friction.
+pub fn closest_weights(x: &[V3<f64>; 4], ty: DistanceType) -> [f64; 4] {
+    let mut w = [0.0; 4];
+    match ty {
+        DistanceType::PointPoint(i, j) => {
+            w[i as usize] = 1.0;
+            w[j as usize] = -1.0;
+        }
+        DistanceType::PointLine(p, a, b) => {
+            let t = point_edge::line_parameter(&x[p as usize], &x[a as usize], &x[b as usize]);
+            w[p as usize] = 1.0;
+            w[a as usize] = -(1.0 - t);
+            w[b as usize] = -t;
+        }
+        DistanceType::PointPlane => {
+            let (v0, v1, v2) = (sub(&x[2], &x[1]), sub(&x[3], &x[1]), sub(&x[0], &x[1]));
+            let (d00, d01, d11) = (dot(&v0, &v0), dot(&v0, &v1), dot(&v1, &v1));
+            let (d20, d21) = (dot(&v2, &v0), dot(&v2, &v1));
+            let den = d00 * d11 - d01 * d01;
+            let b1 = (d11 * d20 - d01 * d21) / den;
+            let b2 = (d00 * d21 - d01 * d20) / den;
+            w = [1.0, -(1.0 - b1 - b2), -b1, -b2];
+        }
+        DistanceType::LineLine => {
+            let (d1, d2, r) = (sub(&x[1], &x[0]), sub(&x[3], &x[2]), sub(&x[0], &x[2]));
+            let (a, e, b) = (norm2(&d1), norm2(&d2), dot(&d1, &d2));
+            let (c, f) = (dot(&d1, &r), dot(&d2, &r));
+            let den = a * e - b * b;
+            let s = (b * f - c * e) / den;
+            let t = (a * f - b * c) / den;
+            w = [1.0 - s, s, -(1.0 - t), -t];
+        }
+    }
+    w
+}
