@@ -3,6 +3,7 @@
 //! exit code 1; nothing here panics on bad input.
 
 mod bench;
+mod contact_model;
 mod optimize;
 mod simulate;
 mod util;

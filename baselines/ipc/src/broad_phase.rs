@@ -114,8 +114,11 @@ impl PrimitiveBoxes {
         self.vert
             .extend((0..x0.len() as u32).map(|i| pt(i).inflate(m)));
         self.edge.clear();
-        self.edge
-            .extend(mesh.edges.iter().map(|e| join(pt(e[0]), pt(e[1])).inflate(m)));
+        self.edge.extend(
+            mesh.edges
+                .iter()
+                .map(|e| join(pt(e[0]), pt(e[1])).inflate(m)),
+        );
         self.tri.clear();
         self.tri.extend(
             mesh.tris

@@ -22,7 +22,8 @@ pub struct AccdOptions {
     /// least `s` of the initial gap above `ξ`). Default 0.1 (ACCD's value).
     pub s: f64,
     /// Iteration cap; reaching it reports a hit at the last safe time
-    /// (conservative). Default 10 000.
+    /// (conservative: the step bound then subdivides or stops there).
+    /// Default 200.
     pub max_iters: usize,
 }
 
@@ -30,7 +31,7 @@ impl Default for AccdOptions {
     fn default() -> Self {
         AccdOptions {
             s: 0.1,
-            max_iters: 10_000,
+            max_iters: 200,
         }
     }
 }
@@ -57,7 +58,9 @@ pub fn additive_ccd(
         PrimitiveKind::PointTriangle => n(&p[0]) + n(&p[1]).max(n(&p[2])).max(n(&p[3])),
         PrimitiveKind::EdgeEdge { .. } => n(&p[0]).max(n(&p[1])) + n(&p[2]).max(n(&p[3])),
     };
-    let at = |t: f64| -> [V3<f64>; 4] { std::array::from_fn(|i| std::array::from_fn(|k| x0[i][k] + t * p[i][k])) };
+    let at = |t: f64| -> [V3<f64>; 4] {
+        std::array::from_fn(|i| std::array::from_fn(|k| x0[i][k] + t * p[i][k]))
+    };
     let mut d = distance(kind, x0);
     if d <= xi {
         return Some(0.0);

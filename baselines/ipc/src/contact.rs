@@ -67,15 +67,23 @@ impl IpcContact {
         let mut link_pairs = Vec::new();
         for a in 0..n {
             for b in a + 1..n {
-                let moves = !model.ancestor_dofs[a].is_empty() || !model.ancestor_dofs[b].is_empty();
-                if moves && !meshes[a].is_empty() && !meshes[b].is_empty() && !excluded.contains(&(a, b)) {
+                let moves =
+                    !model.ancestor_dofs[a].is_empty() || !model.ancestor_dofs[b].is_empty();
+                if moves
+                    && !meshes[a].is_empty()
+                    && !meshes[b].is_empty()
+                    && !excluded.contains(&(a, b))
+                {
                     link_pairs.push((a, b));
                 }
             }
         }
         IpcContact {
             params,
-            world: meshes.iter().map(|m| vec![Vector3::zeros(); m.x_local.len()]).collect(),
+            world: meshes
+                .iter()
+                .map(|m| vec![Vector3::zeros(); m.x_local.len()])
+                .collect(),
             boxes: vec![PrimitiveBoxes::default(); n],
             cands: vec![Candidates::default(); link_pairs.len()],
             results: Vec::new(),
@@ -221,13 +229,21 @@ impl Energy for IpcContact {
             &mut self.ccd,
         );
         self.time_ccd += t0.elapsed();
+                dq.amax(),
+                self.last_min_distance
+            );
+        }
         Ok(a)
     }
 
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut StageTimers) {
         d.contact_pairs += self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
-        timers.transfer("ipc_contact", "ipc_broad_phase", std::mem::take(&mut self.time_broad));
+        timers.transfer(
+            "ipc_contact",
+            "ipc_broad_phase",
+            std::mem::take(&mut self.time_broad),
+        );
         timers.add("ipc_ccd", std::mem::take(&mut self.time_ccd));
     }
 }

@@ -53,7 +53,10 @@ pub fn link_meshes(scene: &Scene) -> Result<Vec<LinkMesh>, Invalid> {
             }
             LinkMesh::from_hulls(model, i).map_err(|e| {
                 Invalid::new(
-                    format!("robot \"{}\" link \"{}\"", model.robots[l.robot].name, l.name),
+                    format!(
+                        "robot \"{}\" link \"{}\"",
+                        model.robots[l.robot].name, l.name
+                    ),
                     format!("IPC surface mesh: {e}"),
                 )
             })
@@ -75,7 +78,11 @@ impl ContactModelFactory for IpcFactory {
         }
         let model = &scene.model;
         let meshes = link_meshes(scene)?;
-        let kappa = if c.kappa_given { c.kappa } else { adaptive_kappa(scene, c.dhat) };
+        let kappa = if c.kappa_given {
+            c.kappa
+        } else {
+            adaptive_kappa(scene, c.dhat)
+        };
         let params = IpcParams {
             dhat: c.dhat,
             kappa,
@@ -84,7 +91,12 @@ impl ContactModelFactory for IpcFactory {
         let mut contact = IpcContact::new(model, meshes.clone(), &c.excluded, params.clone());
         let mut kin = Kinematics::new(model);
         kin.update(model, &scene.q0, &scene.charts, KinOrder::Pose);
-        let (d, pair) = contact.min_distance(&kin.pose);
+        let (mut d, mut pair) = contact.min_distance(&kin.pose);
+        if let Some(p) =
+            crate::start_check::first_intersecting(model, &kin.pose, &contact.link_pairs)
+        {
+            (d, pair) = (0.0, Some(p));
+        }
         if let (true, Some((a, b))) = (d <= 0.0, pair) {
             let name = |i: usize| {
                 let l = &model.links[i];
@@ -93,7 +105,7 @@ impl ContactModelFactory for IpcFactory {
             return Err(Invalid::new(
                 "initial state",
                 format!(
-                    "the surfaces of {} and {} touch or intersect at the start (distance {d:.3e} m); IPC needs a separated start",
+                    "{} and {} touch or intersect at the start; IPC needs a separated start",
                     name(a),
                     name(b)
                 ),

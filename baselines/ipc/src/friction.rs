@@ -10,7 +10,7 @@ use crate::broad_phase::{Candidates, PrimitiveBoxes, candidates};
 use crate::distance::closest_weights;
 use crate::friction_stencil::{FrictionStencil, tangent_basis};
 use crate::mesh::LinkMesh;
-use crate::pair::{PairHessian, PairGeometry};
+use crate::pair::{PairGeometry, PairHessian};
 use crate::primitive::stencil_distance;
 use nalgebra::{DVector, Matrix3x4, Vector3};
 use sdrs::energy::pairs::scatter_pair;
@@ -67,8 +67,10 @@ impl IpcFriction {
                 ccd: Default::default(),
             },
         );
-        let world: Vec<Vec<Vector3<f64>>> =
-            meshes.iter().map(|m| vec![Vector3::zeros(); m.x_local.len()]).collect();
+        let world: Vec<Vec<Vector3<f64>>> = meshes
+            .iter()
+            .map(|m| vec![Vector3::zeros(); m.x_local.len()])
+            .collect();
         IpcFriction {
             params,
             link_pairs: c.link_pairs.clone(),
@@ -173,14 +175,33 @@ impl Energy for IpcFriction {
                 let (val, g, hs) = c.stencil.evaluate(&dx, eps, derivs);
                 acc.value += val;
                 if derivs {
-                    let loc = c.ids.map(|(s, i)| self.meshes[link(s)].x_local[i as usize].push(1.0));
+                    let loc = c
+                        .ids
+                        .map(|(s, i)| self.meshes[link(s)].x_local[i as usize].push(1.0));
                     let side = c.ids.map(|(s, _)| s);
-                    crate::pair::chain_to_poses(&g, &hs, &side, &loc, &mut ga, &mut gb, h.as_deref_mut());
+                    crate::pair::chain_to_poses(
+                        &g,
+                        &hs,
+                        &side,
+                        &loc,
+                        &mut ga,
+                        &mut gb,
+                        h.as_deref_mut(),
+                    );
                 }
                 k += 1;
             }
             if derivs {
-                scatter_pair(ctx.model, acc, &mut self.pair_slots, need, (la, lb), 1.0, (&ga, &gb), h.as_deref());
+                scatter_pair(
+                    ctx.model,
+                    acc,
+                    &mut self.pair_slots,
+                    need,
+                    (la, lb),
+                    1.0,
+                    (&ga, &gb),
+                    h.as_deref(),
+                );
             }
         }
         Ok(())

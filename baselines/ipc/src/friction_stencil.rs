@@ -39,12 +39,20 @@ pub fn f0(y: f64, eps: f64) -> f64 {
 
 /// `f₁(y; ε) = f₀'(y)`.
 pub fn f1(y: f64, eps: f64) -> f64 {
-    if y >= eps { 1.0 } else { -y * y / (eps * eps) + 2.0 * y / eps }
+    if y >= eps {
+        1.0
+    } else {
+        -y * y / (eps * eps) + 2.0 * y / eps
+    }
 }
 
 /// `f₁(y)/y`, finite at `y = 0`.
 fn f1_over_y(y: f64, eps: f64) -> f64 {
-    if y >= eps { 1.0 / y } else { -y / (eps * eps) + 2.0 / eps }
+    if y >= eps {
+        1.0 / y
+    } else {
+        -y / (eps * eps) + 2.0 / eps
+    }
 }
 
 impl FrictionStencil {
@@ -56,7 +64,12 @@ impl FrictionStencil {
 
     /// Value, and gradient/Hessian over the 12 stencil coordinates when
     /// `derivatives`.
-    pub fn evaluate(&self, dx: &[Vector3<f64>; 4], eps: f64, derivatives: bool) -> (f64, Vec12, Mat12) {
+    pub fn evaluate(
+        &self,
+        dx: &[Vector3<f64>; 4],
+        eps: f64,
+        derivatives: bool,
+    ) -> (f64, Vec12, Mat12) {
         let u = self.tangential(dx);
         let y = u.norm();
         let value = self.mu_lambda * f0(y, eps);
@@ -64,7 +77,11 @@ impl FrictionStencil {
         if derivatives {
             let a = f1_over_y(y, eps);
             let gu = u * a; // ∂f₀/∂u
-            let d1 = if y >= eps { 0.0 } else { -2.0 * y / (eps * eps) + 2.0 / eps };
+            let d1 = if y >= eps {
+                0.0
+            } else {
+                -2.0 * y / (eps * eps) + 2.0 / eps
+            };
             let m = if y > 0.0 {
                 let uh = u / y;
                 Matrix2::identity() * a + uh * uh.transpose() * (d1 - a)

@@ -19,18 +19,19 @@
 //!   `Scene::simulator_with`.
 
 pub mod barrier;
-pub mod distance;
-pub mod mollifier;
-pub mod primitive;
 pub mod broad_phase;
 pub mod ccd;
 pub mod contact;
+pub mod distance;
 pub mod factory;
 pub mod friction;
 pub mod friction_stencil;
 pub mod line_search;
 pub mod mesh;
+pub mod mollifier;
 pub mod pair;
+pub mod primitive;
+pub mod start_check;
 
 pub use contact::{IpcContact, IpcParams};
 pub use factory::IpcFactory;

@@ -42,15 +42,20 @@ use sdrs::model::{JointKind, Model};
 pub struct CcdOptions {
     pub accd: AccdOptions,
     /// Interval halvings allowed when the curvature bound limits the step.
-    /// Default 10.
+    /// Default 48 (the bound shrinks by 2⁻⁴⁸).
     pub max_depth: usize,
+    /// Depth down to which both halves of an interval are examined; below
+    /// it, a safe left half is returned as it is (bounded work per call).
+    /// Default 3.
+    pub explore_depth: usize,
 }
 
 impl Default for CcdOptions {
     fn default() -> Self {
         CcdOptions {
             accd: AccdOptions::default(),
-            max_depth: 10,
+            max_depth: 48,
+            explore_depth: 3,
         }
     }
 }
@@ -60,13 +65,29 @@ impl Default for CcdOptions {
 pub struct CcdScratch {
     kin: Option<Kinematics>,
     q: DVector<f64>,
-    speed: Vec<f64>,
+    speed: Vec<(f64, f64)>,
     boxes: Vec<PrimitiveBoxes>,
     cand: Candidates,
 }
 
-/// `U_L` for every link (see the module docs).
-pub fn nonlinear_speed_bounds(model: &Model, meshes: &[LinkMesh], q: &DVector<f64>, dq: &DVector<f64>, out: &mut Vec<f64>) {
+/// `(U_L, A_L)` for every link: bounds on the speed and the acceleration
+/// (per unit `α`) of the non-linear part of its vertex paths (see the module
+/// docs). With `s_j` the rotational speed bound of joint `j`, `t_j` its
+/// translation speed (when it has a moving ancestor), `R_j = R_{j,L}`,
+/// `W_j = Σ_{ancestors i of j} s_i` and `V_j = Σ_{i on the path at or below
+/// j} (s_i R_i + t_i)`: `U_L = Σ_j (s_j R_j + t_j)` and
+/// `A_L = Σ_j [s_j (W_j + s_j/2) R_j + s_j V_j + t_j W_j]`, from
+/// `Ẍ = Σ_j [ω̇_j × (X − c_j) + ω_j × (Ẋ − ċ_j)]` with `‖ω_j‖ ≤ s_j`,
+/// `‖ω̇_j‖ ≤ s_j (W_j + s_j/2)` (the axis turns with the ancestors; the
+/// rotation-vector Jacobian changes at rate ≤ ½‖Δφ‖) and
+/// `‖Ẋ − ċ_j‖ ≤ V_j`.
+pub fn nonlinear_speed_bounds(
+    model: &Model,
+    meshes: &[LinkMesh],
+    q: &DVector<f64>,
+    dq: &DVector<f64>,
+    out: &mut Vec<(f64, f64)>,
+) {
     out.clear();
     let trans_len = |l: usize, x: &DVector<f64>| -> f64 {
         let link = &model.links[l];
@@ -99,23 +120,43 @@ pub fn nonlinear_speed_bounds(model: &Model, meshes: &[LinkMesh], q: &DVector<f6
     };
     let q1 = q + dq;
     for l in 0..model.links.len() {
-        let mut u = 0.0;
+        // The path L → root: per joint, s (rotational speed), t (translation
+        // speed counted as non-linear) and R (centre-to-vertex bound).
+        let mut path: Vec<(f64, f64, f64)> = Vec::new();
         let mut reach = meshes[l].radius;
         let mut j = l;
         loop {
             let link = &model.links[j];
-            let has_moving_ancestor = link.parent.is_some_and(|p| !model.ancestor_dofs[p].is_empty());
-            u += rot_speed(j) * reach;
-            if has_moving_ancestor {
-                u += trans_speed(j);
-            }
+            let has_moving_ancestor = link
+                .parent
+                .is_some_and(|p| !model.ancestor_dofs[p].is_empty());
+            let t = if has_moving_ancestor {
+                trans_speed(j)
+            } else {
+                0.0
+            };
+            path.push((rot_speed(j), t, reach));
             let Some(p) = link.parent else { break };
-            let t_attach = link.attach.column(3).norm();
-            reach += t_attach + trans_len(j, q).max(trans_len(j, &q1));
+            reach += link.attach.column(3).norm() + trans_len(j, q).max(trans_len(j, &q1));
             j = p;
         }
-        out.push(u);
+        let (mut u, mut acc, mut below) = (0.0, 0.0, 0.0);
+        let total_s: f64 = path.iter().map(|p| p.0).sum();
+        let mut anc = total_s;
+        for &(sp, tp, rp) in &path {
+            anc -= sp;
+            u += sp * rp + tp;
+            below += sp * rp + tp;
+            acc += sp * (anc + 0.5 * sp) * rp + sp * below + tp * anc;
+        }
+        out.push((u, acc));
     }
+}
+
+/// Bound on the distance between a link's true vertex path and its chord
+/// over a sub-interval of length `h`: `min(U h/2, A h²/8)` (m).
+pub fn chord_deviation((u, a): (f64, f64), h: f64) -> f64 {
+    (u * h / 2.0).min(a * h * h / 8.0)
 }
 
 /// Largest `α ∈ [0, 1]` such that the surfaces of every link pair stay
@@ -140,11 +181,18 @@ pub fn max_collision_free_step(
         meshes
             .iter()
             .enumerate()
-            .map(|(i, m)| m.x_local.iter().map(|x| sdrs::math::transform_point(&pose[i], x)).collect())
+            .map(|(i, m)| {
+                m.x_local
+                    .iter()
+                    .map(|x| sdrs::math::transform_point(&pose[i], x))
+                    .collect()
+            })
             .collect()
     };
     let x0 = world(&kin.pose);
-    reach(model, meshes, link_pairs, q, dq, charts, opts, s, 0.0, 1.0, x0, 0)
+    reach(
+        model, meshes, link_pairs, q, dq, charts, opts, s, 0.0, 1.0, x0, 0,
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -168,14 +216,23 @@ fn reach(
     let x1: Vec<Vec<Vector3<f64>>> = meshes
         .iter()
         .enumerate()
-        .map(|(i, m)| m.x_local.iter().map(|x| sdrs::math::transform_point(&kin.pose[i], x)).collect())
+        .map(|(i, m)| {
+            m.x_local
+                .iter()
+                .map(|x| sdrs::math::transform_point(&kin.pose[i], x))
+                .collect()
+        })
         .collect();
     let h = a1 - a0;
     s.boxes.resize(meshes.len(), PrimitiveBoxes::default());
     // Each side's boxes are inflated by its own deviation plus half the
     // other's: pairs within ξ = δ_a + δ_b are kept either way (inflating by
     // max δ per link is enough, as ξ ≤ 2 max δ).
-    let dmax = s.speed.iter().cloned().fold(0.0, f64::max) * h / 2.0;
+    let dmax = s
+        .speed
+        .iter()
+        .map(|&b| chord_deviation(b, h))
+        .fold(0.0, f64::max);
     for (i, m) in meshes.iter().enumerate() {
         if !m.is_empty() {
             s.boxes[i].build(m, &x0[i], Some(&x1[i]), dmax + 1e-12);
@@ -188,15 +245,28 @@ fn reach(
         if s.cand.is_empty() {
             continue;
         }
-        let xi = (s.speed[a] + s.speed[b]) * h / 2.0;
-        let g0 = PairGeometry { mesh: [&meshes[a], &meshes[b]], world: [&x0[a], &x0[b]] };
-        let g1 = PairGeometry { mesh: [&meshes[a], &meshes[b]], world: [&x1[a], &x1[b]] };
+        let xi = chord_deviation(s.speed[a], h) + chord_deviation(s.speed[b], h);
+        let g0 = PairGeometry {
+            mesh: [&meshes[a], &meshes[b]],
+            world: [&x0[a], &x0[b]],
+        };
+        let g1 = PairGeometry {
+            mesh: [&meshes[a], &meshes[b]],
+            world: [&x1[a], &x1[b]],
+        };
         let mut stencils = Vec::new();
         g0.for_each_stencil(&s.cand, |kind, ids| stencils.push((kind, ids)));
         for (kind, ids) in stencils {
-            let p0 = ids.map(|(sd, i)| { let v = g0.world[sd][i as usize]; [v.x, v.y, v.z] });
-            let p1 = ids.map(|(sd, i)| { let v = g1.world[sd][i as usize]; [v.x, v.y, v.z] });
-            let dx: [[f64; 3]; 4] = std::array::from_fn(|k| std::array::from_fn(|c| p1[k][c] - p0[k][c]));
+            let p0 = ids.map(|(sd, i)| {
+                let v = g0.world[sd][i as usize];
+                [v.x, v.y, v.z]
+            });
+            let p1 = ids.map(|(sd, i)| {
+                let v = g1.world[sd][i as usize];
+                [v.x, v.y, v.z]
+            });
+            let dx: [[f64; 3]; 4] =
+                std::array::from_fn(|k| std::array::from_fn(|c| p1[k][c] - p0[k][c]));
             if let Some(t) = additive_ccd(kind, &p0, &dx, xi, 1.0, &opts.accd) {
                 if t < t_min {
                     t_min = t;
@@ -217,13 +287,44 @@ fn reach(
         let xm: Vec<Vec<Vector3<f64>>> = meshes
             .iter()
             .enumerate()
-            .map(|(i, m)| m.x_local.iter().map(|x| sdrs::math::transform_point(&kin.pose[i], x)).collect())
+            .map(|(i, m)| {
+                m.x_local
+                    .iter()
+                    .map(|x| sdrs::math::transform_point(&kin.pose[i], x))
+                    .collect()
+            })
             .collect();
-        let r = reach(model, meshes, link_pairs, q, dq, charts, opts, s, a0, mid, x0, depth + 1);
-        if r < mid {
+        let r = reach(
+            model,
+            meshes,
+            link_pairs,
+            q,
+            dq,
+            charts,
+            opts,
+            s,
+            a0,
+            mid,
+            x0,
+            depth + 1,
+        );
+        if r < mid || depth >= opts.explore_depth {
             return r;
         }
-        return reach(model, meshes, link_pairs, q, dq, charts, opts, s, mid, a1, xm, depth + 1);
+        return reach(
+            model,
+            meshes,
+            link_pairs,
+            q,
+            dq,
+            charts,
+            opts,
+            s,
+            mid,
+            a1,
+            xm,
+            depth + 1,
+        );
     }
     a0 + t_min * h
 }

@@ -12,7 +12,9 @@ use std::collections::BTreeMap;
 pub enum MeshError {
     #[error("hull {hull}: cannot triangulate its surface: {msg}")]
     Hull { hull: usize, msg: String },
-    #[error("hull {hull}: the surface is not closed (edge {a}–{b} bounds {count} triangles, a closed surface needs 2)")]
+    #[error(
+        "hull {hull}: the surface is not closed (edge {a}–{b} bounds {count} triangles, a closed surface needs 2)"
+    )]
     Open {
         hull: usize,
         a: usize,

@@ -85,9 +85,15 @@ impl PairGeometry<'_> {
             }
         }
         for &(i, j) in &cand.ee {
-            let (ea, eb) = (self.mesh[0].edges[i as usize], self.mesh[1].edges[j as usize]);
+            let (ea, eb) = (
+                self.mesh[0].edges[i as usize],
+                self.mesh[1].edges[j as usize],
+            );
             let kind = PrimitiveKind::EdgeEdge {
-                eps_x: eps_x(self.mesh[0].edge_len2[i as usize], self.mesh[1].edge_len2[j as usize]),
+                eps_x: eps_x(
+                    self.mesh[0].edge_len2[i as usize],
+                    self.mesh[1].edge_len2[j as usize],
+                ),
             };
             f(kind, [(0, ea[0]), (0, ea[1]), (1, eb[0]), (1, eb[1])]);
         }
@@ -113,7 +119,7 @@ pub fn evaluate_pair(
     derivatives: bool,
     hessian: bool,
 ) -> PairEval {
-    let mut out = PairEval::new(hessian && derivatives);
+    let mut out = PairEval::new(hessian && derivatives && !cand.is_empty());
     geo.for_each_stencil(cand, |kind, ids| {
         if !out.value.is_finite() {
             return;
