@@ -229,10 +229,6 @@ impl Energy for IpcContact {
             &mut self.ccd,
         );
         self.time_ccd += t0.elapsed();
-                dq.amax(),
-                self.last_min_distance
-            );
-        }
         Ok(a)
     }
 
