@@ -31,7 +31,12 @@ fn f1_is_the_derivative_of_f0_and_both_are_c1_at_eps() {
 fn tangent_basis_is_orthonormal_and_normal_to_n() {
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     for _ in 0..100 {
-        let n = Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)).normalize();
+        let n = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize();
         let t: Matrix3x2<f64> = tangent_basis(&n);
         assert!((t.transpose() * t - nalgebra::Matrix2::identity()).norm() < 1e-14);
         assert!((t.transpose() * n).norm() < 1e-14);
@@ -48,7 +53,12 @@ fn friction_gradient_and_hessian_match_finite_differences() {
     // gradient-vs-Hessian check is unaffected and runs at 1e-3 ε too.)
     let scales = [10.0, 3.0, 0.5, 0.1, 2e-2, 0.999, 1.001, 1e-3];
     for case in 0..140 {
-        let n = Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)).normalize();
+        let n = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize();
         let b0: f64 = rng.random_range(0.0..1.0);
         let b1: f64 = rng.random_range(0.0..1.0 - b0);
         let st = FrictionStencil {
@@ -57,10 +67,15 @@ fn friction_gradient_and_hessian_match_finite_differences() {
             mu_lambda: rng.random_range(0.1..10.0),
         };
         // A displacement whose tangential slip has the wanted size.
-        let dir = Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let dir = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
         let target = scales[case % scales.len()] * eps;
         let mut v = Vec12::from_fn(|_, _| rng.random_range(-1.0..1.0) * 1e-3 * eps);
-        v.fixed_rows_mut::<3>(0).copy_from(&(dir * (target / (st.basis.transpose() * dir).norm())));
+        v.fixed_rows_mut::<3>(0)
+            .copy_from(&(dir * (target / (st.basis.transpose() * dir).norm())));
         let y = st.tangential(&unflat(&v)).norm();
         let (_, g, h) = st.evaluate(&unflat(&v), eps, true);
         let step = 1e-4 * y.min((y - eps).abs()).max(1e-3 * eps);
@@ -73,12 +88,26 @@ fn friction_gradient_and_hessian_match_finite_differences() {
             };
             let (p1, p2, m1, m2) = (at(step), at(step / 2.0), at(-step), at(-step / 2.0));
             gfd[i] = (4.0 * (p2.0 - m2.0) / step - (p1.0 - m1.0) / (2.0 * step)) / 3.0;
-            hfd.set_column(i, &((4.0 * (p2.1 - m2.1) / step - (p1.1 - m1.1) / (2.0 * step)) / 3.0));
+            hfd.set_column(
+                i,
+                &((4.0 * (p2.1 - m2.1) / step - (p1.1 - m1.1) / (2.0 * step)) / 3.0),
+            );
         }
         let eg = (g - gfd).norm() / g.norm().max(1e-300);
         let eh = (h - hfd).norm() / h.norm();
-        assert!(eg <= 1e-6 || target < 1e-2 * eps, "case {case} (|u|/ε = {}): gradient error {eg:.2e}", y / eps);
-        assert!(eh <= 1e-6, "case {case} (|u|/ε = {}): Hessian error {eh:.2e}", y / eps);
-        assert!(h.symmetric_eigen().eigenvalues.min() >= -1e-9 * h.norm(), "not PSD");
+        assert!(
+            eg <= 1e-6 || target < 1e-2 * eps,
+            "case {case} (|u|/ε = {}): gradient error {eg:.2e}",
+            y / eps
+        );
+        assert!(
+            eh <= 1e-6,
+            "case {case} (|u|/ε = {}): Hessian error {eh:.2e}",
+            y / eps
+        );
+        assert!(
+            h.symmetric_eigen().eigenvalues.min() >= -1e-9 * h.norm(),
+            "not PSD"
+        );
     }
 }

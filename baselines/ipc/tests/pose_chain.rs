@@ -21,14 +21,21 @@ fn pose_gradient_and_hessian_of_a_quadratic_stencil_energy() {
         let h: Mat12 = m * m.transpose();
         let g0 = Vec12::from_fn(|_, _| rng.random_range(-1.0..1.0));
         let side = [0usize, 1, 1, 0];
-        let loc: [Vector4<f64>; 4] =
-            std::array::from_fn(|_| Vector4::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.0));
+        let loc: [Vector4<f64>; 4] = std::array::from_fn(|_| {
+            Vector4::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                1.0,
+            )
+        });
         let a = SMatrix::<f64, 24, 1>::from_fn(|_, _| rng.random_range(-1.0..1.0));
         let stencil = |a: &SMatrix<f64, 24, 1>| -> Vec12 {
             let pose = |s: usize| Matrix3x4::from_column_slice(&a.as_slice()[12 * s..12 * s + 12]);
             let mut x = Vec12::zeros();
             for k in 0..4 {
-                x.fixed_rows_mut::<3>(3 * k).copy_from(&(pose(side[k]) * loc[k]));
+                x.fixed_rows_mut::<3>(3 * k)
+                    .copy_from(&(pose(side[k]) * loc[k]));
             }
             x
         };
@@ -39,7 +46,15 @@ fn pose_gradient_and_hessian_of_a_quadratic_stencil_energy() {
         let x = stencil(&a);
         let (mut ga, mut gb) = (Matrix3x4::zeros(), Matrix3x4::zeros());
         let mut hp = PairHessian::zeros();
-        chain_to_poses(&(g0 + h * x), &h, &side, &loc, &mut ga, &mut gb, Some(&mut hp));
+        chain_to_poses(
+            &(g0 + h * x),
+            &h,
+            &side,
+            &loc,
+            &mut ga,
+            &mut gb,
+            Some(&mut hp),
+        );
         let mut grad = SMatrix::<f64, 24, 1>::zeros();
         grad.fixed_rows_mut::<12>(0).copy_from_slice(ga.as_slice());
         grad.fixed_rows_mut::<12>(12).copy_from_slice(gb.as_slice());
@@ -62,8 +77,13 @@ fn pose_gradient_and_hessian_of_a_quadratic_stencil_energy() {
                 mp[j] += step;
                 mm[i] -= step;
                 mm[j] -= step;
-                let fd = (energy(&pp) - energy(&pm) - energy(&mp) + energy(&mm)) / (4.0 * step * step);
-                assert!((fd - hp[(i, j)]).abs() <= 1e-6 * hp.norm(), "Hessian ({i}, {j}): {fd} vs {}", hp[(i, j)]);
+                let fd =
+                    (energy(&pp) - energy(&pm) - energy(&mp) + energy(&mm)) / (4.0 * step * step);
+                assert!(
+                    (fd - hp[(i, j)]).abs() <= 1e-6 * hp.norm(),
+                    "Hessian ({i}, {j}): {fd} vs {}",
+                    hp[(i, j)]
+                );
             }
         }
     }
@@ -91,7 +111,9 @@ objects:
     initial: {q: [0.02, 0.03, 0.2508, 0, 0, 0.7]}
 ";
     let scene = Scene::from_str(text, Path::new("fd.yaml")).unwrap();
-    let mut sim = scene.simulator_with(&sdrs_ipc::IpcFactory::default()).unwrap();
+    let mut sim = scene
+        .simulator_with(&sdrs_ipc::IpcFactory::default())
+        .unwrap();
     let mut q = sim.state.q.clone();
     // Slip of a few ε_v Δt for the friction term, staying inside d̂.
     q[0] += 3e-5;
@@ -107,7 +129,9 @@ objects:
             p[i] += s;
             sim.objective(&p, Need::Value).unwrap().0
         };
-        let fd = (4.0 * (f(step / 2.0) - f(-step / 2.0)) / step - (f(step) - f(-step)) / (2.0 * step)) / 3.0;
+        let fd = (4.0 * (f(step / 2.0) - f(-step / 2.0)) / step
+            - (f(step) - f(-step)) / (2.0 * step))
+            / 3.0;
         worst = worst.max((fd - g[i]).abs() / g.amax());
     }
     eprintln!("objective gradient vs FD: worst relative error {worst:.2e}");
