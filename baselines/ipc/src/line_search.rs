@@ -225,17 +225,12 @@ fn reach(
         .collect();
     let h = a1 - a0;
     s.boxes.resize(meshes.len(), PrimitiveBoxes::default());
-    // Each side's boxes are inflated by its own deviation plus half the
-    // other's: pairs within ξ = δ_a + δ_b are kept either way (inflating by
-    // max δ per link is enough, as ξ ≤ 2 max δ).
-    let dmax = s
-        .speed
-        .iter()
-        .map(|&b| chord_deviation(b, h))
-        .fold(0.0, f64::max);
+    // Each link's boxes are inflated by its own deviation bound δ_L: two
+    // primitives are then paired when their chords' boxes are within
+    // δ_a + δ_b = ξ on every axis, i.e. whenever the chords may come within ξ.
     for (i, m) in meshes.iter().enumerate() {
         if !m.is_empty() {
-            s.boxes[i].build(m, &x0[i], Some(&x1[i]), dmax + 1e-12);
+            s.boxes[i].build(m, &x0[i], Some(&x1[i]), chord_deviation(s.speed[i], h) + 1e-12);
         }
     }
     let mut t_min = f64::INFINITY;
