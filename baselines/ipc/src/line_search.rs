@@ -41,13 +41,12 @@ use sdrs::model::{JointKind, Model};
 #[derive(Clone, Debug, PartialEq)]
 pub struct CcdOptions {
     pub accd: AccdOptions,
-    /// Interval halvings allowed when the curvature bound limits the step.
-    /// Default 48 (the bound shrinks by 2⁻⁴⁸).
+    /// Smallest piece `2^-max_depth` of the step into which the curvature
+    /// bound may split it. Default 48.
     pub max_depth: usize,
-    /// Depth down to which both halves of an interval are examined; below
-    /// it, a safe left half is returned as it is (bounded work per call).
-    /// Default 3.
-    pub explore_depth: usize,
+    /// Pieces examined per call (bounded work); the step found safe so far
+    /// is returned when they run out. Default 64.
+    pub max_pieces: usize,
 }
 
 impl Default for CcdOptions {
@@ -55,7 +54,7 @@ impl Default for CcdOptions {
         CcdOptions {
             accd: AccdOptions::default(),
             max_depth: 48,
-            explore_depth: 3,
+            max_pieces: 64,
         }
     }
 }
@@ -189,52 +188,59 @@ pub fn max_collision_free_step(
             })
             .collect()
     };
-    let x0 = world(&kin.pose);
-    reach(
-        model, meshes, link_pairs, q, dq, charts, opts, s, 0.0, 1.0, x0, 0,
-    )
+    let mut x0 = world(&kin.pose);
+    let (mut a0, mut h): (f64, f64) = (0.0, 1.0);
+    for _ in 0..opts.max_pieces {
+        let a1 = (a0 + h).min(1.0);
+        let kin1 = s.kin.get_or_insert_with(|| Kinematics::new(model));
+        s.q = q + dq * a1;
+        kin1.update(model, &s.q, charts, KinOrder::Pose);
+        let x1 = world(&kin1.pose);
+        let (t, limited) = piece(meshes, link_pairs, &x0, &x1, a1 - a0, opts, s);
+        if t >= 1.0 {
+            if a1 >= 1.0 {
+                return 1.0;
+            }
+            (a0, x0, h) = (a1, x1, 2.0 * (a1 - a0));
+            continue;
+        }
+        if limited && a1 - a0 > 0.5f64.powi(opts.max_depth as i32) {
+            h = 0.5 * (a1 - a0);
+            continue;
+        }
+        return a0 + t * (a1 - a0);
+    }
+    a0
 }
 
-#[allow(clippy::too_many_arguments)]
-fn reach(
-    model: &Model,
+/// CCD of one sub-interval of length `h` between the vertex positions `x0`
+/// and `x1`: the smallest time of impact in `[0, 1]` (1: none) and whether
+/// the deviation bound rather than the approach limited it.
+fn piece(
     meshes: &[LinkMesh],
     link_pairs: &[(usize, usize)],
-    q: &DVector<f64>,
-    dq: &DVector<f64>,
-    charts: &[Matrix3<f64>],
+    x0: &[Vec<Vector3<f64>>],
+    x1: &[Vec<Vector3<f64>>],
+    h: f64,
     opts: &CcdOptions,
     s: &mut CcdScratch,
-    a0: f64,
-    a1: f64,
-    x0: Vec<Vec<Vector3<f64>>>,
-    depth: usize,
-) -> f64 {
-    let kin = s.kin.get_or_insert_with(|| Kinematics::new(model));
-    s.q = q + dq * a1;
-    kin.update(model, &s.q, charts, KinOrder::Pose);
-    let x1: Vec<Vec<Vector3<f64>>> = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            m.x_local
-                .iter()
-                .map(|x| sdrs::math::transform_point(&kin.pose[i], x))
-                .collect()
-        })
-        .collect();
-    let h = a1 - a0;
+) -> (f64, bool) {
     s.boxes.resize(meshes.len(), PrimitiveBoxes::default());
     // Each link's boxes are inflated by its own deviation bound δ_L: two
     // primitives are then paired when their chords' boxes are within
     // δ_a + δ_b = ξ on every axis, i.e. whenever the chords may come within ξ.
     for (i, m) in meshes.iter().enumerate() {
         if !m.is_empty() {
-            s.boxes[i].build(m, &x0[i], Some(&x1[i]), chord_deviation(s.speed[i], h) + 1e-12);
+            s.boxes[i].build(
+                m,
+                &x0[i],
+                Some(&x1[i]),
+                chord_deviation(s.speed[i], h) + 1e-12,
+            );
         }
     }
-    let mut t_min = f64::INFINITY;
-    let mut limited_by_curvature = false;
+    let mut t_min: f64 = 1.0;
+    let mut limited = false;
     for &(a, b) in link_pairs {
         candidates(&s.boxes[a], &s.boxes[b], &mut s.cand);
         if s.cand.is_empty() {
@@ -249,77 +255,24 @@ fn reach(
             mesh: [&meshes[a], &meshes[b]],
             world: [&x1[a], &x1[b]],
         };
-        let mut stencils = Vec::new();
-        g0.for_each_stencil(&s.cand, |kind, ids| stencils.push((kind, ids)));
-        for (kind, ids) in stencils {
+        g0.for_each_stencil(&s.cand, |kind, ids| {
             let p0 = ids.map(|(sd, i)| {
                 let v = g0.world[sd][i as usize];
                 [v.x, v.y, v.z]
             });
-            let p1 = ids.map(|(sd, i)| {
+            let dx: [[f64; 3]; 4] = std::array::from_fn(|k| {
+                let (sd, i) = ids[k];
                 let v = g1.world[sd][i as usize];
-                [v.x, v.y, v.z]
+                [v.x - p0[k][0], v.y - p0[k][1], v.z - p0[k][2]]
             });
-            let dx: [[f64; 3]; 4] =
-                std::array::from_fn(|k| std::array::from_fn(|c| p1[k][c] - p0[k][c]));
             if let Some(t) = additive_ccd(kind, &p0, &dx, xi, 1.0, &opts.accd) {
                 if t < t_min {
                     t_min = t;
                     let d0 = crate::primitive::stencil_distance(kind, &p0).0.sqrt();
-                    limited_by_curvature = xi > 0.1 * (d0 - xi).max(0.0);
+                    limited = xi > 0.1 * (d0 - xi).max(0.0);
                 }
             }
-        }
+        });
     }
-    if !t_min.is_finite() {
-        return a1;
-    }
-    if limited_by_curvature && depth < opts.max_depth {
-        let mid = 0.5 * (a0 + a1);
-        let kin = s.kin.as_mut().expect("set above");
-        s.q = q + dq * mid;
-        kin.update(model, &s.q, charts, KinOrder::Pose);
-        let xm: Vec<Vec<Vector3<f64>>> = meshes
-            .iter()
-            .enumerate()
-            .map(|(i, m)| {
-                m.x_local
-                    .iter()
-                    .map(|x| sdrs::math::transform_point(&kin.pose[i], x))
-                    .collect()
-            })
-            .collect();
-        let r = reach(
-            model,
-            meshes,
-            link_pairs,
-            q,
-            dq,
-            charts,
-            opts,
-            s,
-            a0,
-            mid,
-            x0,
-            depth + 1,
-        );
-        if r < mid || depth >= opts.explore_depth {
-            return r;
-        }
-        return reach(
-            model,
-            meshes,
-            link_pairs,
-            q,
-            dq,
-            charts,
-            opts,
-            s,
-            mid,
-            a1,
-            xm,
-            depth + 1,
-        );
-    }
-    a0 + t_min * h
+    (t_min, limited)
 }
