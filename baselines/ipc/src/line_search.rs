@@ -47,6 +47,9 @@ pub struct CcdOptions {
     /// Pieces examined per call (bounded work); the step found safe so far
     /// is returned when they run out. Default 64.
     pub max_pieces: usize,
+    /// Fraction of each primitive pair's current distance that a step must
+    /// keep (on top of the curvature bound). Default 0.1.
+    pub keep: f64,
 }
 
 impl Default for CcdOptions {
@@ -55,6 +58,7 @@ impl Default for CcdOptions {
             accd: AccdOptions::default(),
             max_depth: 48,
             max_pieces: 64,
+            keep: 0.1,
         }
     }
 }
@@ -265,11 +269,16 @@ fn piece(
                 let v = g1.world[sd][i as usize];
                 [v.x - p0[k][0], v.y - p0[k][1], v.z - p0[k][2]]
             });
-            if let Some(t) = additive_ccd(kind, &p0, &dx, xi, 1.0, &opts.accd) {
+            // Minimum chord separation: the deviation bound ξ plus a fraction
+            // of the current distance, so the true distance stays above
+            // `keep·d₀` (as ACCD keeps `s·d₀` for straight paths) instead of
+            // only above `s(d₀ − ξ)`, which vanishes when ξ → d₀.
+            let d0 = crate::primitive::stencil_distance(kind, &p0).0.max(0.0).sqrt();
+            let sep = xi + opts.keep * d0;
+            if let Some(t) = additive_ccd(kind, &p0, &dx, sep, 1.0, &opts.accd) {
                 if t < t_min {
                     t_min = t;
-                    let d0 = crate::primitive::stencil_distance(kind, &p0).0.sqrt();
-                    limited = xi > 0.1 * (d0 - xi).max(0.0);
+                    limited = xi > 0.1 * (d0 - sep).max(0.0);
                 }
             }
         });
