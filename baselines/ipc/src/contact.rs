@@ -229,9 +229,6 @@ impl Energy for IpcContact {
             &mut self.ccd,
         );
         self.time_ccd += t0.elapsed();
-        if std::env::var_os("IPC_DEBUG").is_some() {
-            eprintln!("t {:.3} ccd alpha {a:.3e} |dq| {:.3e} min_d {:.3e} active {}", ctx.time, dq.amax(), self.last_min_distance, self.last_active);
-        }
         Ok(a)
     }
 

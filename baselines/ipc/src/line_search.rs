@@ -273,7 +273,10 @@ fn piece(
             // of the current distance, so the true distance stays above
             // `keep·d₀` (as ACCD keeps `s·d₀` for straight paths) instead of
             // only above `s(d₀ − ξ)`, which vanishes when ξ → d₀.
-            let d0 = crate::primitive::stencil_distance(kind, &p0).0.max(0.0).sqrt();
+            let d0 = crate::primitive::stencil_distance(kind, &p0)
+                .0
+                .max(0.0)
+                .sqrt();
             let sep = xi + opts.keep * d0;
             if let Some(t) = additive_ccd(kind, &p0, &dx, sep, 1.0, &opts.accd) {
                 if t < t_min {
