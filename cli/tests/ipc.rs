@@ -7,9 +7,10 @@ mod support;
 
 use support::{python, robots, scratch_dir, sdrs};
 
-#[test]
-fn four_chains_under_ipc_run_2000_steps_and_python_fcl_finds_every_pair_separated() {
-    let dir = scratch_dir("ipc_fcl");
+/// Runs the four chains under IPC for `steps` steps with `--export` and
+/// checks every hull pair at every step with python-fcl.
+fn four_chains_under_ipc(steps: usize) {
+    let dir = scratch_dir(&format!("ipc_fcl_{steps}"));
     let out = sdrs()
         .args([
             "simulate",
@@ -17,7 +18,7 @@ fn four_chains_under_ipc_run_2000_steps_and_python_fcl_finds_every_pair_separate
             "--contact",
             "ipc",
             "--steps",
-            "2000",
+            &steps.to_string(),
             "--json",
         ])
         .arg(dir.join("summary.json"))
@@ -60,7 +61,10 @@ fn four_chains_under_ipc_run_2000_steps_and_python_fcl_finds_every_pair_separate
     let r: serde_json::Value = serde_json::from_str(&report).unwrap();
     eprintln!(
         "IPC four chains, python-fcl: {} steps × {} hull pairs, min distance {:.6e} m at step {}",
-        r["steps_checked"], r["hull_pairs"], r["min_distance"], r["min_at_step"]
+        r["steps_checked"],
+        r["hull_pairs"],
+        r["min_distance"].as_f64().unwrap(),
+        r["min_at_step"]
     );
     assert_eq!(r["steps_checked"], steps as u64 + 1);
     assert!(r["min_distance"].as_f64().unwrap() > 0.0);
