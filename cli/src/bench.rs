@@ -23,6 +23,8 @@ pub struct BenchArgs {
     /// Write the table as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub contact: crate::contact_model::ContactArgs,
 }
 
 pub fn run(a: BenchArgs) -> Result<()> {
@@ -47,8 +49,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
                 c.links = n;
             }
         }
-        let scene = Scene::from_spec(spec, &path)?;
-        let mut sim = scene.simulator();
+        let mut scene = Scene::from_spec(spec, &path)?;
+        a.contact.apply(&mut scene)?;
+        let mut sim = crate::contact_model::simulator(&scene)?;
         let t0 = Instant::now();
         let traj = sdrs::sim::run::run(&mut sim, a.steps, |_| {})?;
         let wall = t0.elapsed().as_secs_f64();

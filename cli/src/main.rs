@@ -4,6 +4,7 @@
 
 mod bench;
 mod calibrate;
+mod contact_model;
 mod optimize;
 mod simulate;
 mod util;

@@ -33,17 +33,20 @@ pub struct SimulateArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub contact: crate::contact_model::ContactArgs,
 }
 
 pub fn run(a: SimulateArgs) -> Result<()> {
-    let scene = Scene::load(&a.scene)?;
+    let mut scene = Scene::load(&a.scene)?;
+    a.contact.apply(&mut scene)?;
     for out in [&a.out, &a.json].into_iter().flatten() {
         if same_file(out, &a.scene) {
             bail!("{}: refusing to overwrite the input scene", out.display());
         }
     }
     let steps = a.steps.unwrap_or(scene.steps);
-    let mut sim = scene.simulator();
+    let mut sim = crate::contact_model::simulator(&scene)?;
     let pb = progress(steps, a.quiet);
     let t0 = Instant::now();
     let traj = sdrs::sim::run::run_recording(&mut sim, steps, a.export.is_some(), |k| {

@@ -186,6 +186,25 @@ pub trait Energy: Send + Sync {
         Ok(())
     }
 
+    /// Largest fraction `α ∈ (0, 1]` of the Newton step `q → q + dq` along
+    /// which this term stays finite (collision-free), for continuous
+    /// collision detection (IPC's CCD line-search filter). `kin` holds the
+    /// kinematics at `q`; `charts` are the rotation-vector chart centres
+    /// needed to evaluate kinematics at other points of the segment. Newton's
+    /// line search starts backtracking at the minimum over all terms.
+    /// Default `1.0` (no bound: the search then behaves exactly as without
+    /// this method).
+    fn max_step(
+        &mut self,
+        _ctx: &StepContext,
+        _q: &DVector<f64>,
+        _dq: &DVector<f64>,
+        _kin: &Kinematics,
+        _charts: &[nalgebra::Matrix3<f64>],
+    ) -> Result<f64, EnergyError> {
+        Ok(1.0)
+    }
+
     /// Adds the term's value and requested derivatives at `θ^{t+1} = q`
     /// (kinematics `kin` already evaluated at `q`). A value of `+∞` marks an
     /// infeasible configuration; derivatives may then be left unset.

@@ -216,6 +216,13 @@ impl Problem {
         let mut scene = self.scene.clone();
         scene.model = model.clone();
         scene.controller = controller;
+        if let Some(c) = scene.contact.as_ref().filter(|c| !c.model.is_sdrs()) {
+            anyhow::bail!(
+                "{}: contact.model: {} is not supported by `optimize` (only sdrs)",
+                scene.source.display(),
+                c.model.name()
+            );
+        }
         let mut sim = scene.simulator();
         let t0 = Instant::now();
         let tape = record(&mut sim, self.horizon)?;

@@ -119,6 +119,11 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
     }
 }
 
+/// Default IPC activation distance `d̂` (m).
+pub const DEFAULT_DHAT: f64 = 1e-3;
+/// Default IPC friction smoothing speed `ε_v` (m/s).
+pub const DEFAULT_EPS_V: f64 = 1e-3;
+
 /// Validated contact settings with excluded link pairs resolved to indices.
 pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSettings, Invalid> {
     if !(c.s > 0.0 && c.s < 1.0) {
@@ -127,10 +132,11 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
             format!("the barrier support must lie in (0, 1), got {}", c.s),
         ));
     }
-    if !(c.kappa > 0.0 && c.kappa.is_finite()) {
+    let kappa = c.kappa.unwrap_or_else(ContactSpec::default_kappa);
+    if !(kappa > 0.0 && kappa.is_finite()) {
         return Err(Invalid::new(
             "contact.kappa",
-            format!("must be positive and finite, got {}", c.kappa),
+            format!("must be positive and finite, got {kappa}"),
         ));
     }
     if !(c.mu >= 0.0 && c.mu.is_finite()) {
@@ -143,6 +149,22 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         return Err(Invalid::new(
             "contact.eps",
             format!("must be positive and finite, got {}", c.eps),
+        ));
+    }
+    let dhat = c.dhat.unwrap_or(DEFAULT_DHAT);
+    if !(dhat > 0.0 && dhat.is_finite()) {
+        return Err(Invalid::new(
+            "contact.dhat",
+            format!("the IPC activation distance must be positive and finite (m), got {dhat}"),
+        ));
+    }
+    let eps_v = c.eps_v.unwrap_or(DEFAULT_EPS_V);
+    if !(eps_v > 0.0 && eps_v.is_finite()) {
+        return Err(Invalid::new(
+            "contact.eps_v",
+            format!(
+                "the IPC friction smoothing speed must be positive and finite (m/s), got {eps_v}"
+            ),
         ));
     }
     let find = |name: &str, k: usize| -> Result<usize, Invalid> {
@@ -178,8 +200,12 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         }
     }
     Ok(ContactSettings {
+        model: c.model,
+        dhat,
+        eps_v,
         s: c.s,
-        kappa: c.kappa,
+        kappa,
+        kappa_given: c.kappa.is_some(),
         mu: c.mu,
         eps: c.eps,
         eps_force: c.eps_force,

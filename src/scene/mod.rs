@@ -46,7 +46,8 @@ impl Invalid {
             msg: msg.into(),
         }
     }
-    fn at(self, path: &Path) -> SceneError {
+    /// Attaches the scene file.
+    pub fn at(self, path: &Path) -> SceneError {
         SceneError::Invalid {
             path: path.to_path_buf(),
             element: self.element,
@@ -83,10 +84,19 @@ pub struct Scene {
 /// Validated contact parameters (see [`schema::ContactSpec`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContactSettings {
+    /// The contact model (`contact.model`; default SDRS).
+    pub model: schema::ContactModelKind,
+    /// IPC activation distance `d̂` (m; unused by the SDRS model).
+    pub dhat: f64,
+    /// IPC friction smoothing speed `ε_v` (m/s; unused by the SDRS model).
+    pub eps_v: f64,
     /// Barrier support `s`.
     pub s: f64,
     /// Barrier stiffness `κ`.
     pub kappa: f64,
+    /// Whether the scene gave `κ` (otherwise the default; the IPC baseline
+    /// then chooses it adaptively).
+    pub kappa_given: bool,
     /// Friction coefficient `μ`.
     pub mu: f64,
     /// Friction velocity smoothing `ε` ((m/s)²).
@@ -128,8 +138,51 @@ impl Scene {
         build::build_scene(spec, path).map_err(|e| e.at(path))
     }
 
-    /// A simulator at the scene's initial state.
+    /// A simulator at the scene's initial state with the core's contact
+    /// model (SDRS). A scene that selects another model (`contact.model:
+    /// ipc`) needs [`Scene::simulator_with`] and a factory providing it (the
+    /// `sdrs` CLI has one); here it runs with the SDRS model.
     pub fn simulator(&self) -> Simulator {
+        let mut sim = self.bare_simulator();
+        if let Some(c) = &self.contact_settings() {
+            push_sdrs_contact(&mut sim, &self.model, c, self.settings.dt);
+        }
+        crate::calibrate::effects::install(&self.effects, &mut sim);
+        sim
+    }
+
+    /// The contact settings with the scene's calibration effects applied
+    /// (fitted μ, κ, s).
+    fn contact_settings(&self) -> Option<ContactSettings> {
+        self.contact
+            .clone()
+            .map(|c| crate::calibrate::effects::contact_settings(&self.effects, c))
+    }
+
+    /// A simulator at the scene's initial state whose contact terms, for a
+    /// scene with `contact.model` other than `sdrs`, come from `factory`
+    /// (the extension point that keeps the core independent of the
+    /// baselines). SDRS scenes get exactly [`Scene::simulator`].
+    pub fn simulator_with(
+        &self,
+        factory: &dyn ContactModelFactory,
+    ) -> Result<Simulator, SceneError> {
+        let mut sim = self.bare_simulator();
+        if let Some(c) = &self.contact_settings() {
+            if c.model.is_sdrs() {
+                push_sdrs_contact(&mut sim, &self.model, c, self.settings.dt);
+            } else {
+                let energies = factory
+                    .contact_energies(self, c)
+                    .map_err(|e| e.at(&self.source))?;
+                sim.energies.extend(energies);
+            }
+        }
+        crate::calibrate::effects::install(&self.effects, &mut sim);
+        Ok(sim)
+    }
+
+    fn bare_simulator(&self) -> Simulator {
         let state = SimState::new(
             &self.model,
             self.q0.clone(),
@@ -137,29 +190,38 @@ impl Scene {
             self.charts.clone(),
             self.settings.dt,
         );
-        let mut sim = Simulator::new(
+        Simulator::new(
             self.model.clone(),
             self.settings.clone(),
             self.controller.clone(),
             state,
-        );
-        let contact = self
-            .contact
-            .clone()
-            .map(|c| crate::calibrate::effects::contact_settings(&self.effects, c));
-        if let Some(c) = &contact {
-            sim.energies
-                .push(Box::new(crate::energy::ContactEnergy::new(
-                    &self.model,
-                    c.clone(),
-                )));
-            if c.mu > 0.0 {
-                let friction =
-                    crate::energy::FrictionEnergy::new(&self.model, c.clone(), self.settings.dt);
-                sim.energies.push(Box::new(friction));
-            }
-        }
-        crate::calibrate::effects::install(&self.effects, &mut sim);
-        sim
+        )
     }
+}
+
+fn push_sdrs_contact(sim: &mut Simulator, model: &Model, c: &ContactSettings, dt: f64) {
+    sim.energies
+        .push(Box::new(crate::energy::ContactEnergy::new(
+            model,
+            c.clone(),
+        )));
+    if c.mu > 0.0 {
+        let friction = crate::energy::FrictionEnergy::new(model, c.clone(), dt);
+        sim.energies.push(Box::new(friction));
+    }
+}
+
+/// Provides the contact (and friction) terms of a contact model the core
+/// does not implement itself (`contact.model: ipc`). Implemented outside the
+/// core (the IPC baseline), passed in by the CLI to
+/// [`Scene::simulator_with`].
+pub trait ContactModelFactory {
+    /// The terms for `settings.model` on `scene`, or a validation problem
+    /// naming the element (e.g. an open mesh, an intersecting start, or a
+    /// model the factory does not know).
+    fn contact_energies(
+        &self,
+        scene: &Scene,
+        settings: &ContactSettings,
+    ) -> Result<Vec<Box<dyn crate::energy::Energy>>, Invalid>;
 }

@@ -172,6 +172,22 @@ pub struct ObstacleSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
+    /// Which contact model the scene uses: `sdrs` (default: the core's
+    /// separating-plane potential) or `ipc` (the mesh-based Incremental
+    /// Potential Contact baseline in `baselines/ipc`, provided by the `sdrs`
+    /// CLI through [`crate::scene::ContactModelFactory`]). With `sdrs` the
+    /// IPC keys below are ignored and nothing changes.
+    #[serde(default, skip_serializing_if = "ContactModelKind::is_sdrs")]
+    pub model: ContactModelKind,
+    /// IPC only: barrier activation distance `d̂` (m, unsquared; the barrier
+    /// acts on squared distances below `d̂²`). Default 1e-3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dhat: Option<f64>,
+    /// IPC only: friction smoothing velocity `ε_v` (m/s): below relative
+    /// tangential speeds of `ε_v` friction is smoothed (IPC's `f₁`).
+    /// Default 1e-3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eps_v: Option<f64>,
     /// Barrier support `s` (m, and the bound on `1 − ‖n‖`; `0 < s < 1`).
     /// Hulls interact within `2s/(1−s)`. Default 0.01.
     #[serde(default = "ContactSpec::default_s")]
@@ -179,8 +195,10 @@ pub struct ContactSpec {
     /// Barrier stiffness `κ` multiplying every `U_c` (J·m). Default 1.
     /// (The paper writes it as "μ" in eq. `SDRS`; it is not the friction
     /// coefficient.)
-    #[serde(default = "ContactSpec::default_kappa")]
-    pub kappa: f64,
+    /// With `model: ipc`, `κ` multiplies IPC's barrier on squared distances
+    /// (J/m⁴) and, when absent, is chosen adaptively by the baseline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
     /// Friction coefficient `μ`. Default 0 (frictionless).
     #[serde(default)]
     pub mu: f64,
@@ -200,11 +218,37 @@ pub struct ContactSpec {
     pub exclude: Vec<[String; 2]>,
 }
 
+/// The contact model of a scene (`contact.model`).
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactModelKind {
+    /// The core's separating-plane potential (paper, `contact.tex`).
+    #[default]
+    Sdrs,
+    /// Mesh-based Incremental Potential Contact (Li et al. 2020), the
+    /// baseline in `baselines/ipc`.
+    Ipc,
+}
+
+impl ContactModelKind {
+    pub fn is_sdrs(&self) -> bool {
+        *self == ContactModelKind::Sdrs
+    }
+    /// Name as written in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ContactModelKind::Sdrs => "sdrs",
+            ContactModelKind::Ipc => "ipc",
+        }
+    }
+}
+
 impl ContactSpec {
     fn default_s() -> f64 {
         0.01
     }
-    fn default_kappa() -> f64 {
+    /// `κ` when the file gives none (SDRS model).
+    pub fn default_kappa() -> f64 {
         1.0
     }
     fn default_eps() -> f64 {
@@ -218,8 +262,11 @@ impl ContactSpec {
 impl Default for ContactSpec {
     fn default() -> Self {
         ContactSpec {
+            model: ContactModelKind::Sdrs,
+            dhat: None,
+            eps_v: None,
             s: Self::default_s(),
-            kappa: Self::default_kappa(),
+            kappa: None,
             mu: 0.0,
             eps: Self::default_eps(),
             eps_force: Self::default_eps(),

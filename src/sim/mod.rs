@@ -30,7 +30,7 @@ use newton::{NewtonScratch, Objective};
 use std::time::Instant;
 
 /// Largest change of a rotation-vector coordinate in one Newton iteration
-/// (rad); see [`Objective::step_limit`].
+/// (rad); see `StepObjective::max_step`.
 pub const MAX_ROTATION_STEP: f64 = 1.0;
 
 /// A step that could not be completed.
@@ -152,13 +152,20 @@ impl Objective for StepObjective<'_> {
         64.0 * f64::EPSILON * sum
     }
 
-    /// A rotation-vector coordinate moves at most [`MAX_ROTATION_STEP`] per
-    /// Newton iteration: far from its chart centre (‖φ‖ → 2π) the chart is
-    /// singular and Newton, started there by one long step along a flat
-    /// rotational direction, crawls (piles of boxes once took > 100
-    /// iterations). Charts are re-centred between steps.
-    fn step_limit(&self, _q: &DVector<f64>, dir: &DVector<f64>) -> f64 {
-        let mut limit: f64 = 1.0;
+    /// The largest step the line search may try: a rotation-vector
+    /// coordinate moves at most [`MAX_ROTATION_STEP`] per Newton iteration
+    /// (far from its chart centre, ‖φ‖ → 2π, the chart is singular and
+    /// Newton, started there by one long step along a flat rotational
+    /// direction, crawls: piles of boxes once took > 100 iterations; charts
+    /// are re-centred between steps), and no term's continuous collision
+    /// detection ([`Energy::max_step`]) may be violated.
+    fn max_step(
+        &mut self,
+        q: &DVector<f64>,
+        dir: &DVector<f64>,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        let mut alpha: f64 = 1.0;
         for link in &self.ctx.model.links {
             if link.chart.is_none() {
                 continue;
@@ -166,10 +173,14 @@ impl Objective for StepObjective<'_> {
             let o = link.dof_offset + link.joint.chart_offset();
             let d = Vector3::new(dir[o], dir[o + 1], dir[o + 2]).norm();
             if d > MAX_ROTATION_STEP {
-                limit = limit.min(MAX_ROTATION_STEP / d);
+                alpha = alpha.min(MAX_ROTATION_STEP / d);
             }
         }
-        limit
+        // Terms time their own CCD and report it through `Energy::report`.
+        for e in self.energies.iter_mut() {
+            alpha = alpha.min(e.max_step(&self.ctx, q, dir, self.kin, self.charts)?);
+        }
+        Ok(alpha)
     }
 
     fn length_scale(&self) -> f64 {

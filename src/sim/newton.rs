@@ -120,12 +120,20 @@ pub trait Objective {
         1.0
     }
 
-    /// Largest step `α ≤ 1` along `dir` from `q` that the parametrization
-    /// supports (e.g. rotation charts: a rotation vector is a good chart
-    /// only well inside `‖φ‖ < 2π`). The line search starts there.
-    /// Default 1.
-    fn step_limit(&self, _q: &DVector<f64>, _dir: &DVector<f64>) -> f64 {
-        1.0
+    /// Largest step fraction `α ≤ 1` along `dir` from `q` that the
+    /// parametrization supports and that keeps the objective finite by
+    /// construction (rotation charts are good only well inside `‖φ‖ < 2π`;
+    /// continuous collision detection, see
+    /// [`crate::energy::Energy::max_step`]). `q` is the point of the last
+    /// evaluation with derivatives. The line search starts there. Default
+    /// `1.0`.
+    fn max_step(
+        &mut self,
+        _q: &DVector<f64>,
+        _dir: &DVector<f64>,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        Ok(1.0)
     }
 }
 
@@ -199,7 +207,8 @@ pub fn minimize(
         // rank trial points: the decrease is smaller than the noise.
         let floor = 1e-9 * value.abs() + obj.value_noise();
         let resolvable = predicted > 10.0 * floor;
-        let alpha0 = obj.step_limit(q, &scratch.dir).min(1.0);
+        // Chart and collision-free bound on the step.
+        let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
         let t0 = std::time::Instant::now();
         // Time spent in the search's objective evaluations is counted by
         // their own stages; `line_search` gets only the remainder.
@@ -207,7 +216,7 @@ pub fn minimize(
         let mut accepted = false;
         if resolvable {
             // Backtracking with Armijo sufficient decrease on a finite value.
-            let mut alpha = alpha0;
+            let mut alpha = alpha_max;
             for _ in 0..=opts.max_backtracks {
                 if alpha * predicted <= 10.0 * floor {
                     // Shorter steps cannot be ranked by value either; an
@@ -239,7 +248,7 @@ pub fn minimize(
         // beyond noise and whose ‖∇O‖∞ is smaller.
         if !accepted {
             let noise = 1e-10 * value.abs().max(1.0);
-            let mut alpha = alpha0;
+            let mut alpha = alpha_max;
             for _ in 0..8 {
                 scratch.trial.clone_from(q);
                 scratch.trial.axpy(alpha, &scratch.dir, 1.0);

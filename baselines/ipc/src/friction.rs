@@ -1,0 +1,209 @@
+//! IPC's lagged friction term (Li et al. 2020, §5) behind [`Energy`]:
+//! `Σ_c μ λ_c f₀(‖T_cᵀ Σ_k w_ck (X_k − X_k^t)‖)` over the contacts active at
+//! the start of the step (`d < d̂²` at `A^t`), with `λ_c`, `w_c` (closest
+//! points) and `T_c` (tangent basis) lagged there ([`crate::friction_stencil`]).
+//! The lagged normal force is the barrier's: `λ = κ |∂b/∂d| · 2√d` (N).
+//! Pose-space chain rule as in [`crate::pair`].
+
+use crate::barrier::barrier_derivative;
+use crate::broad_phase::{Candidates, PrimitiveBoxes, candidates};
+use crate::distance::closest_weights;
+use crate::friction_stencil::{FrictionStencil, tangent_basis};
+use crate::mesh::LinkMesh;
+use crate::pair::{PairGeometry, PairHessian};
+use crate::primitive::stencil_distance;
+use nalgebra::{DVector, Matrix3x4, Vector3};
+use sdrs::energy::pairs::scatter_pair;
+use sdrs::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use sdrs::kinematics::Kinematics;
+use sdrs::model::Model;
+use std::collections::BTreeMap;
+
+/// Friction parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IpcFrictionParams {
+    pub dhat: f64,
+    /// Barrier stiffness (J/m⁴), for the lagged normal force.
+    pub kappa: f64,
+    pub mu: f64,
+    /// Smoothing speed `ε_v` (m/s); the displacement threshold is `ε_v Δt`.
+    pub eps_v: f64,
+    pub dt: f64,
+}
+
+/// One lagged contact: link pair index, stencil `(side, vertex)` and data.
+#[derive(Clone, Debug)]
+struct Contact {
+    pair: usize,
+    ids: [(usize, u32); 4],
+    stencil: FrictionStencil,
+}
+
+/// The friction term.
+pub struct IpcFriction {
+    pub params: IpcFrictionParams,
+    meshes: Vec<LinkMesh>,
+    link_pairs: Vec<(usize, usize)>,
+    world_prev: Vec<Vec<Vector3<f64>>>,
+    world: Vec<Vec<Vector3<f64>>>,
+    contacts: Vec<Contact>,
+    pair_slots: BTreeMap<(usize, usize), usize>,
+}
+
+impl IpcFriction {
+    pub fn new(
+        model: &Model,
+        meshes: Vec<LinkMesh>,
+        excluded: &std::collections::BTreeSet<(usize, usize)>,
+        params: IpcFrictionParams,
+    ) -> Self {
+        let c = crate::contact::IpcContact::new(
+            model,
+            meshes.clone(),
+            excluded,
+            crate::contact::IpcParams {
+                dhat: params.dhat,
+                kappa: params.kappa,
+                ccd: Default::default(),
+            },
+        );
+        let world: Vec<Vec<Vector3<f64>>> = meshes
+            .iter()
+            .map(|m| vec![Vector3::zeros(); m.x_local.len()])
+            .collect();
+        IpcFriction {
+            params,
+            link_pairs: c.link_pairs.clone(),
+            world_prev: world.clone(),
+            world,
+            meshes,
+            contacts: Vec::new(),
+            pair_slots: BTreeMap::new(),
+        }
+    }
+
+    /// Number of lagged contacts of the current step.
+    pub fn contact_count(&self) -> usize {
+        self.contacts.len()
+    }
+}
+
+fn transform(meshes: &[LinkMesh], pose: &[sdrs::math::Pose], out: &mut [Vec<Vector3<f64>>]) {
+    for (i, m) in meshes.iter().enumerate() {
+        for (w, x) in out[i].iter_mut().zip(&m.x_local) {
+            *w = sdrs::math::transform_point(&pose[i], x);
+        }
+    }
+}
+
+impl Energy for IpcFriction {
+    fn name(&self) -> &'static str {
+        "ipc_friction"
+    }
+
+    fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {
+        transform(&self.meshes, ctx.poses_prev, &mut self.world_prev);
+        let p = &self.params;
+        let dhat2 = p.dhat * p.dhat;
+        let mut boxes = vec![PrimitiveBoxes::default(); self.meshes.len()];
+        for (i, m) in self.meshes.iter().enumerate() {
+            if !m.is_empty() {
+                boxes[i].build(m, &self.world_prev[i], None, 0.5 * p.dhat);
+            }
+        }
+        self.contacts.clear();
+        let mut cand = Candidates::default();
+        for (k, &(a, b)) in self.link_pairs.iter().enumerate() {
+            candidates(&boxes[a], &boxes[b], &mut cand);
+            let geo = PairGeometry {
+                mesh: [&self.meshes[a], &self.meshes[b]],
+                world: [&self.world_prev[a], &self.world_prev[b]],
+            };
+            geo.for_each_stencil(&cand, |kind, ids| {
+                let x = ids.map(|(s, i)| {
+                    let v = geo.world[s][i as usize];
+                    [v.x, v.y, v.z]
+                });
+                let (d, ty) = stencil_distance(kind, &x);
+                if !(d > 0.0 && d < dhat2) {
+                    return;
+                }
+                let w = closest_weights(&x, ty);
+                let v: Vector3<f64> = (0..4).map(|j| Vector3::from(x[j]) * w[j]).sum();
+                let lambda = p.kappa * barrier_derivative(d, dhat2).abs() * 2.0 * d.sqrt();
+                self.contacts.push(Contact {
+                    pair: k,
+                    ids,
+                    stencil: FrictionStencil {
+                        w,
+                        basis: tangent_basis(&(v / v.norm())),
+                        mu_lambda: p.mu * lambda,
+                    },
+                });
+            });
+        }
+        Ok(())
+    }
+
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError> {
+        if self.contacts.is_empty() {
+            return Ok(());
+        }
+        transform(&self.meshes, &kin.pose, &mut self.world);
+        let eps = self.params.eps_v * self.params.dt;
+        let derivs = need >= Need::Gradient;
+        self.pair_slots.clear();
+        let mut k = 0;
+        while k < self.contacts.len() {
+            let pair = self.contacts[k].pair;
+            let (la, lb) = self.link_pairs[pair];
+            let (mut ga, mut gb) = (Matrix3x4::zeros(), Matrix3x4::zeros());
+            let mut h = (need >= Need::Hessian).then(|| Box::new(PairHessian::zeros()));
+            while k < self.contacts.len() && self.contacts[k].pair == pair {
+                let c = &self.contacts[k];
+                let link = |s: usize| if s == 0 { la } else { lb };
+                let dx = c.ids.map(|(s, i)| {
+                    self.world[link(s)][i as usize] - self.world_prev[link(s)][i as usize]
+                });
+                let (val, g, hs) = c.stencil.evaluate(&dx, eps, derivs);
+                acc.value += val;
+                if derivs {
+                    let loc = c
+                        .ids
+                        .map(|(s, i)| self.meshes[link(s)].x_local[i as usize].push(1.0));
+                    let side = c.ids.map(|(s, _)| s);
+                    crate::pair::chain_to_poses(
+                        &g,
+                        &hs,
+                        &side,
+                        &loc,
+                        &mut ga,
+                        &mut gb,
+                        h.as_deref_mut(),
+                    );
+                }
+                k += 1;
+            }
+            if derivs {
+                scatter_pair(
+                    ctx.model,
+                    acc,
+                    &mut self.pair_slots,
+                    need,
+                    (la, lb),
+                    1.0,
+                    (&ga, &gb),
+                    h.as_deref(),
+                );
+            }
+        }
+        Ok(())
+    }
+}

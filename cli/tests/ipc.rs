@@ -1,0 +1,144 @@
+//! End-to-end runs of the IPC baseline through `sdrs simulate --contact ipc`:
+//! the tangling four-chain scene with the independent python-fcl checker on
+//! the export, identical output bytes for a contact-free scene under both
+//! models, and bad `--dhat` input.
+
+mod support;
+
+use support::{python, robots, scratch_dir, sdrs};
+
+/// Runs the four chains under IPC for `steps` steps with `--export` and
+/// checks every hull pair at every step with python-fcl.
+fn four_chains_under_ipc(steps: usize) {
+    let dir = scratch_dir(&format!("ipc_fcl_{steps}"));
+    let out = sdrs()
+        .args([
+            "simulate",
+            "-q",
+            "--contact",
+            "ipc",
+            "--steps",
+            &steps.to_string(),
+            "--json",
+        ])
+        .arg(dir.join("summary.json"))
+        .arg("--export")
+        .arg(&dir)
+        .arg(robots("four_chains.yaml"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        summary["contact"]["steps_in_contact"].as_u64().unwrap() > 100,
+        "the chains did not tangle"
+    );
+    let stages: Vec<&str> = summary["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["stage"].as_str().unwrap())
+        .collect();
+    for s in ["ipc_contact", "ipc_broad_phase", "ipc_ccd", "ipc_friction"] {
+        assert!(stages.contains(&s), "stage {s} missing from {stages:?}");
+    }
+    let check = python()
+        .arg(support::root().join("tools/check_separation.py"))
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success(),
+        "checker found interpenetration or failed:\n{report}\n{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_str(&report).unwrap();
+    eprintln!(
+        "IPC four chains, python-fcl: {} steps × {} hull pairs, min distance {:.6e} m at step {}",
+        r["steps_checked"],
+        r["hull_pairs"],
+        r["min_distance"].as_f64().unwrap(),
+        r["min_at_step"]
+    );
+    assert_eq!(r["steps_checked"], steps as u64 + 1);
+    assert!(r["min_distance"].as_f64().unwrap() > 0.0);
+}
+
+/// The acceptance run. Does not pass yet: under IPC, Newton stops
+/// converging in the tangled phase (around step 1500–1600, 100 iterations
+/// with tiny CCD-limited steps after enormous Newton directions; see the
+/// README, "IPC baseline").
+#[test]
+#[ignore = "does not pass yet: Newton stalls around step 1500-1600 under IPC (README, IPC baseline)"]
+fn four_chains_under_ipc_run_2000_steps_and_python_fcl_finds_every_pair_separated() {
+    four_chains_under_ipc(2000);
+}
+
+/// The tangling phase that does run: 1200 steps (contact from about step
+/// 300), every pair checked by python-fcl.
+#[test]
+fn four_chains_under_ipc_tangle_for_1200_steps_and_python_fcl_finds_every_pair_separated() {
+    four_chains_under_ipc(1200);
+}
+
+#[test]
+fn contact_free_scene_gives_the_same_csv_bytes_under_both_models() {
+    let dir = scratch_dir("ipc_free");
+    let scene = dir.join("apart.yaml");
+    std::fs::write(
+        &scene,
+        "version: 1\ndt: 0.002\ncontact: {mu: 0.3}\nobjects:\n  - name: a\n    mass: 1.0\n    hulls: [{box: {size: [0.2, 0.2, 0.2]}}]\n    initial: {q: [0, 0, 1, 0.1, 0.2, 0.3], qdot: [0.5, 0, 2, 1, 0, 3]}\n  - name: b\n    mass: 2.0\n    hulls: [{box: {size: [0.3, 0.2, 0.1]}}]\n    initial: {q: [3, 0, 1, 0, 0, 0], qdot: [-0.5, 0, 1, 0, 2, 0]}\n",
+    )
+    .unwrap();
+    let run = |model: &str| {
+        let csv = dir.join(format!("{model}.csv"));
+        let out = sdrs()
+            .args([
+                "simulate",
+                "-q",
+                "--steps",
+                "200",
+                "--contact",
+                model,
+                "--out",
+            ])
+            .arg(&csv)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(csv).unwrap()
+    };
+    assert_eq!(run("sdrs"), run("ipc"));
+}
+
+#[test]
+fn non_positive_dhat_is_an_error() {
+    let out = sdrs()
+        .args([
+            "simulate",
+            "-q",
+            "--steps",
+            "3",
+            "--contact",
+            "ipc",
+            "--dhat",
+            "0",
+        ])
+        .arg(robots("box_on_ground.yaml"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--dhat") && err.contains("positive"), "{err}");
+}

@@ -1,0 +1,114 @@
+#!/usr/bin/env python3
+"""Reference values from IPC Toolkit (ipctk, pinned in tools/requirements.txt)
+for the cross-check of the IPC baseline (baselines/ipc/tests/ipctk_crosscheck.rs).
+
+Reads a JSON job on stdin and writes the results as JSON to the file named
+by the first argument (stdout without one):
+
+- primitives: point-triangle ("pt") / edge-edge ("ee") stencils x (4 points),
+  dhat (m). Potential P = b(d, dhat^2) with d the squared distance
+  (ipctk's distance functions, AUTO type) and ipctk's log barrier; edge-edge
+  pairs are multiplied by ipctk's mollifier with eps_x from the same
+  (rigid, so rest = current) positions. Value, gradient (12) and exact
+  Hessian (12x12, no PSD projection) by the product and chain rules on
+  ipctk's own derivatives.
+- meshes: two triangle meshes (va, fa, vb, fb), dhat: ipctk's
+  BarrierPotential(dhat, stiffness 1) over NormalCollisions between the two
+  meshes only (can_collide excludes pairs within one mesh); value and
+  vertex gradient.
+- ccd: linear trajectories x0 -> x1 of pt/ee stencils: ipctk's
+  TightInclusionCCD hit flag and time of impact (minimum distance 0).
+- friction: IPC's smoothed f0, f1 at (y, eps).
+"""
+import json
+import sys
+
+import numpy as np
+import ipctk
+
+
+def primitive(p):
+    x = [np.array(v, dtype=float) for v in p["x"]]
+    dhat2 = p["dhat"] ** 2
+    if p["kind"] == "pt":
+        d = ipctk.point_triangle_distance(*x)
+        gd = ipctk.point_triangle_distance_gradient(*x)
+        hd = ipctk.point_triangle_distance_hessian(*x)
+    else:
+        d = ipctk.edge_edge_distance(*x)
+        gd = ipctk.edge_edge_distance_gradient(*x)
+        hd = ipctk.edge_edge_distance_hessian(*x)
+    b = ipctk.barrier(d, dhat2)
+    b1 = ipctk.barrier_first_derivative(d, dhat2)
+    b2 = ipctk.barrier_second_derivative(d, dhat2)
+    val, grad = b, b1 * gd
+    hess = b2 * np.outer(gd, gd) + b1 * hd
+    if p["kind"] == "ee":
+        eps_x = ipctk.edge_edge_mollifier_threshold(*x)
+        m = ipctk.edge_edge_mollifier(*x, eps_x)
+        gm = ipctk.edge_edge_mollifier_gradient(*x, eps_x)
+        hm = ipctk.edge_edge_mollifier_hessian(*x, eps_x)
+        hess = m * hess + np.outer(gm, grad) + np.outer(grad, gm) + val * hm
+        grad = m * grad + val * gm
+        val = m * val
+    return {"d": d, "value": val, "grad": list(grad), "hess": [list(r) for r in hess]}
+
+
+def edges_of(faces):
+    e = set()
+    for f in faces:
+        for k in range(3):
+            a, b = f[k], f[(k + 1) % 3]
+            e.add((min(a, b), max(a, b)))
+    return np.array(sorted(e), dtype=np.int32)
+
+
+def mesh_pair(m):
+    va, vb = np.array(m["va"], dtype=float), np.array(m["vb"], dtype=float)
+    na = len(va)
+    v = np.asfortranarray(np.vstack([va, vb]))
+    f = np.vstack([np.array(m["fa"]), np.array(m["fb"]) + na]).astype(np.int32)
+    mesh = ipctk.CollisionMesh(v, np.asfortranarray(edges_of(f)), np.asfortranarray(f))
+    mesh.can_collide = lambda i, j: (i < na) != (j < na)
+    col = ipctk.NormalCollisions()
+    col.build(mesh, v, m["dhat"])
+    pot = ipctk.BarrierPotential(m["dhat"], 1.0)
+    g = pot.gradient(col, mesh, v)
+    return {"value": pot(col, mesh, v), "grad": list(g), "collisions": len(col)}
+
+
+def ccd(c, tool):
+    a = [np.array(v, dtype=float) for v in c["x0"]]
+    b = [np.array(v, dtype=float) for v in c["x1"]]
+    if c["kind"] == "pt":
+        hit, toi = tool.point_triangle_ccd(*a, *b, min_distance=0.0, tmax=1.0)
+    else:
+        hit, toi = tool.edge_edge_ccd(*a, *b, min_distance=0.0, tmax=1.0)
+    toi = float(toi)
+    return {"hit": bool(hit), "toi": toi if np.isfinite(toi) else None}
+
+
+def main():
+    job = json.load(sys.stdin)
+    tool = ipctk.TightInclusionCCD()
+    out = {
+        "version": ipctk.__version__ if hasattr(ipctk, "__version__") else "?",
+        "primitives": [primitive(p) for p in job.get("primitives", [])],
+        "meshes": [mesh_pair(m) for m in job.get("meshes", [])],
+        "ccd": [ccd(c, tool) for c in job.get("ccd", [])],
+        "friction": [
+            {"f0": ipctk.smooth_friction_f0(y, e), "f1": ipctk.smooth_friction_f1(y, e)}
+            for y, e in job.get("friction", [])
+        ],
+    }
+    # ipctk may log to stdout: the result goes to the file named on the
+    # command line when one is given.
+    if len(sys.argv) > 1:
+        with open(sys.argv[1], "w") as f:
+            json.dump(out, f, allow_nan=False)
+    else:
+        json.dump(out, sys.stdout, allow_nan=False)
+
+
+if __name__ == "__main__":
+    main()
