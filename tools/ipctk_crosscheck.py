@@ -14,8 +14,8 @@ by the first argument (stdout without one):
   ipctk's own derivatives.
 - meshes: two triangle meshes (va, fa, vb, fb), dhat: ipctk's
   BarrierPotential(dhat, stiffness 1) over NormalCollisions between the two
-  meshes only (can_collide excludes pairs within one mesh); value and
-  vertex gradient.
+  meshes only (the combined mesh's minus each mesh's own); value and vertex
+  gradient.
 - ccd: linear trajectories x0 -> x1 of pt/ee stencils: ipctk's
   TightInclusionCCD hit flag and time of impact (minimum distance 0).
 - friction: IPC's smoothed f0, f1 at (y, eps).
@@ -63,18 +63,28 @@ def edges_of(faces):
     return np.array(sorted(e), dtype=np.int32)
 
 
-def mesh_pair(m):
-    va, vb = np.array(m["va"], dtype=float), np.array(m["vb"], dtype=float)
-    na = len(va)
-    v = np.asfortranarray(np.vstack([va, vb]))
-    f = np.vstack([np.array(m["fa"]), np.array(m["fb"]) + na]).astype(np.int32)
+def potential(v, f, dhat):
+    v = np.asfortranarray(v)
+    f = np.asarray(f, dtype=np.int32)
     mesh = ipctk.CollisionMesh(v, np.asfortranarray(edges_of(f)), np.asfortranarray(f))
-    mesh.can_collide = lambda i, j: (i < na) != (j < na)
     col = ipctk.NormalCollisions()
-    col.build(mesh, v, m["dhat"])
-    pot = ipctk.BarrierPotential(m["dhat"], 1.0)
-    g = pot.gradient(col, mesh, v)
-    return {"value": pot(col, mesh, v), "grad": list(g), "collisions": len(col)}
+    col.build(mesh, v, dhat)
+    pot = ipctk.BarrierPotential(dhat, 1.0)
+    return pot(col, mesh, v), np.asarray(pot.gradient(col, mesh, v)), len(col)
+
+
+def mesh_pair(m):
+    # Only pairs between the two meshes: the combined mesh's potential minus
+    # each mesh's own (no Python can_collide callback, which ipctk calls from
+    # its worker threads and which dominated and could hang).
+    va, vb = np.array(m["va"], dtype=float), np.array(m["vb"], dtype=float)
+    fa, fb = np.array(m["fa"]), np.array(m["fb"])
+    na = len(va)
+    vt, gt, nt = potential(np.vstack([va, vb]), np.vstack([fa, fb + na]), m["dhat"])
+    v1, g1, n1 = potential(va, fa, m["dhat"])
+    v2, g2, n2 = potential(vb, fb, m["dhat"])
+    g = gt - np.concatenate([g1, g2])
+    return {"value": vt - v1 - v2, "grad": list(g), "collisions": nt - n1 - n2}
 
 
 def ccd(c, tool):

@@ -81,7 +81,8 @@ pub fn additive_ccd(
         }
         t += tl;
         tl = 0.9 * (d - xi) / lp;
-        if !(tl > 0.0) {
+        // (NaN-safe: a non-positive or undefined advance is a hit here.)
+        if tl.is_nan() || tl <= 0.0 {
             return Some(t);
         }
     }

@@ -122,11 +122,11 @@ pub fn nonlinear_speed_bounds(
         }
     };
     let q1 = q + dq;
-    for l in 0..model.links.len() {
+    for (l, mesh) in meshes.iter().enumerate().take(model.links.len()) {
         // The path L → root: per joint, s (rotational speed), t (translation
         // speed counted as non-linear) and R (centre-to-vertex bound).
         let mut path: Vec<(f64, f64, f64)> = Vec::new();
-        let mut reach = meshes[l].radius;
+        let mut reach = mesh.radius;
         let mut j = l;
         loop {
             let link = &model.links[j];
@@ -278,11 +278,11 @@ fn piece(
                 .max(0.0)
                 .sqrt();
             let sep = xi + opts.keep * d0;
-            if let Some(t) = additive_ccd(kind, &p0, &dx, sep, 1.0, &opts.accd) {
-                if t < t_min {
-                    t_min = t;
-                    limited = xi > 0.1 * (d0 - sep).max(0.0);
-                }
+            if let Some(t) = additive_ccd(kind, &p0, &dx, sep, 1.0, &opts.accd)
+                && t < t_min
+            {
+                t_min = t;
+                limited = xi > 0.1 * (d0 - sep).max(0.0);
             }
         });
     }
