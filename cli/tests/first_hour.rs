@@ -6,23 +6,8 @@
 
 mod support;
 
-use std::path::{Path, PathBuf};
-use support::{python, scratch_dir, sdrs};
-
-fn pybullet_data() -> PathBuf {
-    let out = python()
-        .args([
-            "-c",
-            "import pybullet_data; print(pybullet_data.getDataPath())",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "pybullet_data missing: run tools/setup_python.sh"
-    );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
-}
+use std::path::Path;
+use support::{pybullet_data, python, scratch_dir, sdrs};
 
 /// Imports `urdf` with `--ground` and simulates 2000 steps of 1 ms; returns
 /// the trajectory (header, rows) and the summary.

@@ -8,7 +8,7 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use support::{python, root, scratch_dir, sdrs};
+use support::{pybullet_data, python, root, scratch_dir, sdrs};
 
 /// Files refused, and the reason their error must name.
 const REFUSED: &[(&str, &str)] = &[
@@ -20,21 +20,6 @@ const REFUSED: &[(&str, &str)] = &[
     // A deformable body (its geometry lives in a <deformable> element).
     ("torus_deform.urdf", "has no <link>"),
 ];
-
-fn pybullet_data() -> PathBuf {
-    let out = python()
-        .args([
-            "-c",
-            "import pybullet_data; print(pybullet_data.getDataPath())",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "pybullet_data missing: run tools/setup_python.sh"
-    );
-    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
-}
 
 fn urdfs(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();

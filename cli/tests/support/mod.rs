@@ -11,3 +11,20 @@ pub use common::*;
 pub fn sdrs() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_sdrs"))
 }
+
+/// pybullet's robot files (`pybullet_data`, installed in `.venv` by
+/// `tools/setup_python.sh`).
+pub fn pybullet_data() -> std::path::PathBuf {
+    let out = python()
+        .args([
+            "-c",
+            "import pybullet_data; print(pybullet_data.getDataPath())",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "pybullet_data missing: run tools/setup_python.sh"
+    );
+    std::path::PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+}
