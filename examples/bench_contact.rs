@@ -14,7 +14,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use nalgebra::{Matrix3, Matrix3x4, Rotation3, Unit, Vector3};
+use nalgebra::{Matrix3x4, Rotation3, Unit, Vector3};
 use parry3d_f64::math::{Pose as PPose, Vector as PVec};
 use parry3d_f64::shape::ConvexPolyhedron;
 use rand::{RngExt, SeedableRng};
@@ -23,40 +23,7 @@ use sdrs::contact::{
     ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch, HullPose,
     LaggedContact, Need, PairOutcome, contact_pair, friction_pair,
 };
-
-fn sphere_points(rng: &mut ChaCha8Rng, m: usize, r: f64) -> Vec<Vector3<f64>> {
-    (0..m)
-        .map(|_| {
-            loop {
-                let v = Vector3::new(
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                );
-                let n = v.norm();
-                if n > 1e-3 && n <= 1.0 {
-                    break v * (r / n);
-                }
-            }
-        })
-        .collect()
-}
-
-fn random_rotation(rng: &mut ChaCha8Rng) -> Matrix3<f64> {
-    let axis = Unit::new_normalize(Vector3::new(
-        rng.random_range(-1.0..1.0),
-        rng.random_range(-1.0..1.0),
-        rng.random_range(-1.0..1.0),
-    ));
-    *Rotation3::from_axis_angle(&axis, rng.random_range(-3.1..3.1)).matrix()
-}
-
-fn pose(r: &Matrix3<f64>, t: &Vector3<f64>) -> Matrix3x4<f64> {
-    let mut a = Matrix3x4::zeros();
-    a.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
-    a.set_column(3, t);
-    a
-}
+use sdrs::geometry::sampling::{pose, random_rotation, sphere_points};
 
 /// Median of `reps` timings (µs) of `f`, after a warm-up call.
 fn median_us(reps: usize, mut f: impl FnMut()) -> f64 {

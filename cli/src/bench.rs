@@ -79,21 +79,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// `robots/four_chains.yaml` in the current directory or above the binary
-/// (`target/release/sdrs` in a source tree).
+/// `robots/four_chains.yaml` in the current directory or above the binary.
 fn bundled_scene() -> Result<PathBuf> {
-    let rel = std::path::Path::new("robots/four_chains.yaml");
-    let cwd = std::env::current_dir().ok();
-    let exe = std::env::current_exe().ok();
-    cwd.iter()
-        .chain(exe.iter())
-        .flat_map(|p| p.ancestors())
-        .map(|d| d.join(rel))
-        .find(|p| p.is_file())
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "the bundled scene {} was not found from the current directory or the binary's location; pass --scene PATH",
-                rel.display()
-            )
-        })
+    crate::util::bundled("robots/four_chains.yaml")
+        .map_err(|e| anyhow::anyhow!("{e}; pass --scene PATH"))
 }

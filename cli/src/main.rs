@@ -4,6 +4,7 @@
 
 mod bench;
 mod calibrate;
+mod compare;
 mod contact_model;
 mod optimize;
 mod simulate;
@@ -34,6 +35,8 @@ enum Command {
     Import(sdrs::import::ImportArgs),
     /// Calibration: name the physical effect missing from a scene, given measured data.
     Calibrate(sdrs::calibrate::CalibrateArgs),
+    /// SDRS vs the mesh-based IPC baseline on the paper's benchmarks: report and regression gate.
+    Compare(compare::CompareArgs),
 }
 
 fn main() {
@@ -44,6 +47,7 @@ fn main() {
         Command::Optimize(a) => optimize::run(a),
         Command::Import(a) => sdrs::import::run_import(&a),
         Command::Calibrate(a) => calibrate::run(&a),
+        Command::Compare(a) => compare::run(a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");

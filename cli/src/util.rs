@@ -25,3 +25,22 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
         _ => false,
     }
 }
+
+/// A file of the source tree (`robots/...`), found from the current
+/// directory or above the binary (`target/release/sdrs` in a source tree).
+pub fn bundled(rel: &str) -> anyhow::Result<std::path::PathBuf> {
+    let rel = Path::new(rel);
+    let cwd = std::env::current_dir().ok();
+    let exe = std::env::current_exe().ok();
+    cwd.iter()
+        .chain(exe.iter())
+        .flat_map(|p| p.ancestors())
+        .map(|d| d.join(rel))
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "the bundled file {} was not found from the current directory or the binary's location",
+                rel.display()
+            )
+        })
+}

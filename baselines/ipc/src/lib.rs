@@ -19,6 +19,7 @@
 //!   `Scene::simulator_with`.
 
 pub mod barrier;
+pub mod bench;
 pub mod broad_phase;
 pub mod ccd;
 pub mod contact;

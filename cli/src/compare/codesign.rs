@@ -1,0 +1,108 @@
+//! Co-design benchmarks: each task optimized with shape + controller and
+//! with the controller alone, from the same start; convergence, final loss,
+//! wall time, the final design's minimum hull distance, and a
+//! central-difference check of one design-gradient component.
+
+use super::results::{CodesignPart, CodesignRun, FdCheck};
+use super::suite::CodesignSpec;
+use anyhow::{Context, Result};
+use indicatif::ProgressBar;
+use sdrs::optimize::{Problem, optimize};
+use sdrs::output::Summary;
+use std::path::Path;
+use std::time::Instant;
+
+pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<CodesignPart> {
+    let task = base_dir.join(&spec.task);
+    let load = |design: bool| -> Result<Problem> {
+        let mut p = Problem::load(&task, design)?;
+        if let Some(h) = spec.horizon {
+            p.horizon = h;
+        }
+        Ok(p)
+    };
+    let p = load(true)?;
+    let iters = spec.iters.unwrap_or(p.task.optimizer.iters);
+    pb.set_length(2 * (iters as u64 + 1) + u64::from(spec.fd_check));
+    let fd = if spec.fd_check && !p.design.is_empty() {
+        pb.set_message(format!("{}: gradient check", spec.name));
+        let r = fd_check(&p).with_context(|| format!("{}: gradient check", spec.name))?;
+        pb.inc(1);
+        Some(r)
+    } else {
+        None
+    };
+    let mut runs = Vec::new();
+    for (method, design) in [("co-design", true), ("controller-only", false)] {
+        let p = if design { p.clone() } else { load(false)? };
+        pb.set_message(format!("{}: {method}", spec.name));
+        let t0 = Instant::now();
+        let out = optimize(&p, iters, |_, _| pb.inc(1))
+            .with_context(|| format!("{}: {method}", spec.name))?;
+        let wall = t0.elapsed().as_secs_f64();
+        let n = out.history.len().max(1) as f64;
+        runs.push(CodesignRun {
+            method: method.into(),
+            design_variables: p.design.len(),
+            controller_variables: p.controls.len(),
+            initial_loss: out.initial_loss,
+            final_loss: out.loss,
+            history: out.history.iter().map(|h| h.best_loss).collect(),
+            wall_seconds: wall,
+            forward_seconds_mean: out.history.iter().map(|h| h.forward_seconds).sum::<f64>() / n,
+            backward_seconds_mean: out.history.iter().map(|h| h.backward_seconds).sum::<f64>() / n,
+            min_distance: min_distance(&p, &out.design, &out.controller)?,
+        });
+    }
+    Ok(CodesignPart {
+        name: spec.name.clone(),
+        task: spec.task.display().to_string(),
+        horizon: p.horizon,
+        iters,
+        runs,
+        fd,
+    })
+}
+
+/// The final design's trajectory: minimum hull distance (m).
+fn min_distance(
+    p: &Problem,
+    d: &nalgebra::DVector<f64>,
+    c: &nalgebra::DVector<f64>,
+) -> Result<Option<f64>> {
+    let mut scene = p.scene.clone();
+    scene.model = p.model.clone();
+    p.design.apply(&mut scene.model, d);
+    p.controls.apply(&mut scene.controller, c);
+    let mut sim = scene.simulator();
+    let traj = sdrs::sim::run::run(&mut sim, p.horizon, |_| {})?;
+    Ok(
+        Summary::new("compare", scene.settings.dt, &traj, 0.0, vec![])
+            .contact
+            .min_distance,
+    )
+}
+
+/// Central differences (`h = 1e-6 · max(1, |d_k|)`) of the loss along the
+/// design variable whose adjoint component is largest, at the initial design.
+fn fd_check(p: &Problem) -> Result<FdCheck> {
+    let d0 = p.design.values(&p.model);
+    let c0 = p.controls.values(&p.controller);
+    let ev = p.evaluate(&d0, &c0)?;
+    let k = ev.grad_design.iamax();
+    let h = 1e-6 * d0[k].abs().max(1.0);
+    let at = |s: f64| -> Result<f64> {
+        let mut d = d0.clone();
+        d[k] += s;
+        Ok(p.evaluate(&d, &c0)?.loss)
+    };
+    let fd = (at(h)? - at(-h)?) / (2.0 * h);
+    let adj = ev.grad_design[k];
+    Ok(FdCheck {
+        variable: p.design.vars[k].name.clone(),
+        adjoint: adj,
+        central_difference: fd,
+        h,
+        relative_error: (adj - fd).abs() / adj.abs().max(fd.abs()).max(1e-300),
+    })
+}

@@ -1,0 +1,210 @@
+//! `sdrs compare`: SDRS and the mesh-based IPC baseline side by side on the
+//! paper's benchmarks — one report (`report.html`, `report.md`,
+//! `results.json`, a CSV per table) and a regression gate (`--check`).
+//!
+//! Each benchmark's result is kept in `DIR/parts/<name>.json` together with
+//! the suite entry that produced it: re-running into the same directory
+//! skips finished benchmarks whose entry is unchanged (`--force` re-runs
+//! everything).
+
+mod chains;
+mod codesign;
+mod fcl;
+mod gate;
+mod plots;
+mod potential;
+mod report;
+mod results;
+mod suite;
+
+use crate::util::progress;
+use anyhow::{Context, Result, bail};
+use indicatif::ProgressStyle;
+use results::Results;
+use sdrs::output::write_atomic;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// `quick` (CI-sized, minutes), `paper` (the full reproduction), or a
+    /// suite YAML file (see robots/compare/quick.yaml).
+    #[arg(long, default_value = "quick")]
+    pub suite: String,
+    /// Output directory (created; re-running into it resumes).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Re-run finished benchmarks too.
+    #[arg(long)]
+    pub force: bool,
+    /// Regression gate: compare against this `results.json`; exit non-zero
+    /// naming each metric that regressed beyond its tolerance.
+    #[arg(long)]
+    pub check: Option<PathBuf>,
+    /// Tolerance YAML for `--check` (defaults documented in the README).
+    #[arg(long, requires = "check")]
+    pub tolerance: Option<PathBuf>,
+    /// No progress bars.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// A finished benchmark as stored in `parts/`.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Part<S, R> {
+    spec: S,
+    result: R,
+}
+
+/// Runs `f` unless `parts/<name>.json` holds a result for the same `spec`.
+fn resumable<S, R>(
+    dir: &Path,
+    name: &str,
+    spec: &S,
+    force: bool,
+    quiet: bool,
+    f: impl FnOnce(&indicatif::ProgressBar) -> Result<R>,
+) -> Result<R>
+where
+    S: Serialize + DeserializeOwned,
+    R: Serialize + DeserializeOwned,
+{
+    let file = dir.join("parts").join(format!("{name}.json"));
+    if !force
+        && let Ok(text) = std::fs::read_to_string(&file)
+        && let Ok(p) = serde_json::from_str::<Part<serde_json::Value, R>>(&text)
+        && p.spec == serde_json::to_value(spec)?
+    {
+        eprintln!("{name}: finished earlier, kept (--force re-runs it)");
+        return Ok(p.result);
+    }
+    let pb = progress(1, quiet);
+    pb.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} {name:<28} [{{elapsed_precise}}] {{bar:30}} {{pos}}/{{len}} {{msg}}"
+        ))
+        .expect("static template"),
+    );
+    let r = f(&pb)?;
+    pb.finish_with_message("done");
+    let part = Part { spec, result: r };
+    write_atomic(&file, serde_json::to_string_pretty(&part)?.as_bytes())?;
+    Ok(part.result)
+}
+
+pub fn run(a: CompareArgs) -> Result<()> {
+    if cfg!(debug_assertions) {
+        eprintln!("warning: debug build; timings are meaningless (use `cargo run --release`)");
+    }
+    let (suite, base) = suite::Suite::load(&a.suite)?;
+    let tol = match &a.tolerance {
+        Some(t) => gate::Tolerances::load(t)?,
+        None => gate::Tolerances::default(),
+    };
+    let baseline: Option<Results> = match &a.check {
+        Some(p) => Some(
+            serde_json::from_str(
+                &std::fs::read_to_string(p)
+                    .with_context(|| format!("{}: cannot read the baseline", p.display()))?,
+            )
+            .with_context(|| format!("{}: not a results.json of `sdrs compare`", p.display()))?,
+        ),
+        None => None,
+    };
+    if a.out.is_file() {
+        bail!("{}: the output must be a directory", a.out.display());
+    }
+    if a.out.exists()
+        && !a.out.join("parts").is_dir()
+        && std::fs::read_dir(&a.out)
+            .map(|mut d| d.next().is_some())
+            .unwrap_or(true)
+    {
+        bail!(
+            "{}: the directory is not empty and holds no earlier `sdrs compare` run; choose another --out",
+            a.out.display()
+        );
+    }
+    let work = a.out.join("work");
+    std::fs::create_dir_all(&work)
+        .with_context(|| format!("{}: cannot create the output directory", a.out.display()))?;
+    let mut r = Results {
+        suite: suite.suite.clone(),
+        threads: rayon::current_num_threads(),
+        ..Default::default()
+    };
+    if let Some(s) = &suite.potential {
+        r.potential = Some(resumable(&a.out, "potential", s, a.force, a.quiet, |pb| {
+            potential::run(s, &work, pb)
+        })?);
+    } else {
+        r.not_measured
+            .push("contact potential cost (not in this suite)".into());
+    }
+    if let Some(s) = &suite.chains {
+        r.chains = Some(resumable(&a.out, "chains", s, a.force, a.quiet, |pb| {
+            chains::run(s, &base, &work, pb)
+        })?);
+    } else {
+        r.not_measured
+            .push("four rotating chains (not in this suite)".into());
+    }
+    for s in &suite.codesign {
+        r.codesign.push(resumable(
+            &a.out,
+            &format!("codesign_{}", s.name),
+            s,
+            a.force,
+            a.quiet,
+            |pb| codesign::run(s, &base, pb),
+        )?);
+    }
+    r.not_measured
+        .push("mesh baseline with cage deformation (Xu et al. 2021): not built yet".into());
+    write_atomic(
+        &a.out.join("results.json"),
+        serde_json::to_string_pretty(&r)?.as_bytes(),
+    )?;
+    let verdicts = baseline.as_ref().map(|b| gate::check(b, &r, &tol));
+    if let Some(v) = &verdicts {
+        write_atomic(
+            &a.out.join("gate.json"),
+            serde_json::to_string_pretty(v)?.as_bytes(),
+        )?;
+    }
+    report::write(&a.out, &r, verdicts.as_deref())?;
+    eprintln!(
+        "report: {} ({} and results.json beside it)",
+        a.out.join("report.html").display(),
+        "report.md"
+    );
+    if let Some(v) = verdicts {
+        let bad: Vec<String> = v
+            .iter()
+            .filter(|v| v.regressed)
+            .map(|v| {
+                format!(
+                    "{}: baseline {}, now {}, limit {} ({})",
+                    v.metric,
+                    v.baseline.map_or("—".into(), |x| format!("{x:.4e}")),
+                    v.now.map_or("missing".into(), |x| format!("{x:.4e}")),
+                    v.limit.map_or("—".into(), |x| format!("{x:.4e}")),
+                    v.note
+                )
+            })
+            .collect();
+        if !bad.is_empty() {
+            bail!(
+                "regression gate failed: {} metric(s) regressed:\n  {}",
+                bad.len(),
+                bad.join("\n  ")
+            );
+        }
+        eprintln!(
+            "regression gate passed: {} metrics within tolerance",
+            v.len()
+        );
+    }
+    Ok(())
+}

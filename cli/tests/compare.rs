@@ -1,0 +1,280 @@
+//! End-to-end: `sdrs compare --suite quick` produces the report from the
+//! run (not constants), the report renders in headless Chromium with every
+//! plot and no console error, the regression gate passes on an unchanged
+//! run and fails — naming the metric — on a degraded one, and a re-run
+//! resumes finished benchmarks.
+
+mod support;
+
+use std::path::Path;
+use std::process::Command;
+use support::{root, scratch_dir, sdrs};
+
+fn run_compare(args: &[&str], out: &Path) -> std::process::Output {
+    sdrs()
+        .arg("compare")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("-q")
+        .output()
+        .unwrap()
+}
+
+fn json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+/// Headless Chromium: the DOM after scripts ran, and its console log.
+fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> (String, String) {
+    let out = Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--log-level=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("chromium is not installed: run tools/setup_system.sh");
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn quick_suite_report_browser_gate_and_resume() {
+    let dir = scratch_dir("compare");
+    let out = dir.join("quick");
+    let baseline = root().join("robots/compare/quick_baseline.json");
+    let o = run_compare(
+        &["--suite", "quick", "--check", baseline.to_str().unwrap()],
+        &out,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success(),
+        "quick suite or its gate failed:\n{stderr}"
+    );
+    assert!(stderr.contains("regression gate passed"), "{stderr}");
+    for f in ["report.html", "report.md", "results.json", "gate.json"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let r = json(&out.join("results.json"));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+
+    // Tables are filled from this run: every potential row's figures, the
+    // chain rows and the co-design losses appear as measured.
+    let pot = r["potential"]["rows"].as_array().unwrap();
+    assert_eq!(pot.len(), 4);
+    for row in pot {
+        let s = row["sdrs_us"].as_f64().unwrap();
+        let i = row["ipc_us"].as_f64().unwrap();
+        assert!(s > 0.0 && i > 0.0);
+        assert!(
+            md.contains(&format!("{:.4}", s)),
+            "SDRS µs {s} not in the report"
+        );
+        // SDRS's potential is cheaper than the mesh-based one at every size
+        // (a ratio measured in the same run).
+        assert!(row["ratio"].as_f64().unwrap() > 1.0, "{row}");
+    }
+    let chains = r["chains"]["rows"].as_array().unwrap();
+    assert_eq!(chains.len(), 6, "2 models × 3 chain lengths");
+    let mut contact_runs = 0;
+    for c in chains {
+        let fcl = c["fcl_min_distance"].as_f64().expect("python-fcl ran");
+        assert!(fcl > 0.0, "interpenetration in {c}");
+        if let Some(ours) = c["min_distance"].as_f64() {
+            contact_runs += 1;
+            assert!(ours > 0.0);
+            assert!((ours - fcl).abs() < 1e-6, "GJK {ours} vs FCL {fcl}");
+        }
+        assert!(md.contains(&format!("{:.4}", c["ms_per_step"].as_f64().unwrap())));
+    }
+    assert!(
+        contact_runs >= 3,
+        "the chains barely touched: {contact_runs} runs in contact"
+    );
+    let cd = &r["codesign"][0];
+    assert_eq!(cd["name"], "chain_reach");
+    let runs = cd["runs"].as_array().unwrap();
+    let loss = |m: &str| {
+        runs.iter().find(|x| x["method"] == m).unwrap()["final_loss"]
+            .as_f64()
+            .unwrap()
+    };
+    // The paper's claim on this benchmark: co-design beats controller-only.
+    assert!(loss("co-design") < 0.5 * loss("controller-only"));
+    assert!(
+        md.contains(&format!("{:.4}", loss("co-design")))
+            || md.contains(&format!("{:.3e}", loss("co-design")))
+    );
+    assert!(
+        cd["fd"]["relative_error"].as_f64().unwrap() < 1e-6,
+        "{}",
+        cd["fd"]
+    );
+
+    // The browser: every plot drawn, no console message, a screenshot.
+    let page = out.join("report.html");
+    let (dom, log) = chromium(&page, &dir.join("chrome1"), &["--dump-dom"]);
+    let plots = out.join("plots").read_dir().unwrap().count();
+    assert!(plots >= 3);
+    assert!(
+        dom.contains(&format!("plots rendered: {plots} of {plots}")),
+        "render check failed: {}",
+        dom.split("render-check")
+            .nth(1)
+            .unwrap_or("(no check element)")
+    );
+    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:?}");
+    let shot = dir.join("report.png");
+    chromium(
+        &page,
+        &dir.join("chrome2"),
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1200,2400",
+        ],
+    );
+    let png = std::fs::read(&shot).expect("no screenshot");
+    assert_eq!(&png[1..4], b"PNG");
+    assert!(
+        png.len() > 50_000,
+        "a near-empty screenshot ({} bytes)",
+        png.len()
+    );
+
+    // Resume: nothing re-runs.
+    let t0 = std::time::Instant::now();
+    let o = run_compare(&["--suite", "quick"], &out);
+    assert!(o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("finished earlier, kept"), "{stderr}");
+    assert!(
+        t0.elapsed().as_secs_f64() < 10.0,
+        "resume re-ran benchmarks"
+    );
+    assert_eq!(json(&out.join("results.json")), r);
+
+    // A degraded run: the same suite with the co-design stopped after one
+    // iteration (a worse design). Its other benchmarks resume from the
+    // parts of the run above (same suite entries, same relative paths).
+    let tree = dir.join("tree");
+    for (from, to) in [
+        ("robots/four_chains.yaml", "four_chains.yaml"),
+        ("robots/chain_reach/task.yaml", "chain_reach/task.yaml"),
+        ("robots/chain_reach/scene.yaml", "chain_reach/scene.yaml"),
+    ] {
+        std::fs::create_dir_all(tree.join(to).parent().unwrap()).unwrap();
+        std::fs::copy(root().join(from), tree.join(to)).unwrap();
+    }
+    std::fs::create_dir_all(tree.join("compare")).unwrap();
+    let quick = std::fs::read_to_string(root().join("robots/compare/quick.yaml")).unwrap();
+    assert!(quick.contains("iters: 15"));
+    let degraded = tree.join("compare/degraded.yaml");
+    std::fs::write(&degraded, quick.replace("iters: 15", "iters: 1")).unwrap();
+    let out2 = dir.join("degraded");
+    std::fs::create_dir_all(out2.join("parts")).unwrap();
+    for p in ["potential.json", "chains.json"] {
+        std::fs::copy(out.join("parts").join(p), out2.join("parts").join(p)).unwrap();
+    }
+    let o = run_compare(
+        &[
+            "--suite",
+            degraded.to_str().unwrap(),
+            "--check",
+            baseline.to_str().unwrap(),
+        ],
+        &out2,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "the gate passed a worse design:\n{stderr}"
+    );
+    assert!(
+        stderr.contains("codesign.chain_reach.co-design.final_loss"),
+        "{stderr}"
+    );
+    let gate = json(&out2.join("gate.json"));
+    let bad: Vec<&str> = gate
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|v| v["regressed"] == true)
+        .map(|v| v["metric"].as_str().unwrap())
+        .collect();
+    assert!(
+        bad.contains(&"codesign.chain_reach.co-design.final_loss"),
+        "{bad:?}"
+    );
+    // Only co-design metrics can have moved (the rest resumed).
+    assert!(
+        bad.iter().all(|m| m.starts_with("codesign.chain_reach")),
+        "{bad:?}"
+    );
+    let html = std::fs::read_to_string(out2.join("report.html")).unwrap();
+    assert!(html.contains("REGRESSED"));
+}
+
+#[test]
+fn bad_suite_and_tolerance_files_get_clear_errors() {
+    let dir = scratch_dir("compare_bad");
+    let bad = dir.join("bad.yaml");
+    std::fs::write(&bad, "suite: x\nchains: {links: [], steps: 10}\n").unwrap();
+    let o = run_compare(&["--suite", bad.to_str().unwrap()], &dir.join("o1"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("bad.yaml") && e.contains("chains"), "{e}");
+    let o = run_compare(
+        &["--suite", dir.join("missing.yaml").to_str().unwrap()],
+        &dir.join("o2"),
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("missing.yaml"), "{e}");
+    // A non-empty directory that is not a compare run is not written into.
+    let other = dir.join("mine");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "keep").unwrap();
+    let o = run_compare(&["--suite", "quick"], &other);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("not empty"), "{e}");
+    assert_eq!(
+        std::fs::read_to_string(other.join("notes.txt")).unwrap(),
+        "keep"
+    );
+    // A malformed tolerance file names itself.
+    let tol = dir.join("tol.yaml");
+    std::fs::write(&tol, "loss: {relative: -1}\n").unwrap();
+    let o = run_compare(
+        &[
+            "--suite",
+            "quick",
+            "--check",
+            root()
+                .join("robots/compare/quick_baseline.json")
+                .to_str()
+                .unwrap(),
+            "--tolerance",
+            tol.to_str().unwrap(),
+        ],
+        &dir.join("o3"),
+    );
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("tol.yaml") && e.contains("≥ 0"),
+        "{e}"
+    );
+}
