@@ -252,6 +252,144 @@ pub fn time_case(
     })
 }
 
+/// One measured friction case.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct FrictionTiming {
+    pub vertices: usize,
+    /// Median µs of one SDRS `U_f` value + gradient + Hessian.
+    pub sdrs_us: f64,
+    /// Median µs of one IPC lagged-friction value + gradient + Hessian over
+    /// the pair's lagged stencils.
+    pub ipc_us: f64,
+    /// IPC lagged contacts (stencils inside `d̂` at step `t`).
+    pub ipc_contacts: usize,
+    pub sdrs_value: f64,
+    pub ipc_value: f64,
+}
+
+/// Times the friction potentials of a case: both models lag their contact
+/// data at the case's poses (step `t`, not timed: once per time step in a
+/// simulation), then hull `b` slides 1 mm along a tangent of the SDRS
+/// contact normal and turns 0.01 rad about it (step `t+1`), where the
+/// value, gradient and Hessian are timed, interleaved. `μ = 0.5`,
+/// `Δt = 0.01 s`, unit stiffness; IPC's `ε_v` is SDRS's `ε_v` (m/s).
+pub fn time_friction_case(
+    case: &PotentialCase,
+    params: &ContactParams,
+    reps: usize,
+) -> Result<FrictionTiming, BenchError> {
+    use crate::friction::{IpcFrictionParams, evaluate_pair_friction, lag_pair};
+    use crate::pair::PairHessian;
+    use sdrs::contact::{
+        FrictionNeed, FrictionParams, FrictionScratch, LaggedContact, friction_pair,
+    };
+    let m = case.vertices;
+    let ha = HullPose {
+        pose: &case.pose[0],
+        x_local: &case.mesh[0].x_local,
+    };
+    let hb = HullPose {
+        pose: &case.pose[1],
+        x_local: &case.mesh[1].x_local,
+    };
+    let mut sc = ContactScratch::new();
+    let pair = match contact_pair(ha, hb, params, None, Need::Gradient, &mut sc) {
+        Ok(PairOutcome::Separated(p)) => p,
+        other => {
+            return Err(BenchError::NotInContact {
+                vertices: m,
+                outcome: format!("{other:?}"),
+            });
+        }
+    };
+    let fp = FrictionParams::new(0.5, 0.01);
+    let lag = LaggedContact::from_contact(&pair, ha, hb, params, 1.0);
+    // Step t+1: slide along the first tangent and turn about the normal.
+    let n = lag.normal;
+    let t = lag.basis.column(0).into_owned();
+    let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(n), 0.01);
+    let mut pb_next = case.pose[1];
+    let r_next = turn.matrix() * case.pose[1].fixed_view::<3, 3>(0, 0);
+    pb_next.fixed_view_mut::<3, 3>(0, 0).copy_from(&r_next);
+    let c_next = case.pose[1].column(3) + 1e-3 * t;
+    pb_next.set_column(3, &c_next);
+    let hb_next = HullPose {
+        pose: &pb_next,
+        x_local: &case.mesh[1].x_local,
+    };
+    let mut fs = FrictionScratch::new();
+    let sdrs_eval = |fs: &mut FrictionScratch| {
+        friction_pair(&lag.frame(), ha, hb_next, &fp, FrictionNeed::Hessian, fs)
+    };
+    let first = sdrs_eval(&mut fs).map_err(|e| BenchError::Contact {
+        vertices: m,
+        msg: e.to_string(),
+    })?;
+    // IPC: lagged stencils at step t, evaluated at t+1.
+    let ip = IpcFrictionParams {
+        dhat: case.dhat,
+        kappa: 1.0,
+        mu: fp.mu,
+        eps_v: fp.eps_velocity,
+        dt: fp.dt,
+    };
+    let (mut ba, mut bb, mut c) = (
+        PrimitiveBoxes::default(),
+        PrimitiveBoxes::default(),
+        Candidates::default(),
+    );
+    ba.build(&case.mesh[0], &case.world[0], None, 0.5 * case.dhat);
+    bb.build(&case.mesh[1], &case.world[1], None, 0.5 * case.dhat);
+    candidates(&ba, &bb, &mut c);
+    let mut lagged = Vec::new();
+    lag_pair(
+        &PairGeometry {
+            mesh: [&case.mesh[0], &case.mesh[1]],
+            world: [&case.world[0], &case.world[1]],
+        },
+        &c,
+        &ip,
+        &mut lagged,
+    );
+    let world_next_b = world(&case.mesh[1], &pb_next);
+    let mut hess = Box::new(PairHessian::zeros());
+    let ipc_eval = |hess: &mut PairHessian| {
+        let (mut ga, mut gb) = (Matrix3x4::zeros(), Matrix3x4::zeros());
+        hess.fill(0.0);
+        let v = evaluate_pair_friction(
+            lagged.iter().map(|(i, s)| (i, s)),
+            [&case.mesh[0], &case.mesh[1]],
+            [&case.world[0], &case.world[1]],
+            [&case.world[0], &world_next_b],
+            ip.eps_v * ip.dt,
+            true,
+            (&mut ga, &mut gb),
+            Some(hess),
+        );
+        black_box((ga, gb));
+        v
+    };
+    let ipc_value = ipc_eval(&mut hess);
+    let half = reps.div_ceil(2);
+    let (mut ts, mut ti) = (Vec::new(), Vec::new());
+    for _ in 0..2 {
+        ts.push(median_us(half, || {
+            black_box(sdrs_eval(&mut fs).ok());
+        }));
+        ti.push(median_us(half, || {
+            black_box(ipc_eval(&mut hess));
+        }));
+    }
+    Ok(FrictionTiming {
+        vertices: m,
+        sdrs_us: ts.iter().copied().fold(f64::INFINITY, f64::min),
+        ipc_us: ti.iter().copied().fold(f64::INFINITY, f64::min),
+        ipc_contacts: lagged.len(),
+        sdrs_value: first.value,
+        ipc_value,
+    })
+}
+
 /// Median over the values of one vertex count.
 pub fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -302,6 +440,12 @@ mod tests {
             assert!(t.sdrs_value > 0.0 && t.ipc_value > 0.0, "{t:?}");
             assert!(t.active >= 1 && t.candidates >= t.active, "{t:?}");
             assert!(t.sdrs_us > 0.0 && t.ipc_us > 0.0);
+        }
+        // Friction: both models see a sliding contact with positive dissipation.
+        for c in &cases {
+            let f = time_friction_case(c, &params, 3).unwrap();
+            assert!(f.sdrs_value > 0.0 && f.ipc_value > 0.0, "{f:?}");
+            assert!(f.ipc_contacts >= 1);
         }
         // Seeded: the same cases again.
         let again = potential_cases(&[8, 64], 2, 3, &params).unwrap();

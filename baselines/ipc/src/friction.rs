@@ -35,7 +35,7 @@ pub struct IpcFrictionParams {
 #[derive(Clone, Debug)]
 struct Contact {
     pair: usize,
-    ids: [(usize, u32); 4],
+    ids: StencilIds,
     stencil: FrictionStencil,
 }
 
@@ -88,6 +88,72 @@ impl IpcFriction {
     }
 }
 
+/// A stencil's `(side, vertex)` ids.
+pub type StencilIds = [(usize, u32); 4];
+
+/// IPC's lagged friction contacts of one link pair: every candidate stencil
+/// with `0 < d < d̂²` at the step-`t` world vertices `geo.world`, with its
+/// closest-point weights, tangent basis and `μ λ` (`λ = κ |∂b/∂d| · 2√d`).
+pub fn lag_pair(
+    geo: &PairGeometry<'_>,
+    cand: &Candidates,
+    p: &IpcFrictionParams,
+    out: &mut Vec<(StencilIds, FrictionStencil)>,
+) {
+    let dhat2 = p.dhat * p.dhat;
+    geo.for_each_stencil(cand, |kind, ids| {
+        let x = ids.map(|(s, i)| {
+            let v = geo.world[s][i as usize];
+            [v.x, v.y, v.z]
+        });
+        let (d, ty) = stencil_distance(kind, &x);
+        if !(d > 0.0 && d < dhat2) {
+            return;
+        }
+        let w = closest_weights(&x, ty);
+        let v: Vector3<f64> = (0..4).map(|j| Vector3::from(x[j]) * w[j]).sum();
+        let lambda = p.kappa * barrier_derivative(d, dhat2).abs() * 2.0 * d.sqrt();
+        out.push((
+            ids,
+            FrictionStencil {
+                w,
+                basis: tangent_basis(&(v / v.norm())),
+                mu_lambda: p.mu * lambda,
+            },
+        ));
+    });
+}
+
+/// `Σ_c D_c` over the lagged contacts of one link pair at the step-`t+1`
+/// world vertices `world` (step-`t` ones in `world_prev`), `ε = ε_v Δt`;
+/// with `derivs`, adds `∂D/∂A_a`, `∂D/∂A_b` into `grad` and, when given, the
+/// 24×24 pose-space Hessian into `hess`. Returns the value (J).
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_pair_friction<'c>(
+    contacts: impl Iterator<Item = (&'c StencilIds, &'c FrictionStencil)>,
+    meshes: [&LinkMesh; 2],
+    world_prev: [&Vec<Vector3<f64>>; 2],
+    world: [&Vec<Vector3<f64>>; 2],
+    eps: f64,
+    derivs: bool,
+    grad: (&mut Matrix3x4<f64>, &mut Matrix3x4<f64>),
+    mut hess: Option<&mut PairHessian>,
+) -> f64 {
+    let (ga, gb) = grad;
+    let mut value = 0.0;
+    for (ids, stencil) in contacts {
+        let dx = ids.map(|(s, i)| world[s][i as usize] - world_prev[s][i as usize]);
+        let (val, g, hs) = stencil.evaluate(&dx, eps, derivs);
+        value += val;
+        if derivs {
+            let loc = ids.map(|(s, i)| meshes[s].x_local[i as usize].push(1.0));
+            let side = ids.map(|(s, _)| s);
+            crate::pair::chain_to_poses(&g, &hs, &side, &loc, ga, gb, hess.as_deref_mut());
+        }
+    }
+    value
+}
+
 fn transform(meshes: &[LinkMesh], pose: &[sdrs::math::Pose], out: &mut [Vec<Vector3<f64>>]) {
     for (i, m) in meshes.iter().enumerate() {
         for (w, x) in out[i].iter_mut().zip(&m.x_local) {
@@ -104,7 +170,6 @@ impl Energy for IpcFriction {
     fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {
         transform(&self.meshes, ctx.poses_prev, &mut self.world_prev);
         let p = &self.params;
-        let dhat2 = p.dhat * p.dhat;
         let mut boxes = vec![PrimitiveBoxes::default(); self.meshes.len()];
         for (i, m) in self.meshes.iter().enumerate() {
             if !m.is_empty() {
@@ -113,34 +178,21 @@ impl Energy for IpcFriction {
         }
         self.contacts.clear();
         let mut cand = Candidates::default();
+        let mut lagged = Vec::new();
         for (k, &(a, b)) in self.link_pairs.iter().enumerate() {
             candidates(&boxes[a], &boxes[b], &mut cand);
             let geo = PairGeometry {
                 mesh: [&self.meshes[a], &self.meshes[b]],
                 world: [&self.world_prev[a], &self.world_prev[b]],
             };
-            geo.for_each_stencil(&cand, |kind, ids| {
-                let x = ids.map(|(s, i)| {
-                    let v = geo.world[s][i as usize];
-                    [v.x, v.y, v.z]
-                });
-                let (d, ty) = stencil_distance(kind, &x);
-                if !(d > 0.0 && d < dhat2) {
-                    return;
-                }
-                let w = closest_weights(&x, ty);
-                let v: Vector3<f64> = (0..4).map(|j| Vector3::from(x[j]) * w[j]).sum();
-                let lambda = p.kappa * barrier_derivative(d, dhat2).abs() * 2.0 * d.sqrt();
-                self.contacts.push(Contact {
+            lagged.clear();
+            lag_pair(&geo, &cand, p, &mut lagged);
+            self.contacts
+                .extend(lagged.drain(..).map(|(ids, stencil)| Contact {
                     pair: k,
                     ids,
-                    stencil: FrictionStencil {
-                        w,
-                        basis: tangent_basis(&(v / v.norm())),
-                        mu_lambda: p.mu * lambda,
-                    },
-                });
-            });
+                    stencil,
+                }));
         }
         Ok(())
     }
@@ -166,31 +218,22 @@ impl Energy for IpcFriction {
             let (la, lb) = self.link_pairs[pair];
             let (mut ga, mut gb) = (Matrix3x4::zeros(), Matrix3x4::zeros());
             let mut h = (need >= Need::Hessian).then(|| Box::new(PairHessian::zeros()));
+            let start = k;
             while k < self.contacts.len() && self.contacts[k].pair == pair {
-                let c = &self.contacts[k];
-                let link = |s: usize| if s == 0 { la } else { lb };
-                let dx = c.ids.map(|(s, i)| {
-                    self.world[link(s)][i as usize] - self.world_prev[link(s)][i as usize]
-                });
-                let (val, g, hs) = c.stencil.evaluate(&dx, eps, derivs);
-                acc.value += val;
-                if derivs {
-                    let loc = c
-                        .ids
-                        .map(|(s, i)| self.meshes[link(s)].x_local[i as usize].push(1.0));
-                    let side = c.ids.map(|(s, _)| s);
-                    crate::pair::chain_to_poses(
-                        &g,
-                        &hs,
-                        &side,
-                        &loc,
-                        &mut ga,
-                        &mut gb,
-                        h.as_deref_mut(),
-                    );
-                }
                 k += 1;
             }
+            let geo_prev = [&self.world_prev[la], &self.world_prev[lb]];
+            let geo = [&self.world[la], &self.world[lb]];
+            acc.value += evaluate_pair_friction(
+                self.contacts[start..k].iter().map(|c| (&c.ids, &c.stencil)),
+                [&self.meshes[la], &self.meshes[lb]],
+                geo_prev,
+                geo,
+                eps,
+                derivs,
+                (&mut ga, &mut gb),
+                h.as_deref_mut(),
+            );
             if derivs {
                 scatter_pair(
                     ctx.model,

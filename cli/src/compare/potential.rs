@@ -2,12 +2,12 @@
 //! baseline (Rust, same process, interleaved) vs ipc-toolkit (Python) when
 //! it is installed in the project's `.venv`.
 
-use super::results::{PotentialPart, PotentialRow};
+use super::results::{FrictionRow, PotentialPart, PotentialRow};
 use super::suite::PotentialSpec;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use sdrs::contact::ContactParams;
-use sdrs_ipc::bench::{cases_json, median, potential_cases, time_case};
+use sdrs_ipc::bench::{cases_json, median, potential_cases, time_case, time_friction_case};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
@@ -16,7 +16,7 @@ pub fn run(spec: &PotentialSpec, work: &Path, pb: &ProgressBar) -> Result<Potent
     let t0 = Instant::now();
     let params = ContactParams::default();
     let cases = potential_cases(&spec.sizes, spec.pairs, spec.seed, &params)?;
-    pb.set_length(cases.len() as u64 + u64::from(spec.ipctk));
+    pb.set_length(2 * cases.len() as u64 + u64::from(spec.ipctk));
     let mut rows = Vec::new();
     for &m in &spec.sizes {
         let (mut ts, mut ti, mut r, mut nc, mut na) = (vec![], vec![], vec![], vec![], vec![]);
@@ -38,6 +38,26 @@ pub fn run(spec: &PotentialSpec, work: &Path, pb: &ProgressBar) -> Result<Potent
             active: median(&mut na),
         });
     }
+    let mut friction = Vec::new();
+    pb.set_message("friction");
+    for &m in &spec.sizes {
+        let (mut ts, mut ti, mut r, mut nc) = (vec![], vec![], vec![], vec![]);
+        for c in cases.iter().filter(|c| c.vertices == m) {
+            let t = time_friction_case(c, &params, spec.reps)?;
+            ts.push(t.sdrs_us);
+            ti.push(t.ipc_us);
+            r.push(t.ipc_us / t.sdrs_us);
+            nc.push(t.ipc_contacts as f64);
+            pb.inc(1);
+        }
+        friction.push(FrictionRow {
+            vertices: m,
+            sdrs_us: median(&mut ts),
+            ipc_us: median(&mut ti),
+            ratio: median(&mut r),
+            ipc_contacts: median(&mut nc),
+        });
+    }
     let (ipctk, ipctk_note) = if spec.ipctk {
         pb.set_message("ipc-toolkit");
         let r = ipctk(&cases_json(&cases), spec.reps, work);
@@ -51,6 +71,7 @@ pub fn run(spec: &PotentialSpec, work: &Path, pb: &ProgressBar) -> Result<Potent
     };
     Ok(PotentialPart {
         rows,
+        friction,
         ipctk,
         ipctk_note,
         wall_seconds: t0.elapsed().as_secs_f64(),

@@ -23,6 +23,9 @@ pub struct Results {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PotentialPart {
     pub rows: Vec<PotentialRow>,
+    /// The friction potentials on the same pairs, sliding.
+    #[serde(default)]
+    pub friction: Vec<FrictionRow>,
     /// ipc-toolkit's timing per vertex count, when it ran.
     pub ipctk: Option<BTreeMap<usize, f64>>,
     /// Why ipctk was not timed (missing tool, error).
@@ -40,6 +43,17 @@ pub struct PotentialRow {
     pub ratio: f64,
     pub candidates: f64,
     pub active: f64,
+}
+
+/// Friction potential cost at one vertex count: medians over the pairs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FrictionRow {
+    pub vertices: usize,
+    pub sdrs_us: f64,
+    pub ipc_us: f64,
+    pub ratio: f64,
+    /// IPC lagged stencils of the pair.
+    pub ipc_contacts: f64,
 }
 
 /// Four rotating chains (paper Fig. "bench-time", Table "performance").
@@ -163,6 +177,14 @@ impl Results {
             for r in &p.rows {
                 put(
                     format!("potential.{}.ipc_over_sdrs", r.vertices),
+                    r.ratio,
+                    Better::Higher,
+                    Kind::SpeedRatio,
+                );
+            }
+            for r in &p.friction {
+                put(
+                    format!("friction.{}.ipc_over_sdrs", r.vertices),
                     r.ratio,
                     Better::Higher,
                     Kind::SpeedRatio,
