@@ -140,6 +140,25 @@ pub struct EnergyStats {
     pub total_final: f64,
     /// `max_t |E_t − E_first|`, with `E = kinetic + potential`.
     pub max_abs_drift: f64,
+    /// Where the energy went, when the run computed each term's work
+    /// (`sdrs simulate --energy-balance`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub balance: Option<EnergyBalance>,
+}
+
+/// The energy balance from the first reported step to the last (J):
+/// `change = controller + friction + contact + other − numerical_dissipation`
+/// (see [`crate::sim::StepWork`]). `numerical_dissipation` is the residual:
+/// the implicit scheme's own damping, ≥ 0 and first order in Δt.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnergyBalance {
+    /// `E_final − E_first`, `E` = kinetic + gravity potential.
+    pub change: f64,
+    pub controller_work: f64,
+    pub friction_work: f64,
+    pub contact_work: f64,
+    pub other_work: f64,
+    pub numerical_dissipation: f64,
 }
 
 /// Linear-momentum diagnostics (kg m/s).
@@ -199,7 +218,7 @@ impl Summary {
             ),
             (
                 "energy.*",
-                "J (kinetic + gravity potential of the lumped vertex masses; driven, frictional or contact scenes exchange energy with the controller, friction and barrier, so a change is not an error)",
+                "J (kinetic + gravity potential of the lumped vertex masses; driven, frictional or contact scenes exchange energy with the controller, friction and barrier, so a change is not an error: `energy.balance` (with --energy-balance) says where it went)",
             ),
             ("linear_momentum.*", "kg m/s"),
             ("contact.min_distance", "m"),
@@ -235,6 +254,26 @@ impl Summary {
             .unwrap_or_default();
         let energy = d.first().zip(d.last()).map(|(a, b)| {
             let e0 = a.kinetic + a.potential;
+            // Work of steps 2…H: the energy of step 1 is the first reported.
+            let works: Option<Vec<crate::sim::StepWork>> = d[1..].iter().map(|x| x.work).collect();
+            let balance = works.filter(|_| d.len() > 1).map(|w| {
+                let sum = |f: fn(&crate::sim::StepWork) -> f64| w.iter().map(f).sum::<f64>();
+                let (c, f, k, o) = (
+                    sum(|x| x.controller),
+                    sum(|x| x.friction),
+                    sum(|x| x.contact),
+                    sum(|x| x.other),
+                );
+                let change = b.kinetic + b.potential - e0;
+                EnergyBalance {
+                    change,
+                    controller_work: c,
+                    friction_work: f,
+                    contact_work: k,
+                    other_work: o,
+                    numerical_dissipation: c + f + k + o - change,
+                }
+            });
             EnergyStats {
                 kinetic_first: a.kinetic,
                 potential_first: a.potential,
@@ -246,6 +285,7 @@ impl Summary {
                     .iter()
                     .map(|x| (x.kinetic + x.potential - e0).abs())
                     .fold(0.0, f64::max),
+                balance,
             }
         });
         let linear_momentum = d.first().zip(d.last()).map(|(a, b)| MomentumStats {

@@ -68,6 +68,32 @@ pub struct StepDiagnostics {
     /// Smallest GJK distance among broad-phase candidate pairs at `θ^{t+1}`
     /// (m; `+∞` when no pair is a candidate).
     pub min_distance: f64,
+    /// Work of each non-conservative or contact term over the step, when
+    /// [`Simulator::energy_balance`] is on (see [`StepWork`]).
+    pub work: Option<StepWork>,
+}
+
+/// Work done on the system over one step by the terms other than inertia
+/// and gravity (J): `W_e = −Σ_i ⟨∂E_e/∂A_i, A_i^{t+1} − A_i^t⟩ − ∂E_e/∂θ·Δθ`,
+/// each term's gradient taken at `θ^{t+1}` (the point where the step's
+/// optimality condition holds, so `Σ_e W_e + W_gravity` is the work the
+/// implicit scheme's momentum balance sees). Read off Newton's last
+/// gradient evaluation (at the accepted `θ^{t+1}`): no extra evaluation,
+/// and the trajectory is the same with or without it. With `E = kinetic + gravity
+/// potential`, `ΔE = W_controller + W_friction + W_contact + W_other −
+/// D_num`, where `D_num ≥ 0` is the integrator's own (numerical)
+/// dissipation, first order in Δt; [`crate::output::Summary`] reports it as
+/// the residual of the balance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct StepWork {
+    /// PD controller (`pd`): positive when it drives the robot.
+    pub controller: f64,
+    /// Friction (`friction`, `ipc_friction`): ≤ 0 up to O(Δt²).
+    pub friction: f64,
+    /// Contact barrier (`contact`, `ipc_contact`): minus its potential's change.
+    pub contact: f64,
+    /// Every other term (calibration effects such as damping).
+    pub other: f64,
 }
 
 /// A simulator: model, energy terms, controller and state.
@@ -78,6 +104,10 @@ pub struct Simulator {
     pub energies: Vec<Box<dyn Energy>>,
     pub state: SimState,
     pub timers: StageTimers,
+    /// Also record each term's work per step ([`StepWork`], from Newton's
+    /// last gradient evaluation: a few dot products per term; default off).
+    /// It does not change the trajectory.
+    pub energy_balance: bool,
     scratch: StepScratch,
 }
 
@@ -88,6 +118,8 @@ struct StepScratch {
     assemble: AssembleScratch,
     newton: NewtonScratch,
     targets: Vec<PdTarget>,
+    /// Per-term work of the current step (when `energy_balance` is on).
+    work: StepWork,
 }
 
 /// The step objective `O(θ^{t+1})` as seen by Newton.
@@ -98,6 +130,27 @@ struct StepObjective<'a> {
     kin: &'a mut Kinematics,
     acc: &'a mut EnergyAccumulator,
     assemble: &'a mut AssembleScratch,
+    /// Per-term work of the step at the last gradient evaluation, when on.
+    work: Option<&'a mut StepWork>,
+}
+
+/// `Σ_i ⟨∂E/∂A_i, A_i − A_i^t⟩ + ∂E/∂θ·(θ − θ^t)` of what `acc` holds.
+fn gradient_dot_step(
+    acc: &EnergyAccumulator,
+    kin: &Kinematics,
+    ctx: &StepContext,
+    q: &DVector<f64>,
+) -> f64 {
+    let mut d = 0.0;
+    for (k, (g, a0)) in acc.link_grad.iter().zip(ctx.poses_prev).enumerate() {
+        d += g.component_mul(&(kin.pose[k] - a0)).sum();
+    }
+    d + acc
+        .dof_grad
+        .iter()
+        .zip(q.iter().zip(ctx.q_prev.iter()))
+        .map(|(g, (a, b))| g * (a - b))
+        .sum::<f64>()
 }
 
 impl Objective for StepObjective<'_> {
@@ -119,13 +172,33 @@ impl Objective for StepObjective<'_> {
             self.kin.update(model, q, self.charts, order)
         });
         self.acc.reset(need);
+        let track = need >= Need::Gradient && self.work.is_some();
+        let mut work = StepWork::default();
         for e in self.energies.iter_mut() {
             let t0 = Instant::now();
+            let before = if track {
+                gradient_dot_step(self.acc, self.kin, &self.ctx, q)
+            } else {
+                0.0
+            };
             e.accumulate(&self.ctx, q, self.kin, need, self.acc)?;
+            if track {
+                let w = before - gradient_dot_step(self.acc, self.kin, &self.ctx, q);
+                match e.name() {
+                    "inertia" | "gravity" => {}
+                    "pd" => work.controller += w,
+                    "friction" | "ipc_friction" => work.friction += w,
+                    "contact" | "ipc_contact" => work.contact += w,
+                    _ => work.other += w,
+                }
+            }
             timers.add(e.name(), t0.elapsed());
             if !self.acc.value.is_finite() {
                 return Ok(self.acc.value);
             }
+        }
+        if let Some(w) = self.work.as_deref_mut().filter(|_| track) {
+            *w = work;
         }
         if need >= Need::Gradient {
             timers.time("assembly", || {
@@ -212,6 +285,7 @@ impl Simulator {
             assemble: AssembleScratch::default(),
             newton: NewtonScratch::default(),
             targets: Vec::new(),
+            work: StepWork::default(),
         };
         Simulator {
             model,
@@ -220,6 +294,7 @@ impl Simulator {
             energies,
             state,
             timers: StageTimers::default(),
+            energy_balance: false,
             scratch,
         }
     }
@@ -363,6 +438,9 @@ impl Simulator {
         let new_poses = self.scratch.kin.pose.clone();
         let mut diag = self.diagnostics(&new_poses, report);
         diag.min_distance = f64::INFINITY;
+        if self.energy_balance {
+            diag.work = Some(self.scratch.work);
+        }
         for e in self.energies.iter_mut() {
             e.report(&mut diag, &mut self.timers);
         }
@@ -441,6 +519,7 @@ fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, Solve
         state,
         timers,
         scratch,
+        energy_balance,
         ..
     } = sim;
     let StepScratch {
@@ -449,6 +528,7 @@ fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, Solve
         assemble,
         newton,
         targets,
+        work,
     } = scratch;
     let ctx = make_context(model, settings, state, targets, t_next);
     let obj = StepObjective {
@@ -458,6 +538,7 @@ fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, Solve
         kin,
         acc,
         assemble,
+        work: energy_balance.then_some(work),
     };
     (
         obj,
