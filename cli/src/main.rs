@@ -7,6 +7,8 @@ mod calibrate;
 mod compare;
 mod contact_model;
 mod optimize;
+mod plot;
+mod plots;
 mod simulate;
 mod util;
 
@@ -35,6 +37,8 @@ enum Command {
     Import(sdrs::import::ImportArgs),
     /// Calibration: name the physical effect missing from a scene, given measured data.
     Calibrate(sdrs::calibrate::CalibrateArgs),
+    /// Plot optimization runs together (e.g. co-design vs controller-only) from their output directories.
+    Plot(plot::PlotArgs),
     /// SDRS vs the mesh-based IPC baseline on the paper's benchmarks: report and regression gate.
     Compare(compare::CompareArgs),
 }
@@ -48,6 +52,7 @@ fn main() {
         Command::Import(a) => sdrs::import::run_import(&a),
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Compare(a) => compare::run(a),
+        Command::Plot(a) => plot::run(a),
     };
     if let Err(e) = res {
         eprintln!("error: {e:#}");

@@ -11,7 +11,6 @@ mod chains;
 mod codesign;
 mod fcl;
 mod gate;
-mod plots;
 mod potential;
 mod report;
 mod results;

@@ -3,8 +3,8 @@
 //! figure next to the paper's and says which is better.
 
 use super::gate::{Verdict, markdown as gate_markdown};
-use super::plots::{Axes, Series, line_plot};
 use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
+use crate::plots::{Axes, Series, line_plot};
 use anyhow::Result;
 use sdrs::output::write_atomic;
 use std::path::Path;

@@ -1,6 +1,6 @@
-//! SVG line plots of the report (plotters' SVG backend): titled, labelled
-//! axes with units, a legend, log axes padded to at least one decade so that
-//! they carry several ticks.
+//! SVG line plots of the CLI (`compare` report, `plot`; plotters' SVG backend): titled,
+//! labelled axes with units, a legend, log axes padded to at least one decade so
+//! that they carry several ticks.
 
 use anyhow::Result;
 use plotters::prelude::*;

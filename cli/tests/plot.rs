@@ -1,0 +1,68 @@
+//! `sdrs plot`: co-design against controller-only on one plot, labelled by
+//! task and mode, with a titled, ticked loss axis; bad input named.
+
+mod support;
+
+use support::{robots, scratch_dir, sdrs};
+
+#[test]
+fn codesign_and_controller_only_on_one_labelled_plot() {
+    let dir = scratch_dir("plot");
+    for mode in ["on", "off"] {
+        let o = sdrs()
+            .args(["optimize", "-q", "--iters", "3", "--design", mode, "--out"])
+            .arg(dir.join(mode))
+            .arg(robots("chain_reach/task.yaml"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let svg = dir.join("cmp.svg");
+    let o = sdrs()
+        .arg("plot")
+        .arg(dir.join("on"))
+        .arg(dir.join("off"))
+        .arg("--out")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for s in [
+        "chain_reach: co-design",
+        "chain_reach: controller-only",
+        "chain_reach: best loss per iteration",
+        "best task loss",
+        "iteration",
+    ] {
+        assert!(text.contains(s), "missing `{s}`");
+    }
+    // At least two labelled ticks on the loss axis: text elements placed
+    // left of the plot area (x < 70 px) other than the axis title.
+    let ticks = text
+        .split("<text")
+        .skip(1)
+        .filter(|t| {
+            t.split("x=\"")
+                .nth(1)
+                .and_then(|r| r.split('"').next())
+                .and_then(|x| x.parse::<f64>().ok())
+                .is_some_and(|x| x < 75.0)
+                && !t.contains("best task loss")
+        })
+        .count();
+    assert!(ticks >= 2, "{ticks} y tick label(s)");
+    // Not an optimize output: named.
+    let o = sdrs()
+        .arg("plot")
+        .arg(dir.join("nowhere"))
+        .arg("--out")
+        .arg(dir.join("x.svg"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("nowhere") && e.contains("history.csv"),
+        "{e}"
+    );
+}
