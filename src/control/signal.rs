@@ -131,6 +131,29 @@ impl Signal {
         }
     }
 
+    /// A name per parameter, in the order of [`Signal::nparams`]
+    /// (`value`; `offset`, `term0.amplitude`, `term0.frequency`,
+    /// `term0.phase`, …; `values[k]` at `times[k]`).
+    pub fn param_names(&self) -> Vec<String> {
+        match self {
+            Signal::Constant { .. } => vec!["value".into()],
+            Signal::Sine { terms, .. } => {
+                let mut v = vec!["offset".to_string()];
+                for k in 0..terms.len() {
+                    for f in ["amplitude", "frequency", "phase"] {
+                        v.push(format!("term{k}.{f}"));
+                    }
+                }
+                v
+            }
+            Signal::Spline { times, .. } | Signal::Table { times, .. } => times
+                .iter()
+                .enumerate()
+                .map(|(k, t)| format!("values[{k}] (t = {t} s)"))
+                .collect(),
+        }
+    }
+
     /// The parameters, in the order of [`Signal::nparams`].
     pub fn params(&self) -> Vec<f64> {
         match self {

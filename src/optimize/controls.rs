@@ -60,6 +60,41 @@ impl ControlSpace {
         Ok(ControlSpace { entries })
     }
 
+    /// A name per entry: `robot/joint[:k].signal-parameter`, `….kp`, `….kd`
+    /// (coordinate suffix `:k` for joints of several coordinates).
+    pub fn names(&self, model: &Model, controller: &Controller) -> Vec<String> {
+        let dof_name = |dof: usize| {
+            model
+                .links
+                .iter()
+                .find(|l| (l.dof_offset..l.dof_offset + l.ndof()).contains(&dof))
+                .map_or(format!("dof{dof}"), |l| {
+                    let base = format!("{}/{}", model.robots[l.robot].name, l.joint_name);
+                    if l.ndof() > 1 {
+                        format!("{base}:{}", dof - l.dof_offset)
+                    } else {
+                        base
+                    }
+                })
+        };
+        self.entries
+            .iter()
+            .map(|e| match *e {
+                ControlTarget::Signal { channel, param } => {
+                    let ch = &controller.channels[channel];
+                    let p = ch.signal.param_names().get(param).cloned();
+                    format!("{}.{}", dof_name(ch.dof), p.unwrap_or(format!("p{param}")))
+                }
+                ControlTarget::Kp { channel } => {
+                    format!("{}.kp", dof_name(controller.channels[channel].dof))
+                }
+                ControlTarget::Kd { channel } => {
+                    format!("{}.kd", dof_name(controller.channels[channel].dof))
+                }
+            })
+            .collect()
+    }
+
     pub fn len(&self) -> usize {
         self.entries.len()
     }

@@ -300,7 +300,7 @@ pub fn write_all(
         "mean_backward_seconds": bwd,
         "backward_over_forward": bwd / fwd,
         "design": p.design.vars.iter().zip(outcome.design.iter()).map(|(v, x)| (v.name.clone(), *x)).collect::<std::collections::BTreeMap<_, _>>(),
-        "controller": outcome.controller.as_slice(),
+        "controller": p.controls.names(&p.model, &p.controller).into_iter().zip(outcome.controller.iter().copied()).collect::<std::collections::BTreeMap<_, _>>(),
         "extra": extra,
     });
     write_atomic(
