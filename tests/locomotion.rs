@@ -74,11 +74,10 @@ fn fd_check(name: &str, horizon: Option<usize>, vars: usize) -> f64 {
         if let Target::Vertex {
             link, hull, vertex, ..
         } = p.design.vars[i].targets[0]
+            && !seen.contains(&(link, hull, vertex))
         {
-            if !seen.contains(&(link, hull, vertex)) {
-                seen.push((link, hull, vertex));
-                picked.push(i);
-            }
+            seen.push((link, hull, vertex));
+            picked.push(i);
         }
         if picked.len() == vars {
             break;
