@@ -133,7 +133,7 @@ fn biped_design_gradient_matches_central_differences_short_horizon() {
 /// The full-horizon check (H = 550 / 400): `cargo test --release --test
 /// locomotion -- --ignored full_horizon --nocapture`.
 #[test]
-#[ignore = "full horizon: about a minute per task in release"]
+#[ignore = "full horizon: 2-4 min per task in release; spider fails (see notes/loco.md)"]
 fn full_horizon_design_gradients_match_central_differences() {
     let worst: Vec<f64> = ["spider", "biped"]
         .iter()
