@@ -2,8 +2,9 @@
 //! controller alone with `--design off`).
 
 use crate::util::progress;
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use indicatif::ProgressStyle;
+use sdrs::optimize::checkpoint;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -11,10 +12,19 @@ pub struct OptimizeArgs {
     /// Task YAML (see README, "Co-design").
     pub task: PathBuf,
     /// Output directory: history.csv, convergence.svg, design.yaml,
-    /// meshes/<robot>_<link>.obj, summary.json.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Iterations (default: the task's `optimizer.iters`).
+    /// meshes/<robot>_<link>.obj, shapes.svg, summary.json, checkpoint.json.
+    #[arg(long, required_unless_present = "resume")]
+    pub out: Option<PathBuf>,
+    /// Continue the run whose outputs (and checkpoint.json) are in this
+    /// directory, up to the total iteration count (`--iters` or the task's);
+    /// the outputs are rewritten there. Same task, scene, --design and
+    /// --seed as the interrupted run (checked).
+    #[arg(long, conflicts_with = "out")]
+    pub resume: Option<PathBuf>,
+    /// Seed of the run's randomness (`optimizer.init_noise`).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Iterations in total (default: the task's `optimizer.iters`).
     #[arg(long)]
     pub iters: Option<usize>,
     /// `off` optimizes the controller alone (for comparison).
@@ -29,27 +39,56 @@ pub struct OptimizeArgs {
 }
 
 pub fn run(a: OptimizeArgs) -> Result<()> {
-    if a.out.exists()
-        && std::fs::read_dir(&a.out)
+    let out = a
+        .resume
+        .clone()
+        .or(a.out.clone())
+        .expect("clap: --out or --resume");
+    if a.resume.is_none()
+        && out.exists()
+        && std::fs::read_dir(&out)
             .map(|mut d| d.next().is_some())
             .unwrap_or(true)
         && !a.force
     {
         bail!(
-            "{}: the output directory is not empty (use --force to write into it)",
-            a.out.display()
+            "{}: the output directory is not empty (use --force to write into it, or --resume to continue its run)",
+            out.display()
         );
     }
-    let problem = sdrs::optimize::Problem::load(&a.task, a.design == "on")?;
+    let design_on = a.design == "on";
+    let problem = sdrs::optimize::Problem::load(&a.task, design_on)?;
+    let metrics = sdrs::optimize::metrics::Metrics::from_problem(&problem)?;
+    let key = checkpoint::RunKey::new(&a.task, &problem.scene.source, design_on, a.seed)
+        .with_context(|| format!("{}: cannot hash the task and scene", a.task.display()))?;
+    let resume = match &a.resume {
+        Some(dir) => Some(checkpoint::load(dir, &key)?),
+        None => None,
+    };
     let iters = a.iters.unwrap_or(problem.task.optimizer.iters);
+    if let Some(s) = &resume
+        && s.iter > iters
+    {
+        bail!(
+            "{}: the checkpoint is at iteration {}, beyond the {iters} iterations asked for",
+            out.display(),
+            s.iter
+        );
+    }
+    std::fs::create_dir_all(&out).with_context(|| format!("{}: cannot create", out.display()))?;
     eprintln!(
-        "{}: {} design and {} controller variables, horizon {} steps, {} iterations",
+        "{}: {} design and {} controller variables, horizon {} steps, {} iterations{}",
         a.task.display(),
         problem.design.len(),
         problem.controls.len(),
         problem.horizon,
-        iters
+        iters,
+        resume
+            .as_ref()
+            .map(|s| format!(" (resuming after iteration {})", s.iter))
+            .unwrap_or_default()
     );
+    let resumed_from = resume.as_ref().map(|s| s.iter);
     let pb = progress(iters + 1, a.quiet);
     pb.set_style(
         ProgressStyle::with_template(
@@ -57,24 +96,64 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         )
         .expect("static template"),
     );
-    let outcome = sdrs::optimize::optimize(&problem, iters, |r, _| {
-        pb.set_position(r.iter as u64 + 1);
-        pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
-    })?;
+    let opts = sdrs::optimize::RunOptions {
+        seed: a.seed,
+        resume,
+    };
+    let outcome = sdrs::optimize::optimize_with(
+        &problem,
+        iters,
+        &opts,
+        |r, _| {
+            pb.set_position(r.iter as u64 + 1);
+            pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
+        },
+        |state| checkpoint::save(&out, &key, state),
+    )?;
     pb.finish_and_clear();
+    let (d0, c0) = sdrs::optimize::start(&problem, a.seed);
+    let task_metrics = match &metrics {
+        Some(m) => serde_json::json!({
+            "initial": m.measure(&problem, &d0, &c0)?,
+            "final": m.measure(&problem, &outcome.design, &outcome.controller)?,
+            "definitions": "distance = (COM(H) - COM(0)) . direction (m); tilt = angle (deg) between the reference up n and the torso's initially-up axis; fall = first step with tilt > fall_tilt_deg; upright_at_horizon = tilt(H) <= fall_tilt_deg (see sdrs::optimize::metrics)",
+        }),
+        None => serde_json::Value::Null,
+    };
     sdrs::optimize::output::write_all(
-        &a.out,
+        &out,
         &problem,
         &outcome,
-        serde_json::json!({"design": a.design}),
+        serde_json::json!({
+            "design": a.design,
+            "seed": a.seed,
+            "resumed_from_iteration": resumed_from,
+            "metrics": task_metrics,
+        }),
     )?;
+    if let Some(svg) =
+        sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design)
+    {
+        sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
+    }
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
         outcome.initial_loss,
         outcome.loss,
         100.0 * (1.0 - outcome.loss / outcome.initial_loss),
         iters,
-        a.out.display()
+        out.display()
     );
+    if let Some(m) = task_metrics.get("final") {
+        eprintln!(
+            "distance {:.3} m (initial {:.3}), upright at H: {}, first fall: {}",
+            m["distance"].as_f64().unwrap_or(f64::NAN),
+            task_metrics["initial"]["distance"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+            m["upright_at_horizon"],
+            m["first_fall_time"]
+        );
+    }
     Ok(())
 }

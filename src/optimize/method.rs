@@ -51,7 +51,7 @@ pub fn trust_region_step(
 }
 
 /// Adam state for one block.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adam {
     pub lr: f64,
     pub beta1: f64,

@@ -1,11 +1,14 @@
 //! Co-design: shape and controller optimization with adjoint gradients
 //! (paper, `problem.tex`: `min_{d∈D, c∈C} L(θ^H)` by projected gradient).
 
+pub mod checkpoint;
 pub mod controls;
 pub mod design;
 pub mod method;
+pub mod metrics;
 pub mod names;
 pub mod output;
+pub mod shapes;
 pub mod task;
 
 pub use controls::ControlSpace;
@@ -90,6 +93,12 @@ impl Problem {
         let o = &task.optimizer;
         if !(o.step_design > 0.0 && o.step_controller > 0.0) {
             return Err(invalid("optimizer", "steps must be positive".into()));
+        }
+        if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
+            return Err(invalid(
+                "optimizer.init_noise",
+                format!("must be finite and non-negative, got {}", o.init_noise),
+            ));
         }
         let (design_space, controls) = {
             let ds = match (&task.design, design) {
@@ -289,7 +298,7 @@ pub struct Evaluation {
 }
 
 /// One row of `history.csv`.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct IterRecord {
     pub iter: usize,
     pub loss: f64,
@@ -318,21 +327,81 @@ pub struct Outcome {
 pub fn optimize(
     p: &Problem,
     iters: usize,
-    mut on_iter: impl FnMut(&IterRecord, &DVector<f64>),
+    on_iter: impl FnMut(&IterRecord, &DVector<f64>),
 ) -> anyhow::Result<Outcome> {
-    let t0 = Instant::now();
+    optimize_with(p, iters, &RunOptions::default(), on_iter, |_| Ok(()))
+}
+
+/// Options of [`optimize_with`].
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Seed of the run's randomness (the `optimizer.init_noise`
+    /// perturbation of the initial controller). Default 0.
+    pub seed: u64,
+    /// Continue from this state (a checkpoint) instead of the task's start.
+    pub resume: Option<checkpoint::State>,
+}
+
+/// The run's starting point `(d, c)`: the task's design and controller,
+/// with the controller perturbed by `optimizer.init_noise` (uniform in
+/// `±init_noise`, ChaCha8 seeded by `seed`) when that is positive.
+pub fn start(p: &Problem, seed: u64) -> (DVector<f64>, DVector<f64>) {
+    let d = p.design.values(&p.model);
+    let mut c = p.controls.values(&p.controller);
+    let noise = p.task.optimizer.init_noise;
+    if noise > 0.0 {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        for x in c.iter_mut() {
+            *x += noise * rng.random_range(-1.0..1.0);
+        }
+    }
+    (d, c)
+}
+
+/// [`optimize`] with a seed, an optional state to resume from, and
+/// `on_state` called with the full optimizer state after every iteration
+/// (for checkpoints). Resuming from the state after iteration `k` of a run
+/// gives bitwise the same iterates and losses as that run.
+pub fn optimize_with(
+    p: &Problem,
+    iters: usize,
+    opts: &RunOptions,
+    mut on_iter: impl FnMut(&IterRecord, &DVector<f64>),
+    mut on_state: impl FnMut(&checkpoint::State) -> anyhow::Result<()>,
+) -> anyhow::Result<Outcome> {
     let o = &p.task.optimizer;
     let (lo, hi) = (p.design.lower(), p.design.upper());
-    let mut d = p.design.values(&p.model);
-    let mut c = p.controls.values(&p.controller);
-    let mut ev = p.evaluate(&d, &c)?;
-    let initial_loss = ev.loss;
+    let (mut d, mut c) = start(p, opts.seed);
     let (mut rd, mut rc) = (o.step_design, o.step_controller);
     let mut adam = (
         Adam::new(d.len(), o.step_design),
         Adam::new(c.len(), o.step_controller),
     );
     let mut history = Vec::with_capacity(iters + 1);
+    let mut first = 1;
+    let mut wall0 = 0.0;
+    if let Some(s) = &opts.resume {
+        if s.design.len() != d.len() || s.controller.len() != c.len() {
+            anyhow::bail!(
+                "the checkpoint has {} design and {} controller variables, the task {} and {}",
+                s.design.len(),
+                s.controller.len(),
+                d.len(),
+                c.len()
+            );
+        }
+        d = s.design.clone();
+        c = s.controller.clone();
+        (rd, rc) = (s.radius_design, s.radius_controller);
+        adam = (s.adam_design.clone(), s.adam_controller.clone());
+        history = s.history.clone();
+        first = s.iter + 1;
+        wall0 = history.last().map_or(0.0, |r: &IterRecord| r.wall_seconds);
+    }
+    let t0 = Instant::now();
+    let mut ev = p.evaluate(&d, &c)?;
+    let initial_loss = opts.resume.as_ref().map_or(ev.loss, |s| s.initial_loss);
     let mut push = |history: &mut Vec<IterRecord>,
                     it,
                     ev: &Evaluation,
@@ -352,13 +421,30 @@ pub fn optimize(
             accepted,
             forward_seconds: ev.forward_seconds,
             backward_seconds: ev.backward_seconds,
-            wall_seconds: t0.elapsed().as_secs_f64(),
+            wall_seconds: wall0 + t0.elapsed().as_secs_f64(),
         };
         on_iter(&r, d);
         history.push(r);
     };
-    push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
-    for it in 1..=iters {
+    let state =
+        |it, d: &DVector<f64>, c: &DVector<f64>, rd, rc, adam: &(Adam, Adam), h: &[IterRecord]| {
+            checkpoint::State {
+                iter: it,
+                design: d.clone(),
+                controller: c.clone(),
+                radius_design: rd,
+                radius_controller: rc,
+                adam_design: adam.0.clone(),
+                adam_controller: adam.1.clone(),
+                initial_loss,
+                history: h.to_vec(),
+            }
+        };
+    if opts.resume.is_none() {
+        push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
+        on_state(&state(0, &d, &c, rd, rc, &adam, &history))?;
+    }
+    for it in first..=iters {
         let (dd, dc) = match o.method {
             Method::TrustRegion => (
                 trust_region_step(&ev.grad_design, &d, &lo, &hi, rd),
@@ -407,6 +493,7 @@ pub fn optimize(
                 push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
             }
         }
+        on_state(&state(it, &d, &c, rd, rc, &adam, &history))?;
     }
     Ok(Outcome {
         history,

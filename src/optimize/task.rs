@@ -21,6 +21,13 @@
 //!   iters: 60
 //!   step_design: 0.05            # trust-region radius ᾱ_d (m) / Adam learning rate
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
+//!   init_noise: 0.0              # uniform ± perturbation of the initial controller (seeded by --seed)
+//! metrics:                       # optional task metrics in summary.json (see optimize::metrics)
+//!   robot: spider                # whose COM is tracked
+//!   torso: spider/body           # link whose tilt decides "upright" and "fall"
+//!   direction: [1, 0, 0]         # task direction (normalized) for "distance"
+//!   up: [0, 0, 1]                # reference up (default: the ground normal, else +z)
+//!   fall_tilt_deg: 45            # fallen when the tilt exceeds this (default 45)
 //! ```
 //! `when` is `final` (at θ^H) or `running` (mean over θ^1 … θ^H).
 
@@ -53,6 +60,9 @@ pub struct TaskSpec {
     pub design: Option<DesignTaskSpec>,
     #[serde(default)]
     pub optimizer: OptimizerSpec,
+    /// Task metrics reported in `summary.json` (see [`super::metrics`]).
+    #[serde(default)]
+    pub metrics: Option<super::metrics::MetricsSpec>,
 }
 
 /// One loss term (see [`crate::diff::LossTerm`]).
@@ -159,6 +169,10 @@ pub struct OptimizerSpec {
     pub step_design: f64,
     /// Trust-region radius for the controller / Adam learning rate. Default 0.2.
     pub step_controller: f64,
+    /// Half-width of a uniform random perturbation of every initial
+    /// controller parameter, drawn from ChaCha8 seeded by `--seed`.
+    /// Default 0 (no randomness).
+    pub init_noise: f64,
 }
 
 impl Default for OptimizerSpec {
@@ -168,6 +182,7 @@ impl Default for OptimizerSpec {
             iters: 60,
             step_design: 0.05,
             step_controller: 0.2,
+            init_noise: 0.0,
         }
     }
 }

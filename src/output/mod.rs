@@ -1,6 +1,8 @@
 //! Run records: trajectory CSV and summary JSON, written atomically (to a
 //! temporary file in the same directory, renamed when complete).
 
+pub mod picture;
+
 use crate::model::Model;
 use crate::sim::{StageTime, StepDiagnostics};
 use nalgebra::DVector;
