@@ -55,7 +55,22 @@ fn main() {
         Command::Plot(a) => plot::run(a),
     };
     if let Err(e) = res {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", cause_chain(&e));
         std::process::exit(1);
     }
+}
+
+/// The error and its causes, `: `-separated, each cause once: a cause whose
+/// text the message already contains (errors that embed their source) is
+/// not repeated.
+fn cause_chain(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for c in e.chain().skip(1) {
+        let s = c.to_string();
+        if !msg.contains(&s) {
+            msg.push_str(": ");
+            msg.push_str(&s);
+        }
+    }
+    msg
 }

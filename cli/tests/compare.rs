@@ -172,13 +172,21 @@ fn quick_suite_report_browser_gate_and_resume() {
     // iteration (a worse design). Its other benchmarks resume from the
     // parts of the run above (same suite entries, same relative paths).
     let tree = dir.join("tree");
-    for (from, to) in [
-        ("robots/four_chains.yaml", "four_chains.yaml"),
-        ("robots/chain_reach/task.yaml", "chain_reach/task.yaml"),
-        ("robots/chain_reach/scene.yaml", "chain_reach/scene.yaml"),
-    ] {
-        std::fs::create_dir_all(tree.join(to).parent().unwrap()).unwrap();
-        std::fs::copy(root().join(from), tree.join(to)).unwrap();
+    std::fs::create_dir_all(&tree).unwrap();
+    std::fs::copy(
+        root().join("robots/four_chains.yaml"),
+        tree.join("four_chains.yaml"),
+    )
+    .unwrap();
+    for task in ["chain_reach", "spider", "biped"] {
+        std::fs::create_dir_all(tree.join(task)).unwrap();
+        for f in ["task.yaml", "scene.yaml"] {
+            std::fs::copy(
+                root().join("robots").join(task).join(f),
+                tree.join(task).join(f),
+            )
+            .unwrap();
+        }
     }
     std::fs::create_dir_all(tree.join("compare")).unwrap();
     let quick = std::fs::read_to_string(root().join("robots/compare/quick.yaml")).unwrap();
@@ -187,7 +195,12 @@ fn quick_suite_report_browser_gate_and_resume() {
     std::fs::write(&degraded, quick.replace("iters: 15", "iters: 1")).unwrap();
     let out2 = dir.join("degraded");
     std::fs::create_dir_all(out2.join("parts")).unwrap();
-    for p in ["potential.json", "chains.json"] {
+    for p in [
+        "potential.json",
+        "chains.json",
+        "codesign_spider.json",
+        "codesign_biped.json",
+    ] {
         std::fs::copy(out.join("parts").join(p), out2.join("parts").join(p)).unwrap();
     }
     let o = run_compare(

@@ -12,7 +12,12 @@ use sdrs::output::Summary;
 use std::path::Path;
 use std::time::Instant;
 
-pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<CodesignPart> {
+pub fn run(
+    spec: &CodesignSpec,
+    base_dir: &Path,
+    out_dir: &Path,
+    pb: &ProgressBar,
+) -> Result<CodesignPart> {
     let task = base_dir.join(&spec.task);
     let load = |design: bool| -> Result<Problem> {
         let mut p = Problem::load(&task, design)?;
@@ -32,7 +37,9 @@ pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<Cod
     } else {
         None
     };
+    let metrics = sdrs::optimize::metrics::Metrics::from_problem(&p)?;
     let mut runs = Vec::new();
+    let mut shapes_svg = None;
     for (method, design) in [("co-design", true), ("controller-only", false)] {
         let p = if design { p.clone() } else { load(false)? };
         pb.set_message(format!("{}: {method}", spec.name));
@@ -41,6 +48,21 @@ pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<Cod
             .with_context(|| format!("{}: {method}", spec.name))?;
         let wall = t0.elapsed().as_secs_f64();
         let n = out.history.len().max(1) as f64;
+        let m = match &metrics {
+            Some(m) => Some(m.measure(&p, &out.design, &out.controller)?),
+            None => None,
+        };
+        if design {
+            let (d0, _) = sdrs::optimize::start(&p, 0);
+            if let Some(svg) =
+                sdrs::optimize::shapes::initial_vs_optimized_svg(&p, &d0, &out.design)
+            {
+                let rel = format!("plots/shapes_{}.svg", spec.name);
+                std::fs::create_dir_all(out_dir.join("plots"))?;
+                sdrs::output::write_atomic(&out_dir.join(&rel), svg.as_bytes())?;
+                shapes_svg = Some(rel);
+            }
+        }
         runs.push(CodesignRun {
             method: method.into(),
             design_variables: p.design.len(),
@@ -52,6 +74,9 @@ pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<Cod
             forward_seconds_mean: out.history.iter().map(|h| h.forward_seconds).sum::<f64>() / n,
             backward_seconds_mean: out.history.iter().map(|h| h.backward_seconds).sum::<f64>() / n,
             min_distance: min_distance(&p, &out.design, &out.controller)?,
+            distance: m.as_ref().map(|m| m.distance),
+            upright_at_horizon: m.as_ref().map(|m| m.upright_at_horizon),
+            first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
         });
     }
     Ok(CodesignPart {
@@ -61,6 +86,7 @@ pub fn run(spec: &CodesignSpec, base_dir: &Path, pb: &ProgressBar) -> Result<Cod
         iters,
         runs,
         fd,
+        shapes_svg,
     })
 }
 

@@ -10,6 +10,7 @@
 //! | `distance` | `now ≤ 0`, or `now < base·(1 − relative) − absolute` | relative 0.5, absolute 0 |
 //! | `gradient_error` | `now > max(base·factor, absolute)` | factor 10, absolute 1e-4 |
 //! | `speed_ratio` | `now < base·(1 − relative)` | relative 0.5 |
+//! | `task` (higher is better, e.g. distance walked) | `now < base − max(relative·|base|, absolute)` | relative 0.05, absolute 1e-3 |
 //!
 //! Speed enters only as a ratio measured in one run (baseline time / SDRS
 //! time on the same machine, interleaved), never as an absolute time. A
@@ -51,6 +52,8 @@ pub struct Tolerances {
     pub gradient_error: Rule,
     #[serde(default)]
     pub speed_ratio: Rule,
+    #[serde(default)]
+    pub task: Rule,
     /// Per metric name; overrides the kind's rule field by field.
     #[serde(default)]
     pub metrics: BTreeMap<String, Rule>,
@@ -67,7 +70,7 @@ impl Tolerances {
                 ("distance", &t.distance),
                 ("gradient_error", &t.gradient_error),
             ])
-            .chain([("speed_ratio", &t.speed_ratio)])
+            .chain([("speed_ratio", &t.speed_ratio), ("task", &t.task)])
             .chain(t.metrics.iter().map(|(k, v)| (k.as_str(), v)))
         {
             for v in [r.relative, r.absolute, r.factor].into_iter().flatten() {
@@ -88,6 +91,7 @@ impl Tolerances {
             Kind::Distance => (&self.distance, (0.5, 0.0, 1.0)),
             Kind::GradientError => (&self.gradient_error, (0.0, 1e-4, 10.0)),
             Kind::SpeedRatio => (&self.speed_ratio, (0.5, 0.0, 1.0)),
+            Kind::Task => (&self.task, (0.05, 1e-3, 1.0)),
         };
         let m = self.metrics.get(name).copied().unwrap_or_default();
         (
@@ -174,6 +178,14 @@ fn judge(name: &str, b: &Metric, n: &Metric, tol: &Tolerances) -> (bool, f64, St
                 n.value > limit,
                 limit,
                 format!("at most {factor}× the baseline or {abs}"),
+            )
+        }
+        Kind::Task => {
+            let limit = b.value - (rel * b.value.abs()).max(abs);
+            (
+                n.value < limit,
+                limit,
+                format!("may fall by {rel}·|base| or {abs}"),
             )
         }
         Kind::SpeedRatio => {

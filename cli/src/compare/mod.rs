@@ -156,7 +156,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
             s,
             a.force,
             a.quiet,
-            |pb| codesign::run(s, &base, pb),
+            |pb| codesign::run(s, &base, &a.out, pb),
         )?);
     }
     r.not_measured

@@ -403,7 +403,7 @@ fn chains_section(c: &ChainsPart) -> Result<Section> {
     })
 }
 
-fn codesign_section(b: &CodesignPart) -> Result<Section> {
+fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
     let mut t = Table {
         name: "codesign",
         title: format!("Co-design: {}", b.name),
@@ -418,6 +418,8 @@ fn codesign_section(b: &CodesignPart) -> Result<Section> {
             "forward s/iter",
             "backward s/iter",
             "min distance (m)",
+            "distance walked (m)",
+            "upright at H",
         ]
         .map(String::from)
         .to_vec(),
@@ -435,11 +437,18 @@ fn codesign_section(b: &CodesignPart) -> Result<Section> {
             g(r.forward_seconds_mean),
             g(r.backward_seconds_mean),
             opt(r.min_distance),
+            opt(r.distance),
+            match (r.upright_at_horizon, r.first_fall_time) {
+                (Some(true), _) => "yes".into(),
+                (Some(false), Some(t)) => format!("no (falls at {t:.2} s)"),
+                (Some(false), None) => "no".into(),
+                (None, _) => "—".into(),
+            },
         ]);
     }
     for cage in ["mesh baseline, coarse cage", "mesh baseline, fine cage"] {
         let mut row = vec![cage.to_string()];
-        row.extend(std::iter::repeat_n("not built".to_string(), 9));
+        row.extend(std::iter::repeat_n("not built".to_string(), 11));
         t.rows.push(row);
     }
     let mut text = vec![format!(
@@ -509,11 +518,28 @@ fn codesign_section(b: &CodesignPart) -> Result<Section> {
         heading: format!("Co-design: {}", b.name),
         text,
         tables,
-        plots: vec![(
-            format!("convergence_{}", b.name),
-            format!("{}: best loss per iteration", b.name),
-            svg,
-        )],
+        plots: {
+            let mut v = vec![(
+                format!("convergence_{}", b.name),
+                format!("{}: best loss per iteration", b.name),
+                svg,
+            )];
+            if let Some(svg) = b
+                .shapes_svg
+                .as_ref()
+                .and_then(|f| std::fs::read_to_string(dir.join(f)).ok())
+            {
+                v.push((
+                    format!("shapes_{}", b.name),
+                    format!(
+                        "{}: designed links, initial (grey) and optimized (blue)",
+                        b.name
+                    ),
+                    svg,
+                ));
+            }
+            v
+        },
     })
 }
 
@@ -527,7 +553,7 @@ pub fn write(dir: &Path, r: &Results, gate: Option<&[Verdict]>) -> Result<()> {
         sections.push(chains_section(c)?);
     }
     for b in &r.codesign {
-        sections.push(codesign_section(b)?);
+        sections.push(codesign_section(b, dir)?);
     }
     let title = format!("SDRS vs the mesh-based IPC baseline — suite `{}`", r.suite);
     let intro = format!(
@@ -612,7 +638,7 @@ pub fn write(dir: &Path, r: &Results, gate: Option<&[Verdict]>) -> Result<()> {
         }
     }
     // A self-check the browser test reads back: every plot has drawn content.
-    html.push_str("<p id=\"render-check\">plots not checked</p><script>(function(){var s=document.querySelectorAll('svg.plot');var ok=0;s.forEach(function(e){var b=e.getBBox();if(e.querySelectorAll('polyline,path,line,circle').length>0&&b.width>0&&b.height>0)ok++;});document.getElementById('render-check').textContent='plots rendered: '+ok+' of '+s.length;})();</script></body></html>\n");
+    html.push_str("<p id=\"render-check\">plots not checked</p><script>(function(){var s=document.querySelectorAll('svg.plot');var ok=0;s.forEach(function(e){var b=e.getBBox();if(e.querySelectorAll('polyline,polygon,path,line,circle').length>0&&b.width>0&&b.height>0)ok++;});document.getElementById('render-check').textContent='plots rendered: '+ok+' of '+s.length;})();</script></body></html>\n");
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("report.html"), html.as_bytes())?;
     Ok(())

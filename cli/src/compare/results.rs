@@ -98,6 +98,10 @@ pub struct CodesignPart {
     /// `co-design` and `controller-only`, plus rows for methods not built.
     pub runs: Vec<CodesignRun>,
     pub fd: Option<FdCheck>,
+    /// Initial vs optimized designed links (SVG file under the output
+    /// directory), when the design has hull vertices.
+    #[serde(default)]
+    pub shapes_svg: Option<String>,
 }
 
 /// One optimization.
@@ -115,6 +119,15 @@ pub struct CodesignRun {
     pub backward_seconds_mean: f64,
     /// Minimum hull distance over the final design's trajectory (m).
     pub min_distance: Option<f64>,
+    /// Task metrics of the final design (locomotion: distance walked along
+    /// the task direction (m), upright at H, first fall (s)), when the task
+    /// defines them.
+    #[serde(default)]
+    pub distance: Option<f64>,
+    #[serde(default)]
+    pub upright_at_horizon: Option<bool>,
+    #[serde(default)]
+    pub first_fall_time: Option<f64>,
 }
 
 /// Central differences of one design-gradient component at the initial design.
@@ -147,6 +160,8 @@ pub enum Kind {
     GradientError,
     /// A speed ratio measured in one run (baseline time / SDRS time).
     SpeedRatio,
+    /// A task metric where higher is better (distance walked, m).
+    Task,
 }
 
 /// One gated metric.
@@ -233,6 +248,14 @@ impl Results {
                     Better::Lower,
                     Kind::Loss,
                 );
+                if let Some(d) = r.distance {
+                    put(
+                        format!("codesign.{}.{}.distance_walked", b.name, r.method),
+                        d,
+                        Better::Higher,
+                        Kind::Task,
+                    );
+                }
                 if let Some(d) = r.min_distance {
                     put(
                         format!("codesign.{}.{}.min_distance", b.name, r.method),
