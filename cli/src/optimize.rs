@@ -57,6 +57,8 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         )
         .expect("static template"),
     );
+    let d0 = problem.design.values(&problem.model);
+    let c0 = problem.controls.values(&problem.controller);
     let outcome = sdrs::optimize::optimize(&problem, iters, |r, _| {
         pb.set_position(r.iter as u64 + 1);
         pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
@@ -66,8 +68,13 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         &a.out,
         &problem,
         &outcome,
-        serde_json::json!({"design": a.design}),
+        serde_json::json!({
+            "design": a.design,
+            "trajectories": 1 + problem.others.len(),
+            "metrics": sdrs::optimize::metrics::summary(&problem, &d0, &c0, &outcome)?,
+        }),
     )?;
+    sdrs::optimize::metrics::write_scenes(&a.out, &problem, &outcome)?;
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
         outcome.initial_loss,

@@ -22,7 +22,16 @@
 //!   step_design: 0.05            # trust-region radius ᾱ_d (m) / Adam learning rate
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
 //! ```
-//! `when` is `final` (at θ^H) or `running` (mean over θ^1 … θ^H).
+//! `when` is `final` (at θ^H), `running` (mean over θ^1 … θ^H) or a stage
+//! `{window: {from: a, to: b}}` (mean over θ^{a+1} … θ^b).
+//!
+//! Several scenes optimized collectively (one design, losses summed; see
+//! [`super::multi`]) replace `scene`/`loss` by a list:
+//! ```yaml
+//! trajectories:
+//!   - {scene: scene_cube.yaml, loss: [...], grasp: {object: cube/cube, gripper: g/palm, from: 60}}
+//!   - {scene: scene_ball.yaml, loss: [...]}
+//! ```
 
 use crate::diff::When;
 use serde::{Deserialize, Serialize};
@@ -43,10 +52,19 @@ fn final_time() -> When {
 pub struct TaskSpec {
     #[serde(default = "version")]
     pub version: u32,
+    /// The scene (empty when `trajectories` is given).
+    #[serde(default)]
     pub scene: String,
     #[serde(default)]
     pub horizon: Option<usize>,
+    #[serde(default)]
     pub loss: Vec<LossSpec>,
+    /// Several scenes optimized collectively (instead of `scene`/`loss`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub trajectories: Vec<super::multi::TrajectorySpec>,
+    /// The grasp metric of a single-scene task (see [`super::grasp`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grasp: Option<super::grasp::GraspSpec>,
     #[serde(default)]
     pub controller: ControlSpec,
     #[serde(default)]
