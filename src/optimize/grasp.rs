@@ -59,7 +59,11 @@ pub struct GraspResult {
 
 /// Simulates every trajectory of `p` at `(d, c)` that has a grasp spec and
 /// measures it (trajectories run in parallel; results in task order).
-pub fn measure(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Vec<GraspResult>> {
+pub fn measure(
+    p: &Problem,
+    d: &DVector<f64>,
+    c: &DVector<f64>,
+) -> anyhow::Result<Vec<GraspResult>> {
     use rayon::prelude::*;
     super::multi::all(p)
         .par_iter()
@@ -75,7 +79,8 @@ fn measure_one(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Resul
     let mut controller = p.controller.clone();
     p.controls.apply(&mut controller, c);
     let obj = names::link(&model, &g.object).map_err(|e| anyhow::anyhow!("grasp.object: {e}"))?;
-    let grip = names::link(&model, &g.gripper).map_err(|e| anyhow::anyhow!("grasp.gripper: {e}"))?;
+    let grip =
+        names::link(&model, &g.gripper).map_err(|e| anyhow::anyhow!("grasp.gripper: {e}"))?;
     anyhow::ensure!(
         g.from <= p.horizon,
         "grasp.from = {} is beyond the horizon {}",

@@ -17,10 +17,19 @@ pub fn topologies(p: &Problem, d: &DVector<f64>) -> anyhow::Result<serde_json::V
     let mut model = p.model.clone();
     p.design.apply(&mut model, d);
     let mut out = serde_json::Map::new();
-    let links = p.task.design.as_ref().map(|x| x.vertices.clone()).unwrap_or_default();
+    let links = p
+        .task
+        .design
+        .as_ref()
+        .map(|x| x.vertices.clone())
+        .unwrap_or_default();
     for name in links {
         let l = names::link(&model, &name)?;
-        let hulls: Vec<_> = model.links[l].hulls.iter().map(|h| h.x_local.clone()).collect();
+        let hulls: Vec<_> = model.links[l]
+            .hulls
+            .iter()
+            .map(|h| h.x_local.clone())
+            .collect();
         let t = topology::measure(&hulls, TOPOLOGY_RESOLUTION)?;
         out.insert(name, serde_json::to_value(t)?);
     }

@@ -124,10 +124,8 @@ pub fn all(p: &Problem) -> Vec<&Problem> {
 /// The summed evaluation (see the module docs). `grads` and `model` are the
 /// first trajectory's; the timings are sums (CPU seconds).
 pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
-    let parts: Vec<anyhow::Result<Evaluation>> = all(p)
-        .par_iter()
-        .map(|q| q.evaluate_one(d, c))
-        .collect();
+    let parts: Vec<anyhow::Result<Evaluation>> =
+        all(p).par_iter().map(|q| q.evaluate_one(d, c)).collect();
     let mut out: Option<Evaluation> = None;
     for (j, r) in parts.into_iter().enumerate() {
         let e = r.map_err(|e| e.context(format!("trajectory {j}")))?;
