@@ -41,7 +41,13 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         );
     }
     let problem = sdrs::optimize::Problem::load(&a.task, a.design == "on")?;
-    let iters = a.iters.unwrap_or(problem.task.optimizer.iters);
+    // Nothing to optimize (`--design off` with a preset controller): the run
+    // is one evaluation of the initial design.
+    let iters = if problem.design.is_empty() && problem.controls.is_empty() {
+        0
+    } else {
+        a.iters.unwrap_or(problem.task.optimizer.iters)
+    };
     eprintln!(
         "{}: {} design and {} controller variables, horizon {} steps, {} iterations",
         a.task.display(),
