@@ -65,7 +65,13 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         Some(dir) => Some(checkpoint::load(dir, &key)?),
         None => None,
     };
-    let iters = a.iters.unwrap_or(problem.task.optimizer.iters);
+    // Nothing to optimize (`--design off` with a preset controller): the run
+    // is one evaluation of the initial design.
+    let iters = if problem.design.is_empty() && problem.controls.is_empty() {
+        0
+    } else {
+        a.iters.unwrap_or(problem.task.optimizer.iters)
+    };
     if let Some(s) = &resume
         && s.iter > iters
     {
@@ -120,6 +126,12 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         }),
         None => serde_json::Value::Null,
     };
+    // Locomotion metrics (initial/final/definitions) and the grasp and
+    // topology metrics side by side under `extra.metrics`.
+    let mut metrics_json = sdrs::optimize::grasp_metrics::summary(&problem, &d0, &c0, &outcome)?;
+    if let (Some(m), serde_json::Value::Object(t)) = (metrics_json.as_object_mut(), &task_metrics) {
+        m.extend(t.clone());
+    }
     sdrs::optimize::output::write_all(
         &out,
         &problem,
@@ -128,9 +140,11 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             "design": a.design,
             "seed": a.seed,
             "resumed_from_iteration": resumed_from,
-            "metrics": task_metrics,
+            "trajectories": 1 + problem.others.len(),
+            "metrics": metrics_json,
         }),
     )?;
+    sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
     if let Some(svg) =
         sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design)
     {

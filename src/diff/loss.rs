@@ -14,6 +14,24 @@ pub enum When {
     Final,
     /// Mean over `θ^1 … θ^H`.
     Running,
+    /// A stage (YAML `when: {window: {from: a, to: b}}`): mean over
+    /// `θ^{a+1} … θ^b` (`0 ≤ a < b ≤ H`, checked when a task is loaded);
+    /// `{from: b−1, to: b}` is the value at `θ^b` alone.
+    Window { from: usize, to: usize },
+}
+
+impl When {
+    /// Weight of time level `k` (of `H`) in the term: `1` at `H` for
+    /// `final`, `1/H` for `k ≥ 1` when `running`, `1/(b − a)` for
+    /// `a < k ≤ b` in a window, else `0`.
+    pub fn scale(&self, k: usize, horizon: usize) -> f64 {
+        match *self {
+            When::Final if k == horizon => 1.0,
+            When::Running if k >= 1 => 1.0 / horizon as f64,
+            When::Window { from, to } if from < k && k <= to => 1.0 / (to - from) as f64,
+            _ => 0.0,
+        }
+    }
 }
 
 /// One loss term; each is `weight · ‖e‖²`.
@@ -107,11 +125,10 @@ impl Loss {
                 | LossTerm::Relative { when, .. } => *when,
                 LossTerm::JointLinear { .. } => continue,
             };
-            let scale = match when {
-                When::Final if k == horizon => 1.0,
-                When::Running if k >= 1 => 1.0 / horizon as f64,
-                _ => continue,
-            };
+            let scale = when.scale(k, horizon);
+            if scale == 0.0 {
+                continue;
+            }
             match term {
                 LossTerm::JointLinear { .. } => {}
                 LossTerm::Joint {

@@ -4,6 +4,7 @@
 pub mod broad_phase;
 pub mod hulls;
 pub mod sampling;
+pub mod topology;
 
 pub use broad_phase::BroadPhase;
 pub use hulls::{HullId, WorldHulls};

@@ -11,6 +11,9 @@
 //!   package), `threshold` is its concavity threshold, `max_hulls` its
 //!   `max_convex_hull`, `resolution` its `resolution`.
 //! - `hull`: one convex hull of the whole mesh.
+//! - `grid`: about `max_hulls` equal boxes on a grid over the mesh (the
+//!   paper's block design space; see [`super::grid`]); neighbouring blocks'
+//!   coincident corners are tied instead of the usual shared vertices.
 //! - `none`: the mesh must already be convex (its volume equals its hull's to
 //!   1e-6 relative); otherwise an error.
 
@@ -32,6 +35,7 @@ pub enum Decomposer {
     Coacd,
     Hull,
     None,
+    Grid,
 }
 
 impl Decomposer {
@@ -41,6 +45,7 @@ impl Decomposer {
             Decomposer::Coacd => "coacd",
             Decomposer::Hull => "hull",
             Decomposer::None => "none",
+            Decomposer::Grid => "grid",
         }
     }
 }
@@ -61,6 +66,7 @@ pub fn decompose(
         || convex_hull(&mesh.vertices).map_err(|e| fail(format!("the mesh has no volume: {e}")));
     match opts.decomposer {
         Decomposer::Hull => Ok(vec![whole()?]),
+        Decomposer::Grid => super::grid::grid_blocks(mesh, max_hulls).map_err(fail),
         Decomposer::None => {
             let h = whole()?;
             let hv = h.volume();

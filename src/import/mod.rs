@@ -21,6 +21,7 @@ pub mod connectivity;
 pub mod decompose;
 pub mod error;
 pub mod fkcheck;
+pub mod grid;
 pub mod interior;
 pub mod limits;
 pub mod mass;
@@ -174,6 +175,20 @@ fn link_geometry(
 ) -> Result<LinkGeometry, ImportError> {
     let t0 = Instant::now();
     let link = &src.links[li];
+    // `grid` divides the designable links only; the others keep one hull
+    // per mesh (a fixed palm needs no blocks).
+    let grid_opts;
+    let opts = match &opts.designable {
+        Some(d) if opts.decomposer == decompose::Decomposer::Grid && !d.contains(&link.name) => {
+            grid_opts = ImportOptions {
+                decomposer: decompose::Decomposer::Hull,
+                designable: opts.designable.clone(),
+                ..*opts
+            };
+            &grid_opts
+        }
+        _ => opts,
+    };
     let nmesh = link
         .geometry
         .iter()
@@ -322,7 +337,11 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     // 2. Shared vertices inside each link.
     let mut conn = Vec::with_capacity(n);
     for g in geoms.iter_mut() {
-        conn.push(connect_link(&mut g.hulls, opts.bridge_gaps));
+        conn.push(if opts.decomposer == decompose::Decomposer::Grid {
+            grid::corner_ties(&g.hulls)
+        } else {
+            connect_link(&mut g.hulls, opts.bridge_gaps)
+        });
     }
     // 3. Attachment points.
     let mut attachments = Vec::new();

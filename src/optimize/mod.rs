@@ -4,8 +4,11 @@
 pub mod checkpoint;
 pub mod controls;
 pub mod design;
+pub mod grasp;
+pub mod grasp_metrics;
 pub mod method;
 pub mod metrics;
+pub mod multi;
 pub mod names;
 pub mod output;
 pub mod shapes;
@@ -59,6 +62,9 @@ pub struct Problem {
     pub design: DesignSpace,
     pub controls: ControlSpace,
     pub horizon: usize,
+    /// Further trajectories optimized collectively with this one (same
+    /// design and controller spaces; see [`multi`]).
+    pub others: Vec<Problem>,
 }
 
 impl Problem {
@@ -72,6 +78,15 @@ impl Problem {
             path: path.into(),
             msg: e.to_string(),
         })?;
+        if !task.trajectories.is_empty() || task.scene.is_empty() {
+            return multi::load(path, task, design);
+        }
+        Self::from_spec(path, task, design)
+    }
+
+    /// A problem from a parsed single-scene task (`path` names the task file
+    /// in errors and anchors relative scene paths).
+    pub fn from_spec(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
         let invalid = |element: &str, msg: String| TaskError::Invalid {
             path: path.into(),
             element: element.into(),
@@ -125,7 +140,9 @@ impl Problem {
             .map_err(|e| invalid("controller", e.to_string()))?;
             (ds, cs)
         };
-        if design_space.is_empty() && controls.is_empty() {
+        if design_space.is_empty() && controls.is_empty() && design {
+            // (With `--design off` and a preset controller the run is an
+            // evaluation of the initial design, the twin of a co-design run.)
             return Err(invalid("design/controller", "nothing to optimize".into()));
         }
         let mut loss = Loss::default();
@@ -202,6 +219,9 @@ impl Problem {
                 },
             });
         }
+        for (i, l) in task.loss.iter().enumerate() {
+            multi::check_when(l, horizon).map_err(|m| invalid(&format!("loss[{i}].when"), m))?;
+        }
         Ok(Problem {
             task_path: path.into(),
             controller: scene.controller.clone(),
@@ -212,12 +232,23 @@ impl Problem {
             design: design_space,
             controls,
             horizon,
+            others: Vec::new(),
         })
     }
 
     /// Loss and gradients at design `d` and controller `c` (forward +
     /// backward), with timings.
+    /// With several trajectories, the sum over them ([`multi::evaluate`]).
     pub fn evaluate(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+        if self.others.is_empty() {
+            self.evaluate_one(d, c)
+        } else {
+            multi::evaluate(self, d, c)
+        }
+    }
+
+    /// [`Problem::evaluate`] of this trajectory alone.
+    pub fn evaluate_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
         let mut model = self.model.clone();
         self.design.apply(&mut model, d);
         let mut controller = self.controller.clone();

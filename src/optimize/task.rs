@@ -29,7 +29,16 @@
 //!   up: [0, 0, 1]                # reference up (default: the ground normal, else +z)
 //!   fall_tilt_deg: 45            # fallen when the tilt exceeds this (default 45)
 //! ```
-//! `when` is `final` (at θ^H) or `running` (mean over θ^1 … θ^H).
+//! `when` is `final` (at θ^H), `running` (mean over θ^1 … θ^H) or a stage
+//! `{window: {from: a, to: b}}` (mean over θ^{a+1} … θ^b).
+//!
+//! Several scenes optimized collectively (one design, losses summed; see
+//! [`super::multi`]) replace `scene`/`loss` by a list:
+//! ```yaml
+//! trajectories:
+//!   - {scene: scene_cube.yaml, loss: [...], grasp: {object: cube/cube, gripper: g/palm, from: 60}}
+//!   - {scene: scene_ball.yaml, loss: [...]}
+//! ```
 
 use crate::diff::When;
 use serde::{Deserialize, Serialize};
@@ -50,10 +59,19 @@ fn final_time() -> When {
 pub struct TaskSpec {
     #[serde(default = "version")]
     pub version: u32,
+    /// The scene (empty when `trajectories` is given).
+    #[serde(default)]
     pub scene: String,
     #[serde(default)]
     pub horizon: Option<usize>,
+    #[serde(default)]
     pub loss: Vec<LossSpec>,
+    /// Several scenes optimized collectively (instead of `scene`/`loss`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub trajectories: Vec<super::multi::TrajectorySpec>,
+    /// The grasp metric of a single-scene task (see [`super::grasp`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grasp: Option<super::grasp::GraspSpec>,
     #[serde(default)]
     pub controller: ControlSpec,
     #[serde(default)]

@@ -1,0 +1,102 @@
+//! Smoke runs of the grasping benchmarks (issue 12): 2 iterations of each
+//! task and its `--design off` twin through the binary; the summary holds
+//! the grasp and topology metrics, the optimized scenes keep every tie, and
+//! every design variable stays within its bounds. Full runs:
+//! `tools/bench_grasping.sh`.
+
+mod support;
+
+use sdrs::optimize::Problem;
+use sdrs::scene::schema::{HullSpec, SceneSpec};
+use support::{robots, scratch_dir, sdrs};
+
+fn run(task: &str, design: &str, out: &std::path::Path) -> serde_json::Value {
+    let status = sdrs()
+        .args([
+            "optimize", "-q", "--iters", "2", "--design", design, "--out",
+        ])
+        .arg(out)
+        .arg(robots(task))
+        .status()
+        .unwrap();
+    assert!(status.success(), "{task} --design {design}");
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn vertex(spec: &SceneSpec, link: &str, hull: usize, v: usize) -> [f64; 3] {
+    let l = spec.robots[0]
+        .links
+        .iter()
+        .find(|l| l.name == link)
+        .unwrap();
+    let h: &HullSpec = &l.hulls[hull];
+    h.vertices.as_ref().expect("a vertex-list hull")[v]
+}
+
+#[test]
+fn parallel_jaw_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
+    let dir = scratch_dir("grasp_pj");
+    let on = run("parallel_jaw_gripper/task.yaml", "on", &dir.join("on"));
+    let off = run("parallel_jaw_gripper/task.yaml", "off", &dir.join("off"));
+    for s in [&on, &off] {
+        let m = &s["extra"]["metrics"];
+        assert_eq!(m["grasp"]["trajectories"], 4);
+        // The benchmark's premise (paper): the initial gripper grasps none.
+        assert_eq!(m["grasp"]["grasped_before"], 0, "{m}");
+        for jaw in ["gripper/jaw_left", "gripper/jaw_right"] {
+            let t = &m["topology"]["before"][jaw];
+            if s == &on {
+                assert_eq!(
+                    (t["components"].as_u64(), t["holes"].as_u64()),
+                    (Some(1), Some(0)),
+                    "{jaw}: {t}"
+                );
+            }
+        }
+    }
+    assert_eq!(off["design_variables"], 0);
+    assert_eq!(
+        off["extra"]["metrics"]["grasp"]["grasped_after"], 0,
+        "nothing changed, nothing grasped"
+    );
+    // Bounds: every design variable within ±bound of its initial value.
+    let p = Problem::load(&robots("parallel_jaw_gripper/task.yaml"), true).unwrap();
+    let (lo, hi) = (p.design.lower(), p.design.upper());
+    let vals = on["design"].as_object().unwrap();
+    assert_eq!(vals.len(), p.design.len());
+    for (i, v) in p.design.vars.iter().enumerate() {
+        let x = vals[&v.name].as_f64().unwrap();
+        assert!(
+            lo[i] <= x && x <= hi[i],
+            "{} = {x} outside [{}, {}]",
+            v.name,
+            lo[i],
+            hi[i]
+        );
+    }
+    // Ties: in every optimized scene, tied block corners are still one point,
+    // and the design moved (some vertex differs from the initial scene).
+    let initial: SceneSpec = serde_yaml::from_str(
+        &std::fs::read_to_string(robots("parallel_jaw_gripper/scene_cube.yaml")).unwrap(),
+    )
+    .unwrap();
+    let ties = &initial.robots[0].design.as_ref().unwrap().ties;
+    assert!(ties.len() > 100);
+    let mut moved = false;
+    for name in ["scene_cube", "scene_cylinder", "scene_ball", "scene_plus"] {
+        let f = dir.join("on/scenes").join(format!("{name}.yaml"));
+        let spec: SceneSpec = serde_yaml::from_str(&std::fs::read_to_string(&f).unwrap()).unwrap();
+        for group in ties {
+            let x = vertex(&spec, &group[0].link, group[0].hull, group[0].vertex);
+            for t in &group[1..] {
+                assert_eq!(
+                    x,
+                    vertex(&spec, &t.link, t.hull, t.vertex),
+                    "{name}: tie {group:?}"
+                );
+            }
+            moved |= x != vertex(&initial, &group[0].link, group[0].hull, group[0].vertex);
+        }
+    }
+    assert!(moved, "two Adam steps moved no tied corner");
+}

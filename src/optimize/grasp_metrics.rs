@@ -1,0 +1,106 @@
+//! Grasp and topology metrics added to `summary.json` by `sdrs optimize`: the grasp of
+//! every trajectory with a `grasp:` spec ([`super::grasp`]) and the topology
+//! of every designable link ([`crate::geometry::topology`]), at the initial
+//! and the optimized design; and a runnable optimized scene per trajectory.
+
+use super::{Outcome, Problem, grasp, multi, names, output};
+use crate::geometry::topology;
+use crate::output::write_atomic;
+use nalgebra::DVector;
+use std::path::Path;
+
+/// Voxels along a link's longest side for the topology measure.
+pub const TOPOLOGY_RESOLUTION: usize = 64;
+
+/// Topology of each designable link (`design.vertices`) of `p` at `d`.
+pub fn topologies(p: &Problem, d: &DVector<f64>) -> anyhow::Result<serde_json::Value> {
+    let mut model = p.model.clone();
+    p.design.apply(&mut model, d);
+    let mut out = serde_json::Map::new();
+    let links = p
+        .task
+        .design
+        .as_ref()
+        .map(|x| x.vertices.clone())
+        .unwrap_or_default();
+    for name in links {
+        let l = names::link(&model, &name)?;
+        let hulls: Vec<_> = model.links[l]
+            .hulls
+            .iter()
+            .map(|h| h.x_local.clone())
+            .collect();
+        let t = topology::measure(&hulls, TOPOLOGY_RESOLUTION)?;
+        out.insert(name, serde_json::to_value(t)?);
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+/// Grasp and topology at the initial (`d0`, `c0`) and optimized design.
+pub fn summary(
+    p: &Problem,
+    d0: &DVector<f64>,
+    c0: &DVector<f64>,
+    o: &Outcome,
+) -> anyhow::Result<serde_json::Value> {
+    let before = grasp::measure(p, d0, c0)?;
+    let after = grasp::measure(p, &o.design, &o.controller)?;
+    let count = |v: &[grasp::GraspResult]| v.iter().filter(|g| g.grasped).count();
+    let t0 = topologies(p, d0)?;
+    let t1 = topologies(p, &o.design)?;
+    // A topology change: some link's (components, holes, cavities) differ.
+    let betti = |t: &serde_json::Value| -> Vec<serde_json::Value> {
+        t.as_object()
+            .map(|m| {
+                m.values()
+                    .map(|v| serde_json::json!([v["components"], v["holes"], v["cavities"]]))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let changed = betti(&t0) != betti(&t1);
+    Ok(serde_json::json!({
+        "grasp": {
+            "trajectories": before.len(),
+            "grasped_before": count(&before),
+            "grasped_after": count(&after),
+            "before": before,
+            "after": after,
+        },
+        "topology": {
+            "resolution": TOPOLOGY_RESOLUTION,
+            "before": t0,
+            "after": t1,
+            "changed": changed,
+        },
+    }))
+}
+
+/// Writes `scenes/<scene file name>` for every trajectory: its scene with
+/// the optimized design and controller (`sdrs simulate` runs it).
+pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> anyhow::Result<()> {
+    for q in multi::all(p) {
+        let mut model = q.model.clone();
+        q.design.apply(&mut model, &o.design);
+        let mut controller = q.controller.clone();
+        q.controls.apply(&mut controller, &o.controller);
+        let spec = output::design_scene(&q.scene.spec, &model, &controller);
+        let name = q
+            .scene
+            .source
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene.yaml".into());
+        let header = format!(
+            "# {} with the design optimized by `sdrs optimize {}`; horizon {} steps.\n",
+            q.scene.source.display(),
+            p.task_path.display(),
+            q.horizon
+        );
+        write_atomic(
+            &dir.join("scenes").join(name),
+            (header + &serde_yaml::to_string(&spec)?).as_bytes(),
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,144 @@
+//! Several trajectories optimized collectively (paper, `evaluation.tex`:
+//! "the gripper sequentially grasps 4 objects … we optimize these 4
+//! trajectories collectively").
+//!
+//! A task with `trajectories:` is one problem per scene sharing one design
+//! vector `d` and one controller vector `c`; the loss and its gradients are
+//! sums over the trajectories,
+//! `L(d, c) = Σ_j L_j(θ_j^{1…H_j}(d, c))`, `∇L = Σ_j ∇L_j`.
+//! The trajectories run in parallel (rayon); the sum is taken afterwards in
+//! the task's order, so the result is bitwise the same for any number of
+//! threads.
+
+use super::grasp::GraspSpec;
+use super::task::{LossSpec, TaskSpec};
+use super::{Evaluation, Problem, TaskError};
+use crate::diff::When;
+use nalgebra::DVector;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// One trajectory of a collective task.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// Scene file, relative to the task file.
+    pub scene: String,
+    /// Steps `H_j` (default: the task's `horizon`, else the scene's `steps`).
+    #[serde(default)]
+    pub horizon: Option<usize>,
+    pub loss: Vec<LossSpec>,
+    /// The grasp metric of this trajectory (see [`super::grasp`]).
+    #[serde(default)]
+    pub grasp: Option<GraspSpec>,
+}
+
+/// Checks that a stage window lies within the horizon.
+pub fn check_when(l: &LossSpec, horizon: usize) -> Result<(), String> {
+    let when = match l {
+        LossSpec::LinkPoint { when, .. }
+        | LossSpec::Joint { when, .. }
+        | LossSpec::Com { when, .. }
+        | LossSpec::Relative { when, .. } => *when,
+    };
+    match when {
+        When::Window { from, to } if !(from < to && to <= horizon) => Err(format!(
+            "the window {{from: {from}, to: {to}}} needs from < to <= horizon ({horizon})"
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Loads a task with `trajectories:` (called by [`Problem::load`]).
+pub fn load(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
+    let invalid = |element: String, msg: String| TaskError::Invalid {
+        path: path.into(),
+        element,
+        msg,
+    };
+    if task.trajectories.is_empty() {
+        return Err(invalid(
+            "scene".into(),
+            "a task needs `scene` (one trajectory) or `trajectories` (several)".into(),
+        ));
+    }
+    if !task.scene.is_empty() || !task.loss.is_empty() || task.grasp.is_some() {
+        return Err(invalid(
+            "trajectories".into(),
+            "with `trajectories`, give `scene`, `loss` and `grasp` per trajectory only".into(),
+        ));
+    }
+    let mut problems = Vec::with_capacity(task.trajectories.len());
+    for (j, t) in task.trajectories.iter().enumerate() {
+        let spec = TaskSpec {
+            scene: t.scene.clone(),
+            horizon: t.horizon.or(task.horizon),
+            loss: t.loss.clone(),
+            trajectories: Vec::new(),
+            grasp: t.grasp.clone(),
+            ..task.clone()
+        };
+        let p = Problem::from_spec(path, spec, design).map_err(|e| match e {
+            TaskError::Invalid { element, msg, .. } => {
+                invalid(format!("trajectories[{j}].{element}"), msg)
+            }
+            e => e,
+        })?;
+        if let Some(first) = problems.first() {
+            same_spaces(first, &p).map_err(|m| invalid(format!("trajectories[{j}]"), m))?;
+        }
+        problems.push(p);
+    }
+    let mut first = problems.remove(0);
+    first.others = problems;
+    Ok(first)
+}
+
+/// The shared design and controller spaces must be the same in every
+/// trajectory (same robot first in every scene, same designable links).
+fn same_spaces(a: &Problem, b: &Problem) -> Result<(), String> {
+    if a.design.vars.len() != b.design.vars.len()
+        || a.design
+            .vars
+            .iter()
+            .zip(&b.design.vars)
+            .any(|(x, y)| x.name != y.name || x.lower != y.lower || x.upper != y.upper)
+    {
+        return Err(
+            "its design space differs from trajectories[0]'s (the designed robot must be the same, listed first)"
+                .into(),
+        );
+    }
+    if a.controls.values(&a.controller) != b.controls.values(&b.controller) {
+        return Err("its controller parameters differ from trajectories[0]'s".into());
+    }
+    Ok(())
+}
+
+/// Every trajectory of `p` (itself first).
+pub fn all(p: &Problem) -> Vec<&Problem> {
+    std::iter::once(p).chain(p.others.iter()).collect()
+}
+
+/// The summed evaluation (see the module docs). `grads` and `model` are the
+/// first trajectory's; the timings are sums (CPU seconds).
+pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+    let parts: Vec<anyhow::Result<Evaluation>> =
+        all(p).par_iter().map(|q| q.evaluate_one(d, c)).collect();
+    let mut out: Option<Evaluation> = None;
+    for (j, r) in parts.into_iter().enumerate() {
+        let e = r.map_err(|e| e.context(format!("trajectory {j}")))?;
+        match out.as_mut() {
+            None => out = Some(e),
+            Some(o) => {
+                o.loss += e.loss;
+                o.grad_design += &e.grad_design;
+                o.grad_controller += &e.grad_controller;
+                o.forward_seconds += e.forward_seconds;
+                o.backward_seconds += e.backward_seconds;
+            }
+        }
+    }
+    out.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+}

@@ -1,0 +1,100 @@
+#!/usr/bin/env python3
+"""Writes the grasping benchmarks' scenes (robots/<gripper>/scene_*.yaml).
+
+Each scene = the gripper imported by `sdrs import --decomposer grid` (the
+paper's block design space) + one object (imported OBJ, V-HACD hulls) on a
+ground plane, with the prescribed base path and the closed-pose targets of
+the task header. Run from the repository root after `cargo build --release`:
+
+    .venv/bin/python tools/make_grasp_scenes.py [--blocks 156]
+
+The outputs are committed; rerun only to regenerate them.
+"""
+import argparse
+import random
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parent.parent
+SDRS = ROOT / "target" / "release" / "sdrs"
+
+
+def sdrs_import(src, out, *args):
+    subprocess.run([str(SDRS), "import", str(src), "--out", str(out), "--force", "-q", *args],
+                   check=True)
+    return yaml.safe_load(Path(out).read_text())
+
+
+def object_hulls(obj, tmp, convex):
+    dec = ["--decomposer", "hull"] if convex else ["--decomposer", "vhacd", "--max-hulls", "6"]
+    s = sdrs_import(obj, Path(tmp) / (obj.stem + ".yaml"), *dec)
+    return [{"vertices": h["vertices"]} for h in s["robots"][0]["links"][0]["hulls"]]
+
+
+def write(path, scene, header):
+    text = header + yaml.safe_dump(scene, sort_keys=False, default_flow_style=None, width=200)
+    path.write_text(text)
+    print("wrote", path.relative_to(ROOT))
+
+
+def parallel_jaw(blocks, tmp):
+    d = ROOT / "robots" / "parallel_jaw_gripper"
+    g = sdrs_import(d / "parallel_jaw_gripper.urdf", Path(tmp) / "pj.yaml", "--decomposer", "grid",
+                    "--max-hulls", str(blocks), "--designable", "jaw_left,jaw_right")
+    robot = g["robots"][0]
+    robot["name"] = "gripper"
+    g["contact"]["exclude"] = [[a.replace("parallel_jaw_gripper/", "gripper/") for a in pair]
+                               for pair in g["contact"]["exclude"]]
+    # Lift: the palm starts 0.215 m below the URDF pose (jaw feet beside the
+    # object's centre), holds while the jaws close, then rises by `rise`.
+    lift0 = -0.215
+    rng = random.Random(12)  # the paper's "random target position", drawn once
+    objects = [("cube", True), ("cylinder", True), ("ball", True), ("plus", False)]
+    for name, convex in objects:
+        rise = round(rng.uniform(0.10, 0.20), 3)
+        hulls = object_hulls(d / "objects" / f"{name}.obj", tmp, convex)
+        zmin = min(v[2] for h in hulls for v in h["vertices"])
+        r = dict(robot)
+        r["controller"] = {
+            "kp": 0.3, "kd": 0.003,
+            "gains": {"lift": {"kp": 3000.0, "kd": 30.0}},
+            "targets": {
+                "lift": {"type": "table", "times": [0.0, 0.6, 1.4], "values": [lift0, lift0, lift0 + rise]},
+                # closed pose θ⋆: each jaw turned 0.3 rad inwards about y.
+                "jaw_left_pivot_x+jaw_left_pivot_y": [{"type": "constant", "value": 0.0},
+                                                      {"type": "constant", "value": -0.3}],
+                "jaw_right_pivot_x+jaw_right_pivot_y": [{"type": "constant", "value": 0.0},
+                                                        {"type": "constant", "value": 0.3}],
+            },
+        }
+        r["initial"] = {"lift": {"q": [lift0]}}
+        scene = {
+            "version": 1, "dt": 0.01, "steps": 180,
+            "solver": {"tol": 1e-6, "max_iters": 100},
+            "robots": [r],
+            "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
+                         "initial": {"q": [0.0, 0.0, -zmin + 0.001, 0.0, 0.0, 0.0]}}],
+            "ground": {"height": 0.0},
+            "contact": {**g["contact"], "s": 0.003, "mu": 0.05},
+        }
+        write(d / f"scene_{name}.yaml", scene,
+              f"# Parallel-jaw gripper grasping the {name} (written by tools/make_grasp_scenes.py;\n"
+              f"# see task.yaml for the settings). Lift rise {rise} m.\n")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--blocks", type=int, default=156)
+    ap.add_argument("--which", default="parallel_jaw")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        if "parallel_jaw" in a.which:
+            parallel_jaw(a.blocks, tmp)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
