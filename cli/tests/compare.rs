@@ -178,14 +178,13 @@ fn quick_suite_report_browser_gate_and_resume() {
         tree.join("four_chains.yaml"),
     )
     .unwrap();
-    for task in ["chain_reach", "spider", "biped"] {
+    for task in ["chain_reach", "spider", "biped", "parallel_jaw_gripper"] {
         std::fs::create_dir_all(tree.join(task)).unwrap();
-        for f in ["task.yaml", "scene.yaml"] {
-            std::fs::copy(
-                root().join("robots").join(task).join(f),
-                tree.join(task).join(f),
-            )
-            .unwrap();
+        for f in std::fs::read_dir(root().join("robots").join(task)).unwrap() {
+            let f = f.unwrap().path();
+            if f.extension().is_some_and(|e| e == "yaml") {
+                std::fs::copy(&f, tree.join(task).join(f.file_name().unwrap())).unwrap();
+            }
         }
     }
     std::fs::create_dir_all(tree.join("compare")).unwrap();
@@ -200,6 +199,7 @@ fn quick_suite_report_browser_gate_and_resume() {
         "chains.json",
         "codesign_spider.json",
         "codesign_biped.json",
+        "codesign_parallel_jaw_gripper.json",
     ] {
         std::fs::copy(out.join("parts").join(p), out2.join("parts").join(p)).unwrap();
     }

@@ -23,6 +23,9 @@ pub fn run(
         let mut p = Problem::load(&task, design)?;
         if let Some(h) = spec.horizon {
             p.horizon = h;
+            for o in &mut p.others {
+                o.horizon = h;
+            }
         }
         Ok(p)
     };
@@ -48,6 +51,7 @@ pub fn run(
             .with_context(|| format!("{}: {method}", spec.name))?;
         let wall = t0.elapsed().as_secs_f64();
         let n = out.history.len().max(1) as f64;
+        let grasps = sdrs::optimize::grasp::measure(&p, &out.design, &out.controller)?;
         let m = match &metrics {
             Some(m) => Some(m.measure(&p, &out.design, &out.controller)?),
             None => None,
@@ -77,6 +81,8 @@ pub fn run(
             distance: m.as_ref().map(|m| m.distance),
             upright_at_horizon: m.as_ref().map(|m| m.upright_at_horizon),
             first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
+            grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
+            grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
         });
     }
     Ok(CodesignPart {

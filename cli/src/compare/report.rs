@@ -420,6 +420,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
             "min distance (m)",
             "distance walked (m)",
             "upright at H",
+            "grasped",
         ]
         .map(String::from)
         .to_vec(),
@@ -444,11 +445,15 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
                 (Some(false), None) => "no".into(),
                 (None, _) => "—".into(),
             },
+            match (r.grasped, r.grasp_trajectories) {
+                (Some(g), Some(n)) => format!("{g} of {n}"),
+                _ => "—".into(),
+            },
         ]);
     }
     for cage in ["mesh baseline, coarse cage", "mesh baseline, fine cage"] {
         let mut row = vec![cage.to_string()];
-        row.extend(std::iter::repeat_n("not built".to_string(), 11));
+        row.extend(std::iter::repeat_n("not built".to_string(), 12));
         t.rows.push(row);
     }
     let mut text = vec![format!(

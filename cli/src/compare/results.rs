@@ -128,6 +128,12 @@ pub struct CodesignRun {
     pub upright_at_horizon: Option<bool>,
     #[serde(default)]
     pub first_fall_time: Option<f64>,
+    /// Grasping tasks: objects grasped by the final design, out of
+    /// `grasp_trajectories`.
+    #[serde(default)]
+    pub grasped: Option<usize>,
+    #[serde(default)]
+    pub grasp_trajectories: Option<usize>,
 }
 
 /// Central differences of one design-gradient component at the initial design.
@@ -252,6 +258,14 @@ impl Results {
                     put(
                         format!("codesign.{}.{}.distance_walked", b.name, r.method),
                         d,
+                        Better::Higher,
+                        Kind::Task,
+                    );
+                }
+                if let Some(g) = r.grasped {
+                    put(
+                        format!("codesign.{}.{}.grasped", b.name, r.method),
+                        g as f64,
                         Better::Higher,
                         Kind::Task,
                     );
