@@ -9,6 +9,7 @@ mod contact_model;
 mod optimize;
 mod plot;
 mod plots;
+mod schema;
 mod simulate;
 mod util;
 
@@ -41,6 +42,8 @@ enum Command {
     Plot(plot::PlotArgs),
     /// SDRS vs the mesh-based IPC baseline on the paper's benchmarks: report and regression gate.
     Compare(compare::CompareArgs),
+    /// Print the annotated schema of scene or task files (JSON Schema, as YAML or JSON).
+    Schema(schema::SchemaArgs),
 }
 
 fn main() {
@@ -53,6 +56,7 @@ fn main() {
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Compare(a) => compare::run(a),
         Command::Plot(a) => plot::run(a),
+        Command::Schema(a) => schema::run(a),
     };
     if let Err(e) = res {
         eprintln!("error: {}", cause_chain(&e));

@@ -17,7 +17,7 @@ pub enum SignalError {
 }
 
 /// One sine term `A sin(2π f t + φ)`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SineTerm {
     /// Amplitude (rad or m).
@@ -30,7 +30,7 @@ pub struct SineTerm {
 }
 
 /// A target signal. Its velocity target is its exact time derivative.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Signal {
     /// `θ* = value`, `θ̇* = 0`.

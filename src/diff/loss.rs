@@ -7,7 +7,9 @@ use crate::model::Model;
 use nalgebra::{DVector, Matrix3x4, Vector3, Vector4};
 
 /// When a term applies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum When {
     /// At `θ^H` only.

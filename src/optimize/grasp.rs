@@ -18,7 +18,7 @@ use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Which links and window define a grasp.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GraspSpec {
     /// The object link (`robot/link`).

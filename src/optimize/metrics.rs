@@ -25,7 +25,7 @@ use nalgebra::{DVector, Matrix3, Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// The `metrics:` section of a task.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MetricsSpec {
     /// Robot whose COM is tracked.

@@ -54,7 +54,7 @@ fn final_time() -> When {
 }
 
 /// A whole task.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TaskSpec {
     #[serde(default = "version")]
@@ -84,7 +84,7 @@ pub struct TaskSpec {
 }
 
 /// One loss term (see [`crate::diff::LossTerm`]).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LossSpec {
     LinkPoint {
@@ -138,7 +138,7 @@ fn ones() -> [f64; 3] {
 }
 
 /// Which controller parameters are optimized.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControlSpec {
     #[serde(default)]
@@ -148,7 +148,7 @@ pub struct ControlSpec {
 }
 
 /// Which design parameters are optimized.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignTaskSpec {
     #[serde(default)]
@@ -166,7 +166,7 @@ impl DesignTaskSpec {
 }
 
 /// Optimizer choice.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     /// The paper's trust-region projected gradient step.
@@ -176,7 +176,7 @@ pub enum Method {
 }
 
 /// Optimizer settings (defaults documented on each field).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OptimizerSpec {
     /// Default `trust_region`.

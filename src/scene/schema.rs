@@ -73,7 +73,7 @@ fn default_version() -> u32 {
 }
 
 /// A whole scene.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
     #[serde(default = "default_version")]
@@ -108,7 +108,7 @@ pub struct SceneSpec {
 
 /// A free rigid object: one link on a 6-DOF free joint named after the
 /// object (coordinates `[x, y, z, rx, ry, rz]`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
     pub name: String,
@@ -125,7 +125,7 @@ pub struct ObjectSpec {
 
 /// Static ground: the half-space below a plane through `height` whose
 /// normal is +z tilted by `slope_deg` about `slope_axis`.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GroundSpec {
     /// Height of the plane at the origin (m). Default 0.
@@ -159,7 +159,7 @@ impl GroundSpec {
 }
 
 /// A static obstacle: hulls at a fixed world pose.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObstacleSpec {
     pub name: String,
@@ -169,7 +169,7 @@ pub struct ObstacleSpec {
 }
 
 /// Contact and friction parameters (paper, `contact.tex`, `friction.tex`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
     /// Which contact model the scene uses: `sdrs` (default: the core's
@@ -219,7 +219,9 @@ pub struct ContactSpec {
 }
 
 /// The contact model of a scene (`contact.model`).
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(
+    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ContactModelKind {
     /// The core's separating-plane potential (paper, `contact.tex`).
@@ -277,7 +279,7 @@ impl Default for ContactSpec {
 }
 
 /// A pose given as translation and roll–pitch–yaw (URDF convention).
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Origin {
     #[serde(default)]
@@ -287,7 +289,7 @@ pub struct Origin {
 }
 
 /// One robot or free object.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     pub name: String,
@@ -307,7 +309,7 @@ pub struct RobotSpec {
 }
 
 /// One link.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinkSpec {
     pub name: String,
@@ -322,7 +324,7 @@ pub struct LinkSpec {
 }
 
 /// Joint types accepted in scene files.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum JointType {
     Fixed,
@@ -334,7 +336,7 @@ pub enum JointType {
 }
 
 /// The joint connecting a link to its parent.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -350,7 +352,7 @@ pub struct JointSpec {
 }
 
 /// A hull: explicit `vertices` or a `box` primitive (8 vertices); exactly one.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HullSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -365,7 +367,7 @@ pub struct HullSpec {
 }
 
 /// Axis-aligned box primitive in the link frame.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
     /// Full edge lengths (m).
@@ -396,7 +398,7 @@ impl HullSpec {
 
 /// Generator for the paper's rotating chains: `links` box links hanging
 /// along −z, each attached at the far end of its parent.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ChainSpec {
     /// Number of links (≥ 1).
@@ -432,7 +434,7 @@ impl ChainSpec {
 }
 
 /// PD gains.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Gains {
     #[serde(default)]
@@ -442,7 +444,7 @@ pub struct Gains {
 }
 
 /// One signal, or one per coordinate of a multi-coordinate joint.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum SignalList {
     One(Signal),
@@ -459,7 +461,7 @@ impl SignalList {
 }
 
 /// Open-loop stable-PD controller.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerSpec {
     /// Default `k_p` (J/rad²). Default 0.
@@ -475,7 +477,7 @@ pub struct ControllerSpec {
 }
 
 /// Initial coordinates and velocities of one joint (default zeros).
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
     #[serde(default)]
@@ -485,7 +487,9 @@ pub struct InitialSpec {
 }
 
 /// A hull vertex of a link.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(
+    Clone, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields)]
 pub struct VertexRef {
     pub link: String,
@@ -495,7 +499,7 @@ pub struct VertexRef {
 
 /// A joint's attachment point tied to a vertex of a parent hull and a vertex
 /// of a child hull (paper, `shape.tex`, Fig. `attachment`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AttachmentTie {
     /// Child link whose joint origin is the attachment point.
@@ -506,7 +510,7 @@ pub struct AttachmentTie {
 
 /// Design space description (paper, `shape.tex`): which links are designable,
 /// connectivity ties and box bounds.
-#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignSpec {
     /// Designable links (default: all).

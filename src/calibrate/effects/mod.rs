@@ -43,7 +43,19 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Every effect of the library, by its documented name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum EffectKind {
     /// Viscous joint damping `c` (N·m·s/rad): [`damping`].
@@ -186,7 +198,7 @@ impl EffectKind {
 }
 
 /// An effect as written in a scene file (`effects:` section).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EffectSpec {
     /// The effect's name ([`EffectKind::name`]).
