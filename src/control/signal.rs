@@ -34,19 +34,34 @@ pub struct SineTerm {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Signal {
     /// `θ* = value`, `θ̇* = 0`.
-    Constant { value: f64 },
+    Constant {
+        /// The target (rad or m).
+        value: f64,
+    },
     /// `θ* = offset + Σ A_j sin(2π f_j t + φ_j)` (the paper's spider gait).
     Sine {
+        /// Constant part (rad or m). Default 0.
         #[serde(default)]
         offset: f64,
+        /// The sine terms.
         terms: Vec<SineTerm>,
     },
     /// Natural cubic spline through `(times, values)`, held constant (with
     /// zero velocity) outside the knot range (the paper's chain controller
     /// uses 4 knots).
-    Spline { times: Vec<f64>, values: Vec<f64> },
+    Spline {
+        /// Knot times (s), increasing.
+        times: Vec<f64>,
+        /// Values at the knots (rad or m).
+        values: Vec<f64>,
+    },
     /// Piecewise-linear interpolation of a table, held outside its range.
-    Table { times: Vec<f64>, values: Vec<f64> },
+    Table {
+        /// Sample times (s), increasing.
+        times: Vec<f64>,
+        /// Values at the samples (rad or m).
+        values: Vec<f64>,
+    },
 }
 
 impl Signal {

@@ -19,7 +19,12 @@ pub enum When {
     /// A stage (YAML `when: {window: {from: a, to: b}}`): mean over
     /// `θ^{a+1} … θ^b` (`0 ≤ a < b ≤ H`, checked when a task is loaded);
     /// `{from: b−1, to: b}` is the value at `θ^b` alone.
-    Window { from: usize, to: usize },
+    Window {
+        /// First step `a` (exclusive).
+        from: usize,
+        /// Last step `b` (inclusive).
+        to: usize,
+    },
 }
 
 impl When {

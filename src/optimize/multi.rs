@@ -28,6 +28,7 @@ pub struct TrajectorySpec {
     /// Steps `H_j` (default: the task's `horizon`, else the scene's `steps`).
     #[serde(default)]
     pub horizon: Option<usize>,
+    /// The loss terms of this trajectory (as the task's `loss`).
     pub loss: Vec<LossSpec>,
     /// The grasp metric of this trajectory (see [`super::grasp`]).
     #[serde(default)]

@@ -57,13 +57,16 @@ fn final_time() -> When {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TaskSpec {
+    /// Schema version; must be 1. Default 1.
     #[serde(default = "version")]
     pub version: u32,
     /// The scene (empty when `trajectories` is given).
     #[serde(default)]
     pub scene: String,
+    /// Steps `H` simulated per evaluation. Default: the scene's `steps`.
     #[serde(default)]
     pub horizon: Option<usize>,
+    /// The loss: a sum of weighted terms.
     #[serde(default)]
     pub loss: Vec<LossSpec>,
     /// Several scenes optimized collectively (instead of `scene`/`loss`).
@@ -72,10 +75,14 @@ pub struct TaskSpec {
     /// The grasp metric of a single-scene task (see [`super::grasp`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grasp: Option<super::grasp::GraspSpec>,
+    /// Which controller parameters are optimized. Default none.
     #[serde(default)]
     pub controller: ControlSpec,
+    /// Which design parameters are optimized; omitted (or `sdrs optimize
+    /// --design off`): none, the controller alone.
     #[serde(default)]
     pub design: Option<DesignTaskSpec>,
+    /// Optimizer settings.
     #[serde(default)]
     pub optimizer: OptimizerSpec,
     /// Task metrics reported in `summary.json` (see [`super::metrics`]).
@@ -87,47 +94,73 @@ pub struct TaskSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LossSpec {
+    /// Squared distance `weight · |A_link p − target|²` (m²) of a point on a link from a world target.
     LinkPoint {
+        /// Link (`robot/link`).
         link: String,
+        /// Point in the link frame (m). Default origin.
         #[serde(default)]
         point: [f64; 3],
+        /// World target point (m).
         target: [f64; 3],
+        /// Weight of the term. Default 1.
         #[serde(default = "one")]
         weight: f64,
+        /// `final` (default: at the last step), `running` (mean over all steps) or `{window: {from: a, to: b}}` (mean over steps a+1 … b).
         #[serde(default = "final_time")]
         when: When,
     },
+    /// Squared error `weight · (θ − target)²` (rad² or m²) of one joint coordinate.
     Joint {
+        /// Joint name (`robot/joint`).
         joint: String,
+        /// Coordinate of a multi-coordinate joint (0-based). Default 0.
         #[serde(default)]
         index: usize,
+        /// Target value (rad or m).
         target: f64,
+        /// Weight of the term. Default 1.
         #[serde(default = "one")]
         weight: f64,
+        /// `final` (default: at the last step), `running` (mean over all steps) or `{window: {from: a, to: b}}` (mean over steps a+1 … b).
         #[serde(default = "final_time")]
         when: When,
     },
+    /// Squared distance `weight · |axes ⊙ (c − target)|²` (m²) of a robot's centre of mass from a world target.
     Com {
+        /// Robot name.
         robot: String,
+        /// World target of the centre of mass (m).
         target: [f64; 3],
+        /// Per-axis weights of the error (e.g. `[1, 1, 0]` ignores height). Default `[1, 1, 1]`.
         #[serde(default = "ones")]
         axes: [f64; 3],
+        /// Weight of the term. Default 1.
         #[serde(default = "one")]
         weight: f64,
+        /// `final` (default: at the last step), `running` (mean over all steps) or `{window: {from: a, to: b}}` (mean over steps a+1 … b).
         #[serde(default = "final_time")]
         when: When,
     },
+    /// Squared distance `weight · |A_link p − (A_to_link p_to + offset)|²` (m²) between points on two links.
     Relative {
+        /// Link (`robot/link`).
         link: String,
+        /// Point in the link frame (m). Default origin.
         #[serde(default)]
         point: [f64; 3],
+        /// The other link (`robot/link`).
         to_link: String,
+        /// Point in the other link's frame (m). Default origin.
         #[serde(default)]
         to_point: [f64; 3],
+        /// Desired world offset of the first point from the second (m). Default zero.
         #[serde(default)]
         offset: [f64; 3],
+        /// Weight of the term. Default 1.
         #[serde(default = "one")]
         weight: f64,
+        /// `final` (default: at the last step), `running` (mean over all steps) or `{window: {from: a, to: b}}` (mean over steps a+1 … b).
         #[serde(default = "final_time")]
         when: When,
     },
@@ -141,8 +174,11 @@ fn ones() -> [f64; 3] {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControlSpec {
+    /// Joints (`robot/joint`) whose target signals' parameters are
+    /// optimized.
     #[serde(default)]
     pub joints: Vec<String>,
+    /// Also optimize their PD gains. Default false.
     #[serde(default)]
     pub gains: bool,
 }
@@ -151,10 +187,13 @@ pub struct ControlSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignTaskSpec {
+    /// Links (`robot/link`) whose joint attachment points are design variables (m).
     #[serde(default)]
     pub attachments: Vec<String>,
+    /// Links (`robot/link`) whose hull vertices are design variables (m).
     #[serde(default)]
     pub vertices: Vec<String>,
+    /// Box bound: each design variable stays within this distance (m) of its initial value. Default 0.5.
     #[serde(default = "DesignTaskSpec::default_bound")]
     pub bound: f64,
 }

@@ -76,16 +76,21 @@ fn default_version() -> u32 {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
+    /// Schema version; must be 1. Default 1.
     #[serde(default = "default_version")]
     pub version: u32,
     /// Δt (s).
     pub dt: f64,
+    /// Number of steps to simulate (`sdrs simulate --steps` overrides). Default 1000.
     #[serde(default = "default_steps")]
     pub steps: usize,
+    /// Gravity (m/s², world frame, z up). Default `[0, 0, -9.81]`.
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
+    /// Newton solver options of every step (defaults: the paper's values).
     #[serde(default)]
     pub solver: NewtonOptions,
+    /// The articulated robots. Default none.
     #[serde(default)]
     pub robots: Vec<RobotSpec>,
     /// Free rigid objects (6-DOF bodies made of hulls).
@@ -111,11 +116,15 @@ pub struct SceneSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
+    /// Object name; also the name of its free joint and of its CSV columns.
     pub name: String,
+    /// Total mass (kg), divided equally over the hull vertices; or give `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,
+    /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Convex hulls in the object's frame (m).
     pub hulls: Vec<HullSpec>,
     /// Initial pose `[x, y, z, rx, ry, rz]` (m, rotation vector) and velocity
     /// `[vx, vy, vz, ωx, ωy, ωz]` (world linear, body angular). Default zero.
@@ -162,9 +171,12 @@ impl GroundSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObstacleSpec {
+    /// Obstacle name (used in contact statistics and errors).
     pub name: String,
+    /// World pose of the obstacle's frame. Default identity.
     #[serde(default)]
     pub origin: Origin,
+    /// Convex hulls in the obstacle's frame (m).
     pub hulls: Vec<HullSpec>,
 }
 
@@ -282,8 +294,10 @@ impl Default for ContactSpec {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Origin {
+    /// Translation (m). Default zero.
     #[serde(default)]
     pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (rad, fixed axes x, y, z as in URDF). Default zero.
     #[serde(default)]
     pub rpy: [f64; 3],
 }
@@ -292,15 +306,21 @@ pub struct Origin {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
+    /// Robot name; prefixes its joints' CSV columns (`robot/joint`) when the scene has several robots.
     pub name: String,
+    /// World pose of the root attachment. Default identity.
     #[serde(default)]
     pub base: Origin,
+    /// The links, in any order (parents before or after children, no cycles); or use `chain`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub links: Vec<LinkSpec>,
+    /// Generates `links` as one of the paper's rotating chains instead.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chain: Option<ChainSpec>,
+    /// PD targets and gains of the joints. Default: no control (gains 0).
     #[serde(default)]
     pub controller: ControllerSpec,
+    /// Initial coordinates and velocities per joint name. Default zeros.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub initial: BTreeMap<String, InitialSpec>,
     /// Design-space description (ties, bounds); read by `sdrs optimize`.
@@ -312,14 +332,20 @@ pub struct RobotSpec {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinkSpec {
+    /// Link name (unique within the robot).
     pub name: String,
+    /// Parent link; omitted or null: attached to the robot's base.
     #[serde(default)]
     pub parent: Option<String>,
+    /// The joint that connects this link to its parent.
     pub joint: JointSpec,
+    /// Link mass (kg), divided equally over all hull vertices; or give `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,
+    /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Convex hulls in the link frame (m).
     pub hulls: Vec<HullSpec>,
 }
 
@@ -339,14 +365,19 @@ pub enum JointType {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointSpec {
+    /// Joint name (trajectory columns, controller keys). Default: the link's name.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
+    /// Joint type: `fixed`, `revolute`, `prismatic`, `ball` (two hinges), `spherical` (3 rotations) or `free` (6 DOF).
     #[serde(rename = "type")]
     pub kind: JointType,
+    /// Revolute and prismatic joints: the unit axis in the joint frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<[f64; 3]>,
+    /// Ball joints: two orthogonal unit hinge axes. Default x then y.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axes: Option<[[f64; 3]; 2]>,
+    /// The joint frame in the parent link's frame; `xyz` is the design-dependent attachment point (m). Default identity.
     #[serde(default)]
     pub origin: Origin,
 }
@@ -355,6 +386,7 @@ pub struct JointSpec {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HullSpec {
+    /// Explicit vertices (m, link frame): at least 4, not coplanar; the hull is their convex hull.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertices: Option<Vec<[f64; 3]>>,
     /// Mass of each vertex (kg), overriding the link's `mass`/`vertex_mass`
@@ -362,6 +394,7 @@ pub struct HullSpec {
     /// massless).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_masses: Option<Vec<f64>>,
+    /// A box primitive instead of `vertices` (8 vertices).
     #[serde(default, rename = "box", skip_serializing_if = "Option::is_none")]
     pub cuboid: Option<BoxSpec>,
 }
@@ -437,8 +470,10 @@ impl ChainSpec {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Gains {
+    /// Stiffness `k_p` (J/rad²; restoring torque `2 k_p (θ* − θ)`). Default: the controller's `kp`.
     #[serde(default)]
     pub kp: Option<f64>,
+    /// Damping `k_d` (J s²/rad²; damping torque `(2 k_d/Δt) θ̇`). Default: the controller's `kd`.
     #[serde(default)]
     pub kd: Option<f64>,
 }
@@ -470,8 +505,10 @@ pub struct ControllerSpec {
     /// Default `k_d` (J s²/rad²). Default 0.
     #[serde(default)]
     pub kd: f64,
+    /// Per-joint gain overrides, by joint name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub gains: BTreeMap<String, Gains>,
+    /// Per joint name: its target signal, or a list with one signal per coordinate. Joints without a target are not driven.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub targets: BTreeMap<String, SignalList>,
 }
@@ -480,8 +517,10 @@ pub struct ControllerSpec {
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
+    /// Initial coordinates (rad or m; one per joint coordinate). Default zeros.
     #[serde(default)]
     pub q: Vec<f64>,
+    /// Initial velocities (rad/s or m/s). Default zeros.
     #[serde(default)]
     pub qdot: Vec<f64>,
 }
@@ -492,8 +531,11 @@ pub struct InitialSpec {
 )]
 #[serde(deny_unknown_fields)]
 pub struct VertexRef {
+    /// Link name.
     pub link: String,
+    /// Hull index within the link (0-based).
     pub hull: usize,
+    /// Vertex index within the hull (0-based).
     pub vertex: usize,
 }
 
@@ -504,7 +546,9 @@ pub struct VertexRef {
 pub struct AttachmentTie {
     /// Child link whose joint origin is the attachment point.
     pub link: String,
+    /// The parent hull's vertex tied to the attachment point.
     pub parent_vertex: VertexRef,
+    /// The child hull's vertex tied to the attachment point.
     pub child_vertex: VertexRef,
 }
 
@@ -520,6 +564,7 @@ pub struct DesignSpec {
     /// overlapping hulls of one link).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ties: Vec<Vec<VertexRef>>,
+    /// Joint attachment points tied to a parent and a child hull vertex (keeps the robot connected while its shape changes).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attachments: Vec<AttachmentTie>,
     /// Box bound half-width around each initial vertex position (m).
