@@ -3,8 +3,8 @@
 //! by each run's task and mode (co-design / controller-only, from its
 //! `summary.json`), e.g. co-design against controller-only.
 
-use crate::plots::{Axes, Series, line_plot};
 use anyhow::{Context, Result, bail};
+use sdrs::output::plot::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
 use std::path::{Path, PathBuf};
 
