@@ -8,7 +8,6 @@ mod compare;
 mod contact_model;
 mod optimize;
 mod plot;
-mod plots;
 mod schema;
 mod simulate;
 mod util;

@@ -3,8 +3,8 @@
 //! by each run's task and mode (co-design / controller-only, from its
 //! `summary.json`), e.g. co-design against controller-only.
 
-use crate::plots::{Axes, Series, line_plot};
 use anyhow::{Context, Result, bail};
+use sdrs::output::plot::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
 use std::path::{Path, PathBuf};
 
@@ -24,8 +24,14 @@ pub struct PlotArgs {
     pub linear: bool,
 }
 
-/// `(label, task name, best loss per iteration)` of one run.
-fn load(dir: &Path) -> Result<(String, String, Vec<(f64, f64)>)> {
+/// One run: its label, task name and best loss per iteration.
+struct Run {
+    label: String,
+    task: String,
+    points: Vec<(f64, f64)>,
+}
+
+fn load(dir: &Path) -> Result<Run> {
     let file = dir.join("history.csv");
     let mut rd = csv::Reader::from_path(&file).with_context(|| {
         format!(
@@ -77,7 +83,11 @@ fn load(dir: &Path) -> Result<(String, String, Vec<(f64, f64)>)> {
         Some(Some("on")) => "co-design",
         _ => "run",
     };
-    Ok((format!("{task}: {mode}"), task, pts))
+    Ok(Run {
+        label: format!("{task}: {mode}"),
+        task,
+        points: pts,
+    })
 }
 
 pub fn run(a: PlotArgs) -> Result<()> {
@@ -90,7 +100,11 @@ pub fn run(a: PlotArgs) -> Result<()> {
     let mut series = Vec::new();
     let mut tasks = Vec::new();
     for d in &a.runs {
-        let (label, task, points) = load(d)?;
+        let Run {
+            label,
+            task,
+            points,
+        } = load(d)?;
         if !tasks.contains(&task) {
             tasks.push(task);
         }

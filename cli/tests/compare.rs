@@ -56,8 +56,16 @@ fn quick_suite_report_browser_gate_and_resume() {
     let dir = scratch_dir("compare");
     let out = dir.join("quick");
     let baseline = root().join("robots/compare/quick_baseline.json");
+    let tol = root().join("robots/compare/quick_tolerance.yaml");
     let o = run_compare(
-        &["--suite", "quick", "--check", baseline.to_str().unwrap()],
+        &[
+            "--suite",
+            "quick",
+            "--check",
+            baseline.to_str().unwrap(),
+            "--tolerance",
+            tol.to_str().unwrap(),
+        ],
         &out,
     );
     let stderr = String::from_utf8_lossy(&o.stderr);

@@ -37,21 +37,24 @@ fn codesign_and_controller_only_on_one_labelled_plot() {
     ] {
         assert!(text.contains(s), "missing `{s}`");
     }
-    // At least two labelled ticks on the loss axis: text elements placed
-    // left of the plot area (x < 70 px) other than the axis title.
-    let ticks = text
-        .split("<text")
-        .skip(1)
-        .filter(|t| {
-            t.split("x=\"")
-                .nth(1)
-                .and_then(|r| r.split('"').next())
-                .and_then(|x| x.parse::<f64>().ok())
-                .is_some_and(|x| x < 75.0)
-                && !t.contains("best task loss")
-        })
-        .count();
-    assert!(ticks >= 2, "{ticks} y tick label(s)");
+    assert!(y_ticks(&text) >= 2, "{} y tick label(s)", y_ticks(&text));
+    // Every plot `optimize` writes: titled with the task and mode, and at
+    // least two labelled ticks on the loss axis.
+    for (mode, label) in [
+        ("on", "chain_reach: co-design"),
+        ("off", "chain_reach: controller-only"),
+    ] {
+        let conv = std::fs::read_to_string(dir.join(mode).join("convergence.svg")).unwrap();
+        assert!(
+            conv.contains(&format!("{label}, best loss per iteration")),
+            "{mode}: title"
+        );
+        assert!(
+            y_ticks(&conv) >= 2,
+            "{mode}: {} y tick label(s)",
+            y_ticks(&conv)
+        );
+    }
     // Not an optimize output: named.
     let o = sdrs()
         .arg("plot")
@@ -65,4 +68,20 @@ fn codesign_and_controller_only_on_one_labelled_plot() {
         !o.status.success() && e.contains("nowhere") && e.contains("history.csv"),
         "{e}"
     );
+}
+
+/// Labelled ticks on the y axis: text elements left of the plot area
+/// (x < 75 px) other than the axis title.
+fn y_ticks(svg: &str) -> usize {
+    svg.split("<text")
+        .skip(1)
+        .filter(|t| {
+            t.split("x=\"")
+                .nth(1)
+                .and_then(|r| r.split('"').next())
+                .and_then(|x| x.parse::<f64>().ok())
+                .is_some_and(|x| x < 75.0)
+                && !t.contains("best task loss")
+        })
+        .count()
 }

@@ -35,64 +35,54 @@ pub fn history_csv(history: &[IterRecord]) -> String {
     s
 }
 
-/// Convergence plot (best loss per iteration, log scale) as SVG; several
-/// labelled histories may share the plot (e.g. co-design vs controller only).
-pub fn convergence_svg(series: &[(&str, &[IterRecord])]) -> Result<String> {
-    use plotters::prelude::*;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (720, 440)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let n = series
-            .iter()
-            .map(|(_, h)| h.len())
-            .max()
-            .unwrap_or(1)
-            .max(2);
-        let vals = series
-            .iter()
-            .flat_map(|(_, h)| h.iter().map(|r| r.best_loss))
-            .filter(|v| *v > 0.0);
-        let (lo, hi) = vals.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
-        let (lo, hi) = if lo.is_finite() {
-            (lo * 0.8, hi * 1.25)
+/// Convergence plot (best loss per iteration) as SVG, titled `title`;
+/// several labelled histories may share it (e.g. co-design vs controller
+/// only). The loss axis is logarithmic (padded to at least a decade, so it
+/// carries several labelled ticks) when every loss is positive, else linear.
+pub fn convergence_svg(title: &str, series: &[(&str, &[IterRecord])]) -> Result<String> {
+    use crate::output::plot::{Axes, Series, line_plot};
+    let positive = series
+        .iter()
+        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
+    let s: Vec<Series> = series
+        .iter()
+        .map(|(label, h)| Series {
+            label: label.to_string(),
+            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
+            dashed: false,
+        })
+        .collect();
+    line_plot(
+        &Axes {
+            title,
+            x: "iteration",
+            y: "best task loss",
+            log_x: false,
+            log_y: positive,
+        },
+        &s,
+    )
+}
+
+/// `task-folder: mode` of a run, for titles and legends (`chain_reach:
+/// co-design`).
+pub fn run_label(p: &Problem, design_on: bool) -> String {
+    let task = p
+        .task_path
+        .parent()
+        .and_then(|d| d.file_name())
+        .map_or_else(
+            || p.task_path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+    format!(
+        "{task}: {}",
+        if design_on {
+            "co-design"
         } else {
-            (1e-6, 1.0)
-        };
-        let mut chart = ChartBuilder::on(&root)
-            .caption("convergence", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(64)
-            .build_cartesian_2d(0f64..(n - 1) as f64, (lo..hi).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("iteration")
-            .y_desc("best loss")
-            .x_label_formatter(&|x| format!("{x:.0}"))
-            .y_label_formatter(&|y| format!("{y:.0e}"))
-            .draw()?;
-        let colors = [BLUE, RED, GREEN, MAGENTA];
-        for (k, (label, h)) in series.iter().enumerate() {
-            let color = colors[k % colors.len()];
-            chart
-                .draw_series(LineSeries::new(
-                    h.iter().map(|r| (r.iter as f64, r.best_loss.max(lo))),
-                    color.stroke_width(2),
-                ))?
-                .label(*label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+            "controller-only"
         }
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE)
-            .draw()?;
-        root.present()?;
-    }
-    Ok(svg)
+    )
 }
 
 /// Joint type with its `axis` / `axes` fields as written in scene files.
@@ -251,7 +241,14 @@ pub fn write_all(
     )?;
     write_atomic(
         &dir.join("convergence.svg"),
-        convergence_svg(&[("loss", &outcome.history)])?.as_bytes(),
+        {
+            let label = run_label(p, extra["design"].as_str() != Some("off"));
+            convergence_svg(
+                &format!("{label}, best loss per iteration"),
+                &[(&label, &outcome.history)],
+            )?
+        }
+        .as_bytes(),
     )?;
     let spec = design_scene(&p.scene.spec, &model, &controller);
     let header = format!(

@@ -2,6 +2,7 @@
 //! temporary file in the same directory, renamed when complete).
 
 pub mod picture;
+pub mod plot;
 
 use crate::model::Model;
 use crate::sim::{StageTime, StepDiagnostics};

@@ -246,8 +246,14 @@ mod tests {
                     forward_seconds_mean: 0.0,
                     backward_seconds_mean: 0.0,
                     min_distance: Some(dist),
+                    distance: None,
+                    upright_at_horizon: None,
+                    first_fall_time: None,
+                    grasped: None,
+                    grasp_trajectories: None,
                 }],
                 fd: None,
+                shapes_svg: None,
             }],
             ..Default::default()
         }

@@ -174,9 +174,8 @@ pub fn run(a: CompareArgs) -> Result<()> {
     }
     report::write(&a.out, &r, verdicts.as_deref())?;
     eprintln!(
-        "report: {} ({} and results.json beside it)",
-        a.out.join("report.html").display(),
-        "report.md"
+        "report: {} (report.md and results.json beside it)",
+        a.out.join("report.html").display()
     );
     if let Some(v) = verdicts {
         let bad: Vec<String> = v

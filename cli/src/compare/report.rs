@@ -4,8 +4,8 @@
 
 use super::gate::{Verdict, markdown as gate_markdown};
 use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
-use crate::plots::{Axes, Series, line_plot};
 use anyhow::Result;
+use sdrs::output::plot::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
 use std::path::Path;
 

@@ -1,4 +1,4 @@
-//! SVG line plots of the CLI (`compare` report, `plot`; plotters' SVG backend): titled,
+//! SVG line plots (`optimize`'s convergence, `sdrs plot`, the `compare` report; plotters' SVG backend): titled,
 //! labelled axes with units, a legend, log axes padded to at least one decade so
 //! that they carry several ticks.
 
