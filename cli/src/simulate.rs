@@ -86,15 +86,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             .as_ref()
             .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
             .unwrap_or_default();
-        let hulls = sdrs::output::HullExport::new(&scene.model, excluded);
-        write_atomic(
-            &dir.join("hulls.json"),
-            serde_json::to_string(&hulls)?.as_bytes(),
-        )?;
-        write_atomic(
-            &dir.join("poses.csv"),
-            sdrs::output::poses_csv(&traj, &scene.model).as_bytes(),
-        )?;
+        sdrs::output::export_run(dir, &scene.model, excluded, &traj)?;
     }
     eprintln!(
         "{}: {} steps of {} s in {:.3} s ({:.3} ms/step), Newton iterations mean {:.2} max {}{}",

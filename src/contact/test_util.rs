@@ -21,23 +21,7 @@ pub fn box_vertices(half: Vector3<f64>) -> Vec<Vector3<f64>> {
 }
 
 /// Random points on a sphere of radius `r` (their hull is a convex polytope).
-pub fn sphere_points(rng: &mut ChaCha8Rng, m: usize, r: f64) -> Vec<Vector3<f64>> {
-    (0..m)
-        .map(|_| {
-            loop {
-                let v = Vector3::new(
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                );
-                let n = v.norm();
-                if n > 1e-3 && n <= 1.0 {
-                    break v * (r / n);
-                }
-            }
-        })
-        .collect()
-}
+pub use crate::geometry::sampling::sphere_points;
 
 pub fn random_rotation(rng: &mut ChaCha8Rng) -> Rotation3<f64> {
     let axis = loop {

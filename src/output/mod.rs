@@ -335,6 +335,21 @@ impl Summary {
     }
 }
 
+/// Writes `dir/hulls.json` ([`HullExport`]) and `dir/poses.csv`
+/// ([`poses_csv`]) of a run recorded with link poses: what viewers and the
+/// independent check `tools/check_separation.py` read.
+pub fn export_run(
+    dir: &Path,
+    model: &Model,
+    excluded: impl IntoIterator<Item = (usize, usize)>,
+    traj: &Trajectory,
+) -> Result<(), OutputError> {
+    let hulls = HullExport::new(model, excluded);
+    let json = serde_json::to_string(&hulls).expect("plain data serializes");
+    write_atomic(&dir.join("hulls.json"), json.as_bytes())?;
+    write_atomic(&dir.join("poses.csv"), poses_csv(traj, model).as_bytes())
+}
+
 /// Hull geometry for external tools: every link's hulls in its frame, and
 /// which link pairs interact.
 #[derive(Clone, Debug, Serialize)]

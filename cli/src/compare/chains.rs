@@ -9,7 +9,7 @@ use crate::contact_model::ContactArgs;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use sdrs::diff::{Loss, LossTerm, When, backward, record};
-use sdrs::output::{HullExport, Summary, poses_csv, write_atomic};
+use sdrs::output::{Summary, export_run};
 use sdrs::scene::{Scene, SceneSpec};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -132,15 +132,7 @@ fn one(
             .as_ref()
             .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
             .unwrap_or_default();
-        let hulls = HullExport::new(&scene.model, excluded);
-        write_atomic(
-            &dir.join("hulls.json"),
-            serde_json::to_string(&hulls)?.as_bytes(),
-        )?;
-        write_atomic(
-            &dir.join("poses.csv"),
-            poses_csv(&traj, &scene.model).as_bytes(),
-        )?;
+        export_run(&dir, &scene.model, excluded, &traj)?;
         match super::fcl::check(&dir) {
             Ok(d) => (d, None),
             Err(e) => (None, Some(format!("{e:#}"))),
