@@ -1,4 +1,4 @@
-//! The energy balance of `--energy-balance`: where a driven or frictional
+//! The energy balance of the summary (`energy.balance`): where a driven or frictional
 //! scene's energy goes. Physics asserted: the controller's work accounts for
 //! a driven pendulum's energy change up to the integrator's numerical
 //! dissipation, which is non-negative and first order in Δt; friction does

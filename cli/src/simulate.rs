@@ -30,11 +30,10 @@ pub struct SimulateArgs {
     /// Also write a velocity column `<name>:v` per coordinate (rad/s, m/s).
     #[arg(long)]
     pub velocities: bool,
-    /// Account for the energy: each term's work per step (controller,
-    /// friction, contact, other) and the integrator's numerical dissipation,
-    /// in the summary's `energy.balance` (costs one extra gradient
-    /// evaluation per step; the trajectory is unchanged).
-    #[arg(long)]
+    /// Accepted for compatibility: the summary's `energy.balance` (each
+    /// term's work and the integrator's numerical dissipation) is always
+    /// written now.
+    #[arg(long, hide = true)]
     pub energy_balance: bool,
     /// No progress bar.
     #[arg(long, short)]
@@ -53,7 +52,6 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     }
     let steps = a.steps.unwrap_or(scene.steps);
     let mut sim = crate::contact_model::simulator(&scene)?;
-    sim.energy_balance = a.energy_balance;
     let pb = progress(steps, a.quiet);
     let t0 = Instant::now();
     let traj = sdrs::sim::run::run_recording(&mut sim, steps, a.export.is_some(), |k| {

@@ -143,8 +143,8 @@ pub struct EnergyStats {
     pub total_final: f64,
     /// `max_t |E_t − E_first|`, with `E = kinetic + potential`.
     pub max_abs_drift: f64,
-    /// Where the energy went, when the run computed each term's work
-    /// (`sdrs simulate --energy-balance`).
+    /// Where the energy went (each term's work; absent only when the
+    /// simulator's `energy_balance` was switched off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub balance: Option<EnergyBalance>,
 }
@@ -221,7 +221,7 @@ impl Summary {
             ),
             (
                 "energy.*",
-                "J (kinetic + gravity potential of the lumped vertex masses; driven, frictional or contact scenes exchange energy with the controller, friction and barrier, so a change is not an error: `energy.balance` (with --energy-balance) says where it went)",
+                "J (kinetic + gravity potential of the lumped vertex masses; driven, frictional or contact scenes exchange energy with the controller, friction and barrier, so a change is not an error: `energy.balance` says where it went)",
             ),
             ("linear_momentum.*", "kg m/s"),
             ("contact.min_distance", "m"),

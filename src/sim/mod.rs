@@ -104,9 +104,9 @@ pub struct Simulator {
     pub energies: Vec<Box<dyn Energy>>,
     pub state: SimState,
     pub timers: StageTimers,
-    /// Also record each term's work per step ([`StepWork`], from Newton's
-    /// last gradient evaluation: a few dot products per term; default off).
-    /// It does not change the trajectory.
+    /// Record each term's work per step ([`StepWork`], from Newton's last
+    /// gradient evaluation: a few dot products per term; default on). It
+    /// does not change the trajectory.
     pub energy_balance: bool,
     scratch: StepScratch,
 }
@@ -294,7 +294,7 @@ impl Simulator {
             energies,
             state,
             timers: StageTimers::default(),
-            energy_balance: false,
+            energy_balance: true,
             scratch,
         }
     }
