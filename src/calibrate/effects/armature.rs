@@ -38,17 +38,12 @@ impl Energy for Armature {
         need: Need,
         acc: &mut EnergyAccumulator,
     ) -> Result<(), EnergyError> {
-        let inv_dt2 = 1.0 / (ctx.dt * ctx.dt);
-        for (k, a, _) in self.0.iter() {
-            let s = q[k] - 2.0 * ctx.q_prev[k] + ctx.q_prev2[k];
-            acc.value += 0.5 * a * s * s * inv_dt2;
-            if need >= Need::Gradient {
-                acc.dof_grad[k] += a * s * inv_dt2;
-            }
-            if need >= Need::Hessian {
-                acc.dof_hess[(k, k)] += a * inv_dt2;
-            }
-        }
+        self.0.accumulate_diagonal_quadratic(
+            1.0 / (ctx.dt * ctx.dt),
+            |k| q[k] - 2.0 * ctx.q_prev[k] + ctx.q_prev2[k],
+            need,
+            acc,
+        );
         Ok(())
     }
 

@@ -36,17 +36,8 @@ impl Energy for JointDamping {
         need: Need,
         acc: &mut EnergyAccumulator,
     ) -> Result<(), EnergyError> {
-        let inv_dt = 1.0 / ctx.dt;
-        for (k, c, _) in self.0.iter() {
-            let d = q[k] - ctx.q_prev[k];
-            acc.value += 0.5 * c * d * d * inv_dt;
-            if need >= Need::Gradient {
-                acc.dof_grad[k] += c * d * inv_dt;
-            }
-            if need >= Need::Hessian {
-                acc.dof_hess[(k, k)] += c * inv_dt;
-            }
-        }
+        self.0
+            .accumulate_diagonal_quadratic(1.0 / ctx.dt, |k| q[k] - ctx.q_prev[k], need, acc);
         Ok(())
     }
 

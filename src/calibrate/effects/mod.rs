@@ -265,6 +265,31 @@ impl JointCoeffs {
             .map(|((k, v), s)| (*k, *v, *s))
     }
 
+    /// Adds `Σ_k ½ c_k w s_k²` with `s_k = stencil(k)` (a finite difference
+    /// of coordinate `k` whose derivative w.r.t. `θ_k` is 1) and its
+    /// diagonal gradient `c_k w s_k` and Hessian `c_k w` — the shape of the
+    /// damping (`s = θ − θ^t`, `w = 1/Δt`) and armature (`s = θ − 2θ^t +
+    /// θ^{t−1}`, `w = 1/Δt²`) terms.
+    pub fn accumulate_diagonal_quadratic(
+        &self,
+        w: f64,
+        stencil: impl Fn(usize) -> f64,
+        need: crate::energy::Need,
+        acc: &mut crate::energy::EnergyAccumulator,
+    ) {
+        use crate::energy::Need;
+        for (k, c, _) in self.iter() {
+            let s = stencil(k);
+            acc.value += 0.5 * c * s * s * w;
+            if need >= Need::Gradient {
+                acc.dof_grad[k] += c * s * w;
+            }
+            if need >= Need::Hessian {
+                acc.dof_hess[(k, k)] += c * w;
+            }
+        }
+    }
+
     /// One shared value on `dofs`, differentiated into `slot`.
     pub fn shared(dofs: &[usize], value: f64, slot: usize) -> Self {
         JointCoeffs {
