@@ -1,5 +1,5 @@
 //! Property-based fuzzing of every input reader: scene YAML, URDF and meshes
-//! (OBJ, STL). Each case mutates a file of the corpus (bundled scenes and
+//! (OBJ, STL, COLLADA). Each case mutates a file of the corpus (bundled scenes and
 //! robots) — numbers replaced by extremes (NaN, ±∞, ±1e308, 2^63, 0, −1),
 //! lines deleted or duplicated, bytes flipped, the file truncated — and
 //! feeds it to the reader exactly as the CLI does. The property: the reader
@@ -295,6 +295,8 @@ fn mesh_readers_never_panic_or_hang() {
     let files = corpus(&[
         "robots/spider/meshes/foot.obj",
         "tests/data/repro/l_finger.stl",
+        "tests/data/cube_cm.dae",
+        "tests/data/instanced_mm.dae",
     ]);
     runner()
         .run(

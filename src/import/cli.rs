@@ -11,7 +11,7 @@ use std::path::PathBuf;
 /// design space with connectivity constraints.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ImportArgs {
-    /// Input: `.urdf` (robot) or `.obj` / `.stl` (one free body).
+    /// Input: `.urdf` (robot) or `.obj` / `.stl` / `.dae` (one free body).
     pub input: PathBuf,
     /// Output design (scene YAML). Hull OBJs go to `<out stem>_meshes/`.
     #[arg(long)]

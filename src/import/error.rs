@@ -55,7 +55,7 @@ pub enum ImportError {
         mesh: PathBuf,
     },
     #[error(
-        "{}: {element}: mesh format \".{ext}\" of {} is not supported (supported: .obj, .stl); convert it first, e.g. `python -c \"import trimesh; trimesh.load('{}', force='mesh').export('{}.obj')\"`, or with MeshLab/Blender (File → Export → OBJ)",
+        "{}: {element}: mesh format \".{ext}\" of {} is not supported (supported: .obj, .stl, .dae); convert it first, e.g. `python -c \"import trimesh; trimesh.load('{}', force='mesh').export('{}.obj')\"`, or with MeshLab/Blender (File → Export → OBJ)",
         path.display(), mesh.display(), file_name(mesh), file_stem(mesh)
     )]
     UnsupportedFormat {

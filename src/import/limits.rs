@@ -8,6 +8,11 @@
 /// coordinates (volumes, second moments) lose all precision or overflow.
 pub const MAX_COORDINATE: f64 = 1.0e4;
 
+/// Most vertices one mesh file may produce (5 million: about 120 MB of
+/// positions). A COLLADA scene that instances its geometry many times could
+/// otherwise multiply a small file into an unbounded mesh.
+pub const MAX_MESH_VERTICES: usize = 5_000_000;
+
 /// Checks that every value is finite and at most [`MAX_COORDINATE`] in
 /// magnitude; `what` names the quantity in the message.
 pub fn check_coordinates(what: &str, values: &[f64]) -> Result<(), String> {

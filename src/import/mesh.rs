@@ -1,8 +1,9 @@
-//! Triangle meshes: reading OBJ (tobj) and STL (stl_io), welding, checks
-//! (empty, non-manifold), transforms, volume and surface sampling.
+//! Triangle meshes: reading OBJ (tobj), STL (stl_io) and COLLADA
+//! ([`super::collada`]), welding, checks (empty, non-manifold), transforms,
+//! volume and surface sampling.
 //!
-//! Other formats (COLLADA `.dae`, `.ply`, `.gltf`, …) are refused with an
-//! error that says how to convert them.
+//! Other formats (`.ply`, `.gltf`, …) are refused with an error that says
+//! how to convert them.
 
 use super::error::ImportError;
 use super::polytope::{bounds, mesh_volume};
@@ -156,11 +157,15 @@ impl TriMesh {
     }
 }
 
-/// Reads a mesh file (`.obj` or `.stl`, case-insensitive), welds it and
-/// checks that it is non-empty. Open and non-manifold meshes are accepted: a
-/// convex decomposition needs only the surface (the caller reports them;
-/// their volume is then unknown).
-pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError> {
+/// Reads a mesh file (`.obj`, `.stl` or `.dae`, case-insensitive), welds it
+/// and checks that it is non-empty. Open and non-manifold meshes are
+/// accepted: a convex decomposition needs only the surface (the caller
+/// reports them; their volume is then unknown).
+///
+/// The second value is a note for the import report, if the file says
+/// something the user should know (a COLLADA `<up_axis>` other than `Z_UP`,
+/// which is not applied; see [`super::collada`]).
+pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<(TriMesh, Option<String>), ImportError> {
     let ext = mesh
         .extension()
         .and_then(|e| e.to_str())
@@ -172,7 +177,7 @@ pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError>
         mesh: mesh.to_path_buf(),
         msg,
     };
-    if !matches!(ext.as_str(), "obj" | "stl") {
+    if !matches!(ext.as_str(), "obj" | "stl" | "dae") {
         return Err(ImportError::UnsupportedFormat {
             path: ctx.file.clone(),
             element: ctx.element.clone(),
@@ -188,10 +193,21 @@ pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError>
             hint: String::new(),
         });
     }
-    let (vertices, triangles) = if ext == "obj" {
-        read_obj(mesh).map_err(bad)?
-    } else {
-        read_stl(mesh).map_err(bad)?
+    let mut note = None;
+    let (vertices, triangles) = match ext.as_str() {
+        "obj" => read_obj(mesh).map_err(bad)?,
+        "stl" => read_stl(mesh).map_err(bad)?,
+        _ => {
+            let c = super::collada::read_collada(mesh).map_err(bad)?;
+            note = c.up_axis.map(|axis| {
+                format!(
+                    "{}: COLLADA mesh {} declares <up_axis>{axis}</up_axis>; read in its raw coordinates (as ROS descriptions expect), not rotated to Z_UP",
+                    ctx.element,
+                    mesh.display()
+                )
+            });
+            (c.vertices, c.triangles)
+        }
     };
     let m = TriMesh::welded(vertices, triangles);
     if m.triangles.is_empty() {
@@ -201,7 +217,7 @@ pub fn load_mesh(mesh: &Path, ctx: &MeshContext) -> Result<TriMesh, ImportError>
             mesh: mesh.to_path_buf(),
         });
     }
-    Ok(m)
+    Ok((m, note))
 }
 
 type RawMesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);

@@ -1,4 +1,4 @@
-//! Import: URDF / OBJ / STL robots → convex-hull design spaces with
+//! Import: URDF / OBJ / STL / COLLADA robots → convex-hull design spaces with
 //! connectivity constraints (paper, `shape.tex`: "users may supply
 //! mesh-based link representations, which we convert to our parametric form
 //! using approximate convex decomposition; we then insert connectivity
@@ -17,11 +17,13 @@
 
 pub mod child;
 pub mod cli;
+pub mod collada;
 pub mod connectivity;
 pub mod decompose;
 pub mod error;
 pub mod fkcheck;
 pub mod grid;
+pub mod guard;
 pub mod interior;
 pub mod limits;
 pub mod mass;
@@ -142,7 +144,7 @@ fn is_urdf(p: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xml"))
 }
 
-/// Imports a `.urdf`, `.obj` or `.stl` file.
+/// Imports a `.urdf`, `.obj`, `.stl` or `.dae` file.
 pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportError> {
     let t0 = Instant::now();
     if !input.is_file() {
@@ -252,7 +254,9 @@ fn link_geometry(
             file: src.file.clone(),
             element: g.element.clone(),
         };
-        let m = mesh::load_mesh(path, &ctx)?.transformed(*scale, &g.rotation, &g.translation);
+        let (m, note) = mesh::load_mesh(path, &ctx)?;
+        notes.extend(note);
+        let m = m.transformed(*scale, &g.rotation, &g.translation);
         limits::check_coordinates(
             &format!("mesh {} placed with scale {scale:?}", path.display()),
             m.vertices

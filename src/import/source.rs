@@ -95,7 +95,7 @@ pub struct SourceRobot {
 }
 
 impl SourceRobot {
-    /// A single free body made of one mesh file (bare `.obj`/`.stl` input).
+    /// A single free body made of one mesh file (bare `.obj`/`.stl`/`.dae` input).
     pub fn from_mesh(path: &std::path::Path) -> SourceRobot {
         let name = path
             .file_stem()
