@@ -27,6 +27,29 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// Runs `round` (one proptest run of [`ci_cases`] cases, freshly seeded)
+/// once, or — when `SDRS_FUZZ_SECONDS` is set — again and again until that
+/// many seconds have passed; prints how many cases ran.
+fn rounds(kind: &str, mut round: impl FnMut()) {
+    let budget = std::env::var("SDRS_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok());
+    let t0 = Instant::now();
+    let mut n = 0u64;
+    loop {
+        round();
+        n += 1;
+        if budget.is_none_or(|b| t0.elapsed().as_secs() >= b) {
+            break;
+        }
+    }
+    eprintln!(
+        "fuzz {kind}: {} cases in {:.0} s, no panic, no hang",
+        n * ci_cases() as u64,
+        t0.elapsed().as_secs_f64()
+    );
+}
+
 /// Cases per reader: `SDRS_FUZZ_CASES`, default 150.
 fn ci_cases() -> u32 {
     std::env::var("SDRS_FUZZ_CASES")
@@ -216,39 +239,46 @@ fn scene_reader_never_panics_or_hangs() {
         "robots/chain_reach/scene.yaml",
     ]);
     let loaded = std::cell::Cell::new(0usize);
-    runner()
-        .run(
-            &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
-            |(i, muts)| {
-                let input = apply(&files[i].1, &muts);
-                check("scene", &input, || {
-                    let text = String::from_utf8_lossy(&input);
-                    match Scene::from_str(&text, &files[i].0) {
-                        Ok(scene) => {
-                            loaded.set(loaded.get() + 1);
-                            if scene.model.ndof() <= 64 {
-                                let mut sim = scene.simulator();
-                                for _ in 0..2 {
-                                    if let Ok(d) = sim.step() {
-                                        assert!(d.newton.value.is_finite() || d.newton.iters == 0);
-                                    } else {
-                                        break;
+    rounds("scene", || {
+        runner()
+            .run(
+                &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
+                |(i, muts)| {
+                    let input = apply(&files[i].1, &muts);
+                    check("scene", &input, || {
+                        let text = String::from_utf8_lossy(&input);
+                        match Scene::from_str(&text, &files[i].0) {
+                            Ok(scene) => {
+                                loaded.set(loaded.get() + 1);
+                                if scene.model.ndof() <= 64 {
+                                    let mut sim = scene.simulator();
+                                    for _ in 0..2 {
+                                        if let Ok(d) = sim.step() {
+                                            assert!(
+                                                d.newton.value.is_finite() || d.newton.iters == 0
+                                            );
+                                        } else {
+                                            break;
+                                        }
                                     }
                                 }
+                                String::new()
                             }
-                            String::new()
+                            Err(e) => {
+                                let m = e.to_string();
+                                assert!(!m.is_empty());
+                                m
+                            }
                         }
-                        Err(e) => {
-                            let m = e.to_string();
-                            assert!(!m.is_empty());
-                            m
-                        }
-                    }
-                })
-            },
-        )
-        .unwrap();
-    eprintln!("scene cases: {} ({} loaded)", ci_cases(), loaded.get());
+                    })
+                },
+            )
+            .unwrap();
+    });
+    eprintln!(
+        "scene inputs that loaded (and were simulated): {}",
+        loaded.get()
+    );
 }
 
 fn import_quietly(path: &Path) -> String {
@@ -274,18 +304,24 @@ fn urdf_reader_never_panics_or_hangs() {
         let p = e.unwrap().path();
         std::fs::copy(&p, dir.join("meshes").join(p.file_name().unwrap())).unwrap();
     }
-    let files = corpus(&["robots/spider/spider.urdf", "robots/biped/biped.urdf"]);
+    let files = corpus(&[
+        "robots/spider/spider.urdf",
+        "robots/biped/biped.urdf",
+        "tests/data/pybullet_shapes.urdf",
+    ]);
     let target = dir.join("robot.urdf");
-    runner()
-        .run(
-            &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
-            |(i, muts)| {
-                let input = apply(&files[i].1, &muts);
-                std::fs::write(&target, &input).unwrap();
-                check("urdf", &input, || import_quietly(&target))
-            },
-        )
-        .unwrap();
+    rounds("urdf", || {
+        runner()
+            .run(
+                &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
+                |(i, muts)| {
+                    let input = apply(&files[i].1, &muts);
+                    std::fs::write(&target, &input).unwrap();
+                    check("urdf", &input, || import_quietly(&target))
+                },
+            )
+            .unwrap();
+    });
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -298,23 +334,25 @@ fn mesh_readers_never_panic_or_hang() {
         "tests/data/cube_cm.dae",
         "tests/data/instanced_mm.dae",
     ]);
-    runner()
-        .run(
-            &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
-            |(i, muts)| {
-                let input = apply(&files[i].1, &muts);
-                let ext = files[i]
-                    .0
-                    .extension()
-                    .unwrap()
-                    .to_string_lossy()
-                    .into_owned();
-                let target = dir.join(format!("mesh.{ext}"));
-                std::fs::write(&target, &input).unwrap();
-                check("mesh", &input, || import_quietly(&target))
-            },
-        )
-        .unwrap();
+    rounds("mesh", || {
+        runner()
+            .run(
+                &(0..files.len(), prop::collection::vec(mutation(), 1..4)),
+                |(i, muts)| {
+                    let input = apply(&files[i].1, &muts);
+                    let ext = files[i]
+                        .0
+                        .extension()
+                        .unwrap()
+                        .to_string_lossy()
+                        .into_owned();
+                    let target = dir.join(format!("mesh.{ext}"));
+                    std::fs::write(&target, &input).unwrap();
+                    check("mesh", &input, || import_quietly(&target))
+                },
+            )
+            .unwrap();
+    });
     let _ = std::fs::remove_dir_all(&dir);
 }
 

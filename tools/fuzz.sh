@@ -1,10 +1,19 @@
 #!/usr/bin/env bash
-# Long fuzzing run of the scene, URDF and mesh readers (tests/fuzz_inputs.rs):
-# CASES mutated inputs per reader (default 200000, about 30 minutes on two
-# cores). CI runs the same test with 150 cases per reader.
+# Long fuzzing run of the scene, URDF and mesh readers (tests/fuzz_inputs.rs).
+#
+#   bash tools/fuzz.sh [CASES] [SECONDS]
+#
+# Each reader runs rounds of CASES freshly seeded mutated inputs (default
+# 5000) until SECONDS have passed (default 1800: the three readers run side by
+# side, each for at least 30 minutes), and prints how many cases it ran.
+# With SECONDS = 0 each reader runs one round. CI runs one round of 150.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cases="${1:-200000}"
+cases="${1:-5000}"
+seconds="${2:-1800}"
 start=$(date +%s)
-SDRS_FUZZ_CASES="$cases" cargo test --release --test fuzz_inputs -- --nocapture
-echo "fuzz: $cases cases per reader (3 readers) in $(( $(date +%s) - start )) s, no panic, no hang"
+env_seconds=()
+if [ "$seconds" != 0 ]; then env_seconds=(SDRS_FUZZ_SECONDS="$seconds"); fi
+env SDRS_FUZZ_CASES="$cases" "${env_seconds[@]}" \
+  cargo test --release --test fuzz_inputs -- --nocapture --test-threads 3 2>&1 | tee target/fuzz.log
+echo "fuzz: 3 readers in $(( $(date +%s) - start )) s; cases per reader above ('fuzz <reader>: N cases'), no panic, no hang"

@@ -30,6 +30,7 @@ pub mod mass;
 pub mod mesh;
 pub mod polytope;
 pub mod primitives;
+pub mod pybullet_shapes;
 pub mod python;
 pub mod ready;
 pub mod report;

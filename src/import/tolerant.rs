@@ -13,11 +13,15 @@
 //!   the first one counts, as in tinyxml-based readers; so is anything but a
 //!   shape inside `<geometry>` (a misplaced `<material>`);
 //! - a joint `<limit>` without `effort` or `velocity` gets `0` (pybullet's
-//!   default; they are reported, not simulated).
+//!   default; they are reported, not simulated);
+//! - pybullet's `<plane>` and `<cdf>` shapes are replaced by a placeholder
+//!   and recorded ([`super::pybullet_shapes`]), to be substituted after
+//!   parsing.
 //!
 //! Anything else is left for the strict checks (`urdf::prescan`) to reject
 //! with the line and element.
 
+use super::pybullet_shapes::{Slot, Special, SpecialShapes};
 use quick_xml::Writer;
 use quick_xml::events::{BytesStart, Event};
 use std::collections::{BTreeSet, HashSet};
@@ -109,20 +113,42 @@ fn singleton(parent: &str, child: &str) -> bool {
     }
 }
 
-/// The repaired text and what was repaired. On malformed XML the text is
-/// returned unchanged (the strict checks report it with its line).
-pub fn normalize(text: &str) -> (String, Vec<String>) {
-    match rewrite(text) {
-        Ok(r) => r,
-        Err(_) => (text.to_string(), Vec::new()),
-    }
+/// The tolerant pass's output.
+#[derive(Debug, Default)]
+pub struct Normalized {
+    /// The repaired URDF text.
+    pub text: String,
+    /// What was repaired, in words.
+    pub notes: Vec<String>,
+    /// pybullet shapes replaced by placeholders.
+    pub special: SpecialShapes,
 }
 
-fn rewrite(text: &str) -> Result<(String, Vec<String>), quick_xml::Error> {
+/// The repaired text and what was repaired. On malformed XML the text is
+/// returned unchanged (the strict checks report it with its line).
+pub fn normalize(text: &str) -> Normalized {
+    rewrite(text).unwrap_or_else(|_| Normalized {
+        text: text.to_string(),
+        ..Normalized::default()
+    })
+}
+
+/// Where the rewrite is: the current link and how many `<collision>` and
+/// `<visual>` elements of it have been seen.
+#[derive(Default)]
+struct LinkCursor {
+    name: String,
+    collisions: usize,
+    visuals: usize,
+}
+
+fn rewrite(text: &str) -> Result<Normalized, quick_xml::Error> {
     let mut reader = quick_xml::Reader::from_str(text);
     let mut writer = Writer::new(Vec::with_capacity(text.len()));
     let mut stack: Vec<(String, HashSet<String>)> = Vec::new();
     let mut notes = BTreeSet::new();
+    let mut special = SpecialShapes::new();
+    let mut link = LinkCursor::default();
     let mut skip_depth = 0usize;
     loop {
         let ev = reader.read_event()?;
@@ -172,6 +198,52 @@ fn rewrite(text: &str) -> Result<(String, Vec<String>), quick_xml::Error> {
                     }
                     continue;
                 }
+                let attr = |key: &str| {
+                    e.try_get_attribute(key)
+                        .ok()
+                        .flatten()
+                        .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+                        .unwrap_or_default()
+                };
+                match (parent.as_deref(), name.as_str()) {
+                    (Some("robot"), "link") => {
+                        link = LinkCursor {
+                            name: attr("name"),
+                            ..LinkCursor::default()
+                        }
+                    }
+                    (Some("link"), "collision") => link.collisions += 1,
+                    (Some("link"), "visual") => link.visuals += 1,
+                    _ => {}
+                }
+                let in_slot = (stack.len() >= 2)
+                    .then(|| stack[stack.len() - 2].0.as_str())
+                    .and_then(|s| match s {
+                        "collision" => Some((Slot::Collision, link.collisions.checked_sub(1)?)),
+                        "visual" => Some((Slot::Visual, link.visuals.checked_sub(1)?)),
+                        _ => None,
+                    });
+                let shape = match name.as_str() {
+                    "plane" => Some(Special::Plane {
+                        normal: attr("normal"),
+                    }),
+                    "cdf" => Some(Special::Cdf {
+                        filename: attr("filename"),
+                    }),
+                    _ => None,
+                };
+                if let (Some("geometry"), Some((slot, index)), Some(shape)) =
+                    (parent.as_deref(), in_slot, shape)
+                {
+                    special.insert((link.name.clone(), slot, index), shape);
+                    writer.write_event(Event::Empty(
+                        BytesStart::new("sphere").with_attributes([("radius", "1")]),
+                    ))?;
+                    if is_start {
+                        skip_depth = 1;
+                    }
+                    continue;
+                }
                 let fixed = repair_attributes(e, &name, parent.as_deref(), &mut notes);
                 if is_start {
                     stack.push((name, HashSet::new()));
@@ -189,7 +261,11 @@ fn rewrite(text: &str) -> Result<(String, Vec<String>), quick_xml::Error> {
         }
     }
     let out = String::from_utf8(writer.into_inner()).unwrap_or_else(|_| text.to_string());
-    Ok((out, notes.into_iter().collect()))
+    Ok(Normalized {
+        text: out,
+        notes: notes.into_iter().collect(),
+        special,
+    })
 }
 
 fn repair_attributes<'a>(
@@ -260,7 +336,9 @@ mod tests {
   <gazebo reference="a"><material>Gazebo/Blue</material></gazebo>
   <link name="b"><visual><geometry><box size="1 1 1"/><material name="x"/></geometry></visual></link>
 </robot>"#;
-        let (out, notes) = normalize(text);
+        let Normalized {
+            text: out, notes, ..
+        } = normalize(text);
         assert!(
             out.contains(r#"<axis xyz="1 0 0"/>"#) && !out.contains("0 1 0"),
             "{out}"

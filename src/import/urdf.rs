@@ -29,6 +29,9 @@
 use super::ImportOptions;
 use super::error::ImportError;
 use super::limits;
+use super::pybullet_shapes::{
+    PLANE_EXTENT, PLANE_THICKNESS, Slot, Special, SpecialShapes, plane_slab,
+};
 use super::source::*;
 use crate::math::rpy_to_matrix;
 use crate::scene::schema::{JointType, Origin};
@@ -51,8 +54,8 @@ pub fn read_urdf(path: &Path, opts: &ImportOptions) -> Result<SourceRobot, Impor
         });
     }
     prescan(path, &text)?;
-    let (fixed, repairs) = super::tolerant::normalize(&text);
-    let robot = urdf_rs::read_from_string(&fixed).map_err(|e| {
+    let normalized = super::tolerant::normalize(&text);
+    let robot = urdf_rs::read_from_string(&normalized.text).map_err(|e| {
         let msg = e.to_string();
         let msg = match msg.split("unknown variant `").nth(1).and_then(|s| s.split('`').next()) {
             Some(shape) if msg.contains("expected one of `box`") => format!(
@@ -67,9 +70,42 @@ pub fn read_urdf(path: &Path, opts: &ImportOptions) -> Result<SourceRobot, Impor
             msg,
         }
     })?;
-    let mut src = convert(path, &robot, opts)?;
-    src.notes.extend(repairs);
+    if robot.links.is_empty() && text.contains("<deformable") {
+        return Err(ImportError::InvalidUrdf {
+            path: path.to_path_buf(),
+            element: "robot".into(),
+            msg: deformable_message(path, &text),
+        });
+    }
+    let mut special_notes = Vec::new();
+    let mut src = convert(path, &robot, &normalized.special, &mut special_notes, opts)?;
+    src.notes.extend(normalized.notes);
+    src.notes.extend(special_notes);
     Ok(src)
+}
+
+/// Why a file with a `<deformable>` and no `<link>` is refused, naming its
+/// mesh and whether that mesh exists next to the file.
+fn deformable_message(path: &Path, text: &str) -> String {
+    let mesh = text
+        .split("<deformable")
+        .nth(1)
+        .and_then(|d| d.split("filename=\"").nth(1))
+        .and_then(|f| f.split('"').next());
+    let missing = match mesh {
+        Some(m) => {
+            let p = path.parent().unwrap_or(Path::new(".")).join(m);
+            if p.is_file() {
+                format!(" (its mesh {m} exists)")
+            } else {
+                format!("; its mesh {m} is not found either ({})", p.display())
+            }
+        }
+        None => String::new(),
+    };
+    format!(
+        "the URDF has no <link>: it describes a deformable body (pybullet's <deformable> soft-body extension), which this rigid-body method cannot represent{missing}"
+    )
 }
 
 fn line_of(text: &str, pos: usize) -> usize {
@@ -281,6 +317,84 @@ pub fn resolve_mesh_path(urdf: &Path, filename: &str) -> Result<PathBuf, Vec<Pat
     if f.is_file() { Ok(f) } else { Err(vec![f]) }
 }
 
+/// A link's geometry: its `<collision>` elements, or its `<visual>` ones
+/// when it has none; pybullet's `<plane>` and `<cdf>` substituted as
+/// [`super::pybullet_shapes`] says.
+fn link_geometry(
+    path: &Path,
+    l: &urdf_rs::Link,
+    special: &SpecialShapes,
+    notes: &mut Vec<String>,
+) -> Result<Vec<SourceGeometry>, ImportError> {
+    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+        path: path.to_path_buf(),
+        element,
+        msg,
+    };
+    let one = |slot: Slot, gi: usize, origin: &urdf_rs::Pose, g: &urdf_rs::Geometry| {
+        let tag = if slot == Slot::Collision {
+            "collision"
+        } else {
+            "visual"
+        };
+        let element = format!("link \"{}\" {tag}[{gi}]", l.name);
+        match special.get(&(l.name.clone(), slot, gi)) {
+            None => geometry_of(path, element, origin, g).map(|g| vec![g]),
+            Some(Special::Plane { normal }) => {
+                let (r_plane, c_plane, size) =
+                    plane_slab(normal).map_err(|m| invalid(element.clone(), m))?;
+                let (r, t) = rt(&origin_of(origin));
+                Ok(vec![SourceGeometry {
+                    element,
+                    rotation: r * r_plane,
+                    translation: t + r * c_plane,
+                    shape: SourceShape::Box { size },
+                }])
+            }
+            Some(Special::Cdf { filename }) => Err(invalid(
+                element,
+                format!(
+                    "pybullet's signed-distance-field geometry <cdf filename=\"{filename}\"> has no visual geometry to stand in for it"
+                ),
+            )),
+        }
+    };
+    let mut geometry = Vec::new();
+    if !l.collision.is_empty() {
+        for (gi, c) in l.collision.iter().enumerate() {
+            if let Some(Special::Cdf { filename }) =
+                special.get(&(l.name.clone(), Slot::Collision, gi))
+            {
+                if l.visual.is_empty() {
+                    return one(Slot::Collision, gi, &c.origin, &c.geometry);
+                }
+                notes.push(format!(
+                    "link \"{}\" collision[{gi}]: pybullet's signed-distance-field geometry <cdf filename=\"{filename}\"> is not supported; the link's visual geometry is used for collision instead",
+                    l.name
+                ));
+                for (vi, v) in l.visual.iter().enumerate() {
+                    geometry.extend(one(Slot::Visual, vi, &v.origin, &v.geometry)?);
+                }
+                continue;
+            }
+            if let Some(Special::Plane { normal }) =
+                special.get(&(l.name.clone(), Slot::Collision, gi))
+            {
+                notes.push(format!(
+                    "link \"{}\" collision[{gi}]: pybullet's infinite <plane normal=\"{normal}\"> is imported as a {PLANE_EXTENT} m × {PLANE_EXTENT} m × {PLANE_THICKNESS} m slab whose top face is the plane (a convex hull cannot be infinite)",
+                    l.name
+                ));
+            }
+            geometry.extend(one(Slot::Collision, gi, &c.origin, &c.geometry)?);
+        }
+    } else {
+        for (gi, v) in l.visual.iter().enumerate() {
+            geometry.extend(one(Slot::Visual, gi, &v.origin, &v.geometry)?);
+        }
+    }
+    Ok(geometry)
+}
+
 fn geometry_of(
     path: &Path,
     element: String,
@@ -362,6 +476,8 @@ fn type_name(t: &urdf_rs::JointType) -> &'static str {
 fn convert(
     path: &Path,
     robot: &urdf_rs::Robot,
+    special: &SpecialShapes,
+    special_notes: &mut Vec<String>,
     opts: &ImportOptions,
 ) -> Result<SourceRobot, ImportError> {
     let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
@@ -480,26 +596,7 @@ fn convert(
     let mut pos = vec![usize::MAX; robot.links.len()];
     for &li in &order {
         let l = &robot.links[li];
-        let mut geometry = Vec::new();
-        if !l.collision.is_empty() {
-            for (gi, c) in l.collision.iter().enumerate() {
-                geometry.push(geometry_of(
-                    path,
-                    format!("link \"{}\" collision[{gi}]", l.name),
-                    &c.origin,
-                    &c.geometry,
-                )?);
-            }
-        } else {
-            for (gi, v) in l.visual.iter().enumerate() {
-                geometry.push(geometry_of(
-                    path,
-                    format!("link \"{}\" visual[{gi}]", l.name),
-                    &v.origin,
-                    &v.geometry,
-                )?);
-            }
-        }
+        let geometry = link_geometry(path, l, special, special_notes)?;
         let (parent, joint) = match parent_joint[li] {
             None => (
                 None,
