@@ -26,6 +26,17 @@ fn pybullet_data() -> PathBuf {
         .to_path_buf()
 }
 
+/// Per-axis minimum and maximum of `points`.
+fn extent(points: impl Iterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+    points.fold(([f64::MAX; 3], [f64::MIN; 3]), |(mut lo, mut hi), p| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+        (lo, hi)
+    })
+}
+
 fn all_dae() -> Vec<PathBuf> {
     let d = pybullet_data();
     let mut v: Vec<PathBuf> = std::fs::read_dir(d.join("racecar/meshes"))
@@ -80,16 +91,7 @@ fn dae_meshes_match_trimesh_and_pycollada() {
         };
         let (m, note) = load_mesh(f, &ctx).unwrap_or_else(|e| panic!("{e}"));
         let r = &reference[f.to_str().unwrap()];
-        let (lo, hi) =
-            m.vertices
-                .iter()
-                .fold(([f64::MAX; 3], [f64::MIN; 3]), |(mut lo, mut hi), v| {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(v[k]);
-                        hi[k] = hi[k].max(v[k]);
-                    }
-                    (lo, hi)
-                });
+        let (lo, hi) = extent(m.vertices.iter().map(|v| [v.x, v.y, v.z]));
         let diag = m.diagonal();
         let mut worst = 0.0f64;
         for k in 0..3 {
@@ -163,16 +165,6 @@ fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
     // decimal text, so near-coplanar points of the round wheel may land on
     // either side of a hull face: compare each hull's extent, and its
     // vertex count to 2 %.
-    let extent = |v: &[[f64; 3]]| {
-        v.iter()
-            .fold(([f64::MAX; 3], [f64::MIN; 3]), |(mut lo, mut hi), p| {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-                (lo, hi)
-            })
-    };
     let mut worst = 0.0f64;
     for (la, lb) in a.links.iter().zip(&b.links) {
         assert_eq!(la.hulls.len(), lb.hulls.len(), "link {}", la.name);
@@ -188,7 +180,8 @@ fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
                 "link {}: {na} vs {nb} vertices",
                 la.name
             );
-            let ((lo_a, hi_a), (lo_b, hi_b)) = (extent(va), extent(vb));
+            let ((lo_a, hi_a), (lo_b, hi_b)) =
+                (extent(va.iter().copied()), extent(vb.iter().copied()));
             for k in 0..3 {
                 worst = worst
                     .max((lo_a[k] - lo_b[k]).abs())
