@@ -11,29 +11,11 @@ use support::{python, robots, scratch_dir, sdrs};
 /// checks every hull pair at every step with python-fcl.
 fn four_chains_under_ipc(steps: usize) {
     let dir = scratch_dir(&format!("ipc_fcl_{steps}"));
-    let out = sdrs()
-        .args([
-            "simulate",
-            "-q",
-            "--contact",
-            "ipc",
-            "--steps",
-            &steps.to_string(),
-            "--json",
-        ])
-        .arg(dir.join("summary.json"))
-        .arg("--export")
-        .arg(&dir)
-        .arg(robots("four_chains.yaml"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let summary = support::simulate_export(
+        &dir,
+        &["--contact", "ipc", "--steps", &steps.to_string()],
+        &robots("four_chains.yaml"),
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert!(
         summary["contact"]["steps_in_contact"].as_u64().unwrap() > 100,
         "the chains did not tangle"

@@ -3,26 +3,12 @@
 
 mod support;
 
-use support::{python, robots, scratch_dir, sdrs};
+use support::{python, robots, scratch_dir};
 
 #[test]
 fn four_chains_tangle_for_2000_steps_and_python_fcl_finds_every_pair_separated() {
     let dir = scratch_dir("fcl");
-    let out = sdrs()
-        .args(["simulate", "-q", "--steps", "2000", "--json"])
-        .arg(dir.join("summary.json"))
-        .arg("--export")
-        .arg(&dir)
-        .arg(robots("four_chains.yaml"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary = support::simulate_export(&dir, &["--steps", "2000"], &robots("four_chains.yaml"));
     let links = summary["final_state"]
         .as_object()
         .unwrap()

@@ -28,3 +28,28 @@ pub fn pybullet_data() -> std::path::PathBuf {
     );
     std::path::PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
 }
+
+/// Runs `sdrs simulate -q [extra…] --json DIR/summary.json --export DIR SCENE`,
+/// asserts it succeeded and returns the summary.
+pub fn simulate_export(
+    dir: &std::path::Path,
+    extra: &[&str],
+    scene: &std::path::Path,
+) -> serde_json::Value {
+    let out = sdrs()
+        .args(["simulate", "-q"])
+        .args(extra)
+        .arg("--json")
+        .arg(dir.join("summary.json"))
+        .arg("--export")
+        .arg(dir)
+        .arg(scene)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
