@@ -44,6 +44,16 @@ pub struct PotentialCase {
     pub dhat: f64,
 }
 
+impl PotentialCase {
+    /// The two hulls at their poses, as SDRS's pair functions take them.
+    pub fn hull_poses(&self) -> [HullPose<'_>; 2] {
+        [0, 1].map(|k| HullPose {
+            pose: &self.pose[k],
+            x_local: &self.mesh[k].x_local,
+        })
+    }
+}
+
 /// One measured case.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct PotentialTiming {
@@ -184,14 +194,7 @@ pub fn time_case(
     reps: usize,
 ) -> Result<PotentialTiming, BenchError> {
     let m = case.vertices;
-    let ha = HullPose {
-        pose: &case.pose[0],
-        x_local: &case.mesh[0].x_local,
-    };
-    let hb = HullPose {
-        pose: &case.pose[1],
-        x_local: &case.mesh[1].x_local,
-    };
+    let [ha, hb] = case.hull_poses();
     let mut sc = ContactScratch::new();
     let first = contact_pair(ha, hb, params, None, Need::Hessian, &mut sc).map_err(|e| {
         BenchError::Contact {
@@ -284,14 +287,7 @@ pub fn time_friction_case(
         FrictionNeed, FrictionParams, FrictionScratch, LaggedContact, friction_pair,
     };
     let m = case.vertices;
-    let ha = HullPose {
-        pose: &case.pose[0],
-        x_local: &case.mesh[0].x_local,
-    };
-    let hb = HullPose {
-        pose: &case.pose[1],
-        x_local: &case.mesh[1].x_local,
-    };
+    let [ha, hb] = case.hull_poses();
     let mut sc = ContactScratch::new();
     let pair = match contact_pair(ha, hb, params, None, Need::Gradient, &mut sc) {
         Ok(PairOutcome::Separated(p)) => p,
