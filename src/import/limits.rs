@@ -8,6 +8,10 @@
 /// coordinates (volumes, second moments) lose all precision or overflow.
 pub const MAX_COORDINATE: f64 = 1.0e4;
 
+/// Smallest primitive dimension accepted (m): 1 µm. Below it a box or
+/// cylinder is flat at the precision hull construction works at.
+pub const MIN_DIMENSION: f64 = 1.0e-6;
+
 /// Most vertices one mesh file may produce (5 million: about 120 MB of
 /// positions). A COLLADA scene that instances its geometry many times could
 /// otherwise multiply a small file into an unbounded mesh.

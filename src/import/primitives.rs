@@ -38,15 +38,25 @@ fn check(name: &str, vals: &[f64]) -> Result<(), String> {
     if !vals.iter().all(|v| *v > 0.0 && v.is_finite()) {
         return Err(format!("{name} dimensions must be positive, got {vals:?}"));
     }
+    if let Some(v) = vals.iter().find(|v| **v < super::limits::MIN_DIMENSION) {
+        return Err(format!(
+            "{name} dimensions {vals:?}: {v:e} is below the smallest accepted {:e} m",
+            super::limits::MIN_DIMENSION
+        ));
+    }
     super::limits::check_coordinates(&format!("{name} dimensions"), vals)
 }
 
-fn hull_mesh(points: &[Vector3<f64>]) -> TriMesh {
-    let p = convex_hull(points).expect("primitive tessellations are full-dimensional");
-    TriMesh {
+/// The hull of a primitive's tessellation. Errors (rather than panics) when
+/// the dimensions are so unequal that the hull is flat at working precision.
+fn hull_mesh(name: &str, points: &[Vector3<f64>]) -> Result<TriMesh, String> {
+    let p = convex_hull(points).map_err(|e| {
+        format!("{name}: its tessellation has no volume at working precision ({e})")
+    })?;
+    Ok(TriMesh {
         vertices: p.vertices,
         triangles: p.triangles,
-    }
+    })
 }
 
 /// Box of full `size`.
@@ -54,7 +64,7 @@ pub fn box_hull(size: [f64; 3]) -> Result<PrimitiveHull, String> {
     check("box", &size)?;
     let hull = crate::model::Hull::cuboid(Vector3::from(size), Vector3::zeros());
     Ok(PrimitiveHull {
-        source: hull_mesh(&hull),
+        source: hull_mesh("box", &hull)?,
         volume: size.iter().product(),
         hull,
     })
@@ -79,7 +89,7 @@ pub fn cylinder_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> 
         .collect();
     Ok(PrimitiveHull {
         hull,
-        source: hull_mesh(&fine),
+        source: hull_mesh("cylinder", &fine)?,
         volume: PI * radius * radius * length,
     })
 }
@@ -150,7 +160,7 @@ pub fn sphere_hull(radius: f64) -> Result<PrimitiveHull, String> {
     check("sphere", &[radius])?;
     Ok(PrimitiveHull {
         hull: circumscribed_sphere(radius, Vector3::zeros()),
-        source: hull_mesh(&uv_sphere(radius, Vector3::zeros())),
+        source: hull_mesh("sphere", &uv_sphere(radius, Vector3::zeros()))?,
         volume: 4.0 / 3.0 * PI * radius.powi(3),
     })
 }
@@ -167,7 +177,7 @@ pub fn capsule_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> {
     fine.extend(uv_sphere(radius, -h));
     Ok(PrimitiveHull {
         hull,
-        source: hull_mesh(&fine),
+        source: hull_mesh("capsule", &fine)?,
         volume: PI * radius * radius * (length + 4.0 / 3.0 * radius),
     })
 }
@@ -201,5 +211,21 @@ mod tests {
             );
         }
         assert!(cylinder_hull(-1.0, 1.0).is_err());
+    }
+
+    /// Found by fuzzing (`<box size="1e-308 0.2 0.1"/>` panicked in the
+    /// hull construction): tiny and extremely unequal dimensions are errors
+    /// or hulls, never panics.
+    #[test]
+    fn degenerate_dimensions_are_errors_not_panics() {
+        let e = box_hull([1e-308, 0.2, 0.1]).unwrap_err();
+        assert!(e.contains("below the smallest accepted"), "{e}");
+        assert!(cylinder_hull(0.1, 1e-9).is_err());
+        assert!(sphere_hull(1e-7).is_err());
+        for size in [[1e4, 1e4, 1e-6], [1e-6, 1e-6, 1e4], [1e4, 1e-6, 1e-6]] {
+            let _ = box_hull(size);
+        }
+        let _ = cylinder_hull(1e4, 1e-6);
+        let _ = capsule_hull(1e-6, 1e4);
     }
 }
