@@ -128,8 +128,12 @@ pub struct NewtonStats {
     pub total_iterations: usize,
     pub max_final_gradient: f64,
     /// Steps whose tolerance lay below the gradient's round-off floor and
-    /// that were accepted at that floor (see `sim::newton`).
+    /// that were accepted at that floor (see `sim::newton`), including
+    /// `steps_at_step_floor`.
     pub steps_at_roundoff_floor: usize,
+    /// Of those, steps whose gradient was noise and whose Newton step was
+    /// below `solver.step_floor` (see `sim::newton`).
+    pub steps_at_step_floor: usize,
 }
 
 /// Energy diagnostics (J).
@@ -249,6 +253,7 @@ impl Summary {
             total_iterations: total,
             max_final_gradient: d.iter().map(|x| x.newton.grad_inf).fold(0.0, f64::max),
             steps_at_roundoff_floor: d.iter().filter(|x| x.newton.at_floor).count(),
+            steps_at_step_floor: d.iter().filter(|x| x.newton.at_step_floor).count(),
         };
         let final_state = traj
             .states

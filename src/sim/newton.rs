@@ -11,6 +11,16 @@
 //! round-off floor (`64 ε ‖H‖∞ (‖θ‖∞ + L)`) accepts its point and says so
 //! ([`NewtonReport::at_floor`], counted in the run summary) instead of
 //! failing.
+//!
+//! A second stall is a gradient that is itself noise: when the objective's
+//! terms are large and cancel (e.g. barrier forces between nearly touching
+//! links of one robot, `O ≈ 1e7` J), `∇O` carries round-off well above the
+//! Hessian-based estimate, and successive iterates `1e-10` apart report
+//! `‖∇O‖∞` jumping between `2e-4` and `2e-3`. When neither the value nor
+//! the gradient can rank a trial point and the full Newton step is below
+//! [`NewtonOptions::step_floor`] (a length, measured as
+//! `‖Δθ‖∞ · max(1, L)`), the point is the solution to working precision and
+//! is accepted the same way ([`NewtonReport::at_step_floor`]).
 
 use super::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
@@ -30,6 +40,11 @@ pub struct NewtonOptions {
     pub eig_clamp: f64,
     /// Step halvings before the line search gives up. Default 60.
     pub max_backtracks: usize,
+    /// A stalled solve (no trial point ranked by value or gradient) whose
+    /// full Newton step is shorter than this (m; rotations count times the
+    /// scene's length scale, at least 1 m) is accepted as converged to
+    /// working precision. Default `1e-9` m.
+    pub step_floor: f64,
 }
 
 impl Default for NewtonOptions {
@@ -39,6 +54,7 @@ impl Default for NewtonOptions {
             max_iters: 100,
             eig_clamp: 1e-3,
             max_backtracks: 60,
+            step_floor: 1e-9,
         }
     }
 }
@@ -87,6 +103,10 @@ pub struct NewtonReport {
     /// The solve stalled above `tol` but within the gradient's round-off
     /// floor (`grad_floor`), and its point was accepted (see [`minimize`]).
     pub at_floor: bool,
+    /// Of those, accepted because the Newton step itself was below
+    /// [`NewtonOptions::step_floor`] (the gradient was noise above
+    /// `grad_floor`).
+    pub at_step_floor: bool,
     /// The gradient's round-off floor at the last iterate,
     /// `64 ε ‖H‖∞ (‖θ‖∞ + L)` (J per unit coordinate; `L` the scene's length
     /// scale from [`Objective::length_scale`]).
@@ -275,6 +295,14 @@ pub fn minimize(
             // No trial point can be ranked and the gradient is within its
             // own round-off: this is the solution to working precision.
             report.at_floor = true;
+            return Ok(report);
+        }
+        let step_len = scratch.dir.amax() * obj.length_scale().max(1.0);
+        if !accepted && !resolvable && step_len <= opts.step_floor {
+            // Neither value nor gradient can rank points, and Newton's own
+            // correction is below the length floor.
+            report.at_floor = true;
+            report.at_step_floor = true;
             return Ok(report);
         }
         if !accepted {
