@@ -240,3 +240,22 @@ fn nested_nodes_and_units_compose_in_the_right_order() {
         }
     }
 }
+
+/// Found by fuzzing: a duplicated `<library_visual_scenes>` line nests one
+/// library inside another; the overlapping ranges made the rewrite for
+/// mesh-loader slice out of bounds (a panic). Now the outer library is the
+/// scene; its visual scene holds no `<node>`, so the mesh is empty: an error.
+#[test]
+fn nested_libraries_found_by_fuzzing_do_not_panic() {
+    let p = root().join("tests/data/repro/collada_nested_scenes.dae");
+    let ctx = MeshContext {
+        file: p.clone(),
+        element: "test".into(),
+    };
+    let r = std::panic::catch_unwind(|| load_mesh(&p, &ctx).map(|(m, _)| m.triangles.len()));
+    let r = r.expect("no panic");
+    eprintln!(
+        "nested libraries: {:?}",
+        r.as_ref().map_err(|e| e.to_string())
+    );
+}

@@ -132,26 +132,30 @@ fn local_geometries(
         flat += &format!("<node><instance_geometry url=\"#{}\"/></node>", escape(id));
     }
     flat += "</visual_scene></library_visual_scenes>";
-    // Replacements from the end of the text backwards keep ranges valid.
+    // Top-level elements only (their ranges are disjoint; a nested copy
+    // inside one of them goes with it): every <library_visual_scenes>, and
+    // the <unit> of the document's <asset>.
     let mut edits: Vec<(std::ops::Range<usize>, String)> = root
-        .descendants()
-        .filter(|n| n.has_tag_name("library_visual_scenes") || n.has_tag_name("unit"))
-        .map(|n| {
-            let with = if n.has_tag_name("unit") {
-                "<unit meter=\"1\"/>".to_string()
-            } else {
-                String::new()
-            };
-            (n.range(), with)
-        })
+        .children()
+        .filter(|n| n.has_tag_name("library_visual_scenes"))
+        .map(|n| (n.range(), String::new()))
         .collect();
+    if let Some(unit) = root
+        .children()
+        .find(|n| n.has_tag_name("asset"))
+        .and_then(|a| a.children().find(|n| n.has_tag_name("unit")))
+    {
+        edits.push((unit.range(), "<unit meter=\"1\"/>".to_string()));
+    }
     let insert_at = root
         .children()
         .find(|n| n.has_tag_name("library_geometries"))
         .map(|n| n.range().end)
         .unwrap_or(root.range().start);
     edits.push((insert_at..insert_at, flat));
-    edits.sort_by_key(|(r, _)| std::cmp::Reverse(r.start));
+    // From the end of the text backwards, so earlier ranges stay valid; at
+    // equal starts the removal (longer range) goes before the insertion.
+    edits.sort_by_key(|(r, _)| std::cmp::Reverse((r.start, r.end)));
     let mut s = text.to_string();
     for (r, with) in edits {
         s.replace_range(r, &with);
