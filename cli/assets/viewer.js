@@ -123,6 +123,10 @@ function setFrame(sc, f) {
 function setIteration(k) {
   const it = DATA.iterations[k];
   const sc = scenes[DATA.iteration_scene];
+  it.poses.forEach((q, i) => {
+    sc.poses.set(q, 7 * i);
+  });
+  setFrame(sc, 0);
   for (const [li, hulls] of Object.entries(it.links)) {
     const g = sc.links[+li].group;
     const mat = sc.links[+li].mat;
@@ -190,7 +194,7 @@ scenes.forEach((sc) => sc.links.forEach((l) => { if (!l.env) box.expandByObject(
 if (box.isEmpty()) box.setFromObject(scene);
 const c = box.getCenter(new THREE.Vector3());
 const r = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.1);
-camera.position.set(c.x + 1.6 * r, c.y - 2.6 * r, c.z + 1.3 * r);
+camera.position.set(c.x + 1.1 * r, c.y - 2.0 * r, c.z + 0.9 * r);
 camera.near = r / 100;
 camera.far = r * 200;
 controls.target.copy(c);

@@ -238,10 +238,19 @@ fn iterations_json(v: &Value, n_links: usize) -> Result<Vec<Value>, String> {
                 hulls.iter().map(|h| page::hull_json(h)).collect(),
             );
         }
+        let poses: Vec<[f64; 7]> = serde_json::from_value(it["poses"].clone())
+            .map_err(|e| format!("iterations[{k}].poses: {e}"))?;
+        if poses.len() != n_links {
+            return Err(format!(
+                "iterations[{k}].poses: {} poses for {n_links} links",
+                poses.len()
+            ));
+        }
         out.push(serde_json::json!({
             "iteration": it["iteration"],
             "loss": it["loss"],
             "links": links,
+            "poses": poses,
         }));
     }
     Ok(out)

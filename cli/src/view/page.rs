@@ -15,7 +15,7 @@
 //! `start[k]..start[k+1]` and each pair is its plane's patch: centre `c`
 //! (the midpoint of the two hulls' centroids projected onto the plane, m),
 //! unit normal `n̂`, and side length (m, the smaller hull's diameter).
-//! `iterations` (optimize results) is `[{iteration, loss, links: {index:
+//! `iterations` (optimize results) is `[{iteration, loss, poses: [[t, q] per link], links: {index:
 //! [hull]}}]`: the designed links' hulls at every recorded iteration, shown
 //! on scene `iteration_scene`. Positions and poses are `f32`: ~0.1 µm at
 //! 1 m, far below anything visible.
