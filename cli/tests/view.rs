@@ -55,6 +55,33 @@ fn four_chain_viewer_plays_and_glb_validates() {
             .args(["--steps", "200", "-q", "--planes", "--export"])
             .arg(&exp),
     );
+    // Recording planes and writing a viewer leave the trajectory unchanged.
+    let (a, b) = (dir.join("a.csv"), dir.join("b.csv"));
+    let scene = root().join("robots/four_chains.yaml");
+    run_ok(
+        sdrs()
+            .arg("simulate")
+            .arg(&scene)
+            .args(["--steps", "200", "-q", "--out"])
+            .arg(&a),
+    );
+    run_ok(
+        sdrs()
+            .arg("simulate")
+            .arg(&scene)
+            .args(["--steps", "200", "-q", "--planes", "--export"])
+            .arg(dir.join("run2"))
+            .arg("--view")
+            .arg(dir.join("quick.html"))
+            .arg("--out")
+            .arg(&b),
+    );
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    assert!(
+        std::fs::read_to_string(dir.join("quick.html"))
+            .unwrap()
+            .starts_with("<!doctype html>")
+    );
     let page = dir.join("view.html");
     run_ok(sdrs().arg("view").arg(&exp).arg("--out").arg(&page));
     let html = std::fs::read_to_string(&page).unwrap();
