@@ -202,7 +202,11 @@ scene.updateMatrixWorld(true);
 if (box.isEmpty()) box.setFromObject(scene);
 const c = box.getCenter(new THREE.Vector3());
 const r = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 0.1);
-camera.position.set(c.x + 0.8 * r, c.y - 1.6 * r, c.z + 0.7 * r);
+// Far enough for the bounding sphere to fit the narrower field of view.
+const halfFov = Math.min(camera.fov / 2, (Math.atan(Math.tan((camera.fov * Math.PI) / 360) * view.clientWidth / Math.max(view.clientHeight, 1)) * 180) / Math.PI);
+const dist = (0.8 * r) / Math.sin((halfFov * Math.PI) / 180);
+const dir = new THREE.Vector3(0.45, -0.85, 0.35).normalize();
+camera.position.copy(c).addScaledVector(dir, dist);
 camera.near = r / 100;
 camera.far = r * 200;
 controls.target.copy(c);

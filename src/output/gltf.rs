@@ -31,7 +31,7 @@ pub fn robot_color(k: usize, environment: bool) -> [f64; 3] {
         [0.50, 0.40, 0.80],
     ];
     if environment {
-        [0.6, 0.6, 0.6]
+        [0.78, 0.78, 0.78]
     } else {
         PALETTE[k % PALETTE.len()]
     }
