@@ -154,14 +154,17 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
     }
-    write_pictures(
+    // The main outputs are written: a failure here (a rollout) is a warning.
+    if let Err(e) = write_pictures(
         &out,
         &problem,
         (&d0, &c0),
         &outcome,
         &designs,
         shapes.as_deref(),
-    )?;
+    ) {
+        eprintln!("warning: report.html, robot.svg and playback/ not written: {e:#}");
+    }
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
         outcome.initial_loss,
