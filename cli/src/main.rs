@@ -11,6 +11,7 @@ mod plot;
 mod schema;
 mod simulate;
 mod util;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -43,6 +44,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Print the annotated schema of scene or task files (JSON Schema, as YAML or JSON).
     Schema(schema::SchemaArgs),
+    /// Self-contained HTML viewer (or glTF binary) of a run, an optimization result or a scene.
+    View(view::ViewArgs),
 }
 
 fn main() {
@@ -56,6 +59,7 @@ fn main() {
         Command::Compare(a) => compare::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Schema(a) => schema::run(a),
+        Command::View(a) => view::run(a),
     };
     if let Err(e) = res {
         eprintln!("error: {}", cause_chain(&e));

@@ -12,7 +12,8 @@ pub struct OptimizeArgs {
     /// Task YAML (see README, "Co-design").
     pub task: PathBuf,
     /// Output directory: history.csv, convergence.svg, design.yaml,
-    /// meshes/<robot>_<link>.obj, shapes.svg, summary.json, checkpoint.json.
+    /// meshes/<robot>_<link>.obj, shapes.svg, robot.svg, report.html,
+    /// playback/ (for `sdrs view`), summary.json, checkpoint.json.
     #[arg(long, required_unless_present = "resume")]
     pub out: Option<PathBuf>,
     /// Continue the run whose outputs (and checkpoint.json) are in this
@@ -106,11 +107,15 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         seed: a.seed,
         resume,
     };
+    // Every iteration's design, for the viewer's design-at-iteration slider
+    // (after a resume: the iterations of this session).
+    let mut designs: Vec<sdrs::optimize::playback::IterDesign> = Vec::new();
     let outcome = sdrs::optimize::optimize_with(
         &problem,
         iters,
         &opts,
-        |r, _| {
+        |r, d| {
+            designs.push((r.iter, r.loss, d.clone()));
             pb.set_position(r.iter as u64 + 1);
             pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
         },
@@ -145,10 +150,20 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         }),
     )?;
     sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
-    if let Some(svg) =
-        sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design)
-    {
+    let shapes = sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
+    if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
+    }
+    // The main outputs are written: a failure here (a rollout) is a warning.
+    if let Err(e) = write_pictures(
+        &out,
+        &problem,
+        (&d0, &c0),
+        &outcome,
+        &designs,
+        shapes.as_deref(),
+    ) {
+        eprintln!("warning: report.html, robot.svg and playback/ not written: {e:#}");
     }
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
@@ -169,5 +184,46 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             m["first_fall_time"]
         );
     }
+    Ok(())
+}
+
+/// `playback/` (the rollouts of the initial and optimized designs, for
+/// `sdrs view`), `robot.svg` and `report.html` (the convergence plot next
+/// to the stills).
+fn write_pictures(
+    out: &std::path::Path,
+    problem: &sdrs::optimize::Problem,
+    (d0, c0): (&nalgebra::DVector<f64>, &nalgebra::DVector<f64>),
+    outcome: &sdrs::optimize::Outcome,
+    designs: &[sdrs::optimize::playback::IterDesign],
+    shapes: Option<&str>,
+) -> Result<()> {
+    use sdrs::optimize::playback as pb;
+    let initial = pb::rollout(problem, d0, c0).context("rollout of the initial design")?;
+    let optimized = pb::rollout(problem, &outcome.design, &outcome.controller)
+        .context("rollout of the optimized design")?;
+    pb::write_playback(out, problem, &initial, &optimized, designs)?;
+    let robot = pb::robot_still_svg(&initial, &optimized);
+    if let Some(svg) = &robot {
+        sdrs::output::write_atomic(&out.join("robot.svg"), svg.as_bytes())?;
+    }
+    let convergence = std::fs::read_to_string(out.join("convergence.svg"))
+        .with_context(|| format!("{}: cannot read convergence.svg", out.display()))?;
+    let mut figs = Vec::new();
+    if let Some(svg) = &robot {
+        figs.push(("robot, initial (grey) vs optimized (blue)", svg.as_str()));
+    }
+    if let Some(svg) = shapes {
+        figs.push(("designed links in their frames", svg));
+    }
+    let html = sdrs::optimize::report::report_html(
+        &format!("sdrs optimize {}", problem.task_path.display()),
+        outcome.initial_loss,
+        outcome.loss,
+        outcome.history.len().saturating_sub(1),
+        &convergence,
+        &figs,
+    );
+    sdrs::output::write_atomic(&out.join("report.html"), html.as_bytes())?;
     Ok(())
 }

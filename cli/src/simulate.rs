@@ -27,6 +27,16 @@ pub struct SimulateArgs {
     /// independent checks (`tools/check_separation.py`).
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// With `--export`: also write the active contact pairs and their
+    /// separating planes at every step (`contacts.csv`, recomputed from the
+    /// recorded poses after the run; see `sdrs::output::contacts`).
+    #[arg(long, requires = "export")]
+    pub planes: bool,
+    /// Also write a self-contained HTML viewer of the run (hulls, contact
+    /// planes, time slider; open it in a browser). `sdrs view` makes one
+    /// from an `--export` directory as well.
+    #[arg(long)]
+    pub view: Option<PathBuf>,
     /// Also write a velocity column `<name>:v` per coordinate (rad/s, m/s).
     #[arg(long)]
     pub velocities: bool,
@@ -45,7 +55,7 @@ pub struct SimulateArgs {
 pub fn run(a: SimulateArgs) -> Result<()> {
     let mut scene = Scene::load(&a.scene)?;
     a.contact.apply(&mut scene)?;
-    for out in [&a.out, &a.json].into_iter().flatten() {
+    for out in [&a.out, &a.json, &a.view].into_iter().flatten() {
         if same_file(out, &a.scene) {
             bail!("{}: refusing to overwrite the input scene", out.display());
         }
@@ -54,10 +64,13 @@ pub fn run(a: SimulateArgs) -> Result<()> {
     let mut sim = crate::contact_model::simulator(&scene)?;
     let pb = progress(steps, a.quiet);
     let t0 = Instant::now();
-    let traj = sdrs::sim::run::run_recording(&mut sim, steps, a.export.is_some(), |k| {
-        pb.set_position(k as u64)
-    })
-    .with_context(|| format!("simulating {}", a.scene.display()))?;
+    let record_poses = a.export.is_some() || a.view.is_some();
+    if let Some(v) = &a.view {
+        crate::view::check_overwrite(v, false)?;
+    }
+    let traj =
+        sdrs::sim::run::run_recording(&mut sim, steps, record_poses, |k| pb.set_position(k as u64))
+            .with_context(|| format!("simulating {}", a.scene.display()))?;
     let wall = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     let summary = Summary::new(
@@ -85,6 +98,27 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
             .unwrap_or_default();
         sdrs::output::export_run(dir, &scene.model, excluded, &traj)?;
+    }
+    // Contact planes are recomputed from the recorded poses: the run above
+    // is the same with or without them.
+    let playback = if a.planes || a.view.is_some() {
+        Some(crate::view::playback_of_run(&scene, &traj)?)
+    } else {
+        None
+    };
+    if let (Some(dir), true, Some(p)) = (&a.export, a.planes, &playback) {
+        write_atomic(
+            &dir.join("contacts.csv"),
+            sdrs::output::contacts::contacts_csv(&p.contacts).as_bytes(),
+        )?;
+    }
+    if let (Some(v), Some(p)) = (&a.view, &playback) {
+        let title = a
+            .scene
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        crate::view::write_run_viewer(v, &title, p)?;
+        eprintln!("{}: viewer, open it in a browser", v.display());
     }
     eprintln!(
         "{}: {} steps of {} s in {:.3} s ({:.3} ms/step), Newton iterations mean {:.2} max {}{}",

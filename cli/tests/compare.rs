@@ -7,7 +7,7 @@
 mod support;
 
 use std::path::Path;
-use std::process::Command;
+use support::browser::{chromium, console_messages, file_url};
 use support::{root, scratch_dir, sdrs};
 
 fn run_compare(args: &[&str], out: &Path) -> std::process::Output {
@@ -23,32 +23,6 @@ fn run_compare(args: &[&str], out: &Path) -> std::process::Output {
 
 fn json(p: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
-
-/// Headless Chromium: the DOM after scripts ran, and its console log.
-fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> (String, String) {
-    let out = Command::new("chromium")
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--enable-logging=stderr",
-            "--log-level=0",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(format!("file://{}", page.display()))
-        .output()
-        .expect("chromium is not installed: run tools/setup_system.sh");
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 #[test]
@@ -135,7 +109,7 @@ fn quick_suite_report_browser_gate_and_resume() {
 
     // The browser: every plot drawn, no console message, a screenshot.
     let page = out.join("report.html");
-    let (dom, log) = chromium(&page, &dir.join("chrome1"), &["--dump-dom"]);
+    let (dom, log) = chromium(&file_url(&page, ""), &dir.join("chrome1"), &["--dump-dom"]);
     let plots = out.join("plots").read_dir().unwrap().count();
     assert!(plots >= 3);
     assert!(
@@ -145,11 +119,11 @@ fn quick_suite_report_browser_gate_and_resume() {
             .nth(1)
             .unwrap_or("(no check element)")
     );
-    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    let console = console_messages(&log);
     assert!(console.is_empty(), "console messages: {console:?}");
     let shot = dir.join("report.png");
     chromium(
-        &page,
+        &file_url(&page, ""),
         &dir.join("chrome2"),
         &[
             &format!("--screenshot={}", shot.display()),

@@ -1,13 +1,16 @@
 //! Run records: trajectory CSV and summary JSON, written atomically (to a
 //! temporary file in the same directory, renamed when complete).
 
+pub mod contacts;
+pub mod gltf;
 pub mod picture;
+pub mod playback;
 pub mod plot;
 
 use crate::model::Model;
 use crate::sim::{StageTime, StepDiagnostics};
 use nalgebra::DVector;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -357,7 +360,7 @@ pub fn export_run(
 
 /// Hull geometry for external tools: every link's hulls in its frame, and
 /// which link pairs interact.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct HullExport {
     pub links: Vec<LinkExport>,
     /// Link index pairs that never interact (parent–child, excluded, static).
@@ -365,7 +368,7 @@ pub struct HullExport {
 }
 
 /// One link of a [`HullExport`].
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct LinkExport {
     pub robot: String,
     pub name: String,

@@ -7,6 +7,8 @@ mod common;
 
 pub use common::*;
 
+pub mod browser;
+
 /// The `sdrs` binary.
 pub fn sdrs() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_sdrs"))
