@@ -461,6 +461,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
             },
             mass: Some(mass),
             vertex_mass: None,
+            mass_model: None,
             hulls: g
                 .hulls
                 .iter()

@@ -4,7 +4,7 @@ use super::schema::*;
 use super::{Invalid, Scene, chain, environment};
 use crate::control::{ControlChannel, Controller};
 use crate::math::{pose_from, rpy_to_matrix, so3};
-use crate::model::{Hull, JointKind, Link, Model, RobotInfo};
+use crate::model::{Hull, Inertial, JointKind, Link, MassModel, Model, RobotInfo};
 use crate::sim::SimSettings;
 use nalgebra::{DVector, Matrix3, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -466,8 +466,25 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
                 "a link needs at least one hull",
             ));
         }
-        let explicit = l.hulls.iter().all(|h| h.vertex_masses.is_some());
+        let spec_model = l.mass_model.clone().unwrap_or(MassModelSpec::Vertices);
+        let lumped = matches!(spec_model, MassModelSpec::Vertices);
+        if !lumped {
+            if l.vertex_mass.is_some() {
+                return Err(Invalid::new(
+                    format!("{lel}.vertex_mass"),
+                    "only the `vertices` mass model takes `vertex_mass`",
+                ));
+            }
+            if let Some(hi) = l.hulls.iter().position(|h| h.vertex_masses.is_some()) {
+                return Err(Invalid::new(
+                    format!("{lel}.hulls[{hi}].vertex_masses"),
+                    "only the `vertices` mass model takes `vertex_masses`",
+                ));
+            }
+        }
+        let explicit = lumped && l.hulls.iter().all(|h| h.vertex_masses.is_some());
         let vertex_mass = match (l.mass, l.vertex_mass) {
+            _ if !lumped => 0.0,
             (Some(_), Some(_)) => {
                 return Err(Invalid::new(
                     lel,
@@ -546,6 +563,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             }
             hulls.push(hull);
         }
+        let mass_model = mass_model(&lel, &spec_model, l.mass, &hulls)?;
         new_index[si] = out.len();
         out.push(Link {
             name: l.name.clone(),
@@ -555,6 +573,8 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             joint: kind,
             attach,
             hulls,
+            mass_model,
+            solid_triangles: Vec::new(),
             dof_offset: 0,
             chart: None,
             collides: true,
@@ -566,4 +586,74 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             .all(|l| l.parent.is_none_or(|p| p >= first))
     );
     Ok(())
+}
+
+/// The link's [`MassModel`] from its spec (`mass`: the link's `mass` key).
+fn mass_model(
+    lel: &str,
+    spec: &MassModelSpec,
+    mass: Option<f64>,
+    hulls: &[Hull],
+) -> Result<MassModel, Invalid> {
+    let el = format!("{lel}.mass_model");
+    match spec {
+        MassModelSpec::Vertices => Ok(MassModel::Vertices),
+        MassModelSpec::Solid { density } => {
+            let density = match (density, mass) {
+                (Some(_), Some(_)) => {
+                    return Err(Invalid::new(
+                        lel,
+                        "a `solid` link takes either `mass` or `mass_model.density`, not both",
+                    ));
+                }
+                (None, None) => {
+                    return Err(Invalid::new(
+                        lel,
+                        "a `solid` link needs `mass` (kg) or `mass_model.density` (kg/m³)",
+                    ));
+                }
+                (Some(d), None) => *d,
+                (None, Some(m)) => {
+                    let mut volume = 0.0;
+                    for (hi, h) in hulls.iter().enumerate() {
+                        let tris = crate::model::mass::solid_triangles(&h.x_local)
+                            .map_err(|e| Invalid::new(format!("{lel}.hulls[{hi}]"), e))?;
+                        volume += crate::model::mass::solid_volume(&h.x_local, &tris);
+                    }
+                    m / volume
+                }
+            };
+            if !(density > 0.0 && density.is_finite()) {
+                return Err(Invalid::new(
+                    el,
+                    format!("density must be positive and finite, got {density}"),
+                ));
+            }
+            for (hi, h) in hulls.iter().enumerate() {
+                crate::model::mass::solid_triangles(&h.x_local)
+                    .map_err(|e| Invalid::new(format!("{lel}.hulls[{hi}]"), e))?;
+            }
+            Ok(MassModel::Solid { density })
+        }
+        MassModelSpec::Given {
+            mass: m,
+            com,
+            inertia,
+        } => {
+            if mass.is_some() {
+                return Err(Invalid::new(
+                    lel,
+                    "a `given` link takes its mass from `mass_model.mass`; remove the link's `mass`",
+                ));
+            }
+            let [xx, xy, xz, yy, yz, zz] = *inertia;
+            let g = Inertial {
+                mass: *m,
+                com: Vector3::from(*com),
+                inertia: Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz),
+            };
+            g.check().map_err(|e| Invalid::new(el, e))?;
+            Ok(MassModel::Given(g))
+        }
+    }
 }

@@ -26,6 +26,8 @@
 //!                            # xyz is the design-dependent attachment point
 //!         mass: 1.0          # kg, divided equally over all hull vertices …
 //!         # vertex_mass: 0.125   # … or kg per vertex (the paper's ρ); exactly one of the two
+//!         # mass_model: {type: solid}   # vertices (default) | solid {density} | given
+//!         #                  {mass, com, inertia: [ixx,ixy,ixz,iyy,iyz,izz]}: see MassModelSpec
 //!         hulls:
 //!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
 //!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
@@ -124,6 +126,11 @@ pub struct ObjectSpec {
     /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Mass model: `vertices` (default: the link's mass lumped at its hull
+    /// vertices, the paper's model), `solid` (uniform-density solid hulls)
+    /// or `given` (explicit inertial). See [`MassModelSpec`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the object's frame (m).
     pub hulls: Vec<HullSpec>,
     /// Initial pose `[x, y, z, rx, ry, rz]` (m, rotation vector) and velocity
@@ -345,8 +352,50 @@ pub struct LinkSpec {
     /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Mass model: `vertices` (default: the link's mass lumped at its hull
+    /// vertices, the paper's model), `solid` (uniform-density solid hulls)
+    /// or `given` (explicit inertial). See [`MassModelSpec`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the link frame (m).
     pub hulls: Vec<HullSpec>,
+}
+
+/// How a link's (or object's) mass is distributed; default `vertices`.
+/// Formulas: [`crate::model::mass`].
+///
+/// ```yaml
+/// mass_model: {type: vertices}          # link `mass` (or `vertex_mass`) lumped at the hull vertices
+/// mass_model: {type: solid, density: 1000}   # kg/m³; or omit density and give the link `mass`
+/// mass_model: {type: given, mass: 2.0, com: [0, 0, 0.1], inertia: [0.02, 0, 0, 0.02, 0, 0.01]}
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MassModelSpec {
+    /// The paper's lumped vertex masses (needs the link's `mass` or `vertex_mass`).
+    Vertices,
+    /// Each hull a solid of uniform density; overlapping hulls of a link are
+    /// superposed (their overlap counts once per hull). Give `density` or
+    /// the link's `mass` (then density = mass / total hull volume at load).
+    /// Mass, centre of mass and inertia follow the hull vertices in design
+    /// optimization.
+    Solid {
+        /// Density (kg/m³, > 0). Default: from the link's `mass`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        density: Option<f64>,
+    },
+    /// An explicit inertial (like URDF `<inertial>`), fixed under design
+    /// changes; the link's `mass`/`vertex_mass` must be absent.
+    Given {
+        /// Mass (kg, > 0).
+        mass: f64,
+        /// Centre of mass in the link frame (m).
+        com: [f64; 3],
+        /// Inertia tensor about the centre of mass in link axes (kg m²), in
+        /// URDF order `[ixx, ixy, ixz, iyy, iyz, izz]`; principal moments
+        /// must be ≥ 0 and obey the triangle inequality.
+        inertia: [f64; 6],
+    },
 }
 
 /// Joint types accepted in scene files.
