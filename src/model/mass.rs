@@ -22,6 +22,10 @@
 //!   A vertex that moves out through a face starts adding a cone of volume
 //!   `area·height/3`: `M` is continuous there and its derivative jumps (a
 //!   kink; the derivative reported on the face is the inside one).
+//!   Likewise at a vertex of a planar face with more than three corners
+//!   (a box corner): moving it off the plane flips the face's triangulation,
+//!   the one-sided derivatives differ, and the reported derivative is that
+//!   of the current triangulation (one of them).
 //!   **Overlapping hulls of one link are superposed** (their overlap counts
 //!   once per hull), which keeps every hull's contribution a smooth function
 //!   of its own vertices; with a link `mass` instead of a density, the
