@@ -411,11 +411,23 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         let g = &geoms[li];
         let polys: Vec<_> = g.hulls.iter().map(|h| h.poly.clone()).collect();
         let uv = report::union_volume(&polys, opts.volume_grid);
-        let (mass, mass_source) = mass::link_mass(opts.mass, l.mass, opts.density, uv);
-        if mass_source == mass::MassSource::DensityFallback {
+        let hull_vertices_now: Vec<&[Vector3<f64>]> =
+            g.hulls.iter().map(|h| h.vertices.as_slice()).collect();
+        let lm = mass::link_mass_model(
+            opts.mass,
+            l.moment.as_ref(),
+            opts.density,
+            &hull_vertices_now,
+        )
+        .map_err(|msg| ImportError::Invalid {
+            path: src.file.clone(),
+            msg: format!("link \"{}\": {msg}", l.name),
+        })?;
+        let (mass, mass_source) = (lm.mass, lm.source);
+        if let Some(why) = &lm.fallback {
             notes.push(format!(
-                "link \"{}\" has no mass in the input: {:.4} kg from density {} kg/m³",
-                l.name, mass, opts.density
+                "link \"{}\": {why}: solid hulls at density {} kg/m³ ({:.4} kg)",
+                l.name, opts.density, mass
             ));
         }
         let (mut cov, mut maxd) = (1.0f64, 0.0f64);
@@ -437,6 +449,9 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
             hull_vertices,
             mass,
             mass_source,
+            mass_model: lm.model_name(),
+            inertial_input: lm.input.clone(),
+            inertial_hulls: lm.hulls.clone(),
             union_volume: uv,
             source_volume: g.source_volume,
             coverage: cov,
@@ -459,9 +474,9 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
             },
-            mass: Some(mass),
+            mass: None,
             vertex_mass: None,
-            mass_model: None,
+            mass_model: Some(lm.spec.clone()),
             hulls: g
                 .hulls
                 .iter()

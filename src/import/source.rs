@@ -81,6 +81,11 @@ pub struct SourceLink {
     pub geometry: Vec<SourceGeometry>,
     /// Mass from the input (URDF `<inertial><mass>`), if positive.
     pub mass: Option<f64>,
+    /// The input's inertial (URDF `<inertial>`: origin, mass, inertia) as
+    /// the 4×4 second moment `∫ρ x̃ x̃ᵀ` in the link frame (see
+    /// [`crate::model::Inertial::second_moment`]), if the mass is positive;
+    /// merged links add theirs, moved into this frame (`T M Tᵀ`).
+    pub moment: Option<nalgebra::Matrix4<f64>>,
 }
 
 /// A robot read from the input.
@@ -125,6 +130,7 @@ impl SourceRobot {
                     },
                 }],
                 mass: None,
+                moment: None,
             }],
             notes: vec!["bare mesh: one free body".into()],
         }

@@ -9,6 +9,7 @@
 
 pub mod assemble;
 pub mod counters;
+pub mod mass_matrix;
 pub mod newton;
 pub mod run;
 pub mod state;
