@@ -14,6 +14,7 @@ pub mod contact;
 pub mod friction;
 pub mod gravity;
 pub mod inertia;
+pub mod joint_limit;
 pub mod pairs;
 pub mod pd;
 
@@ -21,6 +22,7 @@ pub use contact::ContactEnergy;
 pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
+pub use joint_limit::JointLimits;
 pub use pd::{PdController, PdTarget};
 
 use crate::kinematics::Kinematics;

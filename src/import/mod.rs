@@ -473,6 +473,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 axis: l.joint.axis,
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
+                limit: joint_limit(l, &mut notes),
             },
             mass: None,
             vertex_mass: None,
@@ -560,5 +561,33 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         links: imported_links,
         report,
         root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
+    })
+}
+
+/// The scene limit of an imported 1-DOF joint whose URDF limits position.
+/// Enforced only when the initial configuration `θ = 0` lies strictly
+/// inside; otherwise the limit is noted and left out (the barrier needs a
+/// feasible start).
+fn joint_limit(l: &source::SourceLink, notes: &mut Vec<String>) -> Option<JointLimitSpec> {
+    let [j] = l.joint.input_joints.as_slice() else {
+        return None;
+    };
+    if !j.limited || !matches!(l.joint.kind, JointType::Revolute | JointType::Prismatic) {
+        return None;
+    }
+    if !(j.lower < 0.0 && 0.0 < j.upper) {
+        notes.push(format!(
+            "joint \"{}\": limits [{}, {}] do not contain the initial coordinate 0 strictly; not enforced",
+            j.name, j.lower, j.upper
+        ));
+        return None;
+    }
+    Some(JointLimitSpec {
+        lower: j.lower,
+        upper: j.upper,
+        support: None,
+        stiffness: None,
+        velocity: j.velocity,
+        effort: j.effort,
     })
 }

@@ -69,6 +69,15 @@ pub struct InputJoint {
     pub kind: String,
     pub lower: f64,
     pub upper: f64,
+    /// Whether the input limits position (URDF `revolute`/`prismatic` with
+    /// finite `lower < upper`); `lower`/`upper` are sampling ranges otherwise.
+    pub limited: bool,
+    /// URDF `<limit velocity>` (rad/s or m/s) when positive; reported only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// URDF `<limit effort>` (N·m or N) when positive; reported only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub effort: Option<f64>,
 }
 
 /// One link.

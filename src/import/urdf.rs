@@ -591,11 +591,21 @@ fn convert(
                 let input_joints = if kind == JointType::Fixed {
                     Vec::new()
                 } else {
+                    let (lo, hi) = (j.limit.lower, j.limit.upper);
+                    let positive = |v: f64| Some(v).filter(|v| *v > 0.0 && v.is_finite());
                     vec![InputJoint {
                         name: j.name.clone(),
                         kind: type_name(&j.joint_type).into(),
                         lower,
                         upper,
+                        limited: matches!(
+                            j.joint_type,
+                            urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic
+                        ) && lo.is_finite()
+                            && hi.is_finite()
+                            && lo < hi,
+                        velocity: positive(j.limit.velocity),
+                        effort: positive(j.limit.effort),
                     }]
                 };
                 (

@@ -10,7 +10,7 @@ pub mod joint;
 pub mod mass;
 
 pub use hull::{Hull, HullError};
-pub use joint::{JointDerivatives, JointKind, MAX_JOINT_DOF};
+pub use joint::{JointDerivatives, JointKind, JointLimit, MAX_JOINT_DOF};
 pub use mass::{Inertial, MassModel};
 
 use crate::math::Pose;
@@ -30,6 +30,8 @@ pub struct Link {
     pub joint_name: String,
     /// Joint kind.
     pub joint: JointKind,
+    /// Position limits of a revolute/prismatic joint (barrier term).
+    pub limit: Option<JointLimit>,
     /// Attachment transform `C_i = [R_i^d | t_i^d]` in the parent frame (for a
     /// root: in the world frame). `t_i^d` is the attachment point, a design
     /// variable.

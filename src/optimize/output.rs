@@ -6,7 +6,8 @@ use crate::math::{compose, rigid_inverse, rot};
 use crate::model::{JointKind, MassModel, Model};
 use crate::output::write_atomic;
 use crate::scene::schema::{
-    Gains, HullSpec, JointSpec, JointType, LinkSpec, MassModelSpec, Origin, SceneSpec, SignalList,
+    Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, Origin,
+    SceneSpec, SignalList,
 };
 use anyhow::Result;
 use std::path::Path;
@@ -140,6 +141,14 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                             xyz: attach.column(3).into_owned().into(),
                             rpy: [roll, pitch, yaw],
                         },
+                        limit: link.limit.as_ref().map(|l| JointLimitSpec {
+                            lower: l.lower,
+                            upper: l.upper,
+                            support: Some(l.support),
+                            stiffness: Some(l.stiffness),
+                            velocity: l.velocity,
+                            effort: l.effort,
+                        }),
                     },
                     mass: None,
                     vertex_mass: None,

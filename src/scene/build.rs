@@ -4,7 +4,7 @@ use super::schema::*;
 use super::{Invalid, Scene, chain, environment};
 use crate::control::{ControlChannel, Controller};
 use crate::math::{pose_from, rpy_to_matrix, so3};
-use crate::model::{Hull, Inertial, JointKind, Link, MassModel, Model, RobotInfo};
+use crate::model::{Hull, Inertial, JointKind, JointLimit, Link, MassModel, Model, RobotInfo};
 use crate::sim::SimSettings;
 use nalgebra::{DVector, Matrix3, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -209,6 +209,23 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
                 let phi = Vector3::new(q0[co], q0[co + 1], q0[co + 2]);
                 charts[c] = so3::exp(&phi);
                 q0.rows_mut(co, 3).fill(0.0);
+            }
+        }
+    }
+    for link in &model.links {
+        if let Some(lim) = &link.limit {
+            let x = q0[link.dof_offset];
+            if !(x > lim.lower && x < lim.upper) {
+                return Err(Invalid::new(
+                    format!(
+                        "robot \"{}\" joint \"{}\"",
+                        model.robots[link.robot].name, link.joint_name
+                    ),
+                    format!(
+                        "the initial coordinate {x} must lie strictly inside the joint limit [{}, {}] (set `initial`)",
+                        lim.lower, lim.upper
+                    ),
+                ));
             }
         }
     }
@@ -442,6 +459,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             ));
         }
         let kind = joint_kind(&format!("{lel}.joint"), &l.joint)?;
+        let limit = joint_limit(&format!("{lel}.joint.limit"), &kind, l.joint.limit.as_ref())?;
         let o = &l.joint.origin;
         check_finite(
             &format!("{lel}.joint.origin"),
@@ -571,6 +589,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             parent,
             joint_name,
             joint: kind,
+            limit,
             attach,
             hulls,
             mass_model,
@@ -656,4 +675,62 @@ fn mass_model(
             Ok(MassModel::Given(g))
         }
     }
+}
+
+/// Default barrier support of a joint limit (rad or m).
+pub const DEFAULT_LIMIT_SUPPORT: f64 = 0.02;
+/// Default barrier stiffness of a joint limit (J·rad or J·m).
+pub const DEFAULT_LIMIT_STIFFNESS: f64 = 1.0e-3;
+
+/// A joint's [`JointLimit`] from its spec: revolute/prismatic only,
+/// finite `lower < upper`, positive support (capped at a quarter of the
+/// range) and stiffness.
+fn joint_limit(
+    el: &str,
+    kind: &JointKind,
+    spec: Option<&JointLimitSpec>,
+) -> Result<Option<JointLimit>, Invalid> {
+    let Some(sp) = spec else { return Ok(None) };
+    if !matches!(
+        kind,
+        JointKind::Revolute { .. } | JointKind::Prismatic { .. }
+    ) {
+        return Err(Invalid::new(
+            el,
+            "only revolute and prismatic joints take a `limit`",
+        ));
+    }
+    check_finite(el, "lower/upper", &[sp.lower, sp.upper])?;
+    if !(sp.lower < sp.upper) {
+        return Err(Invalid::new(
+            el,
+            format!("lower {} must be below upper {}", sp.lower, sp.upper),
+        ));
+    }
+    let support = sp.support.unwrap_or(DEFAULT_LIMIT_SUPPORT);
+    let stiffness = sp.stiffness.unwrap_or(DEFAULT_LIMIT_STIFFNESS);
+    for (what, v) in [("support", support), ("stiffness", stiffness)] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Invalid::new(
+                format!("{el}.{what}"),
+                format!("must be positive and finite, got {v}"),
+            ));
+        }
+    }
+    for (what, v) in [("velocity", sp.velocity), ("effort", sp.effort)] {
+        if let Some(v) = v.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            return Err(Invalid::new(
+                format!("{el}.{what}"),
+                format!("must be non-negative and finite, got {v}"),
+            ));
+        }
+    }
+    Ok(Some(JointLimit {
+        lower: sp.lower,
+        upper: sp.upper,
+        support: support.min(0.25 * (sp.upper - sp.lower)),
+        stiffness,
+        velocity: sp.velocity,
+        effort: sp.effort,
+    }))
 }

@@ -21,6 +21,7 @@ pub fn expand(spec: &ChainSpec) -> Vec<LinkSpec> {
                     xyz: if i == 0 { [0.0; 3] } else { [0.0, 0.0, -l] },
                     rpy: [0.0; 3],
                 },
+                limit: None,
             },
             mass: Some(spec.link_mass),
             vertex_mass: None,

@@ -119,6 +119,7 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
         axis: None,
         axes: None,
         origin,
+        limit: None,
     }
 }
 

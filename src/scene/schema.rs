@@ -23,6 +23,7 @@
 //!           axis: [0, 1, 0]  # revolute/prismatic: unit axis in the joint frame
 //!           # axes: [[1,0,0],[0,1,0]]   # ball: two orthogonal hinge axes
 //!           origin: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # attachment in the parent frame;
+//!           # limit: {lower: -1.5, upper: 1.5}   # revolute/prismatic: barrier-enforced limits
 //!                            # xyz is the design-dependent attachment point
 //!         mass: 1.0          # kg, divided equally over all hull vertices …
 //!         # vertex_mass: 0.125   # … or kg per vertex (the paper's ρ); exactly one of the two
@@ -429,6 +430,41 @@ pub struct JointSpec {
     /// The joint frame in the parent link's frame; `xyz` is the design-dependent attachment point (m). Default identity.
     #[serde(default)]
     pub origin: Origin,
+    /// Revolute and prismatic joints: position limits, enforced by a barrier
+    /// term (see [`JointLimitSpec`]). Default: unlimited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit: Option<JointLimitSpec>,
+}
+
+/// Position limits of a revolute (rad) or prismatic (m) joint, enforced by
+/// the barrier `κ P_s(x)` on the distance `x` to each limit
+/// (`crate::energy::joint_limit`): the coordinate never reaches a limit and
+/// stops within `support` of it. `velocity` and `effort` are carried for
+/// reports (as URDF `<limit>` gives them), not simulated.
+///
+/// ```yaml
+/// limit: {lower: -1.57, upper: 1.57}       # support 0.02, stiffness 1.0e-3
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JointLimitSpec {
+    /// Lower limit (rad or m).
+    pub lower: f64,
+    /// Upper limit (rad or m), > lower.
+    pub upper: f64,
+    /// Barrier support `s` (rad or m), > 0. Default 0.02, capped at a quarter of the range.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<f64>,
+    /// Barrier stiffness `κ` (J·rad or J·m), > 0. Default 1.0e-3 (about 90 N·m
+    /// of push at half the default support).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Velocity limit (rad/s or m/s); reported, not simulated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// Effort limit (N·m or N); reported, not simulated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effort: Option<f64>,
 }
 
 /// A hull: explicit `vertices` or a `box` primitive (8 vertices); exactly one.

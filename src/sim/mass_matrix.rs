@@ -79,7 +79,7 @@ robots:
             let h11 = m1 * r1 * r1 + m2 * (l1 * l1 + r2 * r2 + 2.0 * l1 * r2 * c);
             let h12 = m2 * (r2 * r2 + l1 * r2 * c);
             let want = DMatrix::from_row_slice(2, 2, &[h11, h12, h12, m2 * r2 * r2]);
-            assert!((h - want).norm() < 1e-12, "{q2}: {h} vs {want}");
+            assert!((&h - &want).norm() < 1e-12, "{q2}: {h} vs {want}");
         }
     }
 }
