@@ -701,7 +701,7 @@ fn joint_limit(
         ));
     }
     check_finite(el, "lower/upper", &[sp.lower, sp.upper])?;
-    if !(sp.lower < sp.upper) {
+    if sp.lower >= sp.upper {
         return Err(Invalid::new(
             el,
             format!("lower {} must be below upper {}", sp.lower, sp.upper),
