@@ -237,3 +237,103 @@ fn bad_limits_are_errors_naming_the_joint() {
         );
     }
 }
+
+/// Two fingers on a palm; `right` mimics `left` with multiplier −1 and an
+/// offset, tied by the coupling term; only `left` is driven.
+const GRIPPER: &str = r#"
+dt: 0.01
+gravity: [0, 0, -9.81]
+robots:
+  - name: g
+    links:
+      - name: palm
+        joint: {type: fixed}
+        mass: 1.0
+        hulls: [{box: {size: [0.2, 0.05, 0.05]}}]
+      - name: left
+        parent: palm
+        joint: {name: left, type: revolute, axis: [0, 1, 0], origin: {xyz: [-0.08, 0, -0.03]}}
+        mass: 0.1
+        hulls: [{box: {size: [0.02, 0.02, 0.1], center: [0, 0, -0.05]}}]
+      - name: right
+        parent: palm
+        joint: {name: right, type: revolute, axis: [0, 1, 0], origin: {xyz: [0.08, 0, -0.03]}, mimic: {joint: left, multiplier: -1, offset: 0.05, stiffness: 100}}
+        mass: 0.1
+        hulls: [{box: {size: [0.02, 0.02, 0.1], center: [0, 0, -0.05]}}]
+    controller:
+      gains: {left: {kp: 5, kd: 0.05}}
+      targets:
+        left: {type: constant, value: 0.4}
+    initial:
+      left: {q: [0.1], qdot: [0.5]}
+"#;
+
+#[test]
+fn mimic_tie_derivatives_match_finite_differences() {
+    let scene = Scene::from_str(GRIPPER, Path::new("gripper.yaml")).unwrap();
+    // The mimic starts on its relation.
+    assert!((scene.q0[1] - (-0.1 + 0.05)).abs() < 1e-15 && (scene.qdot0[1] + 0.5).abs() < 1e-15);
+    let model = &scene.model;
+    let mut sim = scene.simulator();
+    let q_prev = DVector::from_vec(vec![0.1, -0.02]);
+    sim.state.poses = link_poses(model, &q_prev, &[]);
+    sim.state.poses_prev = sim.state.poses.clone();
+    sim.state.q = q_prev.clone();
+    sim.state.q_prev = q_prev.clone();
+    let q = DVector::from_vec(vec![0.13, 0.01]);
+    let (_, g, h) = sim.objective(&q, Need::Hessian).unwrap();
+    let step = 1e-6;
+    for k in 0..2 {
+        let (mut qp, mut qm) = (q.clone(), q.clone());
+        qp[k] += step;
+        qm[k] -= step;
+        let (vp, gp, _) = sim.objective(&qp, Need::Gradient).unwrap();
+        let (vm, gm, _) = sim.objective(&qm, Need::Gradient).unwrap();
+        let g_fd = (vp - vm) / (2.0 * step);
+        let h_fd: DVector<f64> = (gp - gm) / (2.0 * step);
+        assert!(
+            rel(g[k], g_fd, 1e-8) <= 1e-6,
+            "gradient {k}: {} vs {g_fd}",
+            g[k]
+        );
+        assert!(
+            (h.column(k) - &h_fd).amax() <= 1e-6 * h.column(k).amax(),
+            "Hessian column {k}"
+        );
+    }
+    // The coupling block: k [1, −a; −a, a²] with a = −1 adds +k off-diagonal.
+    let mut free = scene.clone();
+    free.model.mimics.clear();
+    let mut sim_free = free.simulator();
+    sim_free.state = sim.state.clone();
+    let (_, _, h_free) = sim_free.objective(&q, Need::Hessian).unwrap();
+    assert!(((&h - &h_free)[(0, 1)] - 100.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_mimic_joint_follows_its_driven_joint() {
+    let scene = Scene::from_str(GRIPPER, Path::new("gripper.yaml")).unwrap();
+    let mut sim = scene.simulator();
+    let mut worst: f64 = 0.0;
+    for _ in 0..150 {
+        sim.step().unwrap();
+        let q = &sim.state.q;
+        worst = worst.max((q[1] - (-q[0] + 0.05)).abs());
+    }
+    let q = sim.state.q.clone();
+    // The driven finger moved well towards its target (from 0.1 to 0.4).
+    assert!(q[0] > 0.25, "driven joint at {}", q[0]);
+    assert!(worst < 5e-3, "tie violated by {worst}");
+    eprintln!(
+        "mimic: left {:.4}, right {:.4}, worst tie error {worst:.2e} rad",
+        q[0], q[1]
+    );
+    // Untied, the undriven finger just hangs.
+    let mut free = scene.clone();
+    free.model.mimics.clear();
+    let mut sim = free.simulator();
+    for _ in 0..150 {
+        sim.step().unwrap();
+    }
+    assert!(sim.state.q[1].abs() < 0.2 && (sim.state.q[1] - (-q[0] + 0.05)).abs() > 0.1);
+}

@@ -15,6 +15,7 @@ pub mod friction;
 pub mod gravity;
 pub mod inertia;
 pub mod joint_limit;
+pub mod mimic;
 pub mod pairs;
 pub mod pd;
 
@@ -23,6 +24,7 @@ pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
 pub use joint_limit::JointLimits;
+pub use mimic::MimicTies;
 pub use pd::{PdController, PdTarget};
 
 use crate::kinematics::Kinematics;

@@ -474,6 +474,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
                 limit: joint_limit(l, &mut notes),
+                mimic: mimic(l, &src, &mut notes),
             },
             mass: None,
             vertex_mass: None,
@@ -590,4 +591,29 @@ fn joint_limit(l: &source::SourceLink, notes: &mut Vec<String>) -> Option<JointL
         velocity: j.velocity,
         effort: j.effort,
     })
+}
+
+/// The scene mimic of an imported joint: kept as a tie when both joints
+/// are single revolute/prismatic scene joints, noted and dropped otherwise.
+fn mimic(
+    l: &source::SourceLink,
+    src: &SourceRobot,
+    notes: &mut Vec<String>,
+) -> Option<crate::scene::schema::MimicSpec> {
+    let m = l.joint.mimic.as_ref()?;
+    let one_dof = |k: JointType| matches!(k, JointType::Revolute | JointType::Prismatic);
+    let followed = src.links.iter().find(|o| o.joint.name == m.joint);
+    if one_dof(l.joint.kind) && followed.is_some_and(|o| one_dof(o.joint.kind)) {
+        notes.push(format!(
+            "joint \"{}\" mimics \"{}\": tied by a stiff coupling term",
+            l.joint.name, m.joint
+        ));
+        Some(m.clone())
+    } else {
+        notes.push(format!(
+            "joint \"{}\" mimics \"{}\", which is not a revolute/prismatic scene joint: left independent",
+            l.joint.name, m.joint
+        ));
+        None
+    }
 }

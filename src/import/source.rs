@@ -58,6 +58,8 @@ pub struct SourceJoint {
     /// The input joints behind each coordinate (URDF names; a ball joint
     /// merged from two revolute joints lists both).
     pub input_joints: Vec<InputJoint>,
+    /// URDF `<mimic>`: the followed input joint, multiplier, offset.
+    pub mimic: Option<crate::scene::schema::MimicSpec>,
 }
 
 /// An input (URDF) joint that became coordinates of a scene joint.
@@ -128,6 +130,7 @@ impl SourceRobot {
                     axes: None,
                     origin: Origin::default(),
                     input_joints: Vec::new(),
+                    mimic: None,
                 },
                 geometry: vec![SourceGeometry {
                     element: format!("mesh \"{}\"", path.display()),

@@ -540,6 +540,7 @@ fn convert(
                     axes: None,
                     origin: Origin::default(),
                     input_joints: Vec::new(),
+                    mimic: None,
                 },
             ),
             Some(ji) => {
@@ -617,6 +618,12 @@ fn convert(
                         axes: None,
                         origin,
                         input_joints,
+                        mimic: j.mimic.as_ref().map(|m| crate::scene::schema::MimicSpec {
+                            joint: m.joint.clone(),
+                            multiplier: m.multiplier,
+                            offset: m.offset,
+                            stiffness: None,
+                        }),
                     },
                 )
             }
@@ -720,6 +727,7 @@ fn convert(
             axes: Some([a1, a2]),
             origin: m.joint.origin.clone(),
             input_joints: inputs,
+            mimic: None,
         };
         cl.parent = m.parent;
         if let Some(mm) = m.mass {

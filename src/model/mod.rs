@@ -10,7 +10,7 @@ pub mod joint;
 pub mod mass;
 
 pub use hull::{Hull, HullError};
-pub use joint::{JointDerivatives, JointKind, JointLimit, MAX_JOINT_DOF};
+pub use joint::{JointDerivatives, JointKind, JointLimit, MAX_JOINT_DOF, MimicTie};
 pub use mass::{Inertial, MassModel};
 
 use crate::math::Pose;
@@ -172,6 +172,8 @@ pub struct Model {
     pub second_moment: Vec<Matrix4<f64>>,
     /// Per link: `∫ρ x̃` (kg m, kg), cached.
     pub first_moment: Vec<Vector4<f64>>,
+    /// Mimic ties between coordinates (set by the scene builder).
+    pub mimics: Vec<MimicTie>,
 }
 
 impl Model {
@@ -229,6 +231,7 @@ impl Model {
             nchart,
             second_moment,
             first_moment,
+            mimics: Vec::new(),
         }
     }
 

@@ -6,8 +6,8 @@ use crate::math::{compose, rigid_inverse, rot};
 use crate::model::{JointKind, MassModel, Model};
 use crate::output::write_atomic;
 use crate::scene::schema::{
-    Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, Origin,
-    SceneSpec, SignalList,
+    Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
+    Origin, SceneSpec, SignalList,
 };
 use anyhow::Result;
 use std::path::Path;
@@ -149,6 +149,16 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                             velocity: l.velocity,
                             effort: l.effort,
                         }),
+                        mimic: model
+                            .mimics
+                            .iter()
+                            .find(|m| m.dof == link.dof_offset && link.ndof() == 1)
+                            .map(|m| MimicSpec {
+                                joint: model.links[model.dofs[m.master].link].joint_name.clone(),
+                                multiplier: Some(m.multiplier),
+                                offset: Some(m.offset),
+                                stiffness: Some(m.stiffness),
+                            }),
                     },
                     mass: None,
                     vertex_mass: None,

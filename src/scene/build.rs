@@ -4,7 +4,9 @@ use super::schema::*;
 use super::{Invalid, Scene, chain, environment};
 use crate::control::{ControlChannel, Controller};
 use crate::math::{pose_from, rpy_to_matrix, so3};
-use crate::model::{Hull, Inertial, JointKind, JointLimit, Link, MassModel, Model, RobotInfo};
+use crate::model::{
+    Hull, Inertial, JointKind, JointLimit, Link, MassModel, MimicTie, Model, RobotInfo,
+};
 use crate::sim::SimSettings;
 use nalgebra::{DVector, Matrix3, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -93,7 +95,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
             links: first..links.len(),
         });
     }
-    let model = Model::new(links, robots);
+    let mut model = Model::new(links, robots);
     if model.ndof() > MAX_DOF {
         return Err(Invalid::new(
             "robots",
@@ -212,6 +214,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
             }
         }
     }
+    model.mimics = mimic_ties(&all_robots, &model, &mut q0, &mut qdot0)?;
     for link in &model.links {
         if let Some(lim) = &link.limit {
             let x = q0[link.dof_offset];
@@ -733,4 +736,68 @@ fn joint_limit(
         velocity: sp.velocity,
         effort: sp.effort,
     }))
+}
+
+/// Default stiffness of a mimic tie (J/rad² or J/m²).
+pub const DEFAULT_MIMIC_STIFFNESS: f64 = 1.0e4;
+
+/// The mimic ties of every robot; a mimic joint that `initial` does not set
+/// starts on its relation (`q0`, `qdot0` updated).
+fn mimic_ties(
+    robots: &[RobotSpec],
+    model: &Model,
+    q0: &mut DVector<f64>,
+    qdot0: &mut DVector<f64>,
+) -> Result<Vec<MimicTie>, Invalid> {
+    let mut ties = Vec::new();
+    for (ri, r) in robots.iter().enumerate() {
+        let range = model.robots[ri].links.clone();
+        let by_joint = |name: &str| range.clone().find(|&l| model.links[l].joint_name == name);
+        for l in &r.links {
+            let Some(m) = &l.joint.mimic else { continue };
+            let jname = l.joint.name.clone().unwrap_or_else(|| l.name.clone());
+            let el = format!("robot \"{}\" joint \"{jname}\".mimic", r.name);
+            let me = by_joint(&jname).expect("built above");
+            let Some(master) = by_joint(&m.joint) else {
+                return Err(Invalid::new(
+                    el,
+                    format!("no joint named \"{}\" in this robot", m.joint),
+                ));
+            };
+            let one_dof = |k: &JointKind| {
+                matches!(k, JointKind::Revolute { .. } | JointKind::Prismatic { .. })
+            };
+            if !one_dof(&model.links[me].joint) || !one_dof(&model.links[master].joint) {
+                return Err(Invalid::new(
+                    el,
+                    "mimic joints and the joints they follow must be revolute or prismatic",
+                ));
+            }
+            if master == me {
+                return Err(Invalid::new(el, "a joint cannot mimic itself"));
+            }
+            let (a, b) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+            let k = m.stiffness.unwrap_or(DEFAULT_MIMIC_STIFFNESS);
+            check_finite(&el, "multiplier/offset", &[a, b])?;
+            if !(k > 0.0 && k.is_finite()) {
+                return Err(Invalid::new(
+                    format!("{el}.stiffness"),
+                    format!("must be positive and finite, got {k}"),
+                ));
+            }
+            let (dof, mdof) = (model.links[me].dof_offset, model.links[master].dof_offset);
+            if !r.initial.contains_key(&jname) {
+                q0[dof] = a * q0[mdof] + b;
+                qdot0[dof] = a * qdot0[mdof];
+            }
+            ties.push(MimicTie {
+                dof,
+                master: mdof,
+                multiplier: a,
+                offset: b,
+                stiffness: k,
+            });
+        }
+    }
+    Ok(ties)
 }

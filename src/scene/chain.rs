@@ -22,6 +22,7 @@ pub fn expand(spec: &ChainSpec) -> Vec<LinkSpec> {
                     rpy: [0.0; 3],
                 },
                 limit: None,
+                mimic: None,
             },
             mass: Some(spec.link_mass),
             vertex_mass: None,

@@ -120,6 +120,7 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
         axes: None,
         origin,
         limit: None,
+        mimic: None,
     }
 }
 

@@ -434,6 +434,36 @@ pub struct JointSpec {
     /// term (see [`JointLimitSpec`]). Default: unlimited.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit: Option<JointLimitSpec>,
+    /// Revolute and prismatic joints: follow another 1-DOF joint of the
+    /// same robot, `θ = multiplier·θ_joint + offset` (URDF `<mimic>`), as a
+    /// stiff tie (see [`MimicSpec`]). Default: independent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mimic: Option<MimicSpec>,
+}
+
+/// A mimic joint, **tied** (not eliminated): the term
+/// `½ k (θ − a θ_joint − b)²` (J) couples the two coordinates, so the
+/// mimic follows within `torque / k`. When the robot's `initial` does not
+/// give the mimic joint, its initial coordinate and velocity follow the
+/// relation exactly.
+///
+/// ```yaml
+/// mimic: {joint: finger_left, multiplier: -1}
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MimicSpec {
+    /// The followed joint (a revolute or prismatic joint of the same robot).
+    pub joint: String,
+    /// `a` (dimensionless). Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multiplier: Option<f64>,
+    /// `b` (rad or m). Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
+    /// Tie stiffness `k` (J/rad² or J/m²), > 0. Default 1.0e4.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
 }
 
 /// Position limits of a revolute (rad) or prismatic (m) joint, enforced by

@@ -284,6 +284,9 @@ impl Simulator {
         if let Some(limits) = crate::energy::JointLimits::from_model(&model) {
             energies.push(Box::new(limits));
         }
+        if let Some(ties) = crate::energy::MimicTies::from_model(&model) {
+            energies.push(Box::new(ties));
+        }
         let scratch = StepScratch {
             kin: Kinematics::new(&model),
             acc: EnergyAccumulator::new(&model),
