@@ -96,3 +96,106 @@ fn mass_matrix_check_detects_a_wrong_entry() {
     let (ok, _out, err) = check(&third_party_urdf(), "kuka-wrong", 1e-7);
     assert!(!ok && err.contains("mass matrix mismatch"), "{err}");
 }
+
+#[test]
+fn density_mass_gives_solid_links_and_the_report_compares_inertials() {
+    let urdf = third_party_urdf();
+    let opts = ImportOptions {
+        decomposer: Decomposer::Hull,
+        progress: false,
+        mass: sdrs::import::MassMode::Density,
+        density: 2000.0,
+        ..ImportOptions::default()
+    };
+    let imp = import(&urdf, &opts).unwrap();
+    let scene = Scene::from_spec(imp.scene.clone(), &urdf).unwrap();
+    for (link, rep) in scene.model.links.iter().zip(&imp.report.links) {
+        assert!(matches!(link.mass_model, MassModel::Solid { density } if density == 2000.0));
+        assert_eq!(rep.mass_model, "solid");
+        assert!(
+            (link.mass() - rep.mass).abs() <= 1e-9 * rep.mass,
+            "{}",
+            link.name
+        );
+        // The hulls' COM lies inside their bounding box; the URDF's is listed.
+        let (lo, hi) = link.hulls.iter().flat_map(|h| &h.x_local).fold(
+            (
+                nalgebra::Vector3::repeat(f64::MAX),
+                nalgebra::Vector3::repeat(f64::MIN),
+            ),
+            |(a, b), x| (a.inf(x), b.sup(x)),
+        );
+        let c = nalgebra::Vector3::from(rep.inertial_hulls.com);
+        assert!(
+            c.iter()
+                .zip(lo.iter().zip(hi.iter()))
+                .all(|(v, (l, h))| *l <= *v && *v <= *h)
+        );
+        assert!(
+            rep.inertial_input.is_some(),
+            "{}: URDF inertial missing",
+            link.name
+        );
+    }
+    // Default import: the report's input inertial is the given one.
+    let imp = import(
+        &urdf,
+        &ImportOptions {
+            decomposer: Decomposer::Hull,
+            progress: false,
+            ..ImportOptions::default()
+        },
+    )
+    .unwrap();
+    let rep = &imp.report.links[3];
+    let inp = rep.inertial_input.as_ref().unwrap();
+    assert_eq!(rep.mass_model, "given");
+    assert_eq!(inp.mass, rep.mass);
+    let p = &inp.principal_moments;
+    assert!(p[0] <= p[1] && p[1] <= p[2] && p[0] > 0.0);
+}
+
+#[test]
+fn urdf_mimic_and_limits_are_imported() {
+    let dir = temp_dir("mimic-import");
+    let urdf = dir.join("g.urdf");
+    let link = |n: &str| {
+        format!(
+            r#"<link name="{n}"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial><collision><geometry><box size="0.02 0.02 0.1"/></geometry></collision></link>"#
+        )
+    };
+    let text = format!(
+        r#"<?xml version="1.0"?>
+<robot name="g">
+  <link name="palm"><collision><geometry><box size="0.2 0.05 0.05"/></geometry></collision></link>
+  {}{}
+  <joint name="left" type="revolute"><parent link="palm"/><child link="l"/><origin xyz="-0.08 0 -0.1"/><axis xyz="0 1 0"/><limit lower="-0.5" upper="0.6" effort="3" velocity="2"/></joint>
+  <joint name="right" type="revolute"><parent link="palm"/><child link="r"/><origin xyz="0.08 0 -0.1"/><axis xyz="0 1 0"/><limit lower="-0.6" upper="0.5" effort="3" velocity="2"/><mimic joint="left" multiplier="-1" offset="0"/></joint>
+</robot>
+"#,
+        link("l"),
+        link("r")
+    );
+    std::fs::write(&urdf, text).unwrap();
+    let imp = import(
+        &urdf,
+        &ImportOptions {
+            decomposer: Decomposer::Hull,
+            progress: false,
+            ..ImportOptions::default()
+        },
+    )
+    .unwrap();
+    let scene = Scene::from_spec(imp.scene.clone(), &urdf).unwrap();
+    let m = &scene.model;
+    assert_eq!(m.mimics.len(), 1);
+    assert_eq!(m.mimics[0].multiplier, -1.0);
+    let l = m.links.iter().find(|l| l.joint_name == "left").unwrap();
+    let lim = l.limit.as_ref().unwrap();
+    assert_eq!(
+        (lim.lower, lim.upper, lim.velocity, lim.effort),
+        (-0.5, 0.6, Some(2.0), Some(3.0))
+    );
+    assert!(imp.report.notes.iter().any(|n| n.contains("tied")));
+    let _ = std::fs::remove_dir_all(&dir);
+}
