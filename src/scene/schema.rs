@@ -24,6 +24,7 @@
 //!           # axes: [[1,0,0],[0,1,0]]   # ball: two orthogonal hinge axes
 //!           origin: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # attachment in the parent frame;
 //!           # limit: {lower: -1.5, upper: 1.5}   # revolute/prismatic: barrier-enforced limits
+//!           # mimic: {joint: other, multiplier: 1, offset: 0}   # tied to another joint (stiffness 1e4)
 //!                            # xyz is the design-dependent attachment point
 //!         mass: 1.0          # kg, divided equally over all hull vertices …
 //!         # vertex_mass: 0.125   # … or kg per vertex (the paper's ρ); exactly one of the two
