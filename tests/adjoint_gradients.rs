@@ -177,3 +177,94 @@ fn trajectory_gradients_match_finite_differences_without_contact() {
     check("mass scale", g.physical.mass_scale, a, &mut worst);
     eprintln!("worst relative error {worst:.2e} (h = {h}, Newton tol 1e-10)");
 }
+
+/// The arm with `solid` links (hulls in general position: at a vertex of a
+/// planar face with more than three corners, the solid's moments have a
+/// kink, see `sdrs::model::mass`) and a `given` slider.
+const SOLID_ARM: &str = r#"
+dt: 0.01
+gravity: [0.5, -0.3, -9.81]
+solver: {tol: 1.0e-10}
+robots:
+  - name: arm
+    links:
+      - name: base
+        joint: {name: root, type: free}
+        mass: 2.0
+        mass_model: {type: solid}
+        hulls: [{vertices: [[-0.21,-0.15,-0.1],[0.2,-0.16,-0.11],[-0.19,0.15,-0.09],[0.22,0.14,-0.093],[-0.2,-0.14,0.1],[0.21,-0.15,0.12],[-0.2,0.16,0.1],[0.19,0.15,0.09]]}]
+      - name: upper
+        parent: base
+        joint: {name: shoulder, type: ball, origin: {xyz: [0.2, 0.0, 0.1]}}
+        mass_model: {type: solid, density: 900}
+        hulls: [{vertices: [[0,-0.03,-0.03],[0.02,0.03,-0.02],[0.01,0,0.035],[0.4,-0.02,-0.03],[0.38,0.03,0.01],[0.41,0,0.03]]}]
+      - name: fore
+        parent: upper
+        joint: {name: elbow, type: revolute, axis: [0, 0.6, 0.8], origin: {xyz: [0.4, 0, 0]}}
+        mass_model: {type: solid, density: 1200}
+        hulls: [{vertices: [[0,0,0],[0.3,0.02,0],[0.3,-0.02,0.03],[0.15,0,-0.04],[0.1,0.05,0.02]]}]
+      - name: slider
+        parent: fore
+        joint: {name: slide, type: prismatic, axis: [1, 0, 0], origin: {xyz: [0.3, 0, 0]}}
+        mass_model: {type: given, mass: 0.2, com: [0.05, 0.01, 0], inertia: [1.0e-4, 1.0e-5, 0, 2.0e-4, 0, 2.0e-4]}
+        hulls: [{box: {size: [0.1, 0.05, 0.05], center: [0.05, 0, 0]}}]
+    controller:
+      kp: 4
+      kd: 0.02
+      targets:
+        shoulder: [{type: sine, offset: 0.1, terms: [{amplitude: 0.4, frequency: 1.5, phase: 0.2}]}, {type: constant, value: 0.1}]
+        elbow: {type: table, times: [0, 0.3, 0.6], values: [0.2, -0.4, 0.3]}
+        slide: {type: constant, value: 0.05}
+    initial:
+      root: {q: [0, 0, 1, 0.3, -0.2, 0.5], qdot: [0.2, 0.1, 0.5, 0.4, -0.3, 0.2]}
+      shoulder: {q: [0.2, -0.1], qdot: [0.5, 0.3]}
+      elbow: {q: [0.4], qdot: [-0.2]}
+"#;
+
+#[test]
+fn trajectory_design_gradients_with_solid_and_given_masses_match_finite_differences() {
+    let setup = Setup::new(SOLID_ARM, 40);
+    assert!(matches!(
+        setup.model.links[0].mass_model,
+        sdrs::model::MassModel::Solid { .. }
+    ));
+    let loss = arm_loss(&setup.model);
+    let g = setup.gradients(&loss);
+    assert!(g.unavailable.is_empty(), "{:?}", g.unavailable);
+    let mut worst = 0.0;
+    let h = 1e-5;
+    for (c, e) in [(1, 0), (2, 1), (3, 0)] {
+        let a = fd(&setup, &loss, h, |s, d| {
+            s.model.links[c].attach[(e, 3)] += d
+        });
+        check(
+            &format!("attachment[{c}][{e}]"),
+            g.attachments[c][e],
+            a,
+            &mut worst,
+        );
+    }
+    // Solid links: the vertices move mass, COM and inertia.
+    for (l, v, e) in [
+        (0, 0, 0),
+        (0, 5, 2),
+        (1, 3, 0),
+        (1, 4, 1),
+        (2, 1, 2),
+        (2, 4, 0),
+    ] {
+        let a = fd(&setup, &loss, h, |s, d| {
+            s.model.links[l].hulls[0].x_local[v][e] += d;
+            s.model.refresh_moments();
+        });
+        check(
+            &format!("vertex[{l}][0][{v}][{e}]"),
+            g.vertices[l][0][v][e],
+            a,
+            &mut worst,
+        );
+    }
+    // The given link's inertial does not follow its hull.
+    assert_eq!(g.vertices[3][0][2], nalgebra::Vector3::zeros());
+    eprintln!("solid/given: worst relative error {worst:.2e} (h = {h})");
+}

@@ -4,15 +4,17 @@ and simulate it with MuJoCo, optionally with one effect switched on.
     python tools/mujoco_from_export.py SCENE.yaml EXPORT_DIR --out data.csv \
         [--damping C] [--frictionloss F] [--armature A] [--gain G] \
         [--duration 1.2] [--period 0.01] [--noise 1e-4] [--seed 1] [--timestep 1e-4] \
-        [--mjcf model.xml]
+        [--integrator implicitfast|implicit|RK4|Euler] [--mjcf model.xml]
 
 EXPORT_DIR is written by `sdrs simulate SCENE.yaml --export EXPORT_DIR`: the
 hull vertices of every link come from its `hulls.json`, and `poses.csv`
 (step 0) checks the converted kinematics (link poses at θ^0 must agree to
-1e-9 m). Masses are the SDRS lumped vertex masses (a link's `mass` divided
-equally over its hull vertices, or `vertex_mass` per vertex); each MuJoCo
-body gets the exact mass, centre of mass and inertia tensor of its vertex
-masses, so both engines integrate the same rigid bodies.
+1e-9 m). Masses follow the link's `mass_model`: the SDRS lumped vertex
+masses by default (a link's `mass` divided equally over its hull vertices,
+or `vertex_mass` per vertex), a `given` inertial, or `solid` hulls (trimesh's
+polyhedral integrals, hulls superposed); each MuJoCo body gets the exact
+mass, centre of mass and inertia tensor, so both engines integrate the same
+rigid bodies.
 
 The controller is the scene's stable-PD in SDRS's convention, applied as a
 joint torque each MuJoCo step: τ = 2k_p(θ* − θ) + (2k_d/Δt_sdrs)(θ̇* − θ̇)
@@ -67,6 +69,31 @@ def signal(sig, t):
     sys.exit(f"unsupported target signal type {kind!r} (sine and constant only)")
 
 
+def solid_inertial(name, link, hulls):
+    """Mass, COM and inertia (about the COM) of a `solid` link: each hull a
+    uniform solid (trimesh's polyhedral integrals), overlapping hulls
+    superposed, as `sdrs::model::mass` does."""
+    try:
+        import trimesh
+    except ImportError:
+        fail(f"link {name!r}: the `solid` mass model needs trimesh")
+    meshes = [trimesh.convex.convex_hull(np.asarray(h, dtype=float)) for h in hulls]
+    volume = sum(mesh.volume for mesh in meshes)
+    density = link["mass_model"].get("density")
+    if density is None:
+        density = link["mass"] / volume
+    parts = []
+    for mesh in meshes:
+        mesh.density = density
+        p = mesh.mass_properties
+        parts.append((p["mass"], np.asarray(p["center_mass"]), np.asarray(p["inertia"])))
+    m = sum(p[0] for p in parts)
+    com = sum(p[0] * p[1] for p in parts) / m
+    inertia = sum(p[2] + p[0] * (np.dot(p[1] - com, p[1] - com) * np.eye(3) - np.outer(p[1] - com, p[1] - com))
+                  for p in parts)
+    return m, com, inertia
+
+
 def fail(msg):
     sys.exit(f"error: {msg}")
 
@@ -83,7 +110,7 @@ def build(scene, hulls, args):
     dt_sdrs = scene["dt"]
     lines = [
         '<mujoco model="sdrs">',
-        f'  <option timestep="{args.timestep}" gravity="{g[0]} {g[1]} {g[2]}" integrator="implicitfast"/>',
+        f'  <option timestep="{args.timestep}" gravity="{g[0]} {g[1]} {g[2]}" integrator="{args.integrator}"/>',
         "  <worldbody>",
     ]
     children = {}
@@ -96,16 +123,26 @@ def build(scene, hulls, args):
         if name not in exported:
             fail(f"link {name!r} is not in hulls.json")
         verts = np.array([v for h in exported[name]["hulls"] for v in h])
-        if "mass" in l:
-            rho = np.full(len(verts), l["mass"] / len(verts))
-        elif "vertex_mass" in l:
-            rho = np.full(len(verts), l["vertex_mass"])
+        model = (l.get("mass_model") or {"type": "vertices"})["type"]
+        if model == "given":
+            mm = l["mass_model"]
+            m = float(mm["mass"])
+            com = np.array(mm["com"], dtype=float)
+            ixx, ixy, ixz, iyy, iyz, izz = mm["inertia"]
+            inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+        elif model == "solid":
+            m, com, inertia = solid_inertial(name, l, exported[name]["hulls"])
         else:
-            fail(f"link {name!r}: neither mass nor vertex_mass")
-        m = rho.sum()
-        com = (rho[:, None] * verts).sum(0) / m
-        r = verts - com
-        inertia = sum(w * (np.dot(x, x) * np.eye(3) - np.outer(x, x)) for w, x in zip(rho, r))
+            if "mass" in l:
+                rho = np.full(len(verts), l["mass"] / len(verts))
+            elif "vertex_mass" in l:
+                rho = np.full(len(verts), l["vertex_mass"])
+            else:
+                fail(f"link {name!r}: neither mass nor vertex_mass")
+            m = rho.sum()
+            com = (rho[:, None] * verts).sum(0) / m
+            r = verts - com
+            inertia = sum(w * (np.dot(x, x) * np.eye(3) - np.outer(x, x)) for w, x in zip(rho, r))
         j = l["joint"]
         o = j.get("origin", {})
         xyz = o.get("xyz", [0, 0, 0])
@@ -178,6 +215,8 @@ def main():
     ap.add_argument("--noise", type=float, default=1e-4)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--timestep", type=float, default=1e-4)
+    ap.add_argument("--integrator", default="implicitfast", choices=["implicitfast", "implicit", "RK4", "Euler"],
+                    help="MuJoCo integrator (default implicitfast)")
     args = ap.parse_args()
     with open(args.scene) as f:
         scene = yaml.safe_load(f)

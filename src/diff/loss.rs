@@ -4,7 +4,7 @@
 
 use crate::math::{Pose, rot, transform_point};
 use crate::model::Model;
-use nalgebra::{DVector, Matrix3x4, Vector3, Vector4};
+use nalgebra::{DVector, Matrix3x4, Matrix4, Vector3, Vector4};
 
 /// When a term applies.
 #[derive(
@@ -202,17 +202,19 @@ impl Loss {
                     let e = (com - target).component_mul(axes);
                     value += scale * weight * e.norm_squared();
                     if let Some(o) = out.as_deref_mut() {
-                        // ∂L/∂com = 2 w e∘axes; com = Σ A_i c_i / M with M
-                        // independent of vertex positions.
+                        // ∂L/∂com = 2 w e∘axes; com = Σ A_i c_i / Σ c_i₄, so
+                        // with gc = ∂L/∂com / mass: ∂L/∂A_i = gc c_iᵀ and
+                        // ∂L/∂c_i = A_iᵀgc − (gc·com) e₄ (the mass term
+                        // matters only where the mass depends on the design).
                         let gc = 2.0 * scale * weight * e.component_mul(axes) / mass;
+                        let shift = gc.dot(&com);
                         for &i in links {
                             o.pose[i] += gc * model.first_moment[i].transpose();
                             let r = rot(&poses[i]);
-                            for (h, hull) in model.links[i].hulls.iter().enumerate() {
-                                for (m, rho) in hull.vertex_mass.iter().enumerate() {
-                                    o.vertex[i][h][m] += r.transpose() * gc * *rho;
-                                }
-                            }
+                            let rg = r.transpose() * gc;
+                            let t = poses[i].column(3);
+                            let w1 = Vector4::new(rg.x, rg.y, rg.z, t.dot(&gc) - shift);
+                            model.links[i].moments_vjp(&Matrix4::zeros(), &w1, &mut o.vertex[i]);
                         }
                     }
                 }

@@ -8,7 +8,7 @@
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
-use nalgebra::DVector;
+use nalgebra::{DVector, Matrix4};
 
 /// Uniform gravity (the acceleration is read from the step context).
 #[derive(Default, Clone, Debug)]
@@ -45,7 +45,9 @@ impl Energy for Gravity {
     }
 
     /// `Φ = −Σ_i gᵀ δA_i c_i`: no pose dependence; `∂Φ/∂g = −Σ δA_i c_i`,
-    /// `∂Φ/∂x_m = −ρ_m [δA_iᵀ g]_{xyz}`; `Φ` is linear in the masses.
+    /// `∂Φ/∂c_i = −δA_iᵀ g` taken to the vertices by
+    /// [`crate::model::Link::moments_vjp`] (vertex masses: `−ρ_m [δA_iᵀ g]_{xyz}`);
+    /// `Φ` is linear in the masses.
     fn vjp(
         &mut self,
         ctx: &StepContext,
@@ -65,12 +67,8 @@ impl Energy for Gravity {
                 out.physical.gravity[e] -= dac[e];
             }
             if out.want_vertices {
-                let dg = dir.dpose[i].transpose() * g;
-                for (h, hull) in ctx.model.links[i].hulls.iter().enumerate() {
-                    for (k, rho) in hull.vertex_mass.iter().enumerate() {
-                        out.vertex[i][h][k] -= dg.fixed_rows::<3>(0) * *rho;
-                    }
-                }
+                let w1 = -(dir.dpose[i].transpose() * g);
+                ctx.model.links[i].moments_vjp(&Matrix4::zeros(), &w1, &mut out.vertex[i]);
             }
         }
         Ok(())

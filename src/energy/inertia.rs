@@ -13,7 +13,7 @@ use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::{DVector, Vector4};
 
-/// The inertia term (no parameters: masses come from the hulls).
+/// The inertia term (no parameters: masses come from the links' mass models).
 #[derive(Default, Clone, Debug)]
 pub struct Inertia;
 
@@ -51,7 +51,8 @@ impl Energy for Inertia {
 
     /// `Φ_i = ⟨δA_i, D_i M_i⟩/Δt²`: `∂Φ/∂A^t = δA M/Δt²`, `∂Φ/∂A^{t−1} = −2δA M/Δt²`,
     /// `∂Φ/∂A^{t−2} = δA M/Δt²`; with `W = D_iᵀδA_i/Δt²`, `Φ = ⟨W, M_i⟩` and
-    /// `∂Φ/∂x_m = ρ_m [(W + Wᵀ) x̃_m]_{xyz}`; `Φ` is linear in the masses.
+    /// `∂Φ/∂x_m` from [`crate::model::Link::moments_vjp`] (vertex masses:
+    /// `ρ_m [(W + Wᵀ) x̃_m]_{xyz}`); `Φ` is linear in the masses.
     fn vjp(
         &mut self,
         ctx: &StepContext,
@@ -74,13 +75,7 @@ impl Energy for Inertia {
             out.physical.mass_scale += d.component_mul(&dam).sum();
             if out.want_vertices {
                 let w = d.transpose() * da * inv_dt2;
-                let ws = w + w.transpose();
-                for (h, hull) in ctx.model.links[i].hulls.iter().enumerate() {
-                    for (k, (x, rho)) in hull.x_local.iter().zip(&hull.vertex_mass).enumerate() {
-                        let g = ws * Vector4::new(x.x, x.y, x.z, 1.0) * *rho;
-                        out.vertex[i][h][k] += g.fixed_rows::<3>(0);
-                    }
-                }
+                ctx.model.links[i].moments_vjp(&w, &Vector4::zeros(), &mut out.vertex[i]);
             }
         }
         Ok(())

@@ -14,6 +14,8 @@ pub mod contact;
 pub mod friction;
 pub mod gravity;
 pub mod inertia;
+pub mod joint_limit;
+pub mod mimic;
 pub mod pairs;
 pub mod pd;
 
@@ -21,6 +23,8 @@ pub use contact::ContactEnergy;
 pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
+pub use joint_limit::JointLimits;
+pub use mimic::MimicTies;
 pub use pd::{PdController, PdTarget};
 
 use crate::kinematics::Kinematics;

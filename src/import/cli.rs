@@ -31,7 +31,9 @@ pub struct ImportArgs {
     /// Designable links, comma-separated [default: all].
     #[arg(long, value_delimiter = ',')]
     pub designable: Option<Vec<String>>,
-    /// Mass source: URDF `<mass>` (density fallback) or density × volume.
+    /// Masses: `urdf` keeps each link's URDF `<inertial>` (mass, COM, inertia) as a `given`
+    /// inertial (solid hulls at --density where there is none); `density` makes every link a
+    /// `solid` (its hulls as uniform solids at --density).
     #[arg(long, value_enum, default_value_t = MassMode::Urdf)]
     pub mass: MassMode,
     /// Density (kg/m³) for `--mass density` and fallbacks.

@@ -1,16 +1,24 @@
-//! Link masses.
+//! Link masses of an imported robot, as scene mass models
+//! ([`crate::model::mass`]).
 //!
-//! - `urdf` (default): the link's `<inertial><mass>` (plus the masses of
-//!   geometry-less links merged into it). Links with no positive mass in the
-//!   input (bare meshes, `world`-like links, massless URDF links) fall back to
-//!   `density × volume`, and the report says so.
-//! - `density`: `density × volume` for every link.
+//! - `urdf` (default): the link's URDF `<inertial>` (origin, mass, full
+//!   inertia tensor; geometry-less links merged into it add theirs, moved
+//!   into its frame) as a `given` inertial. Links with no positive mass in
+//!   the input (bare meshes, `world`-like links, massless URDF links) or
+//!   with a non-physical inertia tensor fall back to `solid` hulls at the
+//!   default density, and the report says so.
+//! - `density`: every link `solid` at the given density (mass, COM and
+//!   inertia of the hulls as uniform solids, following the hulls in design
+//!   optimization; overlapping hulls superposed).
 //!
-//! `volume` is the volume of the union of the link's hulls (estimated on a
-//! grid, see [`super::report::union_volume`]). The mass is written as the
-//! link's `mass:` in the scene, which the model divides equally over all the
-//! link's hull vertices (the paper's `ρ_ij(x) = Σ_m ρ δ(x − x^m)`).
+//! The report lists, per link, the input inertial and the hulls' (as
+//! uniform solids scaled to the link's mass, so COM and principal moments
+//! compare directly).
 
+use crate::model::Inertial;
+use crate::model::mass::{solid_second_moment, solid_triangles};
+use crate::scene::schema::MassModelSpec;
+use nalgebra::{Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// How masses are assigned.
@@ -27,42 +35,163 @@ pub enum MassMode {
 pub enum MassSource {
     Urdf,
     Density,
-    /// `urdf` was asked but the input has no positive mass for the link.
+    /// `urdf` was asked but the input has no usable inertial for the link.
     DensityFallback,
 }
 
-/// Mass of a link (kg) and its source.
-pub fn link_mass(
+/// Mass (kg), centre of mass (m, link frame) and principal moments of
+/// inertia about the centre of mass (kg m², ascending).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct InertialReport {
+    pub mass: f64,
+    pub com: [f64; 3],
+    pub principal_moments: [f64; 3],
+}
+
+impl InertialReport {
+    pub fn of(i: &Inertial) -> InertialReport {
+        let mut e: Vec<f64> = i.inertia.symmetric_eigenvalues().iter().copied().collect();
+        e.sort_by(f64::total_cmp);
+        InertialReport {
+            mass: i.mass,
+            com: i.com.into(),
+            principal_moments: [e[0], e[1], e[2]],
+        }
+    }
+}
+
+/// A link's mass model and what the report says about it.
+#[derive(Clone, Debug)]
+pub struct LinkMass {
+    /// The link's mass in the scene (kg).
+    pub mass: f64,
+    pub source: MassSource,
+    /// Written as the link's `mass_model`.
+    pub spec: MassModelSpec,
+    /// The input's inertial (merged links included), if any.
+    pub input: Option<InertialReport>,
+    /// The hulls as uniform solids at the link's mass.
+    pub hulls: InertialReport,
+    /// Why `urdf` fell back to density, if it did.
+    pub fallback: Option<String>,
+}
+
+impl LinkMass {
+    /// `given` or `solid`.
+    pub fn model_name(&self) -> &'static str {
+        match self.spec {
+            MassModelSpec::Given { .. } => "given",
+            MassModelSpec::Solid { .. } => "solid",
+            MassModelSpec::Vertices => "vertices",
+        }
+    }
+}
+
+/// The mass model of a link with input second moment `moment` (link frame)
+/// and final hulls `hulls` (link frame). Errors: a hull without volume.
+pub fn link_mass_model(
     mode: MassMode,
-    input_mass: Option<f64>,
+    moment: Option<&Matrix4<f64>>,
     density: f64,
-    volume: f64,
-) -> (f64, MassSource) {
-    let by_volume = (density * volume).max(f64::MIN_POSITIVE);
-    match (mode, input_mass) {
-        (MassMode::Urdf, Some(m)) if m > 0.0 && m.is_finite() => (m, MassSource::Urdf),
-        (MassMode::Urdf, _) => (by_volume, MassSource::DensityFallback),
-        (MassMode::Density, _) => (by_volume, MassSource::Density),
+    hulls: &[&[Vector3<f64>]],
+) -> Result<LinkMass, String> {
+    let mut unit = Matrix4::zeros();
+    for (k, h) in hulls.iter().enumerate() {
+        let tris = solid_triangles(h).map_err(|e| format!("hull {k}: {e}"))?;
+        unit += solid_second_moment(h, &tris, 1.0);
+    }
+    let volume = unit[(3, 3)];
+    let input = moment.map(Inertial::from_second_moment);
+    let hulls_at =
+        |mass: f64| InertialReport::of(&Inertial::from_second_moment(&(unit * (mass / volume))));
+    let solid = |source: MassSource, fallback: Option<String>| LinkMass {
+        mass: density * volume,
+        source,
+        spec: MassModelSpec::Solid {
+            density: Some(density),
+        },
+        input: input.as_ref().map(InertialReport::of),
+        hulls: hulls_at(density * volume),
+        fallback,
+    };
+    match (mode, &input) {
+        (MassMode::Density, _) => Ok(solid(MassSource::Density, None)),
+        (MassMode::Urdf, None) => Ok(solid(
+            MassSource::DensityFallback,
+            Some("no mass in the input".into()),
+        )),
+        (MassMode::Urdf, Some(i)) => match i.check() {
+            Err(e) => Ok(solid(
+                MassSource::DensityFallback,
+                Some(format!("the input inertial is not physical ({e})")),
+            )),
+            Ok(()) => {
+                let t = &i.inertia;
+                Ok(LinkMass {
+                    mass: i.mass,
+                    source: MassSource::Urdf,
+                    spec: MassModelSpec::Given {
+                        mass: i.mass,
+                        com: i.com.into(),
+                        inertia: [
+                            t[(0, 0)],
+                            t[(0, 1)],
+                            t[(0, 2)],
+                            t[(1, 1)],
+                            t[(1, 2)],
+                            t[(2, 2)],
+                        ],
+                    },
+                    input: Some(InertialReport::of(i)),
+                    hulls: hulls_at(i.mass),
+                    fallback: None,
+                })
+            }
+        },
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Hull;
+    use nalgebra::Matrix3;
 
     #[test]
     fn modes_and_fallback() {
+        let cube = Hull::cuboid(Vector3::repeat(0.1), Vector3::new(0.05, 0.0, 0.0));
+        let hulls = [cube.as_slice()];
+        let given = Inertial {
+            mass: 2.0,
+            com: Vector3::new(0.0, 0.01, 0.0),
+            inertia: Matrix3::from_diagonal(&Vector3::new(0.01, 0.02, 0.025)),
+        };
+        let m = given.second_moment();
+        let l = link_mass_model(MassMode::Urdf, Some(&m), 1000.0, &hulls).unwrap();
         assert_eq!(
-            link_mass(MassMode::Urdf, Some(2.0), 1000.0, 1e-3),
-            (2.0, MassSource::Urdf)
+            (l.mass, l.source, l.model_name()),
+            (2.0, MassSource::Urdf, "given")
         );
+        let inp = l.input.unwrap();
+        assert!((inp.principal_moments[2] - 0.025).abs() < 1e-15);
+        // The hulls at the link's mass: a 0.1 m cube of 2 kg at x = 0.05.
+        assert!((l.hulls.com[0] - 0.05).abs() < 1e-15);
+        assert!((l.hulls.principal_moments[0] - 2.0 * 0.02 / 12.0).abs() < 1e-15);
+        let l = link_mass_model(MassMode::Urdf, None, 1000.0, &hulls).unwrap();
         assert_eq!(
-            link_mass(MassMode::Urdf, None, 1000.0, 1e-3),
-            (1.0, MassSource::DensityFallback)
+            (l.source, l.model_name()),
+            (MassSource::DensityFallback, "solid")
         );
-        assert_eq!(
-            link_mass(MassMode::Density, Some(2.0), 500.0, 1e-3),
-            (0.5, MassSource::Density)
-        );
+        assert!((l.mass - 1.0).abs() < 1e-12);
+        let l = link_mass_model(MassMode::Density, Some(&m), 500.0, &hulls).unwrap();
+        assert_eq!(l.source, MassSource::Density);
+        assert!((l.mass - 0.5).abs() < 1e-12);
+        let bad = Inertial {
+            inertia: Matrix3::from_diagonal(&Vector3::new(1.0, 0.1, 0.1)),
+            ..given
+        };
+        let l =
+            link_mass_model(MassMode::Urdf, Some(&bad.second_moment()), 1000.0, &hulls).unwrap();
+        assert!(l.fallback.unwrap().contains("triangle"));
     }
 }

@@ -416,11 +416,23 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         let g = &geoms[li];
         let polys: Vec<_> = g.hulls.iter().map(|h| h.poly.clone()).collect();
         let uv = report::union_volume(&polys, opts.volume_grid);
-        let (mass, mass_source) = mass::link_mass(opts.mass, l.mass, opts.density, uv);
-        if mass_source == mass::MassSource::DensityFallback {
+        let hull_vertices_now: Vec<&[Vector3<f64>]> =
+            g.hulls.iter().map(|h| h.vertices.as_slice()).collect();
+        let lm = mass::link_mass_model(
+            opts.mass,
+            l.moment.as_ref(),
+            opts.density,
+            &hull_vertices_now,
+        )
+        .map_err(|msg| ImportError::Invalid {
+            path: src.file.clone(),
+            msg: format!("link \"{}\": {msg}", l.name),
+        })?;
+        let (mass, mass_source) = (lm.mass, lm.source);
+        if let Some(why) = &lm.fallback {
             notes.push(format!(
-                "link \"{}\" has no mass in the input: {:.4} kg from density {} kg/m³",
-                l.name, mass, opts.density
+                "link \"{}\": {why}: solid hulls at density {} kg/m³ ({:.4} kg)",
+                l.name, opts.density, mass
             ));
         }
         let (mut cov, mut maxd) = (1.0f64, 0.0f64);
@@ -442,6 +454,9 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
             hull_vertices,
             mass,
             mass_source,
+            mass_model: lm.model_name(),
+            inertial_input: lm.input.clone(),
+            inertial_hulls: lm.hulls.clone(),
             union_volume: uv,
             source_volume: g.source_volume,
             coverage: cov,
@@ -463,9 +478,12 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 axis: l.joint.axis,
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
+                limit: joint_limit(l, &mut notes),
+                mimic: mimic(l, &src, &mut notes),
             },
-            mass: Some(mass),
+            mass: None,
             vertex_mass: None,
+            mass_model: Some(lm.spec.clone()),
             hulls: g
                 .hulls
                 .iter()
@@ -550,4 +568,57 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         report,
         root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
     })
+}
+
+/// The scene limit of an imported 1-DOF joint whose URDF limits position.
+/// Enforced only when the initial configuration `θ = 0` lies strictly
+/// inside; otherwise the limit is noted and left out (the barrier needs a
+/// feasible start).
+fn joint_limit(l: &source::SourceLink, notes: &mut Vec<String>) -> Option<JointLimitSpec> {
+    let [j] = l.joint.input_joints.as_slice() else {
+        return None;
+    };
+    if !j.limited || !matches!(l.joint.kind, JointType::Revolute | JointType::Prismatic) {
+        return None;
+    }
+    if !(j.lower < 0.0 && 0.0 < j.upper) {
+        notes.push(format!(
+            "joint \"{}\": limits [{}, {}] do not contain the initial coordinate 0 strictly; not enforced",
+            j.name, j.lower, j.upper
+        ));
+        return None;
+    }
+    Some(JointLimitSpec {
+        lower: j.lower,
+        upper: j.upper,
+        support: None,
+        stiffness: None,
+        velocity: j.velocity,
+        effort: j.effort,
+    })
+}
+
+/// The scene mimic of an imported joint: kept as a tie when both joints
+/// are single revolute/prismatic scene joints, noted and dropped otherwise.
+fn mimic(
+    l: &source::SourceLink,
+    src: &SourceRobot,
+    notes: &mut Vec<String>,
+) -> Option<crate::scene::schema::MimicSpec> {
+    let m = l.joint.mimic.as_ref()?;
+    let one_dof = |k: JointType| matches!(k, JointType::Revolute | JointType::Prismatic);
+    let followed = src.links.iter().find(|o| o.joint.name == m.joint);
+    if one_dof(l.joint.kind) && followed.is_some_and(|o| one_dof(o.joint.kind)) {
+        notes.push(format!(
+            "joint \"{}\" mimics \"{}\": tied by a stiff coupling term",
+            l.joint.name, m.joint
+        ));
+        Some(m.clone())
+    } else {
+        notes.push(format!(
+            "joint \"{}\" mimics \"{}\", which is not a revolute/prismatic scene joint: left independent",
+            l.joint.name, m.joint
+        ));
+        None
+    }
 }

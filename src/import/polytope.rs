@@ -17,6 +17,15 @@ pub struct Polytope {
     pub planes: Vec<(Vector3<f64>, f64)>,
 }
 
+/// Boundary triangles of the convex hull of `points` as indices into
+/// `points` (counter-clockwise seen from outside); points inside or within
+/// `1e-12 ×` the bounding-box diagonal of the hull's surface are in no
+/// triangle. Same construction and checks as [`convex_hull`].
+pub fn hull_triangles(points: &[Vector3<f64>]) -> Result<Vec<[usize; 3]>, String> {
+    let diag = convex_hull(points)?.diagonal();
+    hull3d_indexed(points, 1e-12 * diag)
+}
+
 /// Convex hull of a point set, or why there is none.
 pub fn convex_hull(points: &[Vector3<f64>]) -> Result<Polytope, String> {
     if points.len() < 4 {
@@ -59,8 +68,7 @@ pub fn convex_hull(points: &[Vector3<f64>]) -> Result<Polytope, String> {
 /// triangle is a supporting plane to within `eps` and the surface is closed
 /// and consistently oriented even for the many coplanar points of voxel
 /// hulls (parry's quickhull can return overlapping triangles there).
-#[allow(clippy::type_complexity)]
-fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usize; 3]>), String> {
+fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, String> {
     struct Face {
         v: [usize; 3],
         n: Vector3<f64>,
@@ -191,11 +199,18 @@ fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usi
             faces.push(f);
         }
     }
+    Ok(faces.iter().filter(|f| f.alive).map(|f| f.v).collect())
+}
+
+/// [`hull3d_indexed`] with the used points gathered into a vertex list.
+#[allow(clippy::type_complexity)]
+fn hull3d(pts: &[Vector3<f64>], eps: f64) -> Result<(Vec<Vector3<f64>>, Vec<[usize; 3]>), String> {
+    let faces = hull3d_indexed(pts, eps)?;
     let mut map = vec![usize::MAX; pts.len()];
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
-    for f in faces.iter().filter(|f| f.alive) {
-        triangles.push(f.v.map(|i| {
+    for f in faces {
+        triangles.push(f.map(|i| {
             if map[i] == usize::MAX {
                 map[i] = vertices.len();
                 vertices.push(pts[i]);

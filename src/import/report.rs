@@ -12,7 +12,7 @@
 //!   error is `1 − coverage`. Distances are exact point–polytope distances.
 
 use super::connectivity::{AttachmentSite, LinkConnectivity};
-use super::mass::MassSource;
+use super::mass::{InertialReport, MassSource};
 use super::mesh::TriMesh;
 use super::polytope::{Polytope, bounds};
 use nalgebra::Vector3;
@@ -29,8 +29,15 @@ pub struct LinkReport {
     pub vertices: usize,
     /// Vertices per hull.
     pub hull_vertices: Vec<usize>,
+    /// The link's mass in the scene (kg).
     pub mass: f64,
     pub mass_source: MassSource,
+    /// The scene mass model: `given` (the input inertial) or `solid`.
+    pub mass_model: &'static str,
+    /// The input's inertial (URDF `<inertial>`, merged links included).
+    pub inertial_input: Option<InertialReport>,
+    /// The hulls as uniform solids scaled to the link's mass.
+    pub inertial_hulls: InertialReport,
     /// Volume of the union of the hulls (m³, grid estimate).
     pub union_volume: f64,
     /// Volume of the source geometry (m³); `None` when a source mesh is open.

@@ -58,6 +58,8 @@ pub struct SourceJoint {
     /// The input joints behind each coordinate (URDF names; a ball joint
     /// merged from two revolute joints lists both).
     pub input_joints: Vec<InputJoint>,
+    /// URDF `<mimic>`: the followed input joint, multiplier, offset.
+    pub mimic: Option<crate::scene::schema::MimicSpec>,
 }
 
 /// An input (URDF) joint that became coordinates of a scene joint.
@@ -69,6 +71,15 @@ pub struct InputJoint {
     pub kind: String,
     pub lower: f64,
     pub upper: f64,
+    /// Whether the input limits position (URDF `revolute`/`prismatic` with
+    /// finite `lower < upper`); `lower`/`upper` are sampling ranges otherwise.
+    pub limited: bool,
+    /// URDF `<limit velocity>` (rad/s or m/s) when positive; reported only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// URDF `<limit effort>` (N·m or N) when positive; reported only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub effort: Option<f64>,
 }
 
 /// One link.
@@ -81,6 +92,11 @@ pub struct SourceLink {
     pub geometry: Vec<SourceGeometry>,
     /// Mass from the input (URDF `<inertial><mass>`), if positive.
     pub mass: Option<f64>,
+    /// The input's inertial (URDF `<inertial>`: origin, mass, inertia) as
+    /// the 4×4 second moment `∫ρ x̃ x̃ᵀ` in the link frame (see
+    /// [`crate::model::Inertial::second_moment`]), if the mass is positive;
+    /// merged links add theirs, moved into this frame (`T M Tᵀ`).
+    pub moment: Option<nalgebra::Matrix4<f64>>,
 }
 
 /// A robot read from the input.
@@ -114,6 +130,7 @@ impl SourceRobot {
                     axes: None,
                     origin: Origin::default(),
                     input_joints: Vec::new(),
+                    mimic: None,
                 },
                 geometry: vec![SourceGeometry {
                     element: format!("mesh \"{}\"", path.display()),
@@ -125,6 +142,7 @@ impl SourceRobot {
                     },
                 }],
                 mass: None,
+                moment: None,
             }],
             notes: vec!["bare mesh: one free body".into()],
         }

@@ -35,7 +35,7 @@ use super::pybullet_shapes::{
 use super::source::*;
 use crate::math::rpy_to_matrix;
 use crate::scene::schema::{JointType, Origin};
-use nalgebra::{Matrix3, Rotation3, Vector3};
+use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
 use quick_xml::events::Event;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -250,6 +250,36 @@ fn rt(o: &Origin) -> (Matrix3<f64>, Vector3<f64>) {
 }
 
 /// `a ∘ b` as an origin (xyz + rpy).
+/// The second moment of a URDF `<inertial>` in its link's frame (`None`
+/// for a zero mass): the inertia tensor (about the COM, in the axes of the
+/// inertial's `origin`) is rotated into link axes, `I = R I_o Rᵀ`, and
+/// placed at the origin's `xyz`.
+fn urdf_moment(i: &urdf_rs::Inertial) -> Option<Matrix4<f64>> {
+    if !(i.mass.value > 0.0) {
+        return None;
+    }
+    let t = &i.inertia;
+    let io = Matrix3::new(
+        t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
+    );
+    let r = rpy_to_matrix(&[i.origin.rpy[0], i.origin.rpy[1], i.origin.rpy[2]]);
+    let g = crate::model::Inertial {
+        mass: i.mass.value,
+        com: Vector3::new(i.origin.xyz[0], i.origin.xyz[1], i.origin.xyz[2]),
+        inertia: r * io * r.transpose(),
+    };
+    Some(g.second_moment())
+}
+
+/// `T M Tᵀ` with `T = [R t; 0 1]`: a second moment given in a child frame,
+/// expressed in the parent frame (`x̃_parent = T x̃_child`).
+fn moved_moment(m: &Matrix4<f64>, r: &Matrix3<f64>, t: &Vector3<f64>) -> Matrix4<f64> {
+    let mut tt = Matrix4::identity();
+    tt.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+    tt.fixed_view_mut::<3, 1>(0, 3).copy_from(t);
+    tt * m * tt.transpose()
+}
+
 fn compose_origin(a: &Origin, b: &Origin) -> Origin {
     let (ra, ta) = rt(a);
     let (rb, tb) = rt(b);
@@ -607,6 +637,7 @@ fn convert(
                     axes: None,
                     origin: Origin::default(),
                     input_joints: Vec::new(),
+                    mimic: None,
                 },
             ),
             Some(ji) => {
@@ -658,11 +689,21 @@ fn convert(
                 let input_joints = if kind == JointType::Fixed {
                     Vec::new()
                 } else {
+                    let (lo, hi) = (j.limit.lower, j.limit.upper);
+                    let positive = |v: f64| Some(v).filter(|v| *v > 0.0 && v.is_finite());
                     vec![InputJoint {
                         name: j.name.clone(),
                         kind: type_name(&j.joint_type).into(),
                         lower,
                         upper,
+                        limited: matches!(
+                            j.joint_type,
+                            urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic
+                        ) && lo.is_finite()
+                            && hi.is_finite()
+                            && lo < hi,
+                        velocity: positive(j.limit.velocity),
+                        effort: positive(j.limit.effort),
                     }]
                 };
                 (
@@ -674,6 +715,12 @@ fn convert(
                         axes: None,
                         origin,
                         input_joints,
+                        mimic: j.mimic.as_ref().map(|m| crate::scene::schema::MimicSpec {
+                            joint: m.joint.clone(),
+                            multiplier: m.multiplier,
+                            offset: m.offset,
+                            stiffness: None,
+                        }),
                     },
                 )
             }
@@ -690,6 +737,7 @@ fn convert(
             joint,
             geometry,
             mass: Some(l.inertial.mass.value).filter(|m| *m > 0.0),
+            moment: urdf_moment(&l.inertial),
         });
     }
     let mut links: Vec<Option<SourceLink>> = tmp.into_iter().map(Some).collect();
@@ -724,6 +772,11 @@ fn convert(
         if let Some(m) = l.mass {
             let pl = links[p].as_mut().unwrap();
             pl.mass = Some(pl.mass.unwrap_or(0.0) + m);
+        }
+        if let Some(m) = l.moment {
+            let (r, t) = rt(&l.joint.origin);
+            let pl = links[p].as_mut().unwrap();
+            pl.moment = Some(pl.moment.unwrap_or_else(Matrix4::zeros) + moved_moment(&m, &r, &t));
         }
         for c in children_of_raw(&links, i) {
             let cl = links[c].as_mut().unwrap();
@@ -771,10 +824,17 @@ fn convert(
             axes: Some([a1, a2]),
             origin: m.joint.origin.clone(),
             input_joints: inputs,
+            mimic: None,
         };
         cl.parent = m.parent;
         if let Some(mm) = m.mass {
             cl.mass = Some(cl.mass.unwrap_or(0.0) + mm);
+        }
+        // The hinge link's frame is the child's at zero second-hinge angle;
+        // its inertial is added there (it then turns with the second hinge
+        // too: exact for mass and a COM on that hinge's axis).
+        if let Some(mm) = m.moment {
+            cl.moment = Some(cl.moment.unwrap_or_else(Matrix4::zeros) + mm);
         }
         notes.push(format!(
             "link \"{}\" has no geometry between two orthogonal hinges: joints merged into ball joint \"{}\"",

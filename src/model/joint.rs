@@ -240,6 +240,39 @@ impl Default for JointDerivatives {
     }
 }
 
+/// A mimic tie `θ_dof ≈ multiplier·θ_master + offset`, enforced by the
+/// penalty term [`crate::energy::mimic`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MimicTie {
+    /// The following coordinate.
+    pub dof: usize,
+    /// The followed coordinate.
+    pub master: usize,
+    pub multiplier: f64,
+    /// rad or m.
+    pub offset: f64,
+    /// Tie stiffness `k` (J/rad² or J/m²).
+    pub stiffness: f64,
+}
+
+/// Position limits of a 1-DOF (revolute or prismatic) joint, enforced by
+/// the barrier term [`crate::energy::joint_limit`]; velocity and effort
+/// limits are carried for reports only (not simulated).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointLimit {
+    /// Lower and upper position limit (rad or m), `lower < upper`.
+    pub lower: f64,
+    pub upper: f64,
+    /// Barrier support `s` (rad or m).
+    pub support: f64,
+    /// Barrier stiffness `κ` (J·rad or J·m).
+    pub stiffness: f64,
+    /// Velocity limit (rad/s or m/s), reported only.
+    pub velocity: Option<f64>,
+    /// Effort limit (N·m or N), reported only.
+    pub effort: Option<f64>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

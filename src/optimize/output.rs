@@ -3,10 +3,11 @@
 use super::{IterRecord, Outcome, Problem};
 use crate::control::Controller;
 use crate::math::{compose, rigid_inverse, rot};
-use crate::model::{JointKind, Model};
+use crate::model::{JointKind, MassModel, Model};
 use crate::output::write_atomic;
 use crate::scene::schema::{
-    Gains, HullSpec, JointSpec, JointType, LinkSpec, Origin, SceneSpec, SignalList,
+    Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
+    Origin, SceneSpec, SignalList,
 };
 use anyhow::Result;
 use std::path::Path;
@@ -140,16 +141,36 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                             xyz: attach.column(3).into_owned().into(),
                             rpy: [roll, pitch, yaw],
                         },
+                        limit: link.limit.as_ref().map(|l| JointLimitSpec {
+                            lower: l.lower,
+                            upper: l.upper,
+                            support: Some(l.support),
+                            stiffness: Some(l.stiffness),
+                            velocity: l.velocity,
+                            effort: l.effort,
+                        }),
+                        mimic: model
+                            .mimics
+                            .iter()
+                            .find(|m| m.dof == link.dof_offset && link.ndof() == 1)
+                            .map(|m| MimicSpec {
+                                joint: model.links[model.dofs[m.master].link].joint_name.clone(),
+                                multiplier: Some(m.multiplier),
+                                offset: Some(m.offset),
+                                stiffness: Some(m.stiffness),
+                            }),
                     },
                     mass: None,
                     vertex_mass: None,
+                    mass_model: mass_model_spec(&link.mass_model),
                     hulls: link
                         .hulls
                         .iter()
                         .map(|h| HullSpec {
                             vertices: Some(h.x_local.iter().map(|x| (*x).into()).collect()),
                             cuboid: None,
-                            vertex_masses: Some(h.vertex_mass.clone()),
+                            vertex_masses: matches!(link.mass_model, MassModel::Vertices)
+                                .then(|| h.vertex_mass.clone()),
                         })
                         .collect(),
                 }
@@ -305,4 +326,30 @@ pub fn write_all(
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     Ok(())
+}
+
+/// The scene-file form of a link's mass model (`None` for the default
+/// `vertices`, whose masses are written per vertex).
+pub fn mass_model_spec(m: &MassModel) -> Option<MassModelSpec> {
+    match m {
+        MassModel::Vertices => None,
+        MassModel::Solid { density } => Some(MassModelSpec::Solid {
+            density: Some(*density),
+        }),
+        MassModel::Given(g) => {
+            let i = &g.inertia;
+            Some(MassModelSpec::Given {
+                mass: g.mass,
+                com: g.com.into(),
+                inertia: [
+                    i[(0, 0)],
+                    i[(0, 1)],
+                    i[(0, 2)],
+                    i[(1, 1)],
+                    i[(1, 2)],
+                    i[(2, 2)],
+                ],
+            })
+        }
+    }
 }

@@ -4,7 +4,9 @@ use super::schema::*;
 use super::{Invalid, Scene, chain, environment};
 use crate::control::{ControlChannel, Controller};
 use crate::math::{pose_from, rpy_to_matrix, so3};
-use crate::model::{Hull, JointKind, Link, Model, RobotInfo};
+use crate::model::{
+    Hull, Inertial, JointKind, JointLimit, Link, MassModel, MimicTie, Model, RobotInfo,
+};
 use crate::sim::SimSettings;
 use nalgebra::{DVector, Matrix3, Vector3};
 use std::collections::{BTreeMap, HashMap};
@@ -93,7 +95,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
             links: first..links.len(),
         });
     }
-    let model = Model::new(links, robots);
+    let mut model = Model::new(links, robots);
     if model.ndof() > MAX_DOF {
         return Err(Invalid::new(
             "robots",
@@ -209,6 +211,24 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
                 let phi = Vector3::new(q0[co], q0[co + 1], q0[co + 2]);
                 charts[c] = so3::exp(&phi);
                 q0.rows_mut(co, 3).fill(0.0);
+            }
+        }
+    }
+    model.mimics = mimic_ties(&all_robots, &model, &mut q0, &mut qdot0)?;
+    for link in &model.links {
+        if let Some(lim) = &link.limit {
+            let x = q0[link.dof_offset];
+            if !(x > lim.lower && x < lim.upper) {
+                return Err(Invalid::new(
+                    format!(
+                        "robot \"{}\" joint \"{}\"",
+                        model.robots[link.robot].name, link.joint_name
+                    ),
+                    format!(
+                        "the initial coordinate {x} must lie strictly inside the joint limit [{}, {}] (set `initial`)",
+                        lim.lower, lim.upper
+                    ),
+                ));
             }
         }
     }
@@ -442,6 +462,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             ));
         }
         let kind = joint_kind(&format!("{lel}.joint"), &l.joint)?;
+        let limit = joint_limit(&format!("{lel}.joint.limit"), &kind, l.joint.limit.as_ref())?;
         let o = &l.joint.origin;
         check_finite(
             &format!("{lel}.joint.origin"),
@@ -466,8 +487,25 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
                 "a link needs at least one hull",
             ));
         }
-        let explicit = l.hulls.iter().all(|h| h.vertex_masses.is_some());
+        let spec_model = l.mass_model.clone().unwrap_or(MassModelSpec::Vertices);
+        let lumped = matches!(spec_model, MassModelSpec::Vertices);
+        if !lumped {
+            if l.vertex_mass.is_some() {
+                return Err(Invalid::new(
+                    format!("{lel}.vertex_mass"),
+                    "only the `vertices` mass model takes `vertex_mass`",
+                ));
+            }
+            if let Some(hi) = l.hulls.iter().position(|h| h.vertex_masses.is_some()) {
+                return Err(Invalid::new(
+                    format!("{lel}.hulls[{hi}].vertex_masses"),
+                    "only the `vertices` mass model takes `vertex_masses`",
+                ));
+            }
+        }
+        let explicit = lumped && l.hulls.iter().all(|h| h.vertex_masses.is_some());
         let vertex_mass = match (l.mass, l.vertex_mass) {
+            _ if !lumped => 0.0,
             (Some(_), Some(_)) => {
                 return Err(Invalid::new(
                     lel,
@@ -546,6 +584,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             }
             hulls.push(hull);
         }
+        let mass_model = mass_model(&lel, &spec_model, l.mass, &hulls)?;
         new_index[si] = out.len();
         out.push(Link {
             name: l.name.clone(),
@@ -553,8 +592,11 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             parent,
             joint_name,
             joint: kind,
+            limit,
             attach,
             hulls,
+            mass_model,
+            solid_triangles: Vec::new(),
             dof_offset: 0,
             chart: None,
             collides: true,
@@ -566,4 +608,196 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             .all(|l| l.parent.is_none_or(|p| p >= first))
     );
     Ok(())
+}
+
+/// The link's [`MassModel`] from its spec (`mass`: the link's `mass` key).
+fn mass_model(
+    lel: &str,
+    spec: &MassModelSpec,
+    mass: Option<f64>,
+    hulls: &[Hull],
+) -> Result<MassModel, Invalid> {
+    let el = format!("{lel}.mass_model");
+    match spec {
+        MassModelSpec::Vertices => Ok(MassModel::Vertices),
+        MassModelSpec::Solid { density } => {
+            let density = match (density, mass) {
+                (Some(_), Some(_)) => {
+                    return Err(Invalid::new(
+                        lel,
+                        "a `solid` link takes either `mass` or `mass_model.density`, not both",
+                    ));
+                }
+                (None, None) => {
+                    return Err(Invalid::new(
+                        lel,
+                        "a `solid` link needs `mass` (kg) or `mass_model.density` (kg/m³)",
+                    ));
+                }
+                (Some(d), None) => *d,
+                (None, Some(m)) => {
+                    let mut volume = 0.0;
+                    for (hi, h) in hulls.iter().enumerate() {
+                        let tris = crate::model::mass::solid_triangles(&h.x_local)
+                            .map_err(|e| Invalid::new(format!("{lel}.hulls[{hi}]"), e))?;
+                        volume += crate::model::mass::solid_volume(&h.x_local, &tris);
+                    }
+                    m / volume
+                }
+            };
+            if !(density > 0.0 && density.is_finite()) {
+                return Err(Invalid::new(
+                    el,
+                    format!("density must be positive and finite, got {density}"),
+                ));
+            }
+            for (hi, h) in hulls.iter().enumerate() {
+                crate::model::mass::solid_triangles(&h.x_local)
+                    .map_err(|e| Invalid::new(format!("{lel}.hulls[{hi}]"), e))?;
+            }
+            Ok(MassModel::Solid { density })
+        }
+        MassModelSpec::Given {
+            mass: m,
+            com,
+            inertia,
+        } => {
+            if mass.is_some() {
+                return Err(Invalid::new(
+                    lel,
+                    "a `given` link takes its mass from `mass_model.mass`; remove the link's `mass`",
+                ));
+            }
+            let [xx, xy, xz, yy, yz, zz] = *inertia;
+            let g = Inertial {
+                mass: *m,
+                com: Vector3::from(*com),
+                inertia: Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz),
+            };
+            g.check().map_err(|e| Invalid::new(el, e))?;
+            Ok(MassModel::Given(g))
+        }
+    }
+}
+
+/// Default barrier support of a joint limit (rad or m).
+pub const DEFAULT_LIMIT_SUPPORT: f64 = 0.02;
+/// Default barrier stiffness of a joint limit (J·rad or J·m).
+pub const DEFAULT_LIMIT_STIFFNESS: f64 = 1.0e-3;
+
+/// A joint's [`JointLimit`] from its spec: revolute/prismatic only,
+/// finite `lower < upper`, positive support (capped at a quarter of the
+/// range) and stiffness.
+fn joint_limit(
+    el: &str,
+    kind: &JointKind,
+    spec: Option<&JointLimitSpec>,
+) -> Result<Option<JointLimit>, Invalid> {
+    let Some(sp) = spec else { return Ok(None) };
+    if !matches!(
+        kind,
+        JointKind::Revolute { .. } | JointKind::Prismatic { .. }
+    ) {
+        return Err(Invalid::new(
+            el,
+            "only revolute and prismatic joints take a `limit`",
+        ));
+    }
+    check_finite(el, "lower/upper", &[sp.lower, sp.upper])?;
+    if sp.lower >= sp.upper {
+        return Err(Invalid::new(
+            el,
+            format!("lower {} must be below upper {}", sp.lower, sp.upper),
+        ));
+    }
+    let support = sp.support.unwrap_or(DEFAULT_LIMIT_SUPPORT);
+    let stiffness = sp.stiffness.unwrap_or(DEFAULT_LIMIT_STIFFNESS);
+    for (what, v) in [("support", support), ("stiffness", stiffness)] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Invalid::new(
+                format!("{el}.{what}"),
+                format!("must be positive and finite, got {v}"),
+            ));
+        }
+    }
+    for (what, v) in [("velocity", sp.velocity), ("effort", sp.effort)] {
+        if let Some(v) = v.filter(|v| !(*v >= 0.0 && v.is_finite())) {
+            return Err(Invalid::new(
+                format!("{el}.{what}"),
+                format!("must be non-negative and finite, got {v}"),
+            ));
+        }
+    }
+    Ok(Some(JointLimit {
+        lower: sp.lower,
+        upper: sp.upper,
+        support: support.min(0.25 * (sp.upper - sp.lower)),
+        stiffness,
+        velocity: sp.velocity,
+        effort: sp.effort,
+    }))
+}
+
+/// Default stiffness of a mimic tie (J/rad² or J/m²).
+pub const DEFAULT_MIMIC_STIFFNESS: f64 = 1.0e4;
+
+/// The mimic ties of every robot; a mimic joint that `initial` does not set
+/// starts on its relation (`q0`, `qdot0` updated).
+fn mimic_ties(
+    robots: &[RobotSpec],
+    model: &Model,
+    q0: &mut DVector<f64>,
+    qdot0: &mut DVector<f64>,
+) -> Result<Vec<MimicTie>, Invalid> {
+    let mut ties = Vec::new();
+    for (ri, r) in robots.iter().enumerate() {
+        let range = model.robots[ri].links.clone();
+        let by_joint = |name: &str| range.clone().find(|&l| model.links[l].joint_name == name);
+        for l in &r.links {
+            let Some(m) = &l.joint.mimic else { continue };
+            let jname = l.joint.name.clone().unwrap_or_else(|| l.name.clone());
+            let el = format!("robot \"{}\" joint \"{jname}\".mimic", r.name);
+            let me = by_joint(&jname).expect("built above");
+            let Some(master) = by_joint(&m.joint) else {
+                return Err(Invalid::new(
+                    el,
+                    format!("no joint named \"{}\" in this robot", m.joint),
+                ));
+            };
+            let one_dof = |k: &JointKind| {
+                matches!(k, JointKind::Revolute { .. } | JointKind::Prismatic { .. })
+            };
+            if !one_dof(&model.links[me].joint) || !one_dof(&model.links[master].joint) {
+                return Err(Invalid::new(
+                    el,
+                    "mimic joints and the joints they follow must be revolute or prismatic",
+                ));
+            }
+            if master == me {
+                return Err(Invalid::new(el, "a joint cannot mimic itself"));
+            }
+            let (a, b) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+            let k = m.stiffness.unwrap_or(DEFAULT_MIMIC_STIFFNESS);
+            check_finite(&el, "multiplier/offset", &[a, b])?;
+            if !(k > 0.0 && k.is_finite()) {
+                return Err(Invalid::new(
+                    format!("{el}.stiffness"),
+                    format!("must be positive and finite, got {k}"),
+                ));
+            }
+            let (dof, mdof) = (model.links[me].dof_offset, model.links[master].dof_offset);
+            if !r.initial.contains_key(&jname) {
+                q0[dof] = a * q0[mdof] + b;
+                qdot0[dof] = a * qdot0[mdof];
+            }
+            ties.push(MimicTie {
+                dof,
+                master: mdof,
+                multiplier: a,
+                offset: b,
+                stiffness: k,
+            });
+        }
+    }
+    Ok(ties)
 }

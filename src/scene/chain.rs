@@ -21,9 +21,12 @@ pub fn expand(spec: &ChainSpec) -> Vec<LinkSpec> {
                     xyz: if i == 0 { [0.0; 3] } else { [0.0, 0.0, -l] },
                     rpy: [0.0; 3],
                 },
+                limit: None,
+                mimic: None,
             },
             mass: Some(spec.link_mass),
             vertex_mass: None,
+            mass_model: None,
             hulls: vec![HullSpec::cuboid([w, w, l], [0.0, 0.0, -l / 2.0])],
         })
         .collect()

@@ -40,6 +40,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
                 joint: fixed_or_free(JointType::Free, Origin::default()),
                 mass: o.mass,
                 vertex_mass: o.vertex_mass,
+                mass_model: o.mass_model.clone(),
                 hulls: o.hulls.clone(),
             }],
             chain: None,
@@ -82,6 +83,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             ),
             mass: Some(1.0),
             vertex_mass: None,
+            mass_model: None,
             hulls: vec![HullSpec::cuboid(size, [0.0, 0.0, -g.thickness / 2.0])],
         });
     }
@@ -92,6 +94,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             joint: fixed_or_free(JointType::Fixed, o.origin.clone()),
             mass: Some(1.0),
             vertex_mass: None,
+            mass_model: None,
             hulls: o.hulls.clone(),
         });
     }
@@ -116,6 +119,8 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
         axis: None,
         axes: None,
         origin,
+        limit: None,
+        mimic: None,
     }
 }
 

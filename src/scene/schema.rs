@@ -23,9 +23,13 @@
 //!           axis: [0, 1, 0]  # revolute/prismatic: unit axis in the joint frame
 //!           # axes: [[1,0,0],[0,1,0]]   # ball: two orthogonal hinge axes
 //!           origin: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # attachment in the parent frame;
+//!           # limit: {lower: -1.5, upper: 1.5}   # revolute/prismatic: barrier-enforced limits
+//!           # mimic: {joint: other, multiplier: 1, offset: 0}   # tied to another joint (stiffness 1e4)
 //!                            # xyz is the design-dependent attachment point
 //!         mass: 1.0          # kg, divided equally over all hull vertices …
 //!         # vertex_mass: 0.125   # … or kg per vertex (the paper's ρ); exactly one of the two
+//!         # mass_model: {type: solid}   # vertices (default) | solid {density} | given
+//!         #                  {mass, com, inertia: [ixx,ixy,ixz,iyy,iyz,izz]}: see MassModelSpec
 //!         hulls:
 //!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
 //!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
@@ -124,6 +128,11 @@ pub struct ObjectSpec {
     /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Mass model: `vertices` (default: the link's mass lumped at its hull
+    /// vertices, the paper's model), `solid` (uniform-density solid hulls)
+    /// or `given` (explicit inertial). See [`MassModelSpec`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the object's frame (m).
     pub hulls: Vec<HullSpec>,
     /// Initial pose `[x, y, z, rx, ry, rz]` (m, rotation vector) and velocity
@@ -345,8 +354,50 @@ pub struct LinkSpec {
     /// Mass per hull vertex (kg, the paper's ρ); exactly one of `mass` and `vertex_mass`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertex_mass: Option<f64>,
+    /// Mass model: `vertices` (default: the link's mass lumped at its hull
+    /// vertices, the paper's model), `solid` (uniform-density solid hulls)
+    /// or `given` (explicit inertial). See [`MassModelSpec`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the link frame (m).
     pub hulls: Vec<HullSpec>,
+}
+
+/// How a link's (or object's) mass is distributed; default `vertices`.
+/// Formulas: [`crate::model::mass`].
+///
+/// ```yaml
+/// mass_model: {type: vertices}          # link `mass` (or `vertex_mass`) lumped at the hull vertices
+/// mass_model: {type: solid, density: 1000}   # kg/m³; or omit density and give the link `mass`
+/// mass_model: {type: given, mass: 2.0, com: [0, 0, 0.1], inertia: [0.02, 0, 0, 0.02, 0, 0.01]}
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MassModelSpec {
+    /// The paper's lumped vertex masses (needs the link's `mass` or `vertex_mass`).
+    Vertices,
+    /// Each hull a solid of uniform density; overlapping hulls of a link are
+    /// superposed (their overlap counts once per hull). Give `density` or
+    /// the link's `mass` (then density = mass / total hull volume at load).
+    /// Mass, centre of mass and inertia follow the hull vertices in design
+    /// optimization.
+    Solid {
+        /// Density (kg/m³, > 0). Default: from the link's `mass`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        density: Option<f64>,
+    },
+    /// An explicit inertial (like URDF `<inertial>`), fixed under design
+    /// changes; the link's `mass`/`vertex_mass` must be absent.
+    Given {
+        /// Mass (kg, > 0).
+        mass: f64,
+        /// Centre of mass in the link frame (m).
+        com: [f64; 3],
+        /// Inertia tensor about the centre of mass in link axes (kg m²), in
+        /// URDF order `[ixx, ixy, ixz, iyy, iyz, izz]`; principal moments
+        /// must be ≥ 0 and obey the triangle inequality.
+        inertia: [f64; 6],
+    },
 }
 
 /// Joint types accepted in scene files.
@@ -380,6 +431,71 @@ pub struct JointSpec {
     /// The joint frame in the parent link's frame; `xyz` is the design-dependent attachment point (m). Default identity.
     #[serde(default)]
     pub origin: Origin,
+    /// Revolute and prismatic joints: position limits, enforced by a barrier
+    /// term (see [`JointLimitSpec`]). Default: unlimited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit: Option<JointLimitSpec>,
+    /// Revolute and prismatic joints: follow another 1-DOF joint of the
+    /// same robot, `θ = multiplier·θ_joint + offset` (URDF `<mimic>`), as a
+    /// stiff tie (see [`MimicSpec`]). Default: independent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mimic: Option<MimicSpec>,
+}
+
+/// A mimic joint, **tied** (not eliminated): the term
+/// `½ k (θ − a θ_joint − b)²` (J) couples the two coordinates, so the
+/// mimic follows within `torque / k`. When the robot's `initial` does not
+/// give the mimic joint, its initial coordinate and velocity follow the
+/// relation exactly.
+///
+/// ```yaml
+/// mimic: {joint: finger_left, multiplier: -1}
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MimicSpec {
+    /// The followed joint (a revolute or prismatic joint of the same robot).
+    pub joint: String,
+    /// `a` (dimensionless). Default 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multiplier: Option<f64>,
+    /// `b` (rad or m). Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
+    /// Tie stiffness `k` (J/rad² or J/m²), > 0. Default 1.0e4.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+}
+
+/// Position limits of a revolute (rad) or prismatic (m) joint, enforced by
+/// the barrier `κ P_s(x)` on the distance `x` to each limit
+/// (`crate::energy::joint_limit`): the coordinate never reaches a limit and
+/// stops within `support` of it. `velocity` and `effort` are carried for
+/// reports (as URDF `<limit>` gives them), not simulated.
+///
+/// ```yaml
+/// limit: {lower: -1.57, upper: 1.57}       # support 0.02, stiffness 1.0e-3
+/// ```
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JointLimitSpec {
+    /// Lower limit (rad or m).
+    pub lower: f64,
+    /// Upper limit (rad or m), > lower.
+    pub upper: f64,
+    /// Barrier support `s` (rad or m), > 0. Default 0.02, capped at a quarter of the range.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<f64>,
+    /// Barrier stiffness `κ` (J·rad or J·m), > 0. Default 1.0e-3 (about 90 N·m
+    /// of push at half the default support).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Velocity limit (rad/s or m/s); reported, not simulated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// Effort limit (N·m or N); reported, not simulated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effort: Option<f64>,
 }
 
 /// A hull: explicit `vertices` or a `box` primitive (8 vertices); exactly one.

@@ -9,6 +9,7 @@
 
 pub mod assemble;
 pub mod counters;
+pub mod mass_matrix;
 pub mod newton;
 pub mod run;
 pub mod state;
@@ -267,18 +268,25 @@ impl Objective for StepObjective<'_> {
 }
 
 impl Simulator {
-    /// A simulator with the standard terms (inertia, gravity, PD).
+    /// A simulator with the standard terms (inertia, gravity, PD, and the
+    /// joint-limit barrier when a joint is limited).
     pub fn new(
         model: Model,
         settings: SimSettings,
         controller: Controller,
         state: SimState,
     ) -> Self {
-        let energies: Vec<Box<dyn Energy>> = vec![
+        let mut energies: Vec<Box<dyn Energy>> = vec![
             Box::new(crate::energy::Inertia),
             Box::new(crate::energy::Gravity),
             Box::new(crate::energy::PdController),
         ];
+        if let Some(limits) = crate::energy::JointLimits::from_model(&model) {
+            energies.push(Box::new(limits));
+        }
+        if let Some(ties) = crate::energy::MimicTies::from_model(&model) {
+            energies.push(Box::new(ties));
+        }
         let scratch = StepScratch {
             kin: Kinematics::new(&model),
             acc: EnergyAccumulator::new(&model),

@@ -133,17 +133,10 @@ impl Energy for ExtraMass {
                     *out.effect(s) += w.component_mul(m0).sum() - dag.dot(c0);
                 }
                 if out.want_vertices {
-                    // ΔM, Δc scale the vertex masses by σ − 1.
-                    let ws = w + w.transpose();
+                    // ΔM, Δc are the link's moments times σ − 1.
                     let f = scale - 1.0;
-                    for (h, hull) in ctx.model.links[i].hulls.iter().enumerate() {
-                        for (k, (x, rho)) in hull.x_local.iter().zip(&hull.vertex_mass).enumerate()
-                        {
-                            let gi = ws * Vector4::new(x.x, x.y, x.z, 1.0) * (*rho * f);
-                            out.vertex[i][h][k] += gi.fixed_rows::<3>(0);
-                            out.vertex[i][h][k] -= dag.fixed_rows::<3>(0) * (*rho * f);
-                        }
-                    }
+                    let link = &ctx.model.links[i];
+                    link.moments_vjp(&(w * f), &(-dag * f), &mut out.vertex[i]);
                 }
             }
         }

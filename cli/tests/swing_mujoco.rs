@@ -1,0 +1,63 @@
+//! Smoke version of `tools/swing_vs_mujoco.py`: the KUKA iiwa imported with
+//! default masses (its URDF inertials), swinging freely (hanging, small
+//! amplitude) for 0.3 s, against MuJoCo's RK4: the joint-angle error
+//! shrinks at first order with Δt (SDRS's implicit scheme). The full table
+//! (1 s, Δt = 1e-2 … 1e-4) is in `notes/mass.md`.
+
+mod support;
+
+use support::{pybullet_data, python, root, scratch_dir, sdrs};
+
+#[test]
+fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
+    let dir = scratch_dir("swing-mujoco");
+    let urdf = pybullet_data().join("kuka_iiwa/model.urdf");
+    let scene = dir.join("iiwa.yaml");
+    let o = sdrs()
+        .args(["import", "--decomposer", "hull", "--out"])
+        .arg(&scene)
+        .arg(&urdf)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json = dir.join("table.json");
+    let o = python()
+        .arg(root().join("tools/swing_vs_mujoco.py"))
+        .arg(&scene)
+        .arg("--sdrs")
+        .arg(env!("CARGO_BIN_EXE_sdrs"))
+        .args([
+            "--q",
+            "0.05 0.1 -0.05 -0.1 0.05 0.1 0.02",
+            "--gravity",
+            "0",
+            "0",
+            "9.81",
+        ])
+        .args([
+            "--duration",
+            "0.3",
+            "--dts",
+            "1e-2,1e-3",
+            "--mj-timestep",
+            "5e-5",
+        ])
+        .arg("--work")
+        .arg(dir.join("work"))
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    eprintln!("{}", String::from_utf8_lossy(&o.stdout));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let e: Vec<f64> = rows
+        .iter()
+        .map(|r| r["max_error_rad"].as_f64().unwrap())
+        .collect();
+    let order = rows[1]["order"].as_f64().unwrap();
+    assert!(e[1] < e[0] && e[1] < 2e-3, "errors {e:?}");
+    assert!((0.8..1.3).contains(&order), "order {order} (errors {e:?})");
+}
