@@ -44,10 +44,21 @@ pub enum Special {
 /// link's elements of that slot).
 pub type SpecialShapes = HashMap<(String, Slot, usize), Special>;
 
+/// A box placed in a geometry frame.
+#[derive(Clone, Debug)]
+pub struct Slab {
+    /// Rotation of the box frame (its +z is the plane normal).
+    pub rotation: Matrix3<f64>,
+    /// Box centre (m).
+    pub centre: Vector3<f64>,
+    /// Full edge lengths (m).
+    pub size: [f64; 3],
+}
+
 /// The slab for a plane with unit normal `n` through the geometry origin, in
 /// the geometry frame: the rotation taking +z to `n` and the box centre at
 /// `−(T/2) n`. Errors name what is wrong with the normal text.
-pub fn plane_slab(normal: &str) -> Result<(Matrix3<f64>, Vector3<f64>, [f64; 3]), String> {
+pub fn plane_slab(normal: &str) -> Result<Slab, String> {
     let v: Vec<f64> = normal
         .split_whitespace()
         .map(str::parse)
@@ -68,11 +79,11 @@ pub fn plane_slab(normal: &str) -> Result<(Matrix3<f64>, Vector3<f64>, [f64; 3])
     let n = n / len;
     let r = Rotation3::rotation_between(&Vector3::z(), &n)
         .unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
-    Ok((
-        *r.matrix(),
-        -0.5 * PLANE_THICKNESS * n,
-        [PLANE_EXTENT, PLANE_EXTENT, PLANE_THICKNESS],
-    ))
+    Ok(Slab {
+        rotation: *r.matrix(),
+        centre: -0.5 * PLANE_THICKNESS * n,
+        size: [PLANE_EXTENT, PLANE_EXTENT, PLANE_THICKNESS],
+    })
 }
 
 #[cfg(test)]
@@ -82,7 +93,11 @@ mod tests {
     #[test]
     fn the_slab_top_face_is_the_plane() {
         for normal in ["0 0 1", "0 0 -1", "1 0 0", "0.3 -0.4 0.5", "0 0 2"] {
-            let (r, c, size) = plane_slab(normal).unwrap();
+            let Slab {
+                rotation: r,
+                centre: c,
+                size,
+            } = plane_slab(normal).unwrap();
             let n: Vector3<f64> = {
                 let v: Vec<f64> = normal.split(' ').map(|t| t.parse().unwrap()).collect();
                 Vector3::new(v[0], v[1], v[2]).normalize()

@@ -371,14 +371,13 @@ fn link_geometry(
         match special.get(&(l.name.clone(), slot, gi)) {
             None => geometry_of(path, element, origin, g).map(|g| vec![g]),
             Some(Special::Plane { normal }) => {
-                let (r_plane, c_plane, size) =
-                    plane_slab(normal).map_err(|m| invalid(element.clone(), m))?;
+                let slab = plane_slab(normal).map_err(|m| invalid(element.clone(), m))?;
                 let (r, t) = rt(&origin_of(origin));
                 Ok(vec![SourceGeometry {
                     element,
-                    rotation: r * r_plane,
-                    translation: t + r * c_plane,
-                    shape: SourceShape::Box { size },
+                    rotation: r * slab.rotation,
+                    translation: t + r * slab.centre,
+                    shape: SourceShape::Box { size: slab.size },
                 }])
             }
             Some(Special::Cdf { filename }) => Err(invalid(
