@@ -14,32 +14,17 @@ configuration.
 Prints a JSON summary; exits 1 when an error exceeds --tol, 2 on bad input,
 3 when pinocchio is missing.
 """
-import argparse
 import json
 import sys
 
-try:
-    import numpy as np
-    import pinocchio as pin
-except ImportError as e:  # pragma: no cover
-    print(f"missing Python package: {e.name} (needed by tools/check_mass_matrix_pinocchio.py)",
-          file=sys.stderr)
-    sys.exit(3)
+from pin_samples import load  # first: exits 3 when a package is missing
+
+import numpy as np
+import pinocchio as pin
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("urdf")
-    ap.add_argument("samples")
-    ap.add_argument("--tol", type=float, default=1e-9)
-    a = ap.parse_args()
-    model = pin.buildModelFromUrdf(a.urdf)
-    data = model.createData()
-    with open(a.samples) as f:
-        samples = json.load(f)["configurations"]
-    if not samples:
-        print("no configurations in the samples file", file=sys.stderr)
-        return 2
+    a, model, data, samples = load(__doc__.splitlines()[0])
     worst = (0.0, None)
     for ci, s in enumerate(samples):
         q = pin.neutral(model)
