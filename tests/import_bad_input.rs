@@ -217,6 +217,25 @@ fn malformed_xml_names_the_file_and_line() {
 #[test]
 fn unsupported_mesh_format_says_how_to_convert() {
     let (e, dir) = fails(
+        "ply",
+        &[
+            ("r.urdf", &urdf("revolute", "arm.ply", "")),
+            ("arm.ply", "ply\nformat ascii 1.0\nend_header\n"),
+        ],
+        "r.urdf",
+    );
+    assert!(
+        e.contains(".ply") && e.contains("trimesh") && e.contains("Blender"),
+        "{e}"
+    );
+    cleanup(&dir);
+}
+
+/// COLLADA is read (`src/import/collada/`); a document without geometry is
+/// an empty mesh, named with the file and element.
+#[test]
+fn a_collada_file_without_geometry_is_an_empty_mesh() {
+    let (e, dir) = fails(
         "dae",
         &[
             ("r.urdf", &urdf("revolute", "arm.dae", "")),
@@ -225,7 +244,7 @@ fn unsupported_mesh_format_says_how_to_convert() {
         "r.urdf",
     );
     assert!(
-        e.contains(".dae") && e.contains("trimesh") && e.contains("Blender"),
+        e.contains("arm.dae") && e.contains("link \"arm\" collision[0]") && e.contains("empty"),
         "{e}"
     );
     cleanup(&dir);

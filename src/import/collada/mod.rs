@@ -147,11 +147,15 @@ fn local_geometries(
     {
         edits.push((unit.range(), "<unit meter=\"1\"/>".to_string()));
     }
-    let insert_at = root
+    // The flat scene goes right after <library_geometries>, inside the
+    // root element; without one there is nothing to read.
+    let Some(insert_at) = root
         .children()
         .find(|n| n.has_tag_name("library_geometries"))
         .map(|n| n.range().end)
-        .unwrap_or(root.range().start);
+    else {
+        return Ok(HashMap::new());
+    };
     edits.push((insert_at..insert_at, flat));
     // From the end of the text backwards, so earlier ranges stay valid; at
     // equal starts the removal (longer range) goes before the insertion.
