@@ -140,6 +140,34 @@ fn numbers(
         .collect()
 }
 
+/// The data rows of a CSV export: `(line number, fields)`, each row checked
+/// to hold `fields` fields.
+fn csv_rows<'a>(
+    text: &'a str,
+    fields: usize,
+    path: &'a Path,
+) -> impl Iterator<Item = Result<(usize, Vec<&'a str>), PlaybackError>> + 'a {
+    text.lines().enumerate().skip(1).map(move |(i, l)| {
+        let f: Vec<&str> = l.split(',').collect();
+        if f.len() != fields {
+            return Err(parse_error(
+                path,
+                i + 1,
+                format!("{} fields, expected {fields}", f.len()),
+            ));
+        }
+        Ok((i + 1, f))
+    })
+}
+
+fn parse_error(path: &Path, line: usize, msg: String) -> PlaybackError {
+    PlaybackError::Parse {
+        path: path.into(),
+        line,
+        msg,
+    }
+}
+
 /// `poses.csv` → times and per-step poses of `n` links.
 fn parse_poses(
     text: &str,
@@ -147,17 +175,9 @@ fn parse_poses(
     path: &Path,
 ) -> Result<(Vec<f64>, Vec<Vec<Pose>>), PlaybackError> {
     let (mut times, mut poses) = (Vec::new(), Vec::<Vec<Pose>>::new());
-    for (i, l) in text.lines().enumerate().skip(1) {
-        let line = i + 1;
-        let err = |msg: String| PlaybackError::Parse {
-            path: path.into(),
-            line,
-            msg,
-        };
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() != 16 {
-            return Err(err(format!("{} fields, expected 16", f.len())));
-        }
+    for row in csv_rows(text, 16, path) {
+        let (line, f) = row?;
+        let err = |msg: String| parse_error(path, line, msg);
         let step: usize = f[0]
             .parse()
             .map_err(|_| err(format!("step `{}` is not an index", f[0])))?;
@@ -183,15 +203,12 @@ fn parse_poses(
         }
         poses[step].push(Pose::from_column_slice(&x[1..]));
     }
-    if poses.last().is_some_and(|p| p.len() != n) {
-        return Err(PlaybackError::Parse {
-            path: path.into(),
-            line: text.lines().count(),
-            msg: format!(
-                "the last step has {} of {n} links",
-                poses[poses.len() - 1].len()
-            ),
-        });
+    if let Some(last) = poses.last().filter(|p| p.len() != n) {
+        return Err(parse_error(
+            path,
+            text.lines().count(),
+            format!("the last step has {} of {n} links", last.len()),
+        ));
     }
     Ok((times, poses))
 }
@@ -204,17 +221,9 @@ fn parse_contacts(
     path: &Path,
 ) -> Result<Vec<ContactRecord>, PlaybackError> {
     let mut out = Vec::new();
-    for (i, l) in text.lines().enumerate().skip(1) {
-        let line = i + 1;
-        let err = |msg: String| PlaybackError::Parse {
-            path: path.into(),
-            line,
-            msg,
-        };
-        let f: Vec<&str> = l.split(',').collect();
-        if f.len() != 10 {
-            return Err(err(format!("{} fields, expected 10", f.len())));
-        }
+    for row in csv_rows(text, 10, path) {
+        let (line, f) = row?;
+        let err = |msg: String| parse_error(path, line, msg);
         let idx: Vec<usize> = f[..5]
             .iter()
             .map(|x| x.parse().map_err(|_| err(format!("`{x}` is not an index"))))
