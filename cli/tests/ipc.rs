@@ -80,24 +80,19 @@ fn contact_free_scene_gives_the_same_csv_bytes_under_both_models() {
     .unwrap();
     let run = |model: &str| {
         let csv = dir.join(format!("{model}.csv"));
-        let out = sdrs()
-            .args([
-                "simulate",
-                "-q",
-                "--steps",
-                "200",
-                "--contact",
-                model,
-                "--out",
-            ])
-            .arg(&csv)
-            .arg(&scene)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        support::run_ok(
+            sdrs()
+                .args([
+                    "simulate",
+                    "-q",
+                    "--steps",
+                    "200",
+                    "--contact",
+                    model,
+                    "--out",
+                ])
+                .arg(&csv)
+                .arg(&scene),
         );
         std::fs::read(csv).unwrap()
     };

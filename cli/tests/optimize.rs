@@ -60,16 +60,11 @@ fn imported_shared_vertex_ties_are_one_design_variable_and_hold_while_optimizing
     // then optimize the body's vertices for a few iterations.
     let dir = scratch_dir("ties");
     let design = dir.join("spider.yaml");
-    let out = sdrs()
-        .args(["import", "--quiet", "--out"])
-        .arg(&design)
-        .arg(robots("spider/spider.urdf"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    support::run_ok(
+        sdrs()
+            .args(["import", "--quiet", "--out"])
+            .arg(&design)
+            .arg(robots("spider/spider.urdf")),
     );
     let task = dir.join("task.yaml");
     std::fs::write(

@@ -8,15 +8,7 @@ use serde_json::Value;
 use support::{robots, scratch_dir, sdrs};
 
 fn schema(kind: &str, format: &str) -> String {
-    let out = sdrs()
-        .args(["schema", kind, "--format", format])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = support::run_ok(sdrs().args(["schema", kind, "--format", format]));
     String::from_utf8(out.stdout).unwrap()
 }
 

@@ -9,14 +9,7 @@ mod support;
 
 use std::path::Path;
 use support::browser::{body_attr, chromium, console_messages, file_url, png_pixels};
-use support::{python, root, scratch_dir, sdrs};
-
-fn run_ok(cmd: &mut std::process::Command) -> String {
-    let o = cmd.output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(o.status.success(), "{cmd:?} failed:\n{err}");
-    err
-}
+use support::{python, root, run_ok, scratch_dir, sdrs};
 
 /// Dumps the DOM of `page#fragment` and checks the page finished without
 /// any error (page hook and console).

@@ -31,6 +31,18 @@ pub fn pybullet_data() -> std::path::PathBuf {
     std::path::PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
 }
 
+/// Runs `cmd`, asserts it succeeded (the message shows the command and its
+/// stderr) and returns its output.
+pub fn run_ok(cmd: &mut std::process::Command) -> std::process::Output {
+    let o = cmd.output().unwrap();
+    assert!(
+        o.status.success(),
+        "{cmd:?} failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
 /// Runs `sdrs simulate -q [extra…] --json DIR/summary.json --export DIR SCENE`,
 /// asserts it succeeded and returns the summary.
 pub fn simulate_export(
@@ -38,20 +50,15 @@ pub fn simulate_export(
     extra: &[&str],
     scene: &std::path::Path,
 ) -> serde_json::Value {
-    let out = sdrs()
-        .args(["simulate", "-q"])
-        .args(extra)
-        .arg("--json")
-        .arg(dir.join("summary.json"))
-        .arg("--export")
-        .arg(dir)
-        .arg(scene)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        sdrs()
+            .args(["simulate", "-q"])
+            .args(extra)
+            .arg("--json")
+            .arg(dir.join("summary.json"))
+            .arg("--export")
+            .arg(dir)
+            .arg(scene),
     );
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
