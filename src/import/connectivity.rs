@@ -239,6 +239,12 @@ pub struct AttachmentSite {
     pub extended: bool,
 }
 
+/// Whether `p` lies in one of `hulls` (to round-off).
+pub fn point_inside(hulls: &[DesignHull], p: &Vector3<f64>) -> bool {
+    let scale = link_scale(hulls);
+    hulls.iter().any(|h| h.poly.violation(p) <= 1e-12 * scale)
+}
+
 /// Adds `p` to the hull of `hulls` that contains it most deeply, or extends
 /// the nearest hull to it.
 pub fn attach_point(hulls: &mut [DesignHull], p: Vector3<f64>) -> AttachmentSite {

@@ -31,6 +31,12 @@ pub enum ImportError {
         joint: String,
         kind: String,
     },
+    #[error("{}: {element}: {msg}", path.display())]
+    InvalidMjcf {
+        path: PathBuf,
+        element: String,
+        msg: String,
+    },
     #[error("{}: kinematic loop: {msg}", path.display())]
     KinematicLoop { path: PathBuf, msg: String },
     #[error("{}: {element}: mesh file {} not found{hint}", path.display(), mesh.display())]

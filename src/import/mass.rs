@@ -87,6 +87,28 @@ impl LinkMass {
     }
 }
 
+/// A massless frame (MJCF joint frames and massless bodies): `given` with
+/// mass, centre of mass and inertia zero, whatever the mass mode.
+pub fn massless_frame() -> LinkMass {
+    let zero = InertialReport {
+        mass: 0.0,
+        com: [0.0; 3],
+        principal_moments: [0.0; 3],
+    };
+    LinkMass {
+        mass: 0.0,
+        source: MassSource::Urdf,
+        spec: MassModelSpec::Given {
+            mass: 0.0,
+            com: [0.0; 3],
+            inertia: [0.0; 6],
+        },
+        input: Some(zero.clone()),
+        hulls: zero,
+        fallback: None,
+    }
+}
+
 /// The mass model of a link with input second moment `moment` (link frame)
 /// and final hulls `hulls` (link frame). Errors: a hull without volume.
 pub fn link_mass_model(

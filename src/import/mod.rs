@@ -28,6 +28,7 @@ pub mod interior;
 pub mod limits;
 pub mod mass;
 pub mod mesh;
+pub mod mjcf;
 pub mod polytope;
 pub mod primitives;
 pub mod pybullet_shapes;
@@ -154,12 +155,68 @@ pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
             err: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
+    if mjcf::is_mjcf(input) {
+        let (src, extra) = mjcf::read_mjcf(input, opts)?;
+        let mut imp = build(src, opts, t0)?;
+        add_mjcf_scene(&mut imp, extra, input)?;
+        return Ok(imp);
+    }
     let src = if is_urdf(input) {
         urdf::read_urdf(input, opts)?
     } else {
         SourceRobot::from_mesh(input)
     };
     build(src, opts, t0)
+}
+
+/// Puts what an MJCF file adds (gravity, ground, obstacles, MuJoCo's
+/// contact filter, joint effects) into the imported scene and validates it.
+fn add_mjcf_scene(
+    imp: &mut Imported,
+    extra: mjcf::MjcfScene,
+    input: &Path,
+) -> Result<(), ImportError> {
+    // MJCF says which bodies are welded to the world: keep it.
+    imp.root_static = true;
+    let scene = &mut imp.scene;
+    let robot = scene.robots[0].name.clone();
+    let env = crate::scene::environment::ENVIRONMENT;
+    scene.gravity = extra.gravity;
+    scene.ground = extra.ground;
+    scene.obstacles = extra.obstacles;
+    // Effects name bare joints (accepted while one robot has the joint).
+    scene.effects = extra.effects;
+
+    let mut exclude: Vec<[String; 2]> = extra
+        .exclude
+        .into_iter()
+        .map(|[a, b]| [format!("{robot}/{a}"), format!("{robot}/{b}")])
+        .collect();
+    if scene.ground.is_some() {
+        exclude.extend(
+            extra
+                .exclude_ground
+                .into_iter()
+                .map(|l| [format!("{env}/ground"), format!("{robot}/{l}")]),
+        );
+    }
+    exclude.extend(
+        extra
+            .exclude_obstacle
+            .into_iter()
+            .map(|[o, l]| [format!("{env}/{o}"), format!("{robot}/{l}")]),
+    );
+    if !exclude.is_empty() {
+        scene.contact = Some(ContactSpec {
+            exclude,
+            ..ContactSpec::default()
+        });
+    }
+    crate::scene::Scene::from_spec(scene.clone(), input).map_err(|e| ImportError::Invalid {
+        path: input.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    Ok(())
 }
 
 struct LinkGeometry {
@@ -229,8 +286,9 @@ fn link_geometry(
             SourceShape::Capsule { radius, length } => {
                 Some(primitives::capsule_hull(*radius, *length))
             }
+            SourceShape::Ellipsoid { radii } => Some(primitives::ellipsoid_hull(*radii)),
             SourceShape::Tiny { edge } => Some(primitives::box_hull([*edge; 3])),
-            SourceShape::Mesh { .. } => None,
+            SourceShape::Mesh { .. } | SourceShape::ConvexMesh { .. } => None,
         };
         if let Some(prim) = prim {
             let prim = prim.map_err(geom_err)?;
@@ -241,6 +299,18 @@ fn link_geometry(
                     .transformed([1.0; 3], &g.rotation, &g.translation),
             );
             volume = volume.map(|v| v + prim.volume);
+            continue;
+        }
+        if let SourceShape::ConvexMesh { mesh } = &g.shape {
+            let m = mesh.transformed([1.0; 3], &g.rotation, &g.translation);
+            hulls.push(DesignHull::new(
+                convex_hull(&m.vertices).map_err(|e| geom_err(e.to_string()))?,
+            ));
+            volume = match (volume, m.volume()) {
+                (Some(a), Some(b)) => Some(a + b),
+                _ => None,
+            };
+            sources.push(m);
             continue;
         }
         let SourceShape::Mesh { path, scale } = &g.shape else {
@@ -349,11 +419,24 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         });
     }
     // 3. Attachment points.
+    let mut notes_attach = Vec::new();
     let mut attachments = Vec::new();
     let mut attach_ties = Vec::new();
     for (li, l) in src.links.iter().enumerate() {
         let Some(p) = l.parent else { continue };
         let xyz = Vector3::from(l.joint.origin.xyz);
+        if src.keep_geometry
+            && !(connectivity::point_inside(&geoms[p].hulls, &xyz)
+                && connectivity::point_inside(&geoms[li].hulls, &Vector3::zeros()))
+        {
+            if !l.frame_only && !src.links[p].frame_only {
+                notes_attach.push(format!(
+                    "joint \"{}\": the attachment point is outside the hulls; not tied in the design (shapes kept as given)",
+                    l.joint.name
+                ));
+            }
+            continue;
+        }
         let parent_site = attach_point(&mut geoms[p].hulls, xyz);
         let child_site = attach_point(&mut geoms[li].hulls, Vector3::zeros());
         attach_ties.push(AttachmentTie {
@@ -411,6 +494,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     let mut imported_links = Vec::with_capacity(n);
     let mut notes = src.notes.clone();
     notes.extend(geoms.iter().flat_map(|g| g.notes.iter().cloned()));
+    notes.extend(notes_attach);
     let mut joints = BTreeMap::new();
     for (li, l) in src.links.iter().enumerate() {
         let g = &geoms[li];
@@ -418,16 +502,20 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         let uv = report::union_volume(&polys, opts.volume_grid);
         let hull_vertices_now: Vec<&[Vector3<f64>]> =
             g.hulls.iter().map(|h| h.vertices.as_slice()).collect();
-        let lm = mass::link_mass_model(
-            opts.mass,
-            l.moment.as_ref(),
-            opts.density,
-            &hull_vertices_now,
-        )
-        .map_err(|msg| ImportError::Invalid {
-            path: src.file.clone(),
-            msg: format!("link \"{}\": {msg}", l.name),
-        })?;
+        let lm = if l.frame_only {
+            mass::massless_frame()
+        } else {
+            mass::link_mass_model(
+                opts.mass,
+                l.moment.as_ref(),
+                opts.density,
+                &hull_vertices_now,
+            )
+            .map_err(|msg| ImportError::Invalid {
+                path: src.file.clone(),
+                msg: format!("link \"{}\": {msg}", l.name),
+            })?
+        };
         let (mass, mass_source) = (lm.mass, lm.source);
         if let Some(why) = &lm.fallback {
             notes.push(format!(
@@ -478,7 +566,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 axis: l.joint.axis,
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
-                limit: joint_limit(l, &mut notes),
+                limit: joint_limit(l, src.initial.get(&l.joint.name), &mut notes),
                 mimic: mimic(l, &src, &mut notes),
             },
             mass: None,
@@ -491,6 +579,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                     HullSpec::from_vertices(h.vertices.iter().map(|v| [v.x, v.y, v.z]).collect())
                 })
                 .collect(),
+            collide: l.collides,
         });
         imported_links.push(ImportedLink {
             name: l.name.clone(),
@@ -519,7 +608,19 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         links: link_specs,
         chain: None,
         controller: ControllerSpec::default(),
-        initial: BTreeMap::new(),
+        initial: src
+            .initial
+            .iter()
+            .map(|(j, q)| {
+                (
+                    j.clone(),
+                    InitialSpec {
+                        q: q.clone(),
+                        qdot: Vec::new(),
+                    },
+                )
+            })
+            .collect(),
         design: Some(DesignSpec {
             designable: opts.designable.clone(),
             ties,
@@ -570,20 +671,25 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     })
 }
 
-/// The scene limit of an imported 1-DOF joint whose URDF limits position.
-/// Enforced only when the initial configuration `θ = 0` lies strictly
-/// inside; otherwise the limit is noted and left out (the barrier needs a
-/// feasible start).
-fn joint_limit(l: &source::SourceLink, notes: &mut Vec<String>) -> Option<JointLimitSpec> {
+/// The scene limit of an imported 1-DOF joint whose input limits position.
+/// Enforced only when the initial coordinate (`initial`, default 0) lies
+/// strictly inside; otherwise the limit is noted and left out (the barrier
+/// needs a feasible start).
+fn joint_limit(
+    l: &source::SourceLink,
+    initial: Option<&Vec<f64>>,
+    notes: &mut Vec<String>,
+) -> Option<JointLimitSpec> {
     let [j] = l.joint.input_joints.as_slice() else {
         return None;
     };
     if !j.limited || !matches!(l.joint.kind, JointType::Revolute | JointType::Prismatic) {
         return None;
     }
-    if !(j.lower < 0.0 && 0.0 < j.upper) {
+    let q0 = initial.and_then(|q| q.first().copied()).unwrap_or(0.0);
+    if !(j.lower < q0 && q0 < j.upper) {
         notes.push(format!(
-            "joint \"{}\": limits [{}, {}] do not contain the initial coordinate 0 strictly; not enforced",
+            "joint \"{}\": limits [{}, {}] do not contain the initial coordinate {q0} strictly; not enforced",
             j.name, j.lower, j.upper
         ));
         return None;

@@ -165,6 +165,27 @@ pub fn sphere_hull(radius: f64) -> Result<PrimitiveHull, String> {
     })
 }
 
+/// Ellipsoid of semi-axes `radii` (x, y, z): the sphere's hull and
+/// tessellation scaled per axis (an affine map keeps the hull
+/// circumscribing the surface). Volume `4/3 π a b c`.
+pub fn ellipsoid_hull(radii: [f64; 3]) -> Result<PrimitiveHull, String> {
+    check("ellipsoid", &radii)?;
+    let s = Vector3::from(radii);
+    let scale = |p: Vector3<f64>| p.component_mul(&s);
+    let fine: Vec<_> = uv_sphere(1.0, Vector3::zeros())
+        .into_iter()
+        .map(scale)
+        .collect();
+    Ok(PrimitiveHull {
+        hull: circumscribed_sphere(1.0, Vector3::zeros())
+            .into_iter()
+            .map(scale)
+            .collect(),
+        source: hull_mesh("ellipsoid", &fine)?,
+        volume: 4.0 / 3.0 * PI * radii[0] * radii[1] * radii[2],
+    })
+}
+
 /// Capsule: a cylinder of `radius` and `length` along z with hemispherical
 /// caps beyond `±length/2`.
 pub fn capsule_hull(radius: f64, length: f64) -> Result<PrimitiveHull, String> {
@@ -201,7 +222,9 @@ mod tests {
         assert_eq!(s.hull.len(), 42);
         let k = capsule_hull(0.2, 1.0).unwrap();
         assert_eq!(k.hull.len(), 54);
-        for p in [&b, &c, &s, &k] {
+        let e = ellipsoid_hull([0.1, 0.2, 0.3]).unwrap();
+        assert_eq!(e.hull.len(), 42);
+        for p in [&b, &c, &s, &k, &e] {
             assert!(contains_source(p));
             let hv = convex_hull(&p.hull).unwrap().volume();
             assert!(

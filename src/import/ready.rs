@@ -191,7 +191,6 @@ pub fn make_ready(
             },
         );
     }
-    let robot_name = robot.name.clone();
 
     // The scene as it stands, for geometry and gains.
     let load = |spec: &SceneSpec| {
@@ -244,11 +243,28 @@ pub fn make_ready(
         }
         let mut exclude = Vec::new();
         for (la, lb) in close {
-            let name = |l: usize| format!("{robot_name}/{}", model.links[l].name);
+            let name = |l: usize| {
+                let link = &model.links[l];
+                format!("{}/{}", model.robots[link.robot].name, link.name)
+            };
             exclude.push([name(la), name(lb)]);
         }
         report.excluded_pairs = exclude.clone();
-        scene.contact = Some(ContactSpec { exclude, ..contact });
+        // Exclusions the input gave (MJCF's contact filter) stay.
+        let mut all = scene
+            .contact
+            .as_ref()
+            .map(|c| c.exclude.clone())
+            .unwrap_or_default();
+        for e in exclude {
+            if !all.contains(&e) {
+                all.push(e);
+            }
+        }
+        scene.contact = Some(ContactSpec {
+            exclude: all,
+            ..contact
+        });
     }
     if opts.ground {
         let min_z = (0..hulls.ids.len())

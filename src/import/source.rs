@@ -29,6 +29,15 @@ pub enum SourceShape {
         radius: f64,
         length: f64,
     },
+    /// Ellipsoid of semi-axes (x, y, z) (MJCF `ellipsoid`).
+    Ellipsoid {
+        radii: [f64; 3],
+    },
+    /// A mesh given inline (MJCF mesh geoms, compiled by MuJoCo), used as
+    /// its convex hull — the shape MuJoCo collides.
+    ConvexMesh {
+        mesh: super::mesh::TriMesh,
+    },
     /// No geometry in the input: a small cube of the given edge at the link
     /// origin keeps the link valid (see [`super::ImportOptions::tiny_hull_size`]).
     Tiny {
@@ -97,6 +106,12 @@ pub struct SourceLink {
     /// [`crate::model::Inertial::second_moment`]), if the mass is positive;
     /// merged links add theirs, moved into this frame (`T M Tᵀ`).
     pub moment: Option<nalgebra::Matrix4<f64>>,
+    /// A massless frame between joints of one input body (MJCF bodies with
+    /// several joints, massless bodies): mass zero.
+    pub frame_only: bool,
+    /// Whether the link takes part in contact (MJCF bodies with visual
+    /// geoms only do not).
+    pub collides: bool,
 }
 
 /// A robot read from the input.
@@ -108,6 +123,12 @@ pub struct SourceRobot {
     pub links: Vec<SourceLink>,
     /// What the reader simplified (merged or dropped links), for the report.
     pub notes: Vec<String>,
+    /// Initial coordinates by joint name (default zeros).
+    pub initial: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Keep the collision geometry as given: a joint whose attachment point
+    /// lies outside a link's hulls is left untied in the design instead of
+    /// growing the hull to it (MJCF: the shapes are what MuJoCo collides).
+    pub keep_geometry: bool,
 }
 
 impl SourceRobot {
@@ -143,8 +164,12 @@ impl SourceRobot {
                 }],
                 mass: None,
                 moment: None,
+                frame_only: false,
+                collides: true,
             }],
             notes: vec!["bare mesh: one free body".into()],
+            initial: Default::default(),
+            keep_geometry: false,
         }
     }
 }

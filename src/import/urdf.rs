@@ -737,6 +737,8 @@ fn convert(
             geometry,
             mass: Some(l.inertial.mass.value).filter(|m| *m > 0.0),
             moment: urdf_moment(&l.inertial),
+            frame_only: false,
+            collides: true,
         });
     }
     let mut links: Vec<Option<SourceLink>> = tmp.into_iter().map(Some).collect();
@@ -873,6 +875,8 @@ fn convert(
         file: path.to_path_buf(),
         links: out,
         notes,
+        initial: Default::default(),
+        keep_geometry: false,
     })
 }
 

@@ -89,11 +89,20 @@ impl Inertial {
     /// Why this is not a physical inertial, if it is not: the mass must be
     /// positive and finite, the COM finite, the tensor symmetric (to 1e-9
     /// relative) with non-negative principal moments obeying the triangle
-    /// inequality `I₁ ≤ I₂ + I₃` (to 1e-9 relative).
+    /// inequality `I₁ ≤ I₂ + I₃` (to 1e-9 relative). A massless frame (mass
+    /// and tensor exactly zero) is accepted: a link that only carries a
+    /// joint (e.g. between two joints of one MJCF body).
     pub fn check(&self) -> Result<(), String> {
+        if self.mass == 0.0 && self.inertia.iter().all(|v| *v == 0.0) {
+            return if self.com.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(format!("centre of mass is not finite: {:?}", self.com))
+            };
+        }
         if !(self.mass > 0.0 && self.mass.is_finite()) {
             return Err(format!(
-                "mass must be positive and finite, got {}",
+                "mass must be positive and finite (or zero with a zero inertia tensor: a massless frame), got {}",
                 self.mass
             ));
         }

@@ -173,6 +173,7 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                                 .then(|| h.vertex_mass.clone()),
                         })
                         .collect(),
+                    collide: link.collides,
                 }
             })
             .collect();

@@ -599,7 +599,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             solid_triangles: Vec::new(),
             dof_offset: 0,
             chart: None,
-            collides: true,
+            collides: l.collide,
         });
     }
     debug_assert!(

@@ -28,6 +28,7 @@ pub fn expand(spec: &ChainSpec) -> Vec<LinkSpec> {
             vertex_mass: None,
             mass_model: None,
             hulls: vec![HullSpec::cuboid([w, w, l], [0.0, 0.0, -l / 2.0])],
+            collide: true,
         })
         .collect()
 }

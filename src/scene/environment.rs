@@ -42,6 +42,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
                 vertex_mass: o.vertex_mass,
                 mass_model: o.mass_model.clone(),
                 hulls: o.hulls.clone(),
+                collide: true,
             }],
             chain: None,
             controller: ControllerSpec::default(),
@@ -85,6 +86,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             vertex_mass: None,
             mass_model: None,
             hulls: vec![HullSpec::cuboid(size, [0.0, 0.0, -g.thickness / 2.0])],
+            collide: true,
         });
     }
     for o in &spec.obstacles {
@@ -96,6 +98,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             vertex_mass: None,
             mass_model: None,
             hulls: o.hulls.clone(),
+            collide: true,
         });
     }
     if !env.is_empty() {

@@ -33,6 +33,7 @@
 //!         hulls:
 //!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
 //!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
+//!         # collide: false   # no contact for this link (default true)
 //!     # chain: {links: 8, ...}   # generates `links` instead (see ChainSpec)
 //!     controller:
 //!       kp: 100              # default gains for every target (J/rad²; default 0)
@@ -361,6 +362,18 @@ pub struct LinkSpec {
     pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the link frame (m).
     pub hulls: Vec<HullSpec>,
+    /// Whether the link takes part in contact. Default true; `false` for
+    /// links that only carry a joint or are visual (MJCF geoms that MuJoCo
+    /// never collides).
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub collide: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 /// How a link's (or object's) mass is distributed; default `vertices`.

@@ -394,9 +394,23 @@ fn resolve_target(
                 }
                 return Ok(Target::Dofs(dofs));
             }
+            // A coordinate's column name; or, in a scene with several
+            // robots, the bare joint name when one robot alone has it.
+            let bare: Vec<usize> = dofs
+                .iter()
+                .copied()
+                .filter(|&k| {
+                    model.dofs[k]
+                        .name
+                        .split_once('/')
+                        .is_some_and(|(_, j)| j == on)
+                })
+                .collect();
             dofs.iter()
                 .find(|&&k| model.dofs[k].name == on)
-                .map(|&k| Target::Dofs(vec![k]))
+                .copied()
+                .or(if bare.len() == 1 { Some(bare[0]) } else { None })
+                .map(|k| Target::Dofs(vec![k]))
                 .ok_or_else(|| {
                     let names: Vec<&str> =
                         dofs.iter().map(|&k| model.dofs[k].name.as_str()).collect();

@@ -1,0 +1,261 @@
+//! MJCF import (`src/import/mjcf/`): third-party models from pybullet_data's
+//! `mjcf/` folder (written for MuJoCo by others) and `tests/data/mjcf_frames.xml`
+//! (joint anchors, several joints per body, `ref`, ball and free joints,
+//! full inertias, a mesh geom) import; their joint-space mass matrices match
+//! MuJoCo's `mj_fullM` (rigid-body part, armature apart) to 1e-9 relative at
+//! 20 random configurations (tools/check_mass_matrix_mujoco.py); bad files give
+//! MuJoCo's message naming the element and line.
+
+mod import_support;
+
+use import_support::*;
+use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
+use rand::{RngExt, SeedableRng};
+use sdrs::calibrate::effects::EffectKind;
+use sdrs::import::{Decomposer, ImportOptions, import};
+use sdrs::model::{JointKind, MassModel};
+use sdrs::scene::Scene;
+use sdrs::sim::mass_matrix::mass_matrix;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+fn pybullet_mjcf(name: &str) -> PathBuf {
+    let urdf = third_party_urdf(); // …/pybullet_data/kuka_iiwa/model.urdf
+    let p = urdf
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("mjcf")
+        .join(name);
+    assert!(p.is_file(), "{} not found", p.display());
+    p
+}
+
+fn opts() -> ImportOptions {
+    ImportOptions {
+        decomposer: Decomposer::Hull,
+        progress: false,
+        ..ImportOptions::default()
+    }
+}
+
+/// 20 random configurations: MuJoCo qpos per joint, our matrix and the
+/// (joint, velocity) of each row. (Armature, MuJoCo's rotor inertia, is the
+/// separate `armature` effect here; the checker leaves it out of both.)
+fn samples(xml: &Path, seed: u64) -> serde_json::Value {
+    let imp = import(xml, &opts()).unwrap_or_else(|e| panic!("{e}"));
+    let scene = Scene::from_spec(imp.scene.clone(), xml).unwrap();
+    let model = &scene.model;
+    // Every link with a body inertial keeps it (`given`).
+    assert!(
+        model
+            .links
+            .iter()
+            .filter(|l| model.robots[l.robot].name != "world")
+            .all(|l| matches!(l.mass_model, MassModel::Given(_))),
+        "MJCF inertials must be kept as `given`"
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut configs = Vec::new();
+    for _ in 0..20 {
+        let mut q = DVector::zeros(model.ndof());
+        let mut charts = vec![Matrix3::identity(); model.nchart];
+        let mut qpos = serde_json::Map::new();
+        let mut dofs = Vec::new();
+        let mut rows = Vec::new();
+        for link in &model.links {
+            let n = link.ndof();
+            if n == 0 {
+                continue;
+            }
+            let o = link.dof_offset;
+            let random_rotation = |rng: &mut rand_chacha::ChaCha8Rng| {
+                let v = Vector3::new(
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                    rng.random_range(-2.0..2.0),
+                );
+                Rotation3::new(v).into_inner()
+            };
+            let quat = |r: &Matrix3<f64>| {
+                let u = UnitQuaternion::from_matrix(r);
+                json!([u.w, u.i, u.j, u.k])
+            };
+            match &link.joint {
+                JointKind::Revolute { .. } | JointKind::Prismatic { .. } => {
+                    let (lo, hi) = link
+                        .limit
+                        .as_ref()
+                        .map(|l| (l.lower, l.upper))
+                        .unwrap_or((-1.0, 1.0));
+                    let v = rng.random_range(lo..hi);
+                    q[o] = v;
+                    qpos.insert(link.joint_name.clone(), json!([v]));
+                }
+                JointKind::Spherical => {
+                    let r = random_rotation(&mut rng);
+                    charts[link.chart.unwrap()] = r;
+                    qpos.insert(link.joint_name.clone(), quat(&r));
+                }
+                JointKind::Free => {
+                    let r = random_rotation(&mut rng);
+                    charts[link.chart.unwrap()] = r;
+                    let p: Vec<f64> = (0..3).map(|_| rng.random_range(-1.0..1.0)).collect();
+                    for k in 0..3 {
+                        q[o + k] = p[k];
+                    }
+                    let qq = quat(&r);
+                    let mut v = p.clone();
+                    v.extend(qq.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()));
+                    qpos.insert(link.joint_name.clone(), json!(v));
+                }
+                other => panic!("MJCF import produced a {other:?} joint"),
+            }
+            for k in 0..n {
+                dofs.push(json!([link.joint_name, k]));
+                rows.push(o + k);
+            }
+        }
+        let h = mass_matrix(model, &q, &charts);
+        let sub = DMatrix::from_fn(rows.len(), rows.len(), |a, b| h[(rows[a], rows[b])]);
+        configs.push(json!({
+            "qpos": qpos,
+            "dofs": dofs,
+            "M": (0..sub.nrows()).map(|r| sub.row(r).iter().copied().collect::<Vec<_>>()).collect::<Vec<_>>(),
+        }));
+    }
+    json!({ "configurations": configs })
+}
+
+fn check_mass_matrix(xml: &Path, tag: &str) {
+    let s = samples(xml, 5);
+    let dir = temp_dir(&format!("mjcf-mass-{tag}"));
+    let json = dir.join("samples.json");
+    std::fs::write(&json, serde_json::to_string(&s).unwrap()).unwrap();
+    let (ok, out, err) = run_tool(
+        "check_mass_matrix_mujoco.py",
+        &[xml, &json, Path::new("--tol"), Path::new("1e-9")],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    eprintln!("{tag}: {}", out.trim());
+    assert!(
+        ok,
+        "{tag}: mass matrices differ from MuJoCo's:\n{out}\n{err}"
+    );
+}
+
+#[test]
+fn third_party_mjcf_mass_matrices_match_mujoco_full_m() {
+    for name in [
+        "ant.xml",
+        "humanoid.xml",
+        "pusher.xml",
+        "thrower.xml",
+        "striker.xml",
+    ] {
+        check_mass_matrix(&pybullet_mjcf(name), name);
+    }
+}
+
+#[test]
+fn anchors_multi_joint_bodies_ref_ball_and_free_joints_match_mujoco() {
+    let xml = import_support::root().join("tests/data/mjcf_frames.xml");
+    check_mass_matrix(&xml, "mjcf_frames");
+}
+
+/// The checker is not blind: a 1e-6 change of one inertia is caught.
+#[test]
+fn mass_matrix_check_catches_a_wrong_inertia() {
+    let xml = import_support::root().join("tests/data/mjcf_frames.xml");
+    let mut s = samples(&xml, 6);
+    let m = &mut s["configurations"][0]["M"][0][0];
+    *m = json!(m.as_f64().unwrap() * (1.0 + 1e-6));
+    let dir = temp_dir("mjcf-mass-perturbed");
+    let json = dir.join("samples.json");
+    std::fs::write(&json, serde_json::to_string(&s).unwrap()).unwrap();
+    let (ok, out, _) = run_tool(
+        "check_mass_matrix_mujoco.py",
+        &[&xml, &json, Path::new("--tol"), Path::new("1e-9")],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(!ok, "a perturbed matrix passed: {out}");
+    // It failed on the comparison (exit 1 with a summary), not on a crash.
+    let r: serde_json::Value = serde_json::from_str(out.trim())
+        .unwrap_or_else(|e| panic!("no summary from the checker ({e}): {out}"));
+    let err = r["max_relative_error"].as_f64().unwrap();
+    assert!(err > 1e-8 && err < 1e-5, "{err}");
+}
+
+#[test]
+fn mjcf_structure_limits_effects_filters_and_ground() {
+    let xml = import_support::root().join("tests/data/mjcf_frames.xml");
+    let imp = import(&xml, &opts()).unwrap();
+    let r = &imp.scene.robots[0];
+    let link = |n: &str| r.links.iter().find(|l| l.name == n).unwrap();
+    // Three joints on `upper`: two massless frames, then the body.
+    assert!(!link("upper__roll").collide && !link("upper__pitch").collide);
+    assert_eq!(link("upper").parent.as_deref(), Some("upper__pitch"));
+    // `ref` is the initial coordinate (θ = qpos): 15° and 0.02 m.
+    assert!((r.initial["roll"].q[0] - 15f64.to_radians()).abs() < 1e-12);
+    assert!((r.initial["reach"].q[0] - 0.02).abs() < 1e-12);
+    // The free body starts at its XML pose.
+    let puck = &r.initial["puck_free"].q;
+    assert_eq!(&puck[..3], &[0.5, 0.5, 0.3]);
+    // Range in degrees → radians; damping and armature → effects.
+    let lim = link("base").joint.limit.as_ref().unwrap();
+    assert!((lim.upper - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    let effects: Vec<_> = imp
+        .scene
+        .effects
+        .iter()
+        .map(|e| (e.effect, e.on.as_str(), e.values[0]))
+        .collect();
+    assert!(
+        effects.contains(&(EffectKind::JointDamping, "yaw", 0.3)),
+        "{effects:?}"
+    );
+    assert!(
+        effects.contains(&(EffectKind::Armature, "yaw", 0.01)),
+        "{effects:?}"
+    );
+    assert_eq!(effects.len(), 2, "{effects:?}");
+    // The plane is the ground; the marker (visual geoms only) does not collide.
+    assert_eq!(imp.scene.ground.as_ref().unwrap().height, 0.0);
+    assert!(!link("marker").collide);
+    // The wrist's visual sphere is not part of its shape: the hull is the wedge's.
+    let wrist = &link("wrist").hulls[0];
+    let extent = wrist
+        .vertices
+        .as_ref()
+        .unwrap()
+        .iter()
+        .map(|v| Vector3::from(*v).norm())
+        .fold(0.0, f64::max);
+    assert!(
+        extent < 0.2,
+        "the visual sphere leaked into the hull ({extent})"
+    );
+    // Parent–child bodies are filtered as MuJoCo does (wrist–tip).
+    let exclude = &imp.scene.contact.as_ref().unwrap().exclude;
+    assert!(
+        exclude.contains(&["frames/wrist".into(), "frames/tip".into()]),
+        "{exclude:?}"
+    );
+}
+
+#[test]
+fn bad_mjcf_names_file_element_and_line() {
+    let dir = temp_dir("mjcf-bad");
+    let bad = dir.join("bad.xml");
+    std::fs::write(
+        &bad,
+        "<mujoco>\n  <worldbody>\n    <body name=\"b\">\n      <joint type=\"hinge\" axis=\"0 0 0\"/>\n      <geom size=\"0.1\"/>\n    </body>\n  </worldbody>\n</mujoco>\n",
+    )
+    .unwrap();
+    let e = import(&bad, &opts()).unwrap_err().to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(e.contains("bad.xml"), "{e}");
+    assert!(e.contains("line 4") || e.contains("line"), "{e}");
+    assert!(e.to_lowercase().contains("axis"), "{e}");
+}

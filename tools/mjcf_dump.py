@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""Compile an MJCF model with MuJoCo and print what `sdrs import` needs as JSON.
+
+Usage: mjcf_dump.py MODEL.xml [--qpos0]
+
+MuJoCo's own compiler resolves everything MJCF leaves implicit (default
+classes, `childclass`, `<compiler angle/eulerseq/meshdir>`, `fromto`,
+`<include>`, frames, inertias from geoms, mesh scaling and re-centring), so
+the numbers printed here are the model MuJoCo simulates:
+
+- bodies in tree order (parents first): name, parent index (-1 = world),
+  `pos`/`quat` in the parent's frame, mass, `ipos`/`iquat` (inertial frame
+  in the body frame) and the principal moments `inertia`;
+- per body its joints in MuJoCo's order: type (free|ball|slide|hinge),
+  anchor `pos` and unit `axis` in the body frame, `range` (null when not
+  limited), damping, armature, frictionloss, stiffness, springref, ref;
+- geoms (world geoms under body -1): type, `size`, `pos`/`quat` in the body
+  frame, contype/conaffinity/group, friction; mesh geoms carry the
+  compiled mesh's vertices and faces in the geom frame;
+- `option`: gravity and timestep; `unsupported`: counts of what the
+  importer leaves out (tendons, equality constraints, actuators, sites with
+  sensors are not needed), for the import notes.
+
+Exit codes: 0 ok, 2 the model does not compile (MuJoCo's message, which
+names the element and line, is printed on stderr), 3 mujoco missing.
+"""
+import json
+import sys
+
+try:
+    import mujoco
+    import numpy as np
+except ImportError as e:  # pragma: no cover - exercised through sdrs
+    print(f"missing Python package: {e.name}", file=sys.stderr)
+    sys.exit(3)
+
+JOINT_TYPES = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+GEOM_TYPES = {0: "plane", 1: "hfield", 2: "sphere", 3: "capsule", 4: "ellipsoid",
+              5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"}
+
+
+def name_of(m, kind, i, fallback):
+    n = mujoco.mj_id2name(m, kind, i)
+    return n if n else fallback
+
+
+def floats(a):
+    return [float(x) for x in np.asarray(a).reshape(-1)]
+
+
+def main():
+    if len(sys.argv) < 2:
+        print(__doc__.splitlines()[2], file=sys.stderr)
+        return 2
+    path = sys.argv[1]
+    try:
+        m = mujoco.MjModel.from_xml_path(path)
+    except Exception as e:  # mujoco raises ValueError with the compiler's message
+        print(f"{path}: MuJoCo cannot compile the model: {str(e).strip()}", file=sys.stderr)
+        return 2
+    bodies = []
+    for b in range(1, m.nbody):
+        joints = []
+        for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b]):
+            jt = JOINT_TYPES[int(m.jnt_type[j])]
+            qa = m.jnt_qposadr[j]
+            joints.append({
+                "name": name_of(m, mujoco.mjtObj.mjOBJ_JOINT, j, f"joint{j}"),
+                "type": jt,
+                "pos": floats(m.jnt_pos[j]),
+                "axis": floats(m.jnt_axis[j]),
+                "range": floats(m.jnt_range[j]) if m.jnt_limited[j] else None,
+                "damping": float(m.dof_damping[m.jnt_dofadr[j]]),
+                "armature": float(m.dof_armature[m.jnt_dofadr[j]]),
+                "frictionloss": float(m.dof_frictionloss[m.jnt_dofadr[j]]),
+                "stiffness": float(m.jnt_stiffness[j]),
+                "springref": floats(m.qpos_spring[qa:qa + {"free": 7, "ball": 4}.get(jt, 1)]),
+                "qpos0": floats(m.qpos0[qa:qa + {"free": 7, "ball": 4}.get(jt, 1)]),
+            })
+        bodies.append({
+            "name": name_of(m, mujoco.mjtObj.mjOBJ_BODY, b, f"body{b}"),
+            "parent": int(m.body_parentid[b]) - 1,
+            "pos": floats(m.body_pos[b]),
+            "quat": floats(m.body_quat[b]),
+            "mass": float(m.body_mass[b]),
+            "ipos": floats(m.body_ipos[b]),
+            "iquat": floats(m.body_iquat[b]),
+            "inertia": floats(m.body_inertia[b]),
+            "mocap": bool(m.body_mocapid[b] >= 0),
+            "joints": joints,
+        })
+    geoms = []
+    for g in range(m.ngeom):
+        gt = GEOM_TYPES.get(int(m.geom_type[g]), str(int(m.geom_type[g])))
+        geom = {
+            "name": name_of(m, mujoco.mjtObj.mjOBJ_GEOM, g, f"geom{g}"),
+            "body": int(m.geom_bodyid[g]) - 1,
+            "type": gt,
+            "size": floats(m.geom_size[g]),
+            "pos": floats(m.geom_pos[g]),
+            "quat": floats(m.geom_quat[g]),
+            "contype": int(m.geom_contype[g]),
+            "conaffinity": int(m.geom_conaffinity[g]),
+            "group": int(m.geom_group[g]),
+            "friction": float(m.geom_friction[g][0]),
+        }
+        if gt == "mesh":
+            k = int(m.geom_dataid[g])
+            va, vn = m.mesh_vertadr[k], m.mesh_vertnum[k]
+            fa, fn = m.mesh_faceadr[k], m.mesh_facenum[k]
+            geom["mesh"] = {
+                "name": name_of(m, mujoco.mjtObj.mjOBJ_MESH, k, f"mesh{k}"),
+                "vertices": np.asarray(m.mesh_vert[va:va + vn], dtype=float).tolist(),
+                "faces": np.asarray(m.mesh_face[fa:fa + fn], dtype=int).tolist(),
+            }
+        geoms.append(geom)
+    out = {
+        "file": path,
+        "model": m.names[:m.names.index(b"\0")].decode() if m.names else "",
+        "option": {"gravity": floats(m.opt.gravity), "timestep": float(m.opt.timestep)},
+        "bodies": bodies,
+        "geoms": geoms,
+        "unsupported": {
+            "tendons": int(m.ntendon),
+            "equality constraints": int(m.neq),
+            "actuators": int(m.nu),
+            "height fields": int(m.nhfield),
+        },
+    }
+    json.dump(out, sys.stdout)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
