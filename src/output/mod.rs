@@ -363,7 +363,8 @@ pub fn export_run(
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct HullExport {
     pub links: Vec<LinkExport>,
-    /// Link index pairs that never interact (parent–child, excluded, static).
+    /// Link index pairs that never interact (parent–child, excluded, static,
+    /// a link without contact).
     pub excluded_pairs: Vec<(usize, usize)>,
 }
 
@@ -391,7 +392,20 @@ impl HullExport {
                         .collect(),
                 })
                 .collect(),
-            excluded_pairs: excluded.into_iter().collect(),
+            excluded_pairs: {
+                // Links without contact (`collide: false`) meet nothing.
+                let mut pairs: std::collections::BTreeSet<(usize, usize)> =
+                    excluded.into_iter().collect();
+                let n = model.links.len();
+                for (i, l) in model.links.iter().enumerate() {
+                    if !l.collides {
+                        for j in (0..n).filter(|&j| j != i) {
+                            pairs.insert((i.min(j), i.max(j)));
+                        }
+                    }
+                }
+                pairs.into_iter().collect()
+            },
         }
     }
 }
