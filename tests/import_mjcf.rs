@@ -56,6 +56,17 @@ fn samples(xml: &Path, seed: u64) -> serde_json::Value {
             .all(|l| matches!(l.mass_model, MassModel::Given(_))),
         "MJCF inertials must be kept as `given`"
     );
+    samples_of(&scene, seed, &|l| l.joint_name.clone())
+}
+
+/// The samples of a loaded scene; `mj_name` gives MuJoCo's joint name of a
+/// link's joint.
+fn samples_of(
+    scene: &Scene,
+    seed: u64,
+    mj_name: &dyn Fn(&sdrs::model::Link) -> String,
+) -> serde_json::Value {
+    let model = &scene.model;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut configs = Vec::new();
     for _ in 0..20 {
@@ -91,12 +102,22 @@ fn samples(xml: &Path, seed: u64) -> serde_json::Value {
                         .unwrap_or((-1.0, 1.0));
                     let v = rng.random_range(lo..hi);
                     q[o] = v;
-                    qpos.insert(link.joint_name.clone(), json!([v]));
+                    qpos.insert(mj_name(link), json!([v]));
+                }
+                JointKind::Ball { .. } => {
+                    for k in 0..2 {
+                        let v = rng.random_range(-1.0..1.0);
+                        q[o + k] = v;
+                        qpos.insert(format!("{}_{k}", mj_name(link)), json!([v]));
+                        dofs.push(json!([format!("{}_{k}", mj_name(link)), 0]));
+                        rows.push(o + k);
+                    }
+                    continue;
                 }
                 JointKind::Spherical => {
                     let r = random_rotation(&mut rng);
                     charts[link.chart.unwrap()] = r;
-                    qpos.insert(link.joint_name.clone(), quat(&r));
+                    qpos.insert(mj_name(link), quat(&r));
                 }
                 JointKind::Free => {
                     let r = random_rotation(&mut rng);
@@ -108,12 +129,12 @@ fn samples(xml: &Path, seed: u64) -> serde_json::Value {
                     let qq = quat(&r);
                     let mut v = p.clone();
                     v.extend(qq.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()));
-                    qpos.insert(link.joint_name.clone(), json!(v));
+                    qpos.insert(mj_name(link), json!(v));
                 }
                 other => panic!("MJCF import produced a {other:?} joint"),
             }
             for k in 0..n {
-                dofs.push(json!([link.joint_name, k]));
+                dofs.push(json!([mj_name(link), k]));
                 rows.push(o + k);
             }
         }
@@ -129,7 +150,10 @@ fn samples(xml: &Path, seed: u64) -> serde_json::Value {
 }
 
 fn check_mass_matrix(xml: &Path, tag: &str) {
-    let s = samples(xml, 5);
+    run_check(xml, &samples(xml, 5), tag);
+}
+
+fn run_check(xml: &Path, s: &serde_json::Value, tag: &str) {
     let dir = temp_dir(&format!("mjcf-mass-{tag}"));
     let json = dir.join("samples.json");
     std::fs::write(&json, serde_json::to_string(&s).unwrap()).unwrap();
@@ -258,4 +282,41 @@ fn bad_mjcf_names_file_element_and_line() {
     assert!(e.contains("bad.xml"), "{e}");
     assert!(e.contains("line 4") || e.contains("line"), "{e}");
     assert!(e.to_lowercase().contains("axis"), "{e}");
+}
+
+/// `sdrs export-mjcf`'s writer: MuJoCo's mass matrix of the written model
+/// equals ours — for an imported MJCF (massless frames, ball and free
+/// joints), the imported KUKA iiwa URDF (`given` inertials) and the
+/// four-chain scene (two-hinge `ball` joints, `vertices` masses).
+#[test]
+fn exported_mjcf_has_our_mass_matrix() {
+    let dir = temp_dir("mjcf-export");
+    let frames = import_support::root().join("tests/data/mjcf_frames.xml");
+    let imp = import(&frames, &opts()).unwrap();
+    let iiwa = import(&third_party_urdf(), &opts()).unwrap();
+    let chains = Scene::load(import_support::root().join("robots/four_chains.yaml")).unwrap();
+    let cases = [
+        ("frames", Scene::from_spec(imp.scene, &frames).unwrap()),
+        (
+            "iiwa",
+            Scene::from_spec(iiwa.scene, &third_party_urdf()).unwrap(),
+        ),
+        ("four_chains", chains),
+    ];
+    for (tag, scene) in cases {
+        let xml = dir.join(format!("{tag}.xml"));
+        std::fs::write(&xml, sdrs::output::mjcf::scene_to_mjcf(&scene, tag)).unwrap();
+        let multi = scene.model.robots.len() > 1;
+        let robots: Vec<String> = scene.model.robots.iter().map(|r| r.name.clone()).collect();
+        let name = |l: &sdrs::model::Link| {
+            if multi {
+                format!("{}/{}", robots[l.robot], l.joint_name)
+            } else {
+                l.joint_name.clone()
+            }
+        };
+        let s = samples_of(&scene, 7, &name);
+        run_check(&xml, &s, &format!("export {tag}"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

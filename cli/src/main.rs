@@ -6,6 +6,7 @@ mod bench;
 mod calibrate;
 mod compare;
 mod contact_model;
+mod export_mjcf;
 mod optimize;
 mod plot;
 mod schema;
@@ -34,8 +35,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Co-design: optimize shape and controller of a task with adjoint gradients.
     Optimize(optimize::OptimizeArgs),
-    /// Import a robot (URDF, OBJ or STL) as a convex-hull design space.
+    /// Import a robot (URDF, MJCF, OBJ, STL or COLLADA) as a convex-hull design space.
     Import(sdrs::import::ImportArgs),
+    /// Write a scene's robots as MJCF for MuJoCo (same kinematics, masses and inertias).
+    ExportMjcf(export_mjcf::ExportMjcfArgs),
     /// Calibration: name the physical effect missing from a scene, given measured data.
     Calibrate(sdrs::calibrate::CalibrateArgs),
     /// Plot optimization runs together (e.g. co-design vs controller-only) from their output directories.
@@ -55,6 +58,7 @@ fn main() {
         Command::Bench(a) => bench::run(a),
         Command::Optimize(a) => optimize::run(a),
         Command::Import(a) => sdrs::import::run_import(&a),
+        Command::ExportMjcf(a) => export_mjcf::run(a),
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Compare(a) => compare::run(a),
         Command::Plot(a) => plot::run(a),

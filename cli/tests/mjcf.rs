@@ -9,7 +9,9 @@ use support::{python, scratch_dir};
 
 fn on_ground(model: &str, import_args: &[&str]) {
     let dir = scratch_dir(&format!("mjcf-{model}"));
-    let xml = support::pybullet_data().join("mjcf").join(format!("{model}.xml"));
+    let xml = support::pybullet_data()
+        .join("mjcf")
+        .join(format!("{model}.xml"));
     let scene = dir.join(format!("{model}.yaml"));
     support::run_ok(
         support::sdrs()
@@ -24,7 +26,10 @@ fn on_ground(model: &str, import_args: &[&str]) {
     std::fs::create_dir_all(&export).unwrap();
     let summary = support::simulate_export(&export, &["--steps", "1000"], &scene);
     let steps = summary["contact"]["steps_in_contact"].as_u64().unwrap();
-    assert!(steps > 100, "{model}: no contact with the ground ({steps} steps)");
+    assert!(
+        steps > 100,
+        "{model}: no contact with the ground ({steps} steps)"
+    );
     let ours = summary["contact"]["min_distance"].as_f64().unwrap();
     let check = python()
         .arg(support::root().join("tools/check_separation.py"))
@@ -44,7 +49,10 @@ fn on_ground(model: &str, import_args: &[&str]) {
         r["steps_checked"]
     );
     assert!(fcl_min > 0.0);
-    assert!((fcl_min - ours).abs() < 1e-6, "{model}: {fcl_min} vs {ours}");
+    assert!(
+        (fcl_min - ours).abs() < 1e-6,
+        "{model}: {fcl_min} vs {ours}"
+    );
 }
 
 #[test]

@@ -3,6 +3,7 @@
 
 pub mod contacts;
 pub mod gltf;
+pub mod mjcf;
 pub mod picture;
 pub mod playback;
 pub mod plot;

@@ -1,0 +1,307 @@
+//! A scene's robots as MJCF (`sdrs export-mjcf`), for MuJoCo.
+//!
+//! Same kinematics, masses, centres of mass and inertias as the simulated
+//! model (MuJoCo's `mj_fullM` of the written model equals
+//! [`crate::sim::mass_matrix::mass_matrix`]; `tests/export_mjcf.rs`):
+//! - every link is a body nested under its parent, at its attachment
+//!   `C_i` (`pos`, `quat` in the parent body's frame); environment links
+//!   (ground, obstacles) are bodies of the world without joints;
+//! - `revolute` → `hinge`, `prismatic` → `slide` (axis in the body frame,
+//!   anchor at the body origin, as `A_i = A_parent C_i J_i(θ)`), `ball`
+//!   (two hinges) → two hinges `NAME_0`, `NAME_1` on the body, `spherical` →
+//!   `ball`, `free` → `freejoint` (the body's pose is then `C_i J_i(θ⁰)`:
+//!   MuJoCo's free coordinates are world poses), `fixed` → no joint;
+//! - inertial: mass, COM and full inertia tensor of the link's mass model
+//!   at the current design (`vertices`, `solid` or `given`), with
+//!   `inertiafromgeom="false"`; a moving massless link gets a stand-in of
+//!   1e-12 kg (MuJoCo refuses massless moving bodies; noted in a comment);
+//! - every hull is a mesh geom (MuJoCo collides meshes as their convex
+//!   hulls, which is what a hull is); links without contact get
+//!   `contype = conaffinity = 0`; excluded pairs become `<exclude>`;
+//! - the initial state as keyframe `initial`, limits as `range`, the joint
+//!   effects `joint_damping`, `armature`, `joint_friction` as `damping`,
+//!   `armature`, `frictionloss`; contact `μ` as the geoms' sliding friction.
+//!
+//! Not translated (MuJoCo has its own): the SDRS barrier and friction
+//! smoothing, PD controllers, mimic ties, the other calibration effects.
+
+use crate::calibrate::effects::EffectKind;
+use crate::math::{Pose, rot};
+use crate::model::{Inertial, JointKind};
+use crate::scene::Scene;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use std::fmt::Write;
+
+/// Mass (kg) and principal moments (kg m²) written for a massless link:
+/// MuJoCo refuses moving bodies whose mass or inertia is below its
+/// `mjMINVAL` (1e-15). Its effect on the mass matrix is ~1e-12 relative.
+pub const MASSLESS_STANDIN: f64 = 1e-12;
+
+fn f(x: f64) -> String {
+    format!("{x}")
+}
+
+fn v3(v: &Vector3<f64>) -> String {
+    format!("{} {} {}", v.x, v.y, v.z)
+}
+
+fn quat(r: &Matrix3<f64>) -> String {
+    let q = UnitQuaternion::from_matrix(r);
+    format!("{} {} {} {}", q.w, q.i, q.j, q.k)
+}
+
+fn pose_attrs(a: &Pose) -> String {
+    format!(
+        "pos=\"{}\" quat=\"{}\"",
+        v3(&a.column(3).into_owned()),
+        quat(&rot(a))
+    )
+}
+
+/// The MJCF text of `scene` (all robots, objects and environment).
+pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
+    let model = &scene.model;
+    let mut x = String::new();
+    let _ = writeln!(
+        x,
+        "<!-- Written by `sdrs export-mjcf` from {} (see src/output/mjcf.rs for what is translated). -->",
+        scene.source.display()
+    );
+    let _ = writeln!(x, "<mujoco model=\"{model_name}\">");
+    let _ = writeln!(
+        x,
+        "  <compiler angle=\"radian\" inertiafromgeom=\"false\" autolimits=\"true\"/>"
+    );
+    let g = scene.settings.gravity;
+    let _ = writeln!(
+        x,
+        "  <option timestep=\"{}\" gravity=\"{}\"/>",
+        scene.settings.dt,
+        v3(&g)
+    );
+    // Joint effects by coordinate.
+    let mut joint_effect = vec![[0.0f64; 3]; model.ndof()];
+    for e in &scene.spec.effects {
+        let slot = match e.effect {
+            EffectKind::JointDamping => 0,
+            EffectKind::Armature => 1,
+            EffectKind::JointFriction => 2,
+            _ => continue,
+        };
+        for (k, d) in model.dofs.iter().enumerate() {
+            let one = matches!(
+                model.links[d.link].joint,
+                JointKind::Revolute { .. } | JointKind::Prismatic { .. } | JointKind::Ball { .. }
+            );
+            let bare = d.name.rsplit_once('/').map(|(_, n)| n).unwrap_or(&d.name);
+            if one && (e.on == "all" || e.on == d.name || e.on == bare) {
+                joint_effect[k][slot] += e.values[0];
+            }
+        }
+    }
+    let mu = scene.contact.as_ref().map(|c| c.mu).unwrap_or(0.0);
+    // Meshes.
+    let _ = writeln!(x, "  <asset>");
+    for (i, l) in model.links.iter().enumerate() {
+        for (h, hull) in l.hulls.iter().enumerate() {
+            let verts: Vec<String> = hull.x_local.iter().map(v3).collect();
+            let _ = writeln!(
+                x,
+                "    <mesh name=\"m{i}_{h}\" vertex=\"{}\"/>",
+                verts.join("  ")
+            );
+        }
+    }
+    let _ = writeln!(x, "  </asset>");
+    let _ = writeln!(x, "  <worldbody>");
+    let mut key_qpos: Vec<f64> = Vec::new();
+    let roots: Vec<usize> = (0..model.links.len())
+        .filter(|&i| model.links[i].parent.is_none())
+        .collect();
+    for r in roots {
+        write_body(scene, r, 2, mu, &joint_effect, &mut key_qpos, &mut x);
+    }
+    let _ = writeln!(x, "  </worldbody>");
+    if let Some(c) = &scene.contact {
+        let pairs: Vec<_> = c
+            .excluded
+            .iter()
+            .filter(|(a, b)| {
+                model.links[*a].parent != Some(*b) && model.links[*b].parent != Some(*a)
+            })
+            .collect();
+        if !pairs.is_empty() {
+            let _ = writeln!(x, "  <contact>");
+            for (a, b) in pairs {
+                let _ = writeln!(
+                    x,
+                    "    <exclude body1=\"{}\" body2=\"{}\"/>",
+                    body_name(scene, *a),
+                    body_name(scene, *b)
+                );
+            }
+            let _ = writeln!(x, "  </contact>");
+        }
+    }
+    let q: Vec<String> = key_qpos.iter().map(|v| f(*v)).collect();
+    let _ = writeln!(x, "  <keyframe>");
+    let _ = writeln!(x, "    <key name=\"initial\" qpos=\"{}\"/>", q.join(" "));
+    let _ = writeln!(x, "  </keyframe>");
+    let _ = writeln!(x, "</mujoco>");
+    x
+}
+
+/// MuJoCo body name of link `i`: `robot/link` when the scene has several
+/// robots (as in trajectory columns), else the link name.
+pub fn body_name(scene: &Scene, i: usize) -> String {
+    let m = &scene.model;
+    let l = &m.links[i];
+    if m.robots.len() > 1 {
+        format!("{}/{}", m.robots[l.robot].name, l.name)
+    } else {
+        l.name.clone()
+    }
+}
+
+/// MuJoCo joint name of coordinate group `name` (as in trajectory columns).
+fn joint_name(scene: &Scene, i: usize) -> String {
+    let m = &scene.model;
+    let l = &m.links[i];
+    if m.robots.len() > 1 {
+        format!("{}/{}", m.robots[l.robot].name, l.joint_name)
+    } else {
+        l.joint_name.clone()
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_body(
+    scene: &Scene,
+    i: usize,
+    depth: usize,
+    mu: f64,
+    joint_effect: &[[f64; 3]],
+    key_qpos: &mut Vec<f64>,
+    x: &mut String,
+) {
+    let model = &scene.model;
+    let l = &model.links[i];
+    let pad = "  ".repeat(depth);
+    let o = l.dof_offset;
+    let q0 = &scene.q0;
+    // A free body's frame is its world pose at θ⁰.
+    let frame = if matches!(l.joint, JointKind::Free) {
+        let c = scene.charts[l.chart.expect("free joints have a chart")];
+        let j = l.joint.transform(&c, &q0.as_slice()[o..o + 6]);
+        crate::math::compose(&l.attach, &j)
+    } else {
+        l.attach
+    };
+    let _ = writeln!(
+        x,
+        "{pad}<body name=\"{}\" {}>",
+        body_name(scene, i),
+        pose_attrs(&frame)
+    );
+    let jn = joint_name(scene, i);
+    let extras = |k: usize| {
+        let [d, a, fl] = joint_effect[k];
+        let mut s = String::new();
+        if d > 0.0 {
+            let _ = write!(s, " damping=\"{d}\"");
+        }
+        if a > 0.0 {
+            let _ = write!(s, " armature=\"{a}\"");
+        }
+        if fl > 0.0 {
+            let _ = write!(s, " frictionloss=\"{fl}\"");
+        }
+        s
+    };
+    let range = || {
+        l.limit
+            .as_ref()
+            .map(|lim| format!(" range=\"{} {}\"", lim.lower, lim.upper))
+            .unwrap_or_default()
+    };
+    match &l.joint {
+        JointKind::Fixed => {}
+        JointKind::Revolute { axis } | JointKind::Prismatic { axis } => {
+            let t = if matches!(l.joint, JointKind::Revolute { .. }) {
+                "hinge"
+            } else {
+                "slide"
+            };
+            let _ = writeln!(
+                x,
+                "{pad}  <joint name=\"{jn}\" type=\"{t}\" axis=\"{}\"{}{}/>",
+                v3(axis),
+                range(),
+                extras(o)
+            );
+            key_qpos.push(q0[o]);
+        }
+        JointKind::Ball { axes } => {
+            for (k, a) in axes.iter().enumerate() {
+                let _ = writeln!(
+                    x,
+                    "{pad}  <joint name=\"{jn}_{k}\" type=\"hinge\" axis=\"{}\"{}/>",
+                    v3(a),
+                    extras(o + k)
+                );
+                key_qpos.push(q0[o + k]);
+            }
+        }
+        JointKind::Spherical => {
+            let _ = writeln!(x, "{pad}  <joint name=\"{jn}\" type=\"ball\"/>");
+            let c = scene.charts[l.chart.expect("spherical joints have a chart")];
+            let j = l.joint.transform(&c, &q0.as_slice()[o..o + 3]);
+            let u = UnitQuaternion::from_matrix(&rot(&j));
+            key_qpos.extend([u.w, u.i, u.j, u.k]);
+        }
+        JointKind::Free => {
+            let _ = writeln!(x, "{pad}  <freejoint name=\"{jn}\"/>");
+            let u = UnitQuaternion::from_matrix(&rot(&frame));
+            key_qpos.extend([frame[(0, 3)], frame[(1, 3)], frame[(2, 3)]]);
+            key_qpos.extend([u.w, u.i, u.j, u.k]);
+        }
+    }
+    let m2 = model.second_moment[i];
+    if m2[(3, 3)] > 0.0 {
+        let inr = Inertial::from_second_moment(&m2);
+        let t = &inr.inertia;
+        let _ = writeln!(
+            x,
+            "{pad}  <inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
+            v3(&inr.com),
+            inr.mass,
+            t[(0, 0)],
+            t[(1, 1)],
+            t[(2, 2)],
+            t[(0, 1)],
+            t[(0, 2)],
+            t[(1, 2)]
+        );
+    } else if l.joint.ndof() > 0 || model.ancestor_dofs[i].iter().next().is_some() {
+        let _ = writeln!(
+            x,
+            "{pad}  <!-- massless in sdrs; MuJoCo needs a mass on moving bodies -->"
+        );
+        let _ = writeln!(
+            x,
+            "{pad}  <inertial pos=\"0 0 0\" mass=\"{MASSLESS_STANDIN}\" diaginertia=\"{0} {0} {0}\"/>",
+            MASSLESS_STANDIN
+        );
+    }
+    let (ct, ca) = if l.collides { (1, 1) } else { (0, 0) };
+    for h in 0..l.hulls.len() {
+        let _ = writeln!(
+            x,
+            "{pad}  <geom type=\"mesh\" mesh=\"m{i}_{h}\" contype=\"{ct}\" conaffinity=\"{ca}\" friction=\"{mu} 0.005 0.0001\"/>"
+        );
+    }
+    for c in (0..model.links.len()).filter(|&c| model.links[c].parent == Some(i)) {
+        write_body(scene, c, depth + 1, mu, joint_effect, key_qpos, x);
+    }
+    let _ = writeln!(x, "{pad}</body>");
+}
