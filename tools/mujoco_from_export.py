@@ -22,6 +22,12 @@ joint torque each MuJoCo step: τ = 2k_p(θ* − θ) + (2k_d/Δt_sdrs)(θ̇* −
 `--damping` (MuJoCo joint damping, N·m·s/rad), `--frictionloss` (dry
 friction, N·m), `--armature` (kg·m²), `--gain` (the PD torque × G).
 
+With `--sdrs BIN`, the MJCF comes from `BIN export-mjcf SCENE` (the toolkit's
+own writer, src/output/mjcf.rs: same kinematics and mass model) and only the
+effects, actuators and integrator are added here (MuJoCo's MjSpec); without
+it, the model is built by this script from the export (kept as a second,
+independent construction).
+
 Supported scenes: one robot, revolute and prismatic joints, sine and constant
 targets, no contact. Output: CSV `t,<joint>…` at `--period` (s) with
 Gaussian noise `--noise` (rad or m), the columns `sdrs simulate` writes.
@@ -183,6 +189,37 @@ def build(scene, hulls, args):
     return "\n".join(lines), joints, dt_sdrs
 
 
+def from_sdrs(scene_path, scene, args):
+    """The robot as `sdrs export-mjcf` writes it, plus the effects on every
+    hinge/slide joint and one motor per joint (MjSpec edits)."""
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        xml = os.path.join(tmp, "model.xml")
+        r = subprocess.run([args.sdrs, "export-mjcf", scene_path, "--out", xml],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            fail(f"sdrs export-mjcf failed: {r.stderr.strip()}")
+        spec = mujoco.MjSpec.from_file(xml)
+    spec.option.timestep = args.timestep
+    spec.option.integrator = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+                              "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+                              "RK4": mujoco.mjtIntegrator.mjINT_RK4,
+                              "Euler": mujoco.mjtIntegrator.mjINT_EULER}[args.integrator]
+    joints = []
+    for j in spec.joints:
+        if j.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+            j.damping = [args.damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
+            j.frictionloss = args.frictionloss
+            j.armature = args.armature
+            joints.append(j.name)
+        else:
+            fail(f"joint {j.name!r}: only revolute and prismatic joints are supported")
+    for jn in joints:
+        spec.add_actuator(name=jn, target=jn, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    return spec, joints, float(scene["dt"])
+
+
 def check_poses(model, data, export_dir, robot_links):
     """Link poses at θ^0 against the SDRS export (step 0 of poses.csv)."""
     path = os.path.join(export_dir, "poses.csv")
@@ -207,6 +244,7 @@ def main():
     ap.add_argument("export_dir")
     ap.add_argument("--out", required=True)
     ap.add_argument("--mjcf")
+    ap.add_argument("--sdrs", help="the sdrs binary: take the MJCF from `sdrs export-mjcf`")
     for k in ("damping", "frictionloss", "armature"):
         ap.add_argument(f"--{k}", type=float, default=0.0)
     ap.add_argument("--gain", type=float, default=1.0)
@@ -222,11 +260,18 @@ def main():
         scene = yaml.safe_load(f)
     with open(os.path.join(args.export_dir, "hulls.json")) as f:
         hulls = json.load(f)
-    xml, joints, dt_sdrs = build(scene, hulls, args)
-    if args.mjcf:
-        with open(args.mjcf, "w") as f:
-            f.write(xml)
-    model = mujoco.MjModel.from_xml_string(xml)
+    if args.sdrs:
+        spec, joints, dt_sdrs = from_sdrs(args.scene, scene, args)
+        model = spec.compile()
+        if args.mjcf:
+            with open(args.mjcf, "w") as f:
+                f.write(spec.to_xml())
+    else:
+        xml, joints, dt_sdrs = build(scene, hulls, args)
+        if args.mjcf:
+            with open(args.mjcf, "w") as f:
+                f.write(xml)
+        model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     robot = scene["robots"][0]
     init = robot.get("initial", {})

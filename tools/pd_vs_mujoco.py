@@ -106,6 +106,9 @@ def main():
     ap.add_argument("--dts", default="1e-2,3e-3,1e-3,3e-4,1e-4")
     ap.add_argument("--mj-timestep", type=float, default=1e-6)
     ap.add_argument("--gravity", type=float, nargs=3)
+    ap.add_argument("--sine", type=float, nargs=2, metavar=("AMP", "FREQ"),
+                    help="replace every revolute joint's target by AMP·sin(2π FREQ t + k) "
+                         "(k: the joint's index), e.g. to drive an imported arm")
     ap.add_argument("--work")
     ap.add_argument("--json")
     a = ap.parse_args()
@@ -119,6 +122,14 @@ def main():
     if a.gravity:
         scene["gravity"] = a.gravity
     robot = robots[0]
+    if a.sine:
+        ctl = robot.setdefault("controller", {})
+        ctl["targets"] = {}
+        for k, l in enumerate(robot["links"]):
+            if l["joint"]["type"] == "revolute":
+                jn = l["joint"].get("name") or l["name"]
+                ctl["targets"][jn] = {"type": "sine", "offset": 0.0, "terms": [
+                    {"amplitude": a.sine[0], "frequency": a.sine[1], "phase": float(k)}]}
     dt0 = float(scene["dt"])
     ctl = robot.get("controller", {}) or {}
     work = a.work or tempfile.mkdtemp(prefix="pd_vs_mujoco_")

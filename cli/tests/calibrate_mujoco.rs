@@ -1,7 +1,8 @@
 //! Calibration against an independent engine: MuJoCo simulates the arm of
-//! `robots/calibrate/arm2_fine.yaml` (converted by
-//! `tools/mujoco_from_export.py` from `sdrs simulate --export`, with the same
-//! lumped vertex masses) with joint damping, dry friction (`frictionloss`)
+//! `robots/calibrate/arm2_fine.yaml` (written by `sdrs export-mjcf`, with the
+//! same lumped vertex masses, and given its effects by
+//! `tools/mujoco_from_export.py --sdrs`; the script's own construction from
+//! `sdrs simulate --export` gives the same data to 6e-16 rad) with joint damping, dry friction (`frictionloss`)
 //! or armature switched on; `calibrate` must name the matching effect first
 //! and shrink the held-out gap by ≥ 80 %. Clean MuJoCo data measure what the
 //! integrator difference alone leaves, and must give the verdict "none".
@@ -22,6 +23,8 @@ fn mujoco_data(scene: &Path, export: &Path, out: &Path, effect: &[&str]) {
         .arg("--out")
         .arg(out)
         .args(effect)
+        .arg("--sdrs")
+        .arg(env!("CARGO_BIN_EXE_sdrs"))
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

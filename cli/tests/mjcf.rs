@@ -69,3 +69,48 @@ fn pybullet_mjcf_humanoid_falls_onto_the_ground() {
 fn pybullet_mjcf_thrower_with_its_own_ground_plane() {
     on_ground("thrower", &[]);
 }
+
+/// `sdrs export-mjcf`: the written model compiles in MuJoCo with one body
+/// per link and one velocity per coordinate; an existing output is never
+/// overwritten without `--force`.
+#[test]
+fn export_mjcf_writes_a_model_mujoco_loads_and_keeps_existing_files() {
+    let dir = scratch_dir("export-mjcf");
+    let out = dir.join("four_chains.xml");
+    let scene = support::robots("four_chains.yaml");
+    support::run_ok(
+        support::sdrs()
+            .arg("export-mjcf")
+            .arg(&scene)
+            .arg("--out")
+            .arg(&out),
+    );
+    let o = python()
+        .arg("-c")
+        .arg("import sys, mujoco; m = mujoco.MjModel.from_xml_path(sys.argv[1]); print(m.nbody, m.nv, m.nkey)")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let counts: Vec<usize> = String::from_utf8_lossy(&o.stdout)
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // 4 chains × 8 links + the world body; 2 coordinates per ball joint; one keyframe.
+    assert_eq!(counts, vec![33, 64, 1]);
+    let before = std::fs::read(&out).unwrap();
+    let o = support::sdrs()
+        .arg("export-mjcf")
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--force") && err.contains("four_chains.xml"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+}

@@ -77,7 +77,14 @@ fn spider_pd_tracking_converges_to_mujoco_at_first_order() {
         .arg(root().join("robots/spider/scene.yaml"))
         .arg("--sdrs")
         .arg(env!("CARGO_BIN_EXE_sdrs"))
-        .args(["--duration", "0.5", "--dts", "1e-2,1e-3", "--mj-timestep", "1e-5"])
+        .args([
+            "--duration",
+            "0.5",
+            "--dts",
+            "1e-2,1e-3",
+            "--mj-timestep",
+            "1e-5",
+        ])
         .arg("--work")
         .arg(dir.join("work"))
         .arg("--json")

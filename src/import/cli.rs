@@ -7,11 +7,12 @@ use super::write::{OutputPaths, check_outputs, write_outputs};
 use super::{ImportOptions, import};
 use std::path::PathBuf;
 
-/// Import a robot (URDF + OBJ/STL meshes) or a bare mesh into a convex-hull
-/// design space with connectivity constraints.
+/// Import a robot (URDF + OBJ/STL/DAE meshes, or MJCF compiled by MuJoCo) or
+/// a bare mesh into a convex-hull design space with connectivity constraints.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ImportArgs {
-    /// Input: `.urdf` (robot) or `.obj` / `.stl` / `.dae` (one free body).
+    /// Input: `.urdf` (robot), MJCF `.xml` (root element `<mujoco>`; compiled by the
+    /// `mujoco` Python package) or `.obj` / `.stl` / `.dae` (one free body).
     pub input: PathBuf,
     /// Output design (scene YAML). Hull OBJs go to `<out stem>_meshes/`.
     #[arg(long)]

@@ -16,8 +16,9 @@
 //!   `inertiafromgeom="false"`; a moving massless link gets a stand-in of
 //!   1e-12 kg (MuJoCo refuses massless moving bodies; noted in a comment);
 //! - every hull is a mesh geom (MuJoCo collides meshes as their convex
-//!   hulls, which is what a hull is); links without contact get
-//!   `contype = conaffinity = 0`; excluded pairs become `<exclude>`;
+//!   hulls, which is what a hull is); links without contact, and every
+//!   link of a scene without `contact:`, get `contype = conaffinity = 0`;
+//!   excluded pairs become `<exclude>`;
 //! - the initial state as keyframe `initial`, limits as `range`, the joint
 //!   effects `joint_damping`, `armature`, `joint_friction` as `damping`,
 //!   `armature`, `frictionloss`; contact `μ` as the geoms' sliding friction.
@@ -282,7 +283,7 @@ fn write_body(
             t[(0, 2)],
             t[(1, 2)]
         );
-    } else if l.joint.ndof() > 0 || model.ancestor_dofs[i].iter().next().is_some() {
+    } else if !model.ancestor_dofs[i].is_empty() {
         let _ = writeln!(
             x,
             "{pad}  <!-- massless in sdrs; MuJoCo needs a mass on moving bodies -->"
@@ -293,7 +294,12 @@ fn write_body(
             MASSLESS_STANDIN
         );
     }
-    let (ct, ca) = if l.collides { (1, 1) } else { (0, 0) };
+    // A scene without `contact:` simulates none: MuJoCo must not either.
+    let (ct, ca) = if l.collides && scene.contact.is_some() {
+        (1, 1)
+    } else {
+        (0, 0)
+    };
     for h in 0..l.hulls.len() {
         let _ = writeln!(
             x,
