@@ -1,0 +1,84 @@
+"""Sweeps of SDRS runs as Ray tasks.
+
+Each sweep entry runs in a Ray worker process as a remote function that
+loads the task or scene file itself (files are read by path, so every node
+of a multi-node cluster needs the repository at the same path, or a shared
+file system) and returns plain numbers and numpy arrays. The runs are
+deterministic, so a sweep gives bitwise the same results as the same runs
+made serially with :func:`optimize_serial` / :func:`evaluate_serial`, for
+the same ``RAYON_NUM_THREADS`` in every worker.
+
+Cluster use: start Ray on the head node (``ray start --head``) and on each
+worker (``ray start --address=HEAD:6379``), then call ``ray.init(address="auto")``
+before the sweep instead of a local ``ray.init()``; the code below is
+unchanged. See ``examples/python/ray_sweep.py`` and the README.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Iterable
+
+import numpy as np
+import ray
+
+from ._sdrs import Task
+
+__all__ = [
+    "optimize_one",
+    "evaluate_one",
+    "sweep_optimize",
+    "sweep_evaluate",
+    "optimize_serial",
+    "evaluate_serial",
+]
+
+
+def optimize_one(task_path: str, seed: int = 0, iters: int | None = None,
+                 design: bool = True) -> dict[str, Any]:
+    """One co-design run of ``task_path`` (``Task.optimize``) with ``seed``."""
+    out = Task.load(str(task_path), design=design).optimize(iters=iters, seed=seed)
+    out["seed"] = seed
+    out["iters"] = iters
+    return out
+
+
+def evaluate_one(task_path: str, design=None, controller=None, physics=None) -> dict[str, Any]:
+    """Loss and gradients of ``task_path`` at one parameter point."""
+    arr = lambda x: None if x is None else np.asarray(x, dtype=np.float64)  # noqa: E731
+    return Task.load(str(task_path)).evaluate(arr(design), arr(controller), arr(physics))
+
+
+def _remote(fn, num_cpus: float):
+    threads = os.environ.get("RAYON_NUM_THREADS")
+    env = {"env_vars": {"RAYON_NUM_THREADS": threads}} if threads else None
+    return ray.remote(num_cpus=num_cpus, runtime_env=env)(fn)
+
+
+def sweep_optimize(task_path: str, seeds: Iterable[int], iters: int | None = None,
+                   design: bool = True, num_cpus: float = 1) -> list[dict[str, Any]]:
+    """A seed sweep of co-design runs, one Ray task per seed (results in
+    ``seeds`` order). Needs ``ray.init(...)`` first."""
+    f = _remote(optimize_one, num_cpus)
+    return ray.get([f.remote(str(task_path), s, iters, design) for s in seeds])
+
+
+def sweep_evaluate(task_path: str, points: Iterable[dict[str, Any]],
+                   num_cpus: float = 1) -> list[dict[str, Any]]:
+    """Loss and gradients at many points (dicts with ``design``,
+    ``controller``, ``physics``), one Ray task each."""
+    f = _remote(evaluate_one, num_cpus)
+    return ray.get([f.remote(str(task_path), p.get("design"), p.get("controller"),
+                             p.get("physics")) for p in points])
+
+
+def optimize_serial(task_path: str, seeds: Iterable[int], iters: int | None = None,
+                    design: bool = True) -> list[dict[str, Any]]:
+    """:func:`sweep_optimize` in this process, one run after another."""
+    return [optimize_one(str(task_path), s, iters, design) for s in seeds]
+
+
+def evaluate_serial(task_path: str, points: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`sweep_evaluate` in this process."""
+    return [evaluate_one(str(task_path), p.get("design"), p.get("controller"),
+                         p.get("physics")) for p in points]
