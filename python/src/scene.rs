@@ -197,6 +197,31 @@ impl PyScene {
         physics_names(&self.scene)
     }
 
+    /// Initial coordinates `θ^0` (charted rotations: the rotation vector
+    /// relative to the initial chart, 0 for a scene's own start).
+    #[getter]
+    fn get_q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.scene.q0.data.as_vec().clone().into_pyarray(py)
+    }
+
+    #[setter]
+    fn set_q0(&mut self, q: PyReadonlyArray1<f64>) -> PyResult<()> {
+        self.scene.q0 = vector("q0", q.as_slice()?, self.scene.model.ndof()).map_err(err)?;
+        Ok(())
+    }
+
+    /// Initial velocities `θ̇^0`.
+    #[getter]
+    fn get_qdot0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.scene.qdot0.data.as_vec().clone().into_pyarray(py)
+    }
+
+    #[setter]
+    fn set_qdot0(&mut self, q: PyReadonlyArray1<f64>) -> PyResult<()> {
+        self.scene.qdot0 = vector("qdot0", q.as_slice()?, self.scene.model.ndof()).map_err(err)?;
+        Ok(())
+    }
+
     /// Adjoint gradients of `loss` (a dict or list of dicts in the task
     /// file's `loss:` format) over `steps` steps (default: the scene's).
     /// Returns a dict of numpy arrays: `loss` (float), `design`,

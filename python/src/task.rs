@@ -237,10 +237,10 @@ impl PyTask {
         };
         let (d, c, p) = (slice(&design)?, slice(&controller)?, slice(&physics)?);
         let pr = &self.problem;
-        let (rec, p) = py
+        let (rec, p, scene) = py
             .detach(|| {
                 let (scene, p) = self.configured(d, c, p)?;
-                Ok::<_, String>((forward(&scene, pr.horizon)?, p))
+                Ok::<_, String>((forward(&scene, pr.horizon)?, p, scene))
             })
             .map_err(err)?;
         let loss = if state {
@@ -257,6 +257,9 @@ impl PyTask {
             physics: p,
             state,
             loss,
+            scene,
+            steps: pr.horizon,
+            backward_done: false,
         })
     }
 
@@ -302,6 +305,8 @@ impl PyTask {
 /// A recorded rollout awaiting its backward pass (`Task.rollout`).
 #[pyclass(name = "Rollout", module = "sdrs")]
 pub struct PyRollout {
+    /// The rollout's simulator and tape (`None` only if a backward pass
+    /// panicked mid-way).
     rec: Option<Recorded>,
     loss_terms: Loss,
     design: DesignSpace,
@@ -310,6 +315,10 @@ pub struct PyRollout {
     physics: Vec<f64>,
     state: bool,
     loss: f64,
+    /// The configured scene and horizon (to re-record for a second pass).
+    scene: Scene,
+    steps: usize,
+    backward_done: bool,
 }
 
 #[pymethods]
@@ -328,13 +337,25 @@ impl PyRollout {
     /// One adjoint pass: the vector–Jacobian product of the output with
     /// `grad` (a float for `output="loss"`, an array of `θ^H`'s length for
     /// `"state"`: the loss `Σ_k grad_k θ^H_k`). Returns `{design,
-    /// controller, physics}`. A rollout can be differentiated once.
+    /// controller, physics}`. Each call is one adjoint pass over the kept
+    /// tape (the same tape and `grad` give bitwise the same result), so
+    /// torch may call it once per output row (Jacobians, gradcheck).
     fn backward<'py>(
         &mut self,
         py: Python<'py>,
         grad: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let mut rec = self.rec.take().ok_or_else(used)?;
+        // The energy terms keep warm starts (separating planes) across
+        // calls, so a second pass over the same simulator would start from
+        // the first one's: later passes re-record the rollout first
+        // (deterministic, so the same tape and the same start as the first).
+        if self.backward_done {
+            let scene = &self.scene;
+            let steps = self.steps;
+            self.rec = Some(py.detach(|| forward(scene, steps)).map_err(err)?);
+        }
+        self.backward_done = true;
+        let rec = self.rec.as_mut().ok_or_else(used)?;
         let (loss, scale) = if self.state {
             let w: Vec<f64> = grad.extract()?;
             let level = rec.tape.len();
@@ -354,7 +375,7 @@ impl PyRollout {
         } else {
             (self.loss_terms.clone(), grad.extract::<f64>()?)
         };
-        let mut g = py.detach(|| backward_of(&mut rec, &loss)).map_err(err)?;
+        let mut g = py.detach(|| backward_of(rec, &loss)).map_err(err)?;
         if scale != 1.0 {
             scale_gradients(&mut g, scale);
         }
@@ -370,7 +391,7 @@ impl PyRollout {
 }
 
 fn used() -> PyErr {
-    SdrsError::new_err("this rollout was already differentiated (backward runs once)")
+    SdrsError::new_err("this rollout holds no tape")
 }
 
 /// `g ← a g` for the parts the parameter vectors read.
