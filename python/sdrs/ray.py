@@ -25,6 +25,9 @@ import ray
 from ._sdrs import Task
 
 __all__ = [
+    "task_variant",
+    "sweep_runs",
+    "serial_runs",
     "optimize_one",
     "evaluate_one",
     "sweep_optimize",
@@ -32,6 +35,36 @@ __all__ = [
     "optimize_serial",
     "evaluate_serial",
 ]
+
+
+def task_variant(task_path: str | os.PathLike, out_path: str | os.PathLike,
+                 **optimizer: Any) -> str:
+    """Writes a copy of a task file with ``optimizer`` settings replaced
+    (e.g. ``step_design=0.02, method="adam"``) and the scene path made
+    absolute; returns ``out_path``. For hyper-parameter sweeps."""
+    import yaml
+    from pathlib import Path
+
+    src = Path(task_path).resolve()
+    spec = yaml.safe_load(src.read_text())
+    if spec.get("scene"):
+        spec["scene"] = str((src.parent / spec["scene"]).resolve())
+    spec.setdefault("optimizer", {}).update(optimizer)
+    Path(out_path).write_text(yaml.safe_dump(spec, sort_keys=False))
+    return str(out_path)
+
+
+def sweep_runs(runs: Iterable[tuple[str, int]], iters: int | None = None,
+               num_cpus: float = 1) -> list[dict[str, Any]]:
+    """Co-design runs ``(task_path, seed)`` (e.g. task variants × seeds),
+    one Ray task each, results in order."""
+    f = _remote(optimize_one, num_cpus)
+    return ray.get([f.remote(str(t), s, iters) for t, s in runs])
+
+
+def serial_runs(runs: Iterable[tuple[str, int]], iters: int | None = None) -> list[dict[str, Any]]:
+    """:func:`sweep_runs` in this process, one run after another."""
+    return [optimize_one(str(t), s, iters) for t, s in runs]
 
 
 def optimize_one(task_path: str, seed: int = 0, iters: int | None = None,

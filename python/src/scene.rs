@@ -148,6 +148,7 @@ impl PyScene {
         Ok(())
     }
 
+    /// Names of `design`: `robot/link.attach.x|y|z`, `robot/link.hull<h>.v<k>.x|y|z`.
     #[getter]
     fn design_names(&self) -> Vec<String> {
         self.design.vars.iter().map(|v| v.name.clone()).collect()
@@ -173,6 +174,7 @@ impl PyScene {
         Ok(())
     }
 
+    /// Names of `controller`: `robot/joint.<signal parameter>`, `….kp`, `….kd`.
     #[getter]
     fn controller_names(&self) -> Vec<String> {
         self.controls
@@ -192,6 +194,7 @@ impl PyScene {
         apply_physics(&mut self.scene, p.as_slice()?).map_err(err)
     }
 
+    /// Names of `physics`.
     #[getter]
     fn physics_names(&self) -> Vec<String> {
         physics_names(&self.scene)

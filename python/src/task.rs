@@ -121,6 +121,7 @@ impl PyTask {
         arr(py, &self.problem.design.values(&self.problem.model))
     }
 
+    /// Names of `design` (`robot/link.attach.x`, vertex coordinates).
     #[getter]
     fn design_names(&self) -> Vec<String> {
         self.problem
@@ -150,6 +151,7 @@ impl PyTask {
         arr(py, &self.problem.controls.values(&self.problem.controller))
     }
 
+    /// Names of `controller` (`robot/joint.<signal parameter>`, gains).
     #[getter]
     fn controller_names(&self) -> Vec<String> {
         self.problem
@@ -163,6 +165,7 @@ impl PyTask {
         physics_values(&self.problem.scene).into_pyarray(py)
     }
 
+    /// Names of `physics`.
     #[getter]
     fn physics_names(&self) -> Vec<String> {
         physics_names(&self.problem.scene)
