@@ -10,7 +10,8 @@ The Rust core (``sdrs._sdrs``, PyO3) provides:
 * :class:`Task` — a co-design task file: its spaces, ``evaluate``, the
   ``rollout``/``backward`` pair behind :func:`sdrs.torch.rollout`, and
   ``optimize`` (the Rust optimizer of ``sdrs optimize``).
-* :func:`import_robot` — ``sdrs import`` as a function.
+* :func:`import_robot` — ``sdrs import`` as a function; :func:`calibrate` —
+  ``sdrs calibrate`` as a function.
 
 ``sdrs.torch`` (needs PyTorch) wraps a rollout as a
 ``torch.autograd.Function``; ``sdrs.ray`` (needs Ray) runs sweeps of
@@ -25,6 +26,7 @@ from ._sdrs import (
     SdrsError,
     Task,
     Trajectory,
+    calibrate,
     import_robot,
     num_threads,
 )
@@ -35,6 +37,7 @@ __all__ = [
     "SdrsError",
     "Task",
     "Trajectory",
+    "calibrate",
     "import_robot",
     "num_threads",
 ]

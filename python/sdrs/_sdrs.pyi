@@ -174,5 +174,15 @@ def import_robot(
 ) -> str:
     """``sdrs import INPUT --out OUT`` as a function; returns ``out``."""
 
+def calibrate(
+    scene: _Path,
+    measured: _Path,
+    out: _Path,
+    *,
+    effects: Sequence[str] | None = None,
+    holdout: float = 0.3,
+) -> dict[str, Any]:
+    """``sdrs calibrate SCENE --measured CSV --out OUT`` as a function; returns ``calibration.json``."""
+
 def num_threads() -> int:
     """Threads of the core's rayon pool."""

@@ -1,4 +1,5 @@
-"""Sweeps of SDRS runs as Ray tasks.
+"""Sweeps of SDRS runs (rollouts, co-design optimizations, calibrations) as
+Ray tasks.
 
 Each sweep entry runs in a Ray worker process as a remote function that
 loads the task or scene file itself (files are read by path, so every node
@@ -22,7 +23,7 @@ from typing import Any, Iterable
 import numpy as np
 import ray
 
-from ._sdrs import Task
+from ._sdrs import Task, calibrate
 
 __all__ = [
     "task_variant",
@@ -34,6 +35,9 @@ __all__ = [
     "sweep_evaluate",
     "optimize_serial",
     "evaluate_serial",
+    "calibrate_one",
+    "sweep_calibrate",
+    "calibrate_serial",
 ]
 
 
@@ -115,3 +119,22 @@ def evaluate_serial(task_path: str, points: Iterable[dict[str, Any]]) -> list[di
     """:func:`sweep_evaluate` in this process."""
     return [evaluate_one(str(task_path), p.get("design"), p.get("controller"),
                          p.get("physics")) for p in points]
+
+
+def calibrate_one(scene: str, measured: str, out: str, effects: list[str] | None = None,
+                  holdout: float = 0.3) -> dict[str, Any]:
+    """One calibration (``sdrs.calibrate``): ``calibration.json`` as a dict."""
+    return calibrate(str(scene), str(measured), str(out), effects=effects, holdout=holdout)
+
+
+def sweep_calibrate(runs: Iterable[dict[str, Any]], num_cpus: float = 1) -> list[dict[str, Any]]:
+    """Calibrations (dicts of :func:`calibrate_one`'s arguments: ``scene``,
+    ``measured``, ``out``, optional ``effects``, ``holdout``), e.g. one per
+    measured data set, one Ray task each. Each run writes its own ``out``."""
+    f = _remote(calibrate_one, num_cpus)
+    return ray.get([f.remote(**r) for r in runs])
+
+
+def calibrate_serial(runs: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`sweep_calibrate` in this process."""
+    return [calibrate_one(**r) for r in runs]

@@ -5,7 +5,7 @@
 //! [`task::PyTask`] (`sdrs.Task`: a co-design task's spaces, evaluation,
 //! the rollout/backward pair behind `sdrs.torch.rollout`, the Rust
 //! optimizer), [`trajectory::PyTrajectory`] (numpy views of a run).
-//! Functions: `import_robot`, `num_threads`.
+//! Functions: `import_robot`, `calibrate`, `num_threads`.
 //!
 //! Every long computation runs with the GIL released (`Python::detach`), so
 //! Python threads (and Ray's worker threads) run meanwhile; the core's rayon
@@ -95,6 +95,42 @@ fn import_robot(
     Ok(out)
 }
 
+/// Names the physical effect missing from a scene given measured data,
+/// fits it and writes `calibrated.yaml`, `calibration.json`, `report.md` and
+/// plots into `out`, exactly as `sdrs calibrate SCENE --measured CSV --out
+/// OUT` (`effects`: candidate names, default all applicable; `holdout`: the
+/// fraction of the data, at the end, held out for scoring). Returns the
+/// contents of `calibration.json` as a dict (verdict, effect, parameters,
+/// gaps before/after, ranking …). GIL released.
+#[pyfunction]
+#[pyo3(signature = (scene, measured, out, *, effects=None, holdout=0.3))]
+fn calibrate<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    measured: PathBuf,
+    out: PathBuf,
+    effects: Option<Vec<String>>,
+    holdout: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let args = sdrs::calibrate::CalibrateArgs {
+        scene,
+        measured,
+        out,
+        effects,
+        holdout,
+        quiet: true,
+    };
+    let json = py
+        .detach(|| {
+            let opts = sdrs::calibrate::CalibrateOptions::from_args(&args)?;
+            let r = sdrs::calibrate::run(&opts)?;
+            Ok::<_, sdrs::calibrate::CalibrateError>(serde_json::to_string(&r))
+        })
+        .map_err(err)?
+        .map_err(err)?;
+    py.import("json")?.call_method1("loads", (json,))
+}
+
 /// Threads of the core's rayon pool (contact and friction terms run on it;
 /// `RAYON_NUM_THREADS` sets it before the first simulation). Results are
 /// bitwise the same for the same thread count.
@@ -112,5 +148,6 @@ fn _sdrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<trajectory::PyTrajectory>()?;
     m.add_function(wrap_pyfunction!(import_robot, m)?)?;
     m.add_function(wrap_pyfunction!(num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate, m)?)?;
     Ok(())
 }

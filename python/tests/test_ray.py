@@ -53,3 +53,32 @@ def test_physics_sweep_of_gradients_equals_serial(cluster, data):
     assert len({r["loss"] for r in remote}) == 3
     # The μ = 0.4 point is the task itself.
     assert remote[1]["loss"] == sdrs.Task.load(task).evaluate()["loss"]
+
+
+def _measured(root, tmp_path, damping: float) -> str:
+    """A 'measured' CSV: arm2 with a hidden joint damping, every 10th step."""
+    hidden = tmp_path / f"hidden_{damping}.yaml"
+    hidden.write_text((root / "robots/calibrate/arm2.yaml").read_text()
+                      + f"effects:\n  - {{effect: joint_damping, on: all, values: [{damping}]}}\n")
+    lines = sdrs.Scene.load(hidden).simulate(600, poses=False).to_csv().splitlines()
+    out = tmp_path / f"measured_{damping}.csv"
+    out.write_text("\n".join([lines[0], *lines[1::10]]) + "\n")
+    return str(out)
+
+
+def test_calibration_sweep_equals_serial(cluster, root, tmp_path):
+    scene = str(root / "robots/calibrate/arm2.yaml")
+    effects = ["joint_damping", "armature"]
+    data = [_measured(root, tmp_path, c) for c in (0.02, 0.05)]
+    runs = [dict(scene=scene, measured=m, out=str(tmp_path / f"ray{k}"), effects=effects)
+            for k, m in enumerate(data)]
+    serial_runs = [dict(r, out=str(tmp_path / f"serial{k}")) for k, r in enumerate(runs)]
+    remote = sr.sweep_calibrate(runs)
+    serial = sr.calibrate_serial(serial_runs)
+    assert remote == serial
+    for r, c in zip(remote, (0.02, 0.05)):
+        assert r["effect"] == "joint_damping", r["verdict"]
+        (value,) = r["parameters"].values()
+        assert abs(value - c) < 0.05 * c, r["parameters"]
+        assert r["gap_after"]["overall"] < 0.1 * r["gap_before"]["overall"]
+    assert (tmp_path / "ray0" / "calibrated.yaml").is_file()
