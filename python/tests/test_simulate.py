@@ -127,3 +127,27 @@ def test_threads_run_simulations_concurrently_with_equal_results(root):
     for a, b in zip(serial, parallel):
         assert np.array_equal(a, b)
     assert sdrs.num_threads() >= 1
+
+
+def test_rayon_pool_is_configurable_and_results_do_not_depend_on_it(root):
+    """The core's rayon pool runs inside `simulate` from Python:
+    RAYON_NUM_THREADS sets its size, and the contact sums are reduced in pair
+    order, so one thread and two give the same bits on a scene with contact."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, sdrs; s = sdrs.Scene.load(sys.argv[1]); "
+        "sys.stdout.write(str(sdrs.num_threads()) + ' '); "
+        "sys.stdout.write(s.simulate(40, poses=False).q.tobytes().hex())"
+    )
+    out = {}
+    for n in ("1", "2"):
+        r = subprocess.run([sys.executable, "-c", code, str(root / "python/tests/data/push.yaml")],
+                           env=dict(os.environ, RAYON_NUM_THREADS=n), check=True,
+                           capture_output=True, text=True)
+        threads, q = r.stdout.split()
+        assert threads == n
+        out[n] = q
+    assert out["1"] == out["2"]
