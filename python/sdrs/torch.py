@@ -30,7 +30,8 @@ class RolloutFunction(torch.autograd.Function):
     def forward(ctx, task: Task, output: str, design, controller, physics):  # type: ignore[override]
         r = task.rollout(_numpy(design), _numpy(controller), _numpy(physics), output)
         ctx.rollout = r
-        ctx.like = (design, controller, physics)
+        # Only dtype and device of each input are needed for the gradients.
+        ctx.like = tuple(None if x is None else (x.dtype, x.device) for x in (design, controller, physics))
         value = r.value
         return torch.as_tensor(np.asarray(value, dtype=np.float64))
 
@@ -40,13 +41,14 @@ class RolloutFunction(torch.autograd.Function):
         arg = float(g) if g.dim() == 0 else g.numpy().tolist()
         grads = ctx.rollout.backward(arg)
         out = []
-        for key, x, need in zip(
+        for key, like, need in zip(
             ("design", "controller", "physics"), ctx.like, ctx.needs_input_grad[2:]
         ):
-            if x is None or not need:
+            if like is None or not need:
                 out.append(None)
             else:
-                out.append(torch.from_numpy(grads[key]).to(dtype=x.dtype, device=x.device))
+                dtype, device = like
+                out.append(torch.from_numpy(grads[key]).to(dtype=dtype, device=device))
         return (None, None, *out)
 
 

@@ -100,3 +100,14 @@ def test_torch_adam_equals_the_rust_optimizer(task):
             d.copy_(torch.maximum(torch.minimum(d, hi), lo))
     assert history[-1] < 0.9 * history[0]
     assert np.allclose(history, rust["history"], rtol=1e-10, atol=0)
+
+
+def test_float32_inputs_get_float32_gradients(task):
+    d = torch.tensor(task.design, dtype=torch.float32, requires_grad=True)
+    loss = st.rollout(task, d)
+    assert loss.dtype == torch.float64
+    loss.backward()
+    assert d.grad.dtype == torch.float32
+    # The rollout ran at the float32-rounded design, in double precision.
+    g = task.evaluate(design=d.detach().double().numpy())
+    assert np.array_equal(d.grad.numpy(), g["design"].astype(np.float32))
