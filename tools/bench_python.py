@@ -17,6 +17,7 @@ Run with `nice -n 5` on a shared machine:
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import statistics
 import subprocess
@@ -43,7 +44,7 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=1000)
     ap.add_argument("--repeats", type=int, default=5)
     a = ap.parse_args()
-    exe = ROOT / "target/release/sdrs"
+    exe = ROOT / os.environ.get("CARGO_TARGET_DIR", "target") / "release" / "sdrs"
     subprocess.run(["cargo", "build", "--release", "-q", "-p", "sdrs-cli"], cwd=ROOT, check=True)
     cli_sim, cli_total, py_sim, py_total = [], [], [], []
     for k in range(a.repeats):

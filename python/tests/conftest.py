@@ -3,6 +3,7 @@ the cargo tests; torch and ray are required, never skipped)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 from pathlib import Path
 
@@ -30,7 +31,7 @@ def cli() -> Path:
         cwd=ROOT,
         check=True,
     )
-    exe = ROOT / "target" / "release" / "sdrs"
+    exe = ROOT / os.environ.get("CARGO_TARGET_DIR", "target") / "release" / "sdrs"
     assert exe.is_file(), exe
     return exe
 
