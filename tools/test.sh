@@ -1,12 +1,24 @@
 #!/usr/bin/env bash
 # The whole test suite, on a fresh clone: installs what the tests need
 # (Debian packages such as chromium, then the Python helpers' packages into
-# .venv/), then runs
-# every Rust test. `.ci/run` calls exactly this.
+# .venv/, and the `sdrs` Python package built from python/), then runs
+# every Rust test, then the Python package's pytest suite (python/tests/;
+# torch and ray are required there: a missing one fails, never skips).
+# `.ci/run` calls exactly this.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup_system.sh
 bash tools/setup_python.sh
 # The release profile: the same build as the README's main command
 # (`cargo run --release`), so a fresh clone compiles the project once.
+# The workspace includes the Python package's crate (python/): give cargo
+# the environment maturin gave it in setup_python.sh, so the PyO3 crates
+# built there are reused instead of rebuilt (pyo3 rebuilds when these change).
+export PYO3_PYTHON="$PWD/.venv/bin/python" PYTHON_SYS_EXECUTABLE="$PWD/.venv/bin/python"
+export PYO3_BUILD_EXTENSION_MODULE=1
+PYO3_ENVIRONMENT_SIGNATURE="$("$PYO3_PYTHON" -c 'import platform, sys; v = sys.version_info; print(f"{sys.implementation.name}-{v[0]}.{v[1]}-{platform.architecture()[0]}")')"
+export PYO3_ENVIRONMENT_SIGNATURE
 cargo test --release --workspace --all-targets
+# The Python package (PyO3): simulate vs the CLI, gradients, the torch
+# operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
+.venv/bin/python -m pytest python/tests -q -p no:cacheprovider

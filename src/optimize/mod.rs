@@ -147,83 +147,7 @@ impl Problem {
             // evaluation of the initial design, the twin of a co-design run.)
             return Err(invalid("design/controller", "nothing to optimize".into()));
         }
-        let mut loss = Loss::default();
-        for (i, l) in task.loss.iter().enumerate() {
-            let el = format!("loss[{i}]");
-            let bad = |e: names::NameError| invalid(&el, e.to_string());
-            loss.terms.push(match l {
-                LossSpec::LinkPoint {
-                    link,
-                    point,
-                    target,
-                    weight,
-                    when,
-                } => LossTerm::LinkPoint {
-                    link: names::link(&model, link).map_err(bad)?,
-                    point: Vector3::from(*point),
-                    target: Vector3::from(*target),
-                    weight: *weight,
-                    when: *when,
-                },
-                LossSpec::Joint {
-                    joint,
-                    index,
-                    target,
-                    weight,
-                    when,
-                } => {
-                    let li = names::joint(&model, joint).map_err(bad)?;
-                    if *index >= model.links[li].ndof() {
-                        return Err(invalid(
-                            &el,
-                            format!("joint {joint} has {} coordinate(s)", model.links[li].ndof()),
-                        ));
-                    }
-                    LossTerm::Joint {
-                        dof: model.links[li].dof_offset + index,
-                        target: *target,
-                        weight: *weight,
-                        when: *when,
-                    }
-                }
-                LossSpec::Com {
-                    robot,
-                    target,
-                    axes,
-                    weight,
-                    when,
-                } => {
-                    let r = names::robot(&model, robot).map_err(bad)?;
-                    LossTerm::CenterOfMass {
-                        links: model.robots[r].links.clone().collect(),
-                        target: Vector3::from(*target),
-                        axes: Vector3::from(*axes),
-                        weight: *weight,
-                        when: *when,
-                    }
-                }
-                LossSpec::Relative {
-                    link,
-                    point,
-                    to_link,
-                    to_point,
-                    offset,
-                    weight,
-                    when,
-                } => LossTerm::Relative {
-                    link_a: names::link(&model, link).map_err(bad)?,
-                    point_a: Vector3::from(*point),
-                    link_b: names::link(&model, to_link).map_err(bad)?,
-                    point_b: Vector3::from(*to_point),
-                    offset: Vector3::from(*offset),
-                    weight: *weight,
-                    when: *when,
-                },
-            });
-        }
-        for (i, l) in task.loss.iter().enumerate() {
-            multi::check_when(l, horizon).map_err(|m| invalid(&format!("loss[{i}].when"), m))?;
-        }
+        let loss = build_loss(path, &model, &task.loss, horizon)?;
         Ok(Problem {
             task_path: path.into(),
             controller: scene.controller.clone(),
@@ -288,6 +212,100 @@ impl Problem {
             model,
         })
     }
+}
+
+/// The loss of a task's `loss:` terms on `model` (link, joint and robot
+/// names resolved, `when` windows checked against `horizon`); `path` names
+/// the task file in errors (`loss[i]: …`).
+pub fn build_loss(
+    path: &Path,
+    model: &Model,
+    specs: &[LossSpec],
+    horizon: usize,
+) -> Result<Loss, TaskError> {
+    let invalid = |element: &str, msg: String| TaskError::Invalid {
+        path: path.into(),
+        element: element.into(),
+        msg,
+    };
+    let mut loss = Loss::default();
+    for (i, l) in specs.iter().enumerate() {
+        let el = format!("loss[{i}]");
+        let bad = |e: names::NameError| invalid(&el, e.to_string());
+        loss.terms.push(match l {
+            LossSpec::LinkPoint {
+                link,
+                point,
+                target,
+                weight,
+                when,
+            } => LossTerm::LinkPoint {
+                link: names::link(model, link).map_err(bad)?,
+                point: Vector3::from(*point),
+                target: Vector3::from(*target),
+                weight: *weight,
+                when: *when,
+            },
+            LossSpec::Joint {
+                joint,
+                index,
+                target,
+                weight,
+                when,
+            } => {
+                let li = names::joint(model, joint).map_err(bad)?;
+                if *index >= model.links[li].ndof() {
+                    return Err(invalid(
+                        &el,
+                        format!("joint {joint} has {} coordinate(s)", model.links[li].ndof()),
+                    ));
+                }
+                LossTerm::Joint {
+                    dof: model.links[li].dof_offset + index,
+                    target: *target,
+                    weight: *weight,
+                    when: *when,
+                }
+            }
+            LossSpec::Com {
+                robot,
+                target,
+                axes,
+                weight,
+                when,
+            } => {
+                let r = names::robot(model, robot).map_err(bad)?;
+                LossTerm::CenterOfMass {
+                    links: model.robots[r].links.clone().collect(),
+                    target: Vector3::from(*target),
+                    axes: Vector3::from(*axes),
+                    weight: *weight,
+                    when: *when,
+                }
+            }
+            LossSpec::Relative {
+                link,
+                point,
+                to_link,
+                to_point,
+                offset,
+                weight,
+                when,
+            } => LossTerm::Relative {
+                link_a: names::link(model, link).map_err(bad)?,
+                point_a: Vector3::from(*point),
+                link_b: names::link(model, to_link).map_err(bad)?,
+                point_b: Vector3::from(*to_point),
+                offset: Vector3::from(*offset),
+                weight: *weight,
+                when: *when,
+            },
+        });
+    }
+    for (i, l) in specs.iter().enumerate() {
+        multi::check_when(l, horizon).map_err(|m| invalid(&format!("loss[{i}].when"), m))?;
+    }
+    Ok(loss)
 }
 
 /// Tie groups of every robot's `design.ties`, as `(link, hull, vertex)`.
