@@ -16,6 +16,7 @@
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::geometry::{BroadPhase, WorldHulls};
 use crate::kinematics::Kinematics;
@@ -44,13 +45,16 @@ pub struct ContactEnergy {
     last_min_distance: f64,
     /// The first intersecting pair of the last evaluation.
     last_intersecting: Option<(usize, usize)>,
+    /// Continuous collision detection of the line search ([`Energy::max_step`]).
+    ccd: Ccd,
+    /// Time spent in CCD since the last report.
+    ccd_time: Duration,
 }
 
 impl ContactEnergy {
     pub fn new(model: &Model, settings: ContactSettings) -> Self {
         ContactEnergy {
             params: ContactParams::with_width(settings.s),
-            settings,
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
@@ -61,6 +65,9 @@ impl ContactEnergy {
             last_active: 0,
             last_min_distance: f64::INFINITY,
             last_intersecting: None,
+            ccd: Ccd::new(model, settings.ccd.clone()),
+            ccd_time: Duration::ZERO,
+            settings,
         }
     }
 
@@ -250,7 +257,34 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
+    /// Continuous collision detection (see [`crate::contact::ccd`]): the
+    /// largest certified fraction of the step `q → q + dq` along which no
+    /// hull pair can touch; `1` when [`crate::contact::ccd::CcdOptions::enabled`]
+    /// is off. Adds no term to the objective.
+    fn max_step(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+        kin: &Kinematics,
+        charts: &[nalgebra::Matrix3<f64>],
+    ) -> Result<f64, EnergyError> {
+        if !self.ccd.options.enabled {
+            return Ok(1.0);
+        }
+        let t0 = Instant::now();
+        let alpha = self
+            .ccd
+            .max_step(ctx.model, &self.settings.excluded, q, dq, kin, charts);
+        self.ccd_time += t0.elapsed();
+        Ok(alpha)
+    }
+
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
+        if self.ccd.options.enabled {
+            d.ccd.merge(&std::mem::take(&mut self.ccd.stats));
+            timers.add("ccd", std::mem::take(&mut self.ccd_time));
+        }
         d.contact_pairs = self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
         timers.transfer(

@@ -35,10 +35,37 @@ impl BroadPhase {
         excluded: &BTreeSet<(usize, usize)>,
         out: &mut Vec<(usize, usize)>,
     ) {
-        out.clear();
         let half = 0.5 * range;
+        self.pairs_padded(hulls, |_| half, excluded, out);
+    }
+
+    /// Candidate pairs for continuous collision detection: as
+    /// [`BroadPhase::candidate_pairs`], with hull `h`'s box padded by
+    /// `pad[h]` on every side — how far any of its points can move on the
+    /// segment being checked, so the padded box contains the hull's whole
+    /// swept volume and a pair that could meet anywhere on the segment is a
+    /// candidate.
+    pub fn swept_pairs(
+        &mut self,
+        hulls: &WorldHulls,
+        pad: &[f64],
+        excluded: &BTreeSet<(usize, usize)>,
+        out: &mut Vec<(usize, usize)>,
+    ) {
+        self.pairs_padded(hulls, |h| pad[h], excluded, out);
+    }
+
+    fn pairs_padded(
+        &mut self,
+        hulls: &WorldHulls,
+        pad: impl Fn(usize) -> f64,
+        excluded: &BTreeSet<(usize, usize)>,
+        out: &mut Vec<(usize, usize)>,
+    ) {
+        out.clear();
         self.aabbs.clear();
         for h in 0..hulls.ids.len() {
+            let half = pad(h);
             let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for x in hulls.hull(h) {
                 for e in 0..3 {

@@ -69,6 +69,9 @@ pub struct StepDiagnostics {
     /// Smallest GJK distance among broad-phase candidate pairs at `θ^{t+1}`
     /// (m; `+∞` when no pair is a candidate).
     pub min_distance: f64,
+    /// Continuous collision detection of the step's Newton iterations
+    /// (zero when off or without contact).
+    pub ccd: crate::contact::ccd::CcdStats,
     /// Work of each non-conservative or contact term over the step, when
     /// [`Simulator::energy_balance`] is on (see [`StepWork`]).
     pub work: Option<StepWork>,
