@@ -103,7 +103,7 @@ impl CcdOptions {
 /// [`crate::sim::StepDiagnostics`], per run in the summary).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 pub struct CcdStats {
-    /// Newton steps (segments) checked.
+    /// Accepted Newton segments checked.
     pub segments: usize,
     /// Hull pairs whose swept boxes overlapped and whose gap was measured.
     pub pairs_tested: usize,
@@ -113,9 +113,11 @@ pub struct CcdStats {
     /// Advancement rounds (each one kinematics evaluation and one GJK query
     /// per pair in doubt).
     pub rounds: usize,
-    /// Segments whose step was capped (`α < 1`).
+    /// Accepted line-search steps that were cut short (the search then
+    /// continued from the cut).
     pub alpha_caps: usize,
-    /// Smallest cap (1 when none).
+    /// Smallest step fraction `α` of a Newton direction after a cut (1 when
+    /// none).
     pub min_alpha: f64,
     /// Pairs GJK could not certify as separated at a segment's start (left
     /// to the barrier; see the module docs).
@@ -154,6 +156,9 @@ impl CcdStats {
 struct Doubt {
     a: usize,
     b: usize,
+    /// For links with a common ancestor: the closing-rate bound relative to
+    /// its frame (direction-free); `None`: the world-frame directional one.
+    relative: Option<f64>,
     /// `η g₀` (m).
     keep: f64,
     /// Certified gap at the current `α` (m) and its direction (a → b).
@@ -176,7 +181,11 @@ pub struct Ccd {
     broad: BroadPhase,
     candidates: Vec<(usize, usize)>,
     doubt: Vec<Doubt>,
+    /// Depth of every link in its tree (roots 0), for common ancestors.
+    depth: Vec<usize>,
     trial: DVector<f64>,
+    /// The segment `α dir` being certified.
+    seg: DVector<f64>,
     simplex: VoronoiSimplex,
 }
 
@@ -193,16 +202,55 @@ impl Ccd {
             broad: BroadPhase::default(),
             candidates: Vec::new(),
             doubt: Vec::new(),
+            depth: model
+                .links
+                .iter()
+                .scan(Vec::new(), |d: &mut Vec<usize>, l| {
+                    let k = l.parent.map_or(0, |p| d[p] + 1);
+                    d.push(k);
+                    Some(k)
+                })
+                .collect(),
             trial: DVector::zeros(model.ndof()),
+            seg: DVector::zeros(model.ndof()),
             simplex: VoronoiSimplex::new(),
         }
     }
 
     /// Closing-rate bound `ρ` of a pair along `dir` (m per unit α).
-    fn rate(&self, a: usize, b: usize, dir: &Vector3<f64>) -> f64 {
-        let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
+    fn rate(&self, d: &Doubt) -> f64 {
+        if let Some(r) = d.relative {
+            return r;
+        }
+        let (la, lb) = (self.hulls.ids[d.a].link, self.hulls.ids[d.b].link);
         let m = &self.motion;
-        (dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0)
+        (d.dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0)
+    }
+
+    /// Lowest common ancestor of links `a` and `b` (`None`: different trees).
+    fn common_ancestor(&self, model: &Model, mut a: usize, mut b: usize) -> Option<usize> {
+        while self.depth[a] > self.depth[b] {
+            a = model.links[a].parent?;
+        }
+        while self.depth[b] > self.depth[a] {
+            b = model.links[b].parent?;
+        }
+        while a != b {
+            a = model.links[a].parent?;
+            b = model.links[b].parent?;
+        }
+        Some(a)
+    }
+
+    /// Lower bound of the distance of hulls `a`, `b` from their boxes
+    /// (`≤ 0` when the boxes overlap): the largest axis gap.
+    fn box_gap(&self, a: usize, b: usize) -> f64 {
+        let (ba, bb) = (self.broad.boxes(), self.broad.boxes());
+        let (pa, pb) = (self.pad[a], self.pad[b]);
+        let (ba, bb) = (&ba[a], &bb[b]);
+        (0..3)
+            .map(|e| (bb.mins[e] + pb - (ba.maxs[e] - pa)).max(ba.mins[e] + pa - (bb.maxs[e] - pb)))
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Certified gap and direction of hulls `a`, `b` at the current
@@ -226,22 +274,44 @@ impl Ccd {
         }
     }
 
-    /// The largest certified `α ∈ [0, 1]` for the segment `q → q + dq`
-    /// (see the module docs). `kin` holds the kinematics at `q`; `excluded`
-    /// are the link pairs that never interact.
-    pub fn max_step(
+    /// The largest certified `α' ≤ α` for the segment `q → q + α dir`
+    /// (see the module docs); `excluded` are the link pairs that never
+    /// interact, `charts` the step's rotation-vector chart centres.
+    pub fn certify(
         &mut self,
         model: &Model,
         excluded: &BTreeSet<(usize, usize)>,
         q: &DVector<f64>,
-        dq: &DVector<f64>,
-        kin: &Kinematics,
+        dir: &DVector<f64>,
+        alpha: f64,
         charts: &[Matrix3<f64>],
     ) -> f64 {
+        self.seg.clone_from(dir);
+        self.seg *= alpha;
+        let frac = self.fraction(model, excluded, q, charts);
         self.stats.segments += 1;
+        if frac < 1.0 {
+            self.stats.alpha_caps += 1;
+            self.stats.min_alpha = self.stats.min_alpha.min(alpha * frac);
+        }
+        alpha * frac
+    }
+
+    /// The largest certified fraction `β ∈ [0, 1]` of the segment
+    /// `q → q + seg`.
+    fn fraction(
+        &mut self,
+        model: &Model,
+        excluded: &BTreeSet<(usize, usize)>,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+    ) -> f64 {
+        let dq = &self.seg;
+        self.kin.update(model, q, charts, KinOrder::Pose);
         hull_radii(model, &mut self.radius);
-        self.motion.update(model, &kin.pre, &self.radius, q, dq);
-        self.hulls.update(model, &kin.pose);
+        self.motion
+            .update(model, &self.kin.pre, &self.radius, q, dq);
+        self.hulls.update(model, &self.kin.pose);
         self.pad.clear();
         let motion = &self.motion;
         self.pad
@@ -253,7 +323,16 @@ impl Ccd {
         for k in 0..self.candidates.len() {
             let (a, b) = self.candidates[k];
             let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
-            if self.motion.reach(la) + self.motion.reach(lb) == 0.0 {
+            let m = &self.motion;
+            // Relative motion bound, direction-free (m per unit α).
+            let relative = self
+                .common_ancestor(model, la, lb)
+                .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
+            let bound = relative.unwrap_or_else(|| {
+                (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb]
+            });
+            // Cheap skips: no relative motion, or less than the box gap.
+            if bound == 0.0 || bound <= (1.0 - eta) * self.box_gap(a, b) {
                 continue;
             }
             self.stats.pairs_tested += 1;
@@ -261,18 +340,20 @@ impl Ccd {
                 self.stats.uncertified += 1;
                 continue;
             };
-            let keep = eta * gap;
-            if self.rate(a, b, &dir) <= gap - keep {
-                continue;
-            }
-            self.stats.pairs_advanced += 1;
-            self.doubt.push(Doubt {
+            let mut d = Doubt {
                 a,
                 b,
-                keep,
+                relative,
+                keep: eta * gap,
                 gap,
                 dir,
-            });
+            };
+            if self.rate(&d) <= gap - d.keep {
+                continue;
+            }
+            d.keep = eta * gap;
+            self.stats.pairs_advanced += 1;
+            self.doubt.push(d);
         }
         let mut alpha = 0.0;
         let mut rounds = 0;
@@ -281,7 +362,7 @@ impl Ccd {
             let rest = 1.0 - alpha;
             let mut doubt = std::mem::take(&mut self.doubt);
             doubt.retain(|d| {
-                let rate = self.rate(d.a, d.b, &d.dir);
+                let rate = self.rate(d);
                 let slack = d.gap - d.keep;
                 if rate * rest <= slack {
                     return false;
@@ -300,7 +381,7 @@ impl Ccd {
             rounds += 1;
             self.stats.rounds += 1;
             self.trial.clone_from(q);
-            self.trial.axpy(next, dq, 1.0);
+            self.trial.axpy(next, &self.seg, 1.0);
             self.kin.update(model, &self.trial, charts, KinOrder::Pose);
             self.hulls.update(model, &self.kin.pose);
             let mut lost = false;
@@ -321,10 +402,6 @@ impl Ccd {
             }
             alpha = next;
         };
-        if alpha < 1.0 {
-            self.stats.alpha_caps += 1;
-            self.stats.min_alpha = self.stats.min_alpha.min(alpha);
-        }
         alpha
     }
 }

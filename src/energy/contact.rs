@@ -257,27 +257,28 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
-    /// Continuous collision detection (see [`crate::contact::ccd`]): the
-    /// largest certified fraction of the step `q → q + dq` along which no
-    /// hull pair can touch; `1` when [`crate::contact::ccd::CcdOptions::enabled`]
-    /// is off. Adds no term to the objective.
-    fn max_step(
+    /// Continuous collision detection (see [`crate::contact::ccd`]) of the
+    /// accepted segment `q → q + α dq`: the largest certified `α' ≤ α`
+    /// along which no hull pair can touch; `α` when
+    /// [`crate::contact::ccd::CcdOptions::enabled`] is off. Adds no term to
+    /// the objective. Timed into the `ccd` stage.
+    fn certify_step(
         &mut self,
         ctx: &StepContext,
         q: &DVector<f64>,
         dq: &DVector<f64>,
-        kin: &Kinematics,
+        alpha: f64,
         charts: &[nalgebra::Matrix3<f64>],
     ) -> Result<f64, EnergyError> {
         if !self.ccd.options.enabled {
-            return Ok(1.0);
+            return Ok(alpha);
         }
         let t0 = Instant::now();
-        let alpha = self
+        let out = self
             .ccd
-            .max_step(ctx.model, &self.settings.excluded, q, dq, kin, charts);
+            .certify(ctx.model, &self.settings.excluded, q, dq, alpha, charts);
         self.ccd_time += t0.elapsed();
-        Ok(alpha)
+        Ok(out)
     }
 
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {

@@ -55,6 +55,11 @@ impl BroadPhase {
         self.pairs_padded(hulls, |h| pad[h], excluded, out);
     }
 
+    /// The padded boxes of the last query, per hull.
+    pub fn boxes(&self) -> &[Aabb] {
+        &self.aabbs
+    }
+
     fn pairs_padded(
         &mut self,
         hulls: &WorldHulls,

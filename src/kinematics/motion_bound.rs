@@ -60,6 +60,12 @@ pub struct SegmentMotion {
     angular: Vec<f64>,
     /// `V_i`: bound on the origin's velocity beyond the drift.
     origin: Vec<f64>,
+    /// `V'_i`: as `V_i` with the drift folded in (no split).
+    origin_full: Vec<f64>,
+    /// `D_i = Σ_{j ≤ i} (‖t_j‖ + τ̄_j)`, summed along the chain from the root.
+    lever: Vec<f64>,
+    /// `r_i`.
+    radius: Vec<f64>,
 }
 
 impl SegmentMotion {
@@ -79,6 +85,10 @@ impl SegmentMotion {
         self.spread.resize(n, 0.0);
         self.angular.resize(n, 0.0);
         self.origin.resize(n, 0.0);
+        self.origin_full.resize(n, 0.0);
+        self.lever.resize(n, 0.0);
+        self.radius.clear();
+        self.radius.extend_from_slice(radius);
         for (i, link) in model.links.iter().enumerate() {
             let o = link.dof_offset;
             let (w, rate, travel) = match &link.joint {
@@ -103,11 +113,19 @@ impl SegmentMotion {
                     )
                 }
             };
-            let (parent_w, parent_v, parent_c) = match link.parent {
-                Some(p) => (self.angular[p], self.origin[p], self.drift[p]),
-                None => (0.0, 0.0, Vector3::zeros()),
+            let (parent_w, parent_v, parent_c, parent_full, parent_lever) = match link.parent {
+                Some(p) => (
+                    self.angular[p],
+                    self.origin[p],
+                    self.drift[p],
+                    self.origin_full[p],
+                    self.lever[p],
+                ),
+                None => (0.0, 0.0, Vector3::zeros(), 0.0, 0.0),
             };
             let attach = link.attach.column(3).norm();
+            self.lever[i] = parent_lever + attach + travel;
+            self.origin_full[i] = parent_full + parent_w * (attach + travel) + rate.norm();
             let (drift, origin) = if parent_w == 0.0 {
                 // Pre-joint frame fixed on the segment: exact drift.
                 (parent_c + rot(&pre[i]) * rate, parent_v)
@@ -122,6 +140,26 @@ impl SegmentMotion {
             self.angular[i] = parent_w + w;
             self.spread[i] = origin + self.angular[i] * radius[i];
         }
+    }
+
+    /// `E_i^c`: the bound on a hull point's speed of link `i` *relative to
+    /// the frame of its ancestor `c`* (`c = i` gives 0). The distance of two
+    /// hulls is invariant under a common rigid motion, so for links whose
+    /// lowest common ancestor is `c` the joints above `c` do not count:
+    /// expressed in `c`'s frame, the recursion above starts at `c` at rest,
+    /// which telescopes to `V'_i − V'_c − W_c (D_i − D_c) + (W_i − W_c) r_i`
+    /// (`V'`, `D` the undivided origin bound and lever sum). Every term is
+    /// a sum of non-negative parts; a relative guard of `1e-12` of the
+    /// operands covers the subtraction's round-off.
+    pub fn relative_spread(&self, i: usize, c: usize) -> f64 {
+        if i == c {
+            return 0.0;
+        }
+        let (wc, wi) = (self.angular[c], self.angular[i]);
+        let v = self.origin_full[i] - self.origin_full[c] - wc * (self.lever[i] - self.lever[c]);
+        let w = wi - wc;
+        let guard = 1e-12 * (self.origin_full[i] + wc * self.lever[i] + wi * self.radius[i]);
+        (v + w * self.radius[i]).max(0.0) + guard
     }
 
     /// `‖c_i‖ + E_i`: how far any hull point of link `i` can move on the
@@ -274,6 +312,21 @@ mod tests {
                                 moved.norm()
                             );
                             worst = worst.max(moved.norm() / bound.max(1e-300));
+                            // Relative to every ancestor's frame.
+                            let mut c = Some(i);
+                            while let Some(a) = c {
+                                let rel = |k: usize| {
+                                    let pa = &poses[k][a];
+                                    rot(pa).transpose() * (pts[k] - pa.column(3))
+                                };
+                                let moved_rel = (rel(k) - rel(k0)).norm();
+                                let b = da * m.relative_spread(i, a);
+                                assert!(
+                                    moved_rel <= b * (1.0 + 1e-9) + 1e-12,
+                                    "case {case} link {i} relative to {a}: {moved_rel} > {b}"
+                                );
+                                c = model.links[a].parent;
+                            }
                             for d in &dirs {
                                 let along = d.dot(&(moved - m.drift[i] * da));
                                 assert!(
