@@ -161,9 +161,11 @@ struct Doubt {
     relative: Option<f64>,
     /// `η g₀` (m).
     keep: f64,
-    /// Certified gap at the current `α` (m) and its direction (a → b).
+    /// Certified gap at the last `α` measured (m) and its direction (a → b).
     gap: f64,
     dir: Vector3<f64>,
+    /// Up to here the pair is certified to keep `η g₀`.
+    horizon: f64,
 }
 
 /// Scratch and statistics of the CCD stage (reused between Newton
@@ -181,6 +183,8 @@ pub struct Ccd {
     broad: BroadPhase,
     candidates: Vec<(usize, usize)>,
     doubt: Vec<Doubt>,
+    /// Per hull at the segment's start: centroid and bounding radius.
+    spheres: Vec<(Vector3<f64>, f64)>,
     /// Depth of every link in its tree (roots 0), for common ancestors.
     depth: Vec<usize>,
     trial: DVector<f64>,
@@ -202,6 +206,7 @@ impl Ccd {
             broad: BroadPhase::default(),
             candidates: Vec::new(),
             doubt: Vec::new(),
+            spheres: Vec::new(),
             depth: model
                 .links
                 .iter()
@@ -319,6 +324,13 @@ impl Ccd {
         self.broad
             .swept_pairs(&self.hulls, &self.pad, excluded, &mut self.candidates);
         let eta = self.options.keep_fraction;
+        self.spheres.clear();
+        for h in 0..self.hulls.ids.len() {
+            let x = self.hulls.hull(h);
+            let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
+            let r = x.iter().map(|v| (v - c).norm()).fold(0.0, f64::max);
+            self.spheres.push((c, r));
+        }
         self.doubt.clear();
         for k in 0..self.candidates.len() {
             let (a, b) = self.candidates[k];
@@ -331,8 +343,11 @@ impl Ccd {
             let bound = relative.unwrap_or_else(|| {
                 (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb]
             });
-            // Cheap skips: no relative motion, or less than the box gap.
-            if bound == 0.0 || bound <= (1.0 - eta) * self.box_gap(a, b) {
+            // Cheap skips: no relative motion, or less than a lower bound of
+            // the distance from the boxes or the bounding spheres.
+            let (sa, sb) = (self.spheres[a], self.spheres[b]);
+            let cheap = self.box_gap(a, b).max((sa.0 - sb.0).norm() - sa.1 - sb.1);
+            if bound == 0.0 || bound <= (1.0 - eta) * cheap {
                 continue;
             }
             self.stats.pairs_tested += 1;
@@ -347,36 +362,27 @@ impl Ccd {
                 keep: eta * gap,
                 gap,
                 dir,
+                horizon: 0.0,
             };
-            if self.rate(&d) <= gap - d.keep {
+            if !d.advance(self.rate(&d), 0.0) {
                 continue;
             }
-            d.keep = eta * gap;
             self.stats.pairs_advanced += 1;
             self.doubt.push(d);
         }
+        // Rounds: every pair in doubt is certified up to its horizon; the
+        // segment up to the smallest horizon is certified. Pairs whose
+        // horizon is near it are measured again there (kinematics at the
+        // new α, GJK); the others keep their horizon.
         let mut alpha = 0.0;
         let mut rounds = 0;
-        let alpha = loop {
-            let mut step = f64::INFINITY;
-            let rest = 1.0 - alpha;
-            let mut doubt = std::mem::take(&mut self.doubt);
-            doubt.retain(|d| {
-                let rate = self.rate(d);
-                let slack = d.gap - d.keep;
-                if rate * rest <= slack {
-                    return false;
-                }
-                step = step.min(slack.max(0.0) / rate);
-                true
-            });
-            self.doubt = doubt;
-            if self.doubt.is_empty() || alpha + step >= 1.0 {
-                break 1.0;
+        loop {
+            let next = self.doubt.iter().map(|d| d.horizon).fold(1.0, f64::min);
+            if next >= 1.0 {
+                return 1.0;
             }
-            let next = alpha + step;
-            if rounds == self.options.max_rounds || step <= 1e-12 {
-                break next;
+            if rounds == self.options.max_rounds || next - alpha <= 1e-12 {
+                return next;
             }
             rounds += 1;
             self.stats.rounds += 1;
@@ -384,24 +390,46 @@ impl Ccd {
             self.trial.axpy(next, &self.seg, 1.0);
             self.kin.update(model, &self.trial, charts, KinOrder::Pose);
             self.hulls.update(model, &self.kin.pose);
+            let soon = (2.0 * next - alpha).min(1.0);
+            let mut doubt = std::mem::take(&mut self.doubt);
             let mut lost = false;
-            for k in 0..self.doubt.len() {
-                let d = self.doubt[k];
+            doubt.retain_mut(|d| {
+                if d.horizon >= soon {
+                    return true;
+                }
                 match self.gap(d.a, d.b, Some(d.dir)) {
                     Some((gap, dir)) => {
-                        self.doubt[k].gap = gap;
-                        self.doubt[k].dir = dir;
+                        d.gap = gap;
+                        d.dir = dir;
+                        d.advance(self.rate(d), next)
                     }
-                    None => lost = true,
+                    None => {
+                        lost = true;
+                        true
+                    }
                 }
-            }
+            });
+            self.doubt = doubt;
             if lost {
                 // Cannot happen while the bound holds (the gap is at least
                 // η g₀ there); stay on the part certified before this round.
-                break alpha;
+                return alpha;
             }
             alpha = next;
-        };
-        alpha
+        }
+    }
+}
+
+impl Doubt {
+    /// Sets the horizon from the gap measured at `at` and the closing rate
+    /// `rate`: `at + (g − η g₀)/ρ`. Returns false when that covers the
+    /// rest of the segment (the pair is cleared).
+    fn advance(&mut self, rate: f64, at: f64) -> bool {
+        let slack = (self.gap - self.keep).max(0.0);
+        if rate * (1.0 - at) <= slack {
+            return false;
+        }
+        self.horizon = at + slack / rate;
+        true
     }
 }
