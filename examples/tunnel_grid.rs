@@ -48,7 +48,9 @@ fn main() {
         .position(|a| a == "--fcl")
         .and_then(|i| args.get(i + 1))
         .map(PathBuf::from);
-    println!("| case | tunnels without CCD | tunnels with CCD | line-search cuts | CCD pairs advanced |");
+    println!(
+        "| case | tunnels without CCD | tunnels with CCD | line-search cuts | CCD pairs advanced |"
+    );
     println!("|---|---|---|---:|---:|");
     let (mut off_n, mut on_n, mut total) = (0, 0, 0);
     for (on, off) in cases(true).into_iter().zip(cases(false)) {
@@ -77,7 +79,11 @@ fn main() {
             let mut ccd = sdrs::contact::ccd::CcdStats::default();
             traj.diagnostics.iter().for_each(|d| ccd.merge(&d.ccd));
             res.push((
-                if v.is_empty() { "no".into() } else { "**yes**".into() },
+                if v.is_empty() {
+                    "no".into()
+                } else {
+                    "**yes**".into()
+                },
                 ccd.alpha_caps,
                 ccd.pairs_advanced,
             ));

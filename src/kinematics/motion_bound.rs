@@ -22,7 +22,9 @@
 //! centre of its joint's rotation):
 //!
 //! - angular speed of joint `i`'s own rotation, `w_i`: revolute `|Δq|`; ball
-//!   (two hinges) `|Δq₁| + |Δq₂|`; spherical and free, `R = R_c exp([φ]×)`:
+//!   (two hinges, `R = Rot(a₁, q₁) Rot(a₂, q₂)`) exactly
+//!   `√(Δq₁² + Δq₂² + 2 Δq₁Δq₂ a₁·a₂)` (the second axis turns about the
+//!   first, so its angle to it is constant); spherical and free, `R = R_c exp([φ]×)`:
 //!   the body angular velocity is `J_r(φ) Δφ`, and the right Jacobian of
 //!   SO(3) has singular values `1` (along `φ`) and
 //!   `|sin(‖φ‖/2)/(‖φ‖/2)| ≤ 1` (across), so `w_i = ‖Δφ‖` for every `φ`
@@ -97,7 +99,14 @@ impl SegmentMotion {
                 JointKind::Prismatic { axis } => {
                     (0.0, axis * dq[o], q[o].abs().max((q[o] + dq[o]).abs()))
                 }
-                JointKind::Ball { .. } => (dq[o].abs() + dq[o + 1].abs(), Vector3::zeros(), 0.0),
+                JointKind::Ball { axes } => {
+                    // ω = a₁ Δq₁ + Rot(a₁, q₁) a₂ Δq₂ and a₁·Rot(a₁, q₁) a₂ = a₁·a₂:
+                    // the norm is exact and constant on the segment.
+                    let c = axes[0].dot(&axes[1]);
+                    let (x, y) = (dq[o], dq[o + 1]);
+                    let w2 = (x * x + y * y + 2.0 * c * x * y).max(0.0);
+                    (w2.sqrt() * (1.0 + 1e-15), Vector3::zeros(), 0.0)
+                }
                 JointKind::Spherical => (
                     Vector3::new(dq[o], dq[o + 1], dq[o + 2]).norm(),
                     Vector3::zeros(),

@@ -21,6 +21,12 @@
 //! [`NewtonOptions::step_floor`] (a length, measured as
 //! `‖Δθ‖∞ · max(1, L)`), the point is the solution to working precision and
 //! is accepted the same way ([`NewtonReport::at_step_floor`]).
+//!
+//! Continuous collision detection: a segment `q → q + αΔ` the search accepts
+//! is certified by [`Objective::certify`] before it is taken (every point
+//! of it collision-free, not only its end); if only `[0, α']` can be, the
+//! search runs again from `α'` ([`NewtonReport::ccd_cuts`]). Starting from
+//! `θ^t`, the accepted segments chain into a certified path `θ^t → θ^{t+1}`.
 
 use super::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
