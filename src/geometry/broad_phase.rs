@@ -75,8 +75,8 @@ impl BroadPhase {
     ) {
         out.clear();
         self.aabbs.clear();
-        for h in 0..hulls.ids.len() {
-            self.aabbs.push(padded_box(hulls.hull(h), pad[h]));
+        for (h, &p) in pad.iter().enumerate().take(hulls.ids.len()) {
+            self.aabbs.push(padded_box(hulls.hull(h), p));
         }
         self.order.clear();
         self.order.extend(0..self.aabbs.len());
