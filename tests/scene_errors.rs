@@ -200,3 +200,23 @@ fn a_missing_file_names_its_cause_once() {
     let chain = format!("{:#}", anyhow::Error::from(err));
     assert_eq!(chain.matches("No such file").count(), 1, "{chain}");
 }
+
+#[test]
+fn bad_ccd_options_name_the_key() {
+    for (bad, expect) in [
+        ("{keep_fraction: 1.5}", "keep_fraction"),
+        ("{keep_fraction: 0}", "keep_fraction"),
+        ("{max_rounds: 0}", "max_rounds"),
+    ] {
+        let text = format!(
+            "dt: 0.01\ncontact: {{ccd: {bad}}}\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n"
+        );
+        let (path, msg) = load("ccd.yaml", &text);
+        assert_names(&msg, &path, &["contact.ccd", expect]);
+    }
+    let text = format!(
+        "dt: 0.01\ncontact: {{ccd: {{enable: false}}}}\nrobots:\n  - name: r\n    links:{GOOD_LINK}\n"
+    );
+    let (path, msg) = load("ccd_typo.yaml", &text);
+    assert_names(&msg, &path, &["enable"]);
+}

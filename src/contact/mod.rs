@@ -50,6 +50,7 @@ pub mod adjoint_contact;
 pub mod adjoint_friction;
 pub mod barrier;
 pub mod capture;
+pub mod ccd;
 mod error;
 pub mod friction;
 #[cfg(test)]

@@ -16,6 +16,7 @@
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::geometry::{BroadPhase, WorldHulls};
 use crate::kinematics::Kinematics;
@@ -44,13 +45,16 @@ pub struct ContactEnergy {
     last_min_distance: f64,
     /// The first intersecting pair of the last evaluation.
     last_intersecting: Option<(usize, usize)>,
+    /// Continuous collision detection of the line search ([`Energy::max_step`]).
+    ccd: Ccd,
+    /// Time spent in CCD since the last report.
+    ccd_time: Duration,
 }
 
 impl ContactEnergy {
     pub fn new(model: &Model, settings: ContactSettings) -> Self {
         ContactEnergy {
             params: ContactParams::with_width(settings.s),
-            settings,
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
@@ -61,6 +65,9 @@ impl ContactEnergy {
             last_active: 0,
             last_min_distance: f64::INFINITY,
             last_intersecting: None,
+            ccd: Ccd::new(model, settings.ccd.clone()),
+            ccd_time: Duration::ZERO,
+            settings,
         }
     }
 
@@ -250,7 +257,35 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
+    /// Continuous collision detection (see [`crate::contact::ccd`]) of the
+    /// accepted segment `q → q + α dq`: the largest certified `α' ≤ α`
+    /// along which no hull pair can touch; `α` when
+    /// [`crate::contact::ccd::CcdOptions::enabled`] is off. Adds no term to
+    /// the objective. Timed into the `ccd` stage.
+    fn certify_step(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+        alpha: f64,
+        charts: &[nalgebra::Matrix3<f64>],
+    ) -> Result<f64, EnergyError> {
+        if !self.ccd.options.enabled {
+            return Ok(alpha);
+        }
+        let t0 = Instant::now();
+        let out = self
+            .ccd
+            .certify(ctx.model, &self.settings.excluded, q, dq, alpha, charts);
+        self.ccd_time += t0.elapsed();
+        Ok(out)
+    }
+
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
+        if self.ccd.options.enabled {
+            d.ccd.merge(&std::mem::take(&mut self.ccd.stats));
+            timers.add("ccd", std::mem::take(&mut self.ccd_time));
+        }
         d.contact_pairs = self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
         timers.transfer(

@@ -209,6 +209,22 @@ pub trait Energy: Send + Sync {
         Ok(1.0)
     }
 
+    /// Continuous collision detection of the segment `q → q + α dq` that
+    /// the line search accepted: the largest `α' ≤ α` such that the term
+    /// stays finite (collision-free) at *every* point of `[q, q + α' dq]`,
+    /// not only at its end. `charts` are the rotation-vector chart centres
+    /// of the step. Adds nothing to the objective. Default `α` (no check).
+    fn certify_step(
+        &mut self,
+        _ctx: &StepContext,
+        _q: &DVector<f64>,
+        _dq: &DVector<f64>,
+        alpha: f64,
+        _charts: &[nalgebra::Matrix3<f64>],
+    ) -> Result<f64, EnergyError> {
+        Ok(alpha)
+    }
+
     /// Adds the term's value and requested derivatives at `θ^{t+1} = q`
     /// (kinematics `kin` already evaluated at `q`). A value of `+∞` marks an
     /// infeasible configuration; derivatives may then be left unset.

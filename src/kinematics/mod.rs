@@ -16,6 +16,10 @@
 //! This lets the assembler reduce every per-link quantity to 3×4 matrices and
 //! never build dense per-vertex Jacobians.
 
+pub mod motion_bound;
+
+pub use motion_bound::{SegmentMotion, hull_radii};
+
 use crate::math::{Pose, compose, pose_from, rot, trans, twist_apply};
 use crate::model::{JointDerivatives, Model};
 use nalgebra::{DVector, Matrix3, Matrix3x4, Vector3};

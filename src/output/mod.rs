@@ -210,6 +210,11 @@ pub struct ContactStats {
     /// Smallest GJK distance between candidate hull pairs over all accepted
     /// states (m); `null` when no pair was ever a candidate.
     pub min_distance: Option<f64>,
+    /// Continuous collision detection over the run (zeros when off): Newton
+    /// segments checked, hull pairs tested and advanced, advancement rounds,
+    /// steps capped (`alpha_caps`) and the smallest cap (`min_alpha`), pairs
+    /// left to the barrier (`uncertified`). See `sdrs::contact::ccd`.
+    pub ccd: crate::contact::ccd::CcdStats,
 }
 
 impl Summary {
@@ -321,6 +326,13 @@ impl Summary {
             steps_in_contact: d.iter().filter(|x| x.contact_pairs > 0).count(),
             max_active_pairs: d.iter().map(|x| x.contact_pairs).max().unwrap_or(0),
             min_distance: min_d.is_finite().then_some(min_d),
+            ccd: d.iter().fold(
+                Default::default(),
+                |mut s: crate::contact::ccd::CcdStats, x| {
+                    s.merge(&x.ccd);
+                    s
+                },
+            ),
         };
         Summary {
             units: Self::units(),

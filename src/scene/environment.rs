@@ -175,6 +175,9 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
             ),
         ));
     }
+    if let Some(msg) = c.ccd.problem() {
+        return Err(Invalid::new("contact.ccd", msg));
+    }
     let find = |name: &str, k: usize| -> Result<usize, Invalid> {
         let el = format!("contact.exclude[{k}]");
         let (robot, link) = name.split_once('/').ok_or_else(|| {
@@ -216,6 +219,7 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         kappa_given: c.kappa.is_some(),
         mu: c.mu,
         eps: c.eps,
+        ccd: c.ccd.clone(),
         eps_force: c.eps_force,
         excluded,
     })

@@ -105,6 +105,8 @@ pub struct ContactSettings {
     pub eps_force: f64,
     /// Link pairs `(i, j)`, `i < j`, that never interact.
     pub excluded: std::collections::BTreeSet<(usize, usize)>,
+    /// Continuous collision detection in the line search (SDRS model).
+    pub ccd: crate::contact::ccd::CcdOptions,
 }
 
 impl Scene {

@@ -238,6 +238,16 @@ pub struct ContactSpec {
     /// Further excluded link pairs, as `robot/link` names.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub exclude: Vec<[String; 2]>,
+    /// Continuous collision detection (SDRS model): every Newton step is
+    /// capped so that no hull pair can touch anywhere along its curved
+    /// path, which makes the whole time step collision-free, not only its
+    /// end (see README, "Choices worth knowing"). Default on:
+    /// `{enabled: true, keep_fraction: 0.1, max_rounds: 16}`.
+    #[serde(
+        default,
+        skip_serializing_if = "crate::contact::ccd::CcdOptions::is_default"
+    )]
+    pub ccd: crate::contact::ccd::CcdOptions,
 }
 
 /// The contact model of a scene (`contact.model`).
@@ -296,6 +306,7 @@ impl Default for ContactSpec {
             eps_force: Self::default_eps(),
             exclude_adjacent: true,
             exclude: Vec::new(),
+            ccd: Default::default(),
         }
     }
 }

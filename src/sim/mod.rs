@@ -69,6 +69,9 @@ pub struct StepDiagnostics {
     /// Smallest GJK distance among broad-phase candidate pairs at `θ^{t+1}`
     /// (m; `+∞` when no pair is a candidate).
     pub min_distance: f64,
+    /// Continuous collision detection of the step's Newton iterations
+    /// (zero when off or without contact).
+    pub ccd: crate::contact::ccd::CcdStats,
     /// Work of each non-conservative or contact term over the step, when
     /// [`Simulator::energy_balance`] is on (see [`StepWork`]).
     pub work: Option<StepWork>,
@@ -250,11 +253,26 @@ impl Objective for StepObjective<'_> {
                 alpha = alpha.min(MAX_ROTATION_STEP / d);
             }
         }
-        // Terms time their own CCD and report it through `Energy::report`.
         for e in self.energies.iter_mut() {
             alpha = alpha.min(e.max_step(&self.ctx, q, dir, self.kin, self.charts)?);
         }
         Ok(alpha)
+    }
+
+    /// Every term's continuous collision detection of the accepted segment
+    /// ([`Energy::certify_step`]); the smallest certified fraction wins.
+    fn certify(
+        &mut self,
+        q: &DVector<f64>,
+        dir: &DVector<f64>,
+        alpha: f64,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        let mut out = alpha;
+        for e in self.energies.iter_mut() {
+            out = out.min(e.certify_step(&self.ctx, q, dir, alpha, self.charts)?);
+        }
+        Ok(out)
     }
 
     fn length_scale(&self) -> f64 {

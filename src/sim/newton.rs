@@ -21,6 +21,12 @@
 //! [`NewtonOptions::step_floor`] (a length, measured as
 //! `‖Δθ‖∞ · max(1, L)`), the point is the solution to working precision and
 //! is accepted the same way ([`NewtonReport::at_step_floor`]).
+//!
+//! Continuous collision detection: a segment `q → q + αΔ` the search accepts
+//! is certified by [`Objective::certify`] before it is taken (every point
+//! of it collision-free, not only its end); if only `[0, α']` can be, the
+//! search runs again from `α'` ([`NewtonReport::ccd_cuts`]). Starting from
+//! `θ^t`, the accepted segments chain into a certified path `θ^t → θ^{t+1}`.
 
 use super::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
@@ -107,6 +113,9 @@ pub struct NewtonReport {
     /// [`NewtonOptions::step_floor`] (the gradient was noise above
     /// `grad_floor`).
     pub at_step_floor: bool,
+    /// Accepted line-search steps that continuous collision detection cut
+    /// short (the search then ran again from the cut).
+    pub ccd_cuts: usize,
     /// The gradient's round-off floor at the last iterate,
     /// `64 ε ‖H‖∞ (‖θ‖∞ + L)` (J per unit coordinate; `L` the scene's length
     /// scale from [`Objective::length_scale`]).
@@ -143,10 +152,9 @@ pub trait Objective {
     /// Largest step fraction `α ≤ 1` along `dir` from `q` that the
     /// parametrization supports and that keeps the objective finite by
     /// construction (rotation charts are good only well inside `‖φ‖ < 2π`;
-    /// continuous collision detection, see
-    /// [`crate::energy::Energy::max_step`]). `q` is the point of the last
-    /// evaluation with derivatives. The line search starts there. Default
-    /// `1.0`.
+    /// joint limits, see [`crate::energy::Energy::max_step`]). `q` is the
+    /// point of the last evaluation with derivatives. The line search starts
+    /// there. Default `1.0`.
     fn max_step(
         &mut self,
         _q: &DVector<f64>,
@@ -154,6 +162,23 @@ pub trait Objective {
         _timers: &mut StageTimers,
     ) -> Result<f64, EnergyError> {
         Ok(1.0)
+    }
+
+    /// Continuous collision detection of an accepted line-search segment
+    /// `q → q + α dir`: the largest `α' ≤ α` such that the whole segment
+    /// `[q, q + α' dir]` is certified collision-free (see
+    /// [`crate::energy::Energy::certify_step`]). When `α' < α` the search
+    /// runs again from `α'`. Called after the search, so only the step
+    /// actually taken is checked (a long Newton direction that the search
+    /// shortens anyway costs nothing). Default: `α`.
+    fn certify(
+        &mut self,
+        _q: &DVector<f64>,
+        _dir: &DVector<f64>,
+        alpha: f64,
+        _timers: &mut StageTimers,
+    ) -> Result<f64, EnergyError> {
+        Ok(alpha)
     }
 }
 
@@ -227,69 +252,91 @@ pub fn minimize(
         // rank trial points: the decrease is smaller than the noise.
         let floor = 1e-9 * value.abs() + obj.value_noise();
         let resolvable = predicted > 10.0 * floor;
-        // Chart and collision-free bound on the step.
+        // Chart and joint-limit bound on the step.
         let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
         let t0 = std::time::Instant::now();
-        // Time spent in the search's objective evaluations is counted by
-        // their own stages; `line_search` gets only the remainder.
+        // Time spent in the search's objective evaluations and in continuous
+        // collision detection is counted by their own stages;
+        // `line_search` gets only the remainder.
         let mut in_evals = std::time::Duration::ZERO;
-        let mut accepted = false;
-        if resolvable {
-            // Backtracking with Armijo sufficient decrease on a finite value.
-            let mut alpha = alpha_max;
-            for _ in 0..=opts.max_backtracks {
-                if alpha * predicted <= 10.0 * floor {
-                    // Shorter steps cannot be ranked by value either; an
-                    // Armijo test passed on round-off would accept a step
-                    // that changes nothing.
-                    break;
+        // The search runs from `start`; once an accepted segment has been
+        // cut by collision detection it runs again from the cut, where every
+        // shorter step is certified too (a sub-segment).
+        let mut start = alpha_max;
+        let mut cut = false;
+        let accepted = loop {
+            let mut accepted = false;
+            let mut alpha = start;
+            if resolvable {
+                // Backtracking with Armijo sufficient decrease on a finite value.
+                for _ in 0..=opts.max_backtracks {
+                    if alpha * predicted <= 10.0 * floor {
+                        // Shorter steps cannot be ranked by value either; an
+                        // Armijo test passed on round-off would accept a step
+                        // that changes nothing.
+                        break;
+                    }
+                    scratch.trial.clone_from(q);
+                    scratch.trial.axpy(alpha, &scratch.dir, 1.0);
+                    let te = std::time::Instant::now();
+                    let v = obj.eval(
+                        &scratch.trial,
+                        Need::Value,
+                        &mut scratch.trial_grad,
+                        &mut scratch.hess,
+                        timers,
+                    )?;
+                    in_evals += te.elapsed();
+                    if v.is_finite() && v < value - 1e-4 * alpha * predicted {
+                        accepted = true;
+                        break;
+                    }
+                    alpha *= 0.5;
+                    report.backtracks += 1;
                 }
-                scratch.trial.clone_from(q);
-                scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                let te = std::time::Instant::now();
-                let v = obj.eval(
-                    &scratch.trial,
-                    Need::Value,
-                    &mut scratch.trial_grad,
-                    &mut scratch.hess,
-                    timers,
-                )?;
-                in_evals += te.elapsed();
-                if v.is_finite() && v < value - 1e-4 * alpha * predicted {
-                    accepted = true;
-                    break;
-                }
-                alpha *= 0.5;
-                report.backtracks += 1;
             }
-        }
-        // Otherwise (or if that failed) the gradient norm is the merit
-        // function: accept a finite trial point whose value is not larger
-        // beyond noise and whose ‖∇O‖∞ is smaller.
-        if !accepted {
-            let noise = 1e-10 * value.abs().max(1.0);
-            let mut alpha = alpha_max;
-            for _ in 0..8 {
-                scratch.trial.clone_from(q);
-                scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                let te = std::time::Instant::now();
-                let v = obj.eval(
-                    &scratch.trial,
-                    Need::Gradient,
-                    &mut scratch.trial_grad,
-                    &mut scratch.hess,
-                    timers,
-                )?;
-                in_evals += te.elapsed();
-                if v.is_finite() && v <= value + noise && scratch.trial_grad.amax() < grad_inf {
-                    accepted = true;
-                    report.gradient_merit_steps += 1;
-                    break;
+            // Otherwise (or if that failed) the gradient norm is the merit
+            // function: accept a finite trial point whose value is not larger
+            // beyond noise and whose ‖∇O‖∞ is smaller.
+            if !accepted {
+                let noise = 1e-10 * value.abs().max(1.0);
+                alpha = start;
+                for _ in 0..8 {
+                    scratch.trial.clone_from(q);
+                    scratch.trial.axpy(alpha, &scratch.dir, 1.0);
+                    let te = std::time::Instant::now();
+                    let v = obj.eval(
+                        &scratch.trial,
+                        Need::Gradient,
+                        &mut scratch.trial_grad,
+                        &mut scratch.hess,
+                        timers,
+                    )?;
+                    in_evals += te.elapsed();
+                    if v.is_finite() && v <= value + noise && scratch.trial_grad.amax() < grad_inf {
+                        accepted = true;
+                        report.gradient_merit_steps += 1;
+                        break;
+                    }
+                    alpha *= 0.5;
+                    report.backtracks += 1;
                 }
-                alpha *= 0.5;
-                report.backtracks += 1;
             }
-        }
+            if !accepted || cut {
+                break accepted;
+            }
+            // Continuous collision detection of the accepted segment
+            // `q → q + α Δ` (see `Objective::certify`).
+            let tc = std::time::Instant::now();
+            let certified = obj.certify(q, &scratch.dir, alpha, timers)?;
+            in_evals += tc.elapsed();
+            if certified >= alpha {
+                break true;
+            }
+            report.ccd_cuts += 1;
+            cut = true;
+            start = certified.max(0.0);
+        };
         timers.add("line_search", t0.elapsed().saturating_sub(in_evals));
         if !accepted && grad_inf <= report.grad_floor {
             // No trial point can be ranked and the gradient is within its
