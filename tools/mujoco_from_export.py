@@ -36,7 +36,6 @@ Gaussian noise `--noise` (rad or m), the columns `sdrs simulate` writes.
 import argparse
 import csv
 import json
-import math
 import os
 import sys
 
@@ -44,13 +43,8 @@ import mujoco
 import numpy as np
 import yaml
 
+from scene_signals import rpy_matrix, signal as scene_signal
 
-def rpy_matrix(r, p, y):
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
 
 
 def mat_quat(m):
@@ -58,21 +52,6 @@ def mat_quat(m):
     mujoco.mju_mat2Quat(q, m.reshape(-1))
     return q
 
-
-def signal(sig, t):
-    """Target value and velocity of a scene signal at time t."""
-    kind = sig["type"]
-    if kind == "constant":
-        return sig["value"], 0.0
-    if kind == "sine":
-        v, d = sig.get("offset", 0.0), 0.0
-        for term in sig["terms"]:
-            w = 2 * math.pi * term["frequency"]
-            ph = term.get("phase", 0.0)
-            v += term["amplitude"] * math.sin(w * t + ph)
-            d += term["amplitude"] * w * math.cos(w * t + ph)
-        return v, d
-    sys.exit(f"unsupported target signal type {kind!r} (sine and constant only)")
 
 
 def solid_inertial(name, link, hulls):
@@ -102,6 +81,13 @@ def solid_inertial(name, link, hulls):
 
 def fail(msg):
     sys.exit(f"error: {msg}")
+
+
+def signal(sig, t):
+    try:
+        return scene_signal(sig, t)
+    except ValueError as e:
+        fail(str(e))
 
 
 def build(scene, hulls, args):

@@ -38,6 +38,8 @@ try:
     import mujoco
     import numpy as np
     import yaml
+
+    from scene_signals import rpy_matrix, signal as scene_signal
 except ImportError as e:  # pragma: no cover
     print(f"missing Python package: {e.name}", file=sys.stderr)
     sys.exit(3)
@@ -48,26 +50,19 @@ def fail(msg):
     sys.exit(2)
 
 
+def signal(sig, t):
+    try:
+        return scene_signal(sig, t)
+    except ValueError as e:
+        fail(str(e))
+
+
 def run(cmd):
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         fail(f"{' '.join(map(str, cmd))} failed:\n{r.stderr}")
     return r.stdout
 
-
-def signal(sig, t):
-    kind = sig["type"]
-    if kind == "constant":
-        return sig["value"], 0.0
-    if kind == "sine":
-        v, d = sig.get("offset", 0.0), 0.0
-        for term in sig["terms"]:
-            w = 2 * math.pi * term["frequency"]
-            ph = term.get("phase", 0.0)
-            v += term["amplitude"] * math.sin(w * t + ph)
-            d += term["amplitude"] * w * math.cos(w * t + ph)
-        return v, d
-    fail(f"unsupported target signal type {kind!r} (sine and constant only)")
 
 
 def rotvec_matrix(v):
@@ -78,13 +73,6 @@ def rotvec_matrix(v):
     kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(th) * kx + (1 - math.cos(th)) * kx @ kx
 
-
-def rpy_matrix(r, p, y):
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
 
 
 def origin(o):

@@ -5,7 +5,7 @@
 
 mod support;
 
-use support::{python, robots, scratch_dir, sdrs};
+use support::{robots, scratch_dir, sdrs};
 
 /// Runs the four chains under IPC for `steps` steps with `--export` and
 /// checks every hull pair at every step with python-fcl.
@@ -29,18 +29,7 @@ fn four_chains_under_ipc(steps: usize) {
     for s in ["ipc_contact", "ipc_broad_phase", "ipc_ccd", "ipc_friction"] {
         assert!(stages.contains(&s), "stage {s} missing from {stages:?}");
     }
-    let check = python()
-        .arg(support::root().join("tools/check_separation.py"))
-        .arg(&dir)
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&check.stdout);
-    assert!(
-        check.status.success(),
-        "checker found interpenetration or failed:\n{report}\n{}",
-        String::from_utf8_lossy(&check.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let r = support::python_fcl_check(&dir);
     eprintln!(
         "IPC four chains, python-fcl: {} steps × {} hull pairs, min distance {:.6e} m at step {}",
         r["steps_checked"],

@@ -31,18 +31,7 @@ fn on_ground(model: &str, import_args: &[&str]) {
         "{model}: no contact with the ground ({steps} steps)"
     );
     let ours = summary["contact"]["min_distance"].as_f64().unwrap();
-    let check = python()
-        .arg(support::root().join("tools/check_separation.py"))
-        .arg(&export)
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&check.stdout);
-    assert!(
-        check.status.success(),
-        "{model}: checker found interpenetration or failed:\n{report}\n{}",
-        String::from_utf8_lossy(&check.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let r = support::python_fcl_check(&export);
     let fcl_min = r["min_distance"].as_f64().unwrap();
     eprintln!(
         "{model}: 1 s, {steps} steps in contact, python-fcl min distance {fcl_min:.4e} m (ours {ours:.4e}) over {} steps",

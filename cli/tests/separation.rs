@@ -3,7 +3,7 @@
 
 mod support;
 
-use support::{python, robots, scratch_dir};
+use support::{robots, scratch_dir};
 
 #[test]
 fn four_chains_tangle_for_2000_steps_and_python_fcl_finds_every_pair_separated() {
@@ -21,18 +21,7 @@ fn four_chains_tangle_for_2000_steps_and_python_fcl_finds_every_pair_separated()
         "the chains did not tangle"
     );
     let ours = summary["contact"]["min_distance"].as_f64().unwrap();
-    let check = python()
-        .arg(support::root().join("tools/check_separation.py"))
-        .arg(&dir)
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&check.stdout);
-    assert!(
-        check.status.success(),
-        "checker found interpenetration or failed:\n{report}\n{}",
-        String::from_utf8_lossy(&check.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let r = support::python_fcl_check(&dir);
     let fcl_min = r["min_distance"].as_f64().unwrap();
     eprintln!(
         "python-fcl: {} steps × {} hull pairs, min distance {fcl_min:.6e} m at step {} (ours {ours:.6e})",

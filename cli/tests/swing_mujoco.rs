@@ -8,6 +8,26 @@ mod support;
 
 use support::{pybullet_data, python, root, scratch_dir, sdrs};
 
+/// Runs a convergence script of `tools/` (`--sdrs`, `--work`, `--json` added)
+/// with `args`, asserts it succeeded and returns its JSON table.
+fn table(dir: &std::path::Path, script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
+    let json = dir.join("table.json");
+    let o = python()
+        .arg(root().join("tools").join(script))
+        .args(args)
+        .arg("--sdrs")
+        .arg(env!("CARGO_BIN_EXE_sdrs"))
+        .arg("--work")
+        .arg(dir.join("work"))
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    eprintln!("{}", String::from_utf8_lossy(&o.stdout));
+    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+}
+
 #[test]
 fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
     let dir = scratch_dir("swing-mujoco");
@@ -20,38 +40,25 @@ fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let json = dir.join("table.json");
-    let o = python()
-        .arg(root().join("tools/swing_vs_mujoco.py"))
-        .arg(&scene)
-        .arg("--sdrs")
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
-        .args([
-            "--q",
-            "0.05 0.1 -0.05 -0.1 0.05 0.1 0.02",
-            "--gravity",
-            "0",
-            "0",
-            "9.81",
-        ])
-        .args([
-            "--duration",
-            "0.3",
-            "--dts",
-            "1e-2,1e-3",
-            "--mj-timestep",
-            "5e-5",
-        ])
-        .arg("--work")
-        .arg(dir.join("work"))
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    eprintln!("{}", String::from_utf8_lossy(&o.stdout));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let v = table(
+        &dir,
+        "swing_vs_mujoco.py",
+        &[
+            scene.as_os_str(),
+            "--q".as_ref(),
+            "0.05 0.1 -0.05 -0.1 0.05 0.1 0.02".as_ref(),
+            "--gravity".as_ref(),
+            "0".as_ref(),
+            "0".as_ref(),
+            "9.81".as_ref(),
+            "--duration".as_ref(),
+            "0.3".as_ref(),
+            "--dts".as_ref(),
+            "1e-2,1e-3".as_ref(),
+            "--mj-timestep".as_ref(),
+            "5e-5".as_ref(),
+        ],
+    );
     let rows = v["rows"].as_array().unwrap();
     let e: Vec<f64> = rows
         .iter()
@@ -71,30 +78,20 @@ fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
 #[test]
 fn spider_pd_tracking_converges_to_mujoco_at_first_order() {
     let dir = scratch_dir("pd-mujoco");
-    let json = dir.join("table.json");
-    let o = python()
-        .arg(root().join("tools/pd_vs_mujoco.py"))
-        .arg(root().join("robots/spider/scene.yaml"))
-        .arg("--sdrs")
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
-        .args([
-            "--duration",
-            "0.5",
-            "--dts",
-            "1e-2,1e-3",
-            "--mj-timestep",
-            "1e-5",
-        ])
-        .arg("--work")
-        .arg(dir.join("work"))
-        .arg("--json")
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    eprintln!("{}", String::from_utf8_lossy(&o.stdout));
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let spider = root().join("robots/spider/scene.yaml");
+    let v = table(
+        &dir,
+        "pd_vs_mujoco.py",
+        &[
+            spider.as_os_str(),
+            "--duration".as_ref(),
+            "0.5".as_ref(),
+            "--dts".as_ref(),
+            "1e-2,1e-3".as_ref(),
+            "--mj-timestep".as_ref(),
+            "1e-5".as_ref(),
+        ],
+    );
     assert_eq!(v["controlled_dofs"], 16, "every leg coordinate is driven");
     let rows = v["rows"].as_array().unwrap();
     let get = |r: usize, k: &str| rows[r][k].as_f64().unwrap();

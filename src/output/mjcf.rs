@@ -155,23 +155,21 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
 /// MuJoCo body name of link `i`: `robot/link` when the scene has several
 /// robots (as in trajectory columns), else the link name.
 pub fn body_name(scene: &Scene, i: usize) -> String {
-    let m = &scene.model;
-    let l = &m.links[i];
-    if m.robots.len() > 1 {
-        format!("{}/{}", m.robots[l.robot].name, l.name)
-    } else {
-        l.name.clone()
-    }
+    scoped(scene, i, &scene.model.links[i].name)
 }
 
-/// MuJoCo joint name of coordinate group `name` (as in trajectory columns).
+/// MuJoCo joint name of link `i`'s joint (as in trajectory columns).
 fn joint_name(scene: &Scene, i: usize) -> String {
+    scoped(scene, i, &scene.model.links[i].joint_name)
+}
+
+/// `name` prefixed by link `i`'s robot when the scene has several robots.
+fn scoped(scene: &Scene, i: usize, name: &str) -> String {
     let m = &scene.model;
-    let l = &m.links[i];
     if m.robots.len() > 1 {
-        format!("{}/{}", m.robots[l.robot].name, l.joint_name)
+        format!("{}/{name}", m.robots[m.links[i].robot].name)
     } else {
-        l.joint_name.clone()
+        name.to_string()
     }
 }
 

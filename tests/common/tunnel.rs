@@ -109,6 +109,18 @@ fn steps(dt: f64, seconds: f64) -> usize {
     (seconds / dt).ceil() as usize + 5
 }
 
+/// The side check of `point` against the 1 × 1 m sheet at x = 0 (thin
+/// along x), the obstacle of the shots and the slider.
+fn x_sheet(point: &str) -> SideCheck {
+    SideCheck {
+        sheet: "sheet".into(),
+        centre: [0.0; 3],
+        thin: 0,
+        half: [0.0, 0.5, 0.5],
+        point: point.into(),
+    }
+}
+
 /// A 5 cm box (free body) shot along +x at `v` m/s from 0.5 m at a thin
 /// obstacle of thickness `thick` (1 × 1 m) at x = 0.
 pub fn shot(v: f64, dt: f64, thick: f64, ccd: bool) -> Case {
@@ -120,13 +132,7 @@ pub fn shot(v: f64, dt: f64, thick: f64, ccd: bool) -> Case {
             steps(dt, 0.5 / v + 0.03),
             contact(ccd)
         ),
-        sides: vec![SideCheck {
-            sheet: "sheet".into(),
-            centre: [0.0; 3],
-            thin: 0,
-            half: [0.0, 0.5, 0.5],
-            point: "bullet".into(),
-        }],
+        sides: vec![x_sheet("bullet")],
     }
 }
 
@@ -212,13 +218,7 @@ pub fn slider(v: f64, dt: f64, ccd: bool) -> Case {
             steps(dt, 0.5 / v + 0.03),
             contact(ccd)
         ),
-        sides: vec![SideCheck {
-            sheet: "sheet".into(),
-            centre: [0.0; 3],
-            thin: 0,
-            half: [0.0, 0.5, 0.5],
-            point: "slider".into(),
-        }],
+        sides: vec![x_sheet("slider")],
     }
 }
 

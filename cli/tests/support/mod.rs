@@ -62,3 +62,21 @@ pub fn simulate_export(
     );
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
+
+/// The independent non-interpenetration check (`tools/check_separation.py`,
+/// python-fcl) of an `sdrs simulate --export DIR` run: asserts that it
+/// found every pair separated and returns its JSON report.
+pub fn python_fcl_check(dir: &std::path::Path) -> serde_json::Value {
+    let check = python()
+        .arg(root().join("tools/check_separation.py"))
+        .arg(dir)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success(),
+        "checker found interpenetration or failed:\n{report}\n{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    serde_json::from_str(&report).unwrap()
+}
