@@ -15,7 +15,7 @@ mod import_support;
 
 use import_support::*;
 use sdrs::import::mesh::{MeshContext, load_mesh};
-use sdrs::import::{Decomposer, ImportOptions, import};
+use sdrs::import::import;
 use std::path::{Path, PathBuf};
 
 fn pybullet_data() -> PathBuf {
@@ -144,11 +144,7 @@ fn racecar_urdf(dir: &Path, ext: &str) -> PathBuf {
 #[test]
 fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
     let dir = temp_dir("collada-urdf");
-    let opts = ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = hull_options();
     let dae = import(&racecar_urdf(&dir, "dae"), &opts).unwrap_or_else(|e| panic!("{e}"));
     let stl = import(&racecar_urdf(&dir, "STL"), &opts).unwrap_or_else(|e| panic!("{e}"));
     let y_up: Vec<&String> = dae
@@ -197,11 +193,7 @@ fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
 #[test]
 fn a_bare_dae_file_imports_as_one_free_body() {
     let cone = pybullet_data().join("racecar/meshes/cone.dae");
-    let opts = ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = hull_options();
     let imp = import(&cone, &opts).unwrap_or_else(|e| panic!("{e}"));
     let l = &imp.scene.robots[0].links[0];
     let zmax = l

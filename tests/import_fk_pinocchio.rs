@@ -6,16 +6,12 @@ mod import_support;
 
 use import_support::*;
 use sdrs::import::fkcheck::fk_samples;
-use sdrs::import::{Decomposer, ImportOptions, import};
+use sdrs::import::{ImportOptions, import};
 use sdrs::scene::Scene;
 use std::path::Path;
 
 fn check(urdf: &Path, tag: &str, seed: u64) {
-    let opts = ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = hull_options();
     let imp = import(urdf, &opts).unwrap_or_else(|e| panic!("{e}"));
     let scene = Scene::from_spec(imp.scene.clone(), urdf).unwrap();
     let samples = fk_samples(&scene, &imp.report, 20, seed);
@@ -56,11 +52,7 @@ fn fk_of_third_party_kuka_iiwa_matches_pinocchio() {
 fn fk_check_detects_a_wrong_pose() {
     // The checker must fail when our poses are wrong.
     let urdf = robot_urdf("three_finger_hand");
-    let opts = ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = hull_options();
     let imp = import(&urdf, &opts).unwrap();
     let scene = Scene::from_spec(imp.scene.clone(), &urdf).unwrap();
     let mut samples = fk_samples(&scene, &imp.report, 2, 5);

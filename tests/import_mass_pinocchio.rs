@@ -18,11 +18,7 @@ use std::path::Path;
 /// 20 configurations within the URDF limits: the URDF joint values, the
 /// URDF names of our 1-DOF coordinates and our matrix restricted to them.
 fn samples(urdf: &Path, seed: u64, perturb: f64) -> serde_json::Value {
-    let opts = ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = hull_options();
     let imp = import(urdf, &opts).unwrap_or_else(|e| panic!("{e}"));
     let scene = Scene::from_spec(imp.scene.clone(), urdf).unwrap();
     let model = &scene.model;
@@ -139,15 +135,7 @@ fn density_mass_gives_solid_links_and_the_report_compares_inertials() {
         );
     }
     // Default import: the report's input inertial is the given one.
-    let imp = import(
-        &urdf,
-        &ImportOptions {
-            decomposer: Decomposer::Hull,
-            progress: false,
-            ..ImportOptions::default()
-        },
-    )
-    .unwrap();
+    let imp = import(&urdf, &hull_options()).unwrap();
     let rep = &imp.report.links[3];
     let inp = rep.inertial_input.as_ref().unwrap();
     assert_eq!(rep.mass_model, "given");
@@ -178,15 +166,7 @@ fn urdf_mimic_and_limits_are_imported() {
         link("r")
     );
     std::fs::write(&urdf, text).unwrap();
-    let imp = import(
-        &urdf,
-        &ImportOptions {
-            decomposer: Decomposer::Hull,
-            progress: false,
-            ..ImportOptions::default()
-        },
-    )
-    .unwrap();
+    let imp = import(&urdf, &hull_options()).unwrap();
     let scene = Scene::from_spec(imp.scene.clone(), &urdf).unwrap();
     let m = &scene.model;
     assert_eq!(m.mimics.len(), 1);

@@ -12,7 +12,7 @@ use import_support::*;
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
 use rand::{RngExt, SeedableRng};
 use sdrs::calibrate::effects::EffectKind;
-use sdrs::import::{Decomposer, ImportOptions, import};
+use sdrs::import::import;
 use sdrs::model::{JointKind, MassModel};
 use sdrs::scene::Scene;
 use sdrs::sim::mass_matrix::mass_matrix;
@@ -32,19 +32,11 @@ fn pybullet_mjcf(name: &str) -> PathBuf {
     p
 }
 
-fn opts() -> ImportOptions {
-    ImportOptions {
-        decomposer: Decomposer::Hull,
-        progress: false,
-        ..ImportOptions::default()
-    }
-}
-
 /// 20 random configurations: MuJoCo qpos per joint, our matrix and the
 /// (joint, velocity) of each row. (Armature, MuJoCo's rotor inertia, is the
 /// separate `armature` effect here; the checker leaves it out of both.)
 fn samples(xml: &Path, seed: u64) -> serde_json::Value {
-    let imp = import(xml, &opts()).unwrap_or_else(|e| panic!("{e}"));
+    let imp = import(xml, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
     let scene = Scene::from_spec(imp.scene.clone(), xml).unwrap();
     let model = &scene.model;
     // Every link with a body inertial keeps it (`given`).
@@ -214,7 +206,7 @@ fn mass_matrix_check_catches_a_wrong_inertia() {
 #[test]
 fn mjcf_structure_limits_effects_filters_and_ground() {
     let xml = import_support::root().join("tests/data/mjcf_frames.xml");
-    let imp = import(&xml, &opts()).unwrap();
+    let imp = import(&xml, &hull_options()).unwrap();
     let r = &imp.scene.robots[0];
     let link = |n: &str| r.links.iter().find(|l| l.name == n).unwrap();
     // Three joints on `upper`: two massless frames, then the body.
@@ -277,7 +269,7 @@ fn bad_mjcf_names_file_element_and_line() {
         "<mujoco>\n  <worldbody>\n    <body name=\"b\">\n      <joint type=\"hinge\" axis=\"0 0 0\"/>\n      <geom size=\"0.1\"/>\n    </body>\n  </worldbody>\n</mujoco>\n",
     )
     .unwrap();
-    let e = import(&bad, &opts()).unwrap_err().to_string();
+    let e = import(&bad, &hull_options()).unwrap_err().to_string();
     let _ = std::fs::remove_dir_all(&dir);
     assert!(e.contains("bad.xml"), "{e}");
     assert!(e.contains("line 4") || e.contains("line"), "{e}");
@@ -292,8 +284,8 @@ fn bad_mjcf_names_file_element_and_line() {
 fn exported_mjcf_has_our_mass_matrix() {
     let dir = temp_dir("mjcf-export");
     let frames = import_support::root().join("tests/data/mjcf_frames.xml");
-    let imp = import(&frames, &opts()).unwrap();
-    let iiwa = import(&third_party_urdf(), &opts()).unwrap();
+    let imp = import(&frames, &hull_options()).unwrap();
+    let iiwa = import(&third_party_urdf(), &hull_options()).unwrap();
     let chains = Scene::load(import_support::root().join("robots/four_chains.yaml")).unwrap();
     let cases = [
         ("frames", Scene::from_spec(imp.scene, &frames).unwrap()),

@@ -110,3 +110,13 @@ pub fn listing(dir: &Path) -> Vec<String> {
     v.sort();
     v
 }
+
+/// Import settings of the independent-checker tests: one hull per mesh
+/// (`--decomposer hull`), no progress bar, every other default.
+pub fn hull_options() -> sdrs::import::ImportOptions {
+    sdrs::import::ImportOptions {
+        decomposer: sdrs::import::Decomposer::Hull,
+        progress: false,
+        ..sdrs::import::ImportOptions::default()
+    }
+}
