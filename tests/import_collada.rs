@@ -14,8 +14,8 @@
 mod import_support;
 
 use import_support::*;
-use sdrs::import::mesh::{MeshContext, load_mesh};
 use sdrs::import::import;
+use sdrs::import::mesh::{MeshContext, load_mesh};
 use std::path::{Path, PathBuf};
 
 fn pybullet_data() -> PathBuf {
