@@ -10,15 +10,22 @@ const GOOD_LINK: &str = r#"
         mass: 1.0
         hulls: [{box: {size: [0.1, 0.1, 0.1]}}]"#;
 
-/// Writes `text` to a unique temporary file and loads it.
+/// Writes `text` to a temporary file in a folder of its own and loads it.
+///
+/// One folder per test: tests run in parallel, and a shared folder could be
+/// removed by one test between another's `create_dir_all` and `write`.
 fn load(name: &str, text: &str) -> (PathBuf, String) {
-    let dir = std::env::temp_dir().join(format!("sdrs-scene-errors-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "sdrs-scene-errors-{}-{}",
+        std::process::id(),
+        name.replace(['/', '.'], "_")
+    ));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     let err = Scene::load(&path).expect_err("the scene must be rejected");
     let _ = std::fs::remove_file(&path);
-    let _ = std::fs::remove_dir(&dir); // only once empty (tests run in parallel)
+    let _ = std::fs::remove_dir(&dir);
     (path, err.to_string())
 }
 
