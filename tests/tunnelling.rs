@@ -85,19 +85,59 @@ fn fcl_check(dir: &Path) {
 fn no_body_tunnels_through_a_thin_obstacle_with_ccd_and_python_fcl_agrees() {
     let dir = common::scratch_dir("tunnelling");
     let mut failures = Vec::new();
-    let mut caps = 0;
+    let (mut caps, mut fallbacks) = (0, 0);
     for (k, case) in grid(true).iter().enumerate() {
         let scene = Scene::from_str(&case.yaml, Path::new(&case.name)).unwrap();
         let sub = dir.join(format!("{k}"));
         let o = run(&scene, case, Some(&sub));
         failures.extend(o.crossings);
         caps += o.ccd.alpha_caps;
+        fallbacks += o.ccd.fallbacks;
         assert!(o.ccd.segments > 0, "{}: CCD did not run", case.name);
         fcl_check(&sub);
     }
     assert!(failures.is_empty(), "tunnelling:\n{}", failures.join("\n"));
-    // CCD did the work (the barrier alone does not stop these, see below).
-    assert!(caps > 10, "only {caps} line-search cuts");
+    // CCD did the work (the barrier alone does not stop these, see below):
+    // straight step paths that could not be certified, steps solved again
+    // with certified line-search segments.
+    assert!(caps > 10, "only {caps} cuts");
+    // (9 measured; at least one per run that tunnels without CCD, of
+    // which the test below asserts ≥ 6.)
+    assert!(fallbacks >= 6, "only {fallbacks} steps solved again");
+}
+
+/// When nothing is fast, collision detection changes nothing: every step's
+/// straight path is certified after the ordinary solve, so the four-chain
+/// scene (contact and friction between tangling chains) gives a
+/// bit-identical trajectory with CCD on and off, and no step is solved
+/// again.
+#[test]
+fn slow_motion_is_bit_identical_with_and_without_ccd() {
+    let path = common::root().join("robots/four_chains.yaml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let off_text = text.replace(
+        "contact: {s: 0.005, kappa: 1.0e-4, mu: 0.2}",
+        "contact: {s: 0.005, kappa: 1.0e-4, mu: 0.2, ccd: {enabled: false}}",
+    );
+    assert_ne!(off_text, text, "could not switch CCD off");
+    let traj = |text: &str| {
+        let scene = Scene::from_str(text, &path).unwrap();
+        let mut sim = scene.simulator();
+        sdrs::sim::run::run_recording(&mut sim, 400, false, |_| {}).unwrap()
+    };
+    let (on, off) = (traj(&text), traj(&off_text));
+    let mut ccd = sdrs::contact::ccd::CcdStats::default();
+    on.diagnostics.iter().for_each(|d| ccd.merge(&d.ccd));
+    assert_eq!(ccd.segments, 400, "one certified path per step");
+    assert_eq!(ccd.fallbacks, 0);
+    assert!(
+        on.diagnostics.iter().any(|d| d.contact_pairs > 0),
+        "the chains never touched: the comparison says nothing"
+    );
+    assert_eq!(on.states.len(), off.states.len());
+    for (k, (a, b)) in on.states.iter().zip(&off.states).enumerate() {
+        assert!(a == b, "step {k}: trajectories differ");
+    }
 }
 
 #[test]

@@ -122,6 +122,10 @@ pub struct CcdStats {
     /// Pairs GJK could not certify as separated at a segment's start (left
     /// to the barrier; see the module docs).
     pub uncertified: usize,
+    /// Steps whose straight path `θ^t → θ^{t+1}` could not be certified
+    /// and that were solved again with certified line-search segments
+    /// (see [`crate::sim::Simulator::step`]).
+    pub fallbacks: usize,
 }
 
 impl Default for CcdStats {
@@ -134,6 +138,7 @@ impl Default for CcdStats {
             alpha_caps: 0,
             min_alpha: 1.0,
             uncertified: 0,
+            fallbacks: 0,
         }
     }
 }
@@ -148,6 +153,7 @@ impl CcdStats {
         self.alpha_caps += o.alpha_caps;
         self.min_alpha = self.min_alpha.min(o.min_alpha);
         self.uncertified += o.uncertified;
+        self.fallbacks += o.fallbacks;
     }
 }
 
@@ -157,7 +163,8 @@ struct Doubt {
     a: usize,
     b: usize,
     /// For links with a common ancestor: the closing-rate bound relative to
-    /// its frame (direction-free); `None`: the world-frame directional one.
+    /// its frame (direction-free), used when below the world-frame
+    /// directional one; `None`: only the world-frame one.
     relative: Option<f64>,
     /// `η g₀` (m).
     keep: f64,
@@ -224,12 +231,12 @@ impl Ccd {
 
     /// Closing-rate bound `ρ` of a pair along `dir` (m per unit α).
     fn rate(&self, d: &Doubt) -> f64 {
-        if let Some(r) = d.relative {
-            return r;
-        }
         let (la, lb) = (self.hulls.ids[d.a].link, self.hulls.ids[d.b].link);
         let m = &self.motion;
-        (d.dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0)
+        let world =
+            (d.dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0);
+        // Both bound the closing rate: the smaller holds.
+        d.relative.map_or(world, |r| r.min(world))
     }
 
     /// Lowest common ancestor of links `a` and `b` (`None`: different trees).
@@ -314,8 +321,15 @@ impl Ccd {
         let dq = &self.seg;
         self.kin.update(model, q, charts, KinOrder::Pose);
         hull_radii(model, &mut self.radius);
-        self.motion
-            .update(model, &self.kin.pre, &self.radius, q, dq);
+        self.motion.update(
+            model,
+            &self.kin.pre,
+            &self.kin.pose,
+            charts,
+            &self.radius,
+            q,
+            dq,
+        );
         self.hulls.update(model, &self.kin.pose);
         self.pad.clear();
         let motion = &self.motion;
@@ -340,9 +354,8 @@ impl Ccd {
             let relative = self
                 .common_ancestor(model, la, lb)
                 .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
-            let bound = relative.unwrap_or_else(|| {
-                (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb]
-            });
+            let world = (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb];
+            let bound = relative.map_or(world, |r| r.min(world));
             // Cheap skips: no relative motion, or less than a lower bound of
             // the distance from the boxes or the bounding spheres.
             let (sa, sb) = (self.spheres[a], self.spheres[b]);

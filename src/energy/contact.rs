@@ -257,6 +257,10 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
+    fn certifies(&self) -> bool {
+        self.ccd.options.enabled
+    }
+
     /// Continuous collision detection (see [`crate::contact::ccd`]) of the
     /// accepted segment `q → q + α dq`: the largest certified `α' ≤ α`
     /// along which no hull pair can touch; `α` when

@@ -209,6 +209,13 @@ pub trait Energy: Send + Sync {
         Ok(1.0)
     }
 
+    /// Whether [`Energy::certify_step`] checks anything (continuous
+    /// collision detection on). The simulator then certifies each step's
+    /// path (see [`crate::sim::Simulator::step`]). Default false.
+    fn certifies(&self) -> bool {
+        false
+    }
+
     /// Continuous collision detection of the segment `q → q + α dq` that
     /// the line search accepted: the largest `α' ≤ α` such that the term
     /// stays finite (collision-free) at *every* point of `[q, q + α' dq]`,

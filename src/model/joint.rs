@@ -14,7 +14,7 @@
 
 use crate::math::{Pose, so3};
 use nalgebra::{Const, Matrix3, SVector, Vector3};
-use num_dual::{Dual2Vec, DualNum, hessian};
+use num_dual::{Dual2Vec, Dual64, DualNum, hessian};
 
 /// Largest number of coordinates of one joint (free body).
 pub const MAX_JOINT_DOF: usize = 6;
@@ -148,6 +148,22 @@ impl JointKind {
     /// `J(q)` for plain numbers.
     pub fn transform(&self, chart: &Matrix3<f64>, q: &[f64]) -> Pose {
         Pose::from_column_slice(&self.transform_generic(chart, q))
+    }
+
+    /// `J(q)` and its rate `dJ/dα` along the straight line `q + α dq` at
+    /// `α = 0` (exact, by first-order dual numbers): the rotation's rate in
+    /// the first three columns, the translation's in the last.
+    pub fn transform_velocity(&self, chart: &Matrix3<f64>, q: &[f64], dq: &[f64]) -> (Pose, Pose) {
+        let n = self.ndof();
+        let mut qs = [Dual64::from(0.0); 6];
+        for k in 0..n {
+            qs[k] = Dual64::new(q[k], dq[k]);
+        }
+        let out = self.transform_generic(chart, &qs[..n.max(1)]);
+        (
+            Pose::from_fn(|r, c| out[c * 3 + r].re),
+            Pose::from_fn(|r, c| out[c * 3 + r].eps),
+        )
     }
 
     /// `J(q)`, `∂J/∂q_k` and `∂²J/∂q_k∂q_l` (exact, by second-order dual

@@ -210,10 +210,13 @@ pub struct ContactStats {
     /// Smallest GJK distance between candidate hull pairs over all accepted
     /// states (m); `null` when no pair was ever a candidate.
     pub min_distance: Option<f64>,
-    /// Continuous collision detection over the run (zeros when off): Newton
-    /// segments checked, hull pairs tested and advanced, advancement rounds,
-    /// steps capped (`alpha_caps`) and the smallest cap (`min_alpha`), pairs
-    /// left to the barrier (`uncertified`). See `sdrs::contact::ccd`.
+    /// Continuous collision detection over the run (zeros when off): paths
+    /// checked (`segments`: each step's straight path, plus the line-search
+    /// segments of steps solved again), hull pairs tested and advanced,
+    /// advancement rounds, paths capped (`alpha_caps`) and the smallest cap
+    /// (`min_alpha`), pairs left to the barrier (`uncertified`), steps
+    /// solved again with certified segments (`fallbacks`). See
+    /// `sdrs::contact::ccd` and `sdrs::sim::Simulator::step`.
     pub ccd: crate::contact::ccd::CcdStats,
 }
 

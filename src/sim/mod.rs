@@ -136,6 +136,10 @@ struct StepObjective<'a> {
     assemble: &'a mut AssembleScratch,
     /// Per-term work of the step at the last gradient evaluation, when on.
     work: Option<&'a mut StepWork>,
+    /// Whether accepted line-search segments are certified by continuous
+    /// collision detection ([`Objective::certify`]); off for the first,
+    /// optimistic solve of a step (see [`Simulator::step`]).
+    certify_segments: bool,
 }
 
 /// `Σ_i ⟨∂E/∂A_i, A_i − A_i^t⟩ + ∂E/∂θ·(θ − θ^t)` of what `acc` holds.
@@ -268,6 +272,9 @@ impl Objective for StepObjective<'_> {
         alpha: f64,
         _timers: &mut StageTimers,
     ) -> Result<f64, EnergyError> {
+        if !self.certify_segments {
+            return Ok(alpha);
+        }
         let mut out = alpha;
         for e in self.energies.iter_mut() {
             out = out.min(e.certify_step(&self.ctx, q, dir, alpha, self.charts)?);
@@ -360,7 +367,7 @@ impl Simulator {
         let t_next = self.begin_next_step()?;
         let n = self.model.ndof();
         let (mut g, mut h) = (DVector::zeros(n), DMatrix::zeros(n, n));
-        let (mut obj, _) = step_objective(self, t_next);
+        let (mut obj, _) = step_objective(self, t_next, false);
         let mut timers = StageTimers::default();
         let v = obj.eval(q, need, &mut g, &mut h, &mut timers)?;
         Ok((v, g, h))
@@ -431,32 +438,70 @@ impl Simulator {
         self.begin_next_step().map_err(|e| fail(e.into()))?;
         self.timers.add("begin_step", t0.elapsed());
         let mut q = self.state.q.clone();
-        let report = {
-            let (mut obj, parts) = step_objective(self, t_next);
-            newton::minimize(
+        // Continuous collision detection (`contact::ccd`): first an
+        // optimistic solve without it, then one check of the straight
+        // joint-space path θ^t → θ^{t+1} — the motion the implicit scheme
+        // assumes (constant generalized velocity (θ^{t+1} − θ^t)/Δt over the
+        // step). Only when that path cannot be certified (or the optimistic
+        // solve fails) is the step solved again from θ^t with every accepted
+        // line-search segment certified; those chain into a certified
+        // polyline θ^t → θ^{t+1}. Either way a collision-free path joins the
+        // two states, and when nothing is fast the trajectory is
+        // bit-identical to one without collision detection.
+        let ccd = self.energies.iter().any(|e| e.certifies());
+        if ccd {
+            let (mut obj, parts) = step_objective(self, t_next, false);
+            let solved = newton::minimize(
                 &mut obj,
                 &mut q,
                 &parts.settings.newton,
                 parts.newton,
                 parts.timers,
-            )
-            .map_err(|e| match e {
-                NewtonError::InfeasibleStart { value, detail } => {
-                    let why: Vec<String> = parts_explain(&self.energies, &self.model);
-                    NewtonError::InfeasibleStart {
-                        value,
-                        detail: if why.is_empty() {
-                            detail
-                        } else {
-                            why.join("; ")
-                        },
-                    }
+            );
+            if let Ok(report) = solved {
+                let q_prev = obj.ctx.q_prev;
+                let path = &q - q_prev;
+                obj.certify_segments = true;
+                let whole = obj
+                    .certify(q_prev, &path, 1.0, parts.timers)
+                    .map_err(|e| fail(e.into()))?;
+                if whole >= 1.0 {
+                    return Ok(self.accept(q, report, false));
                 }
-                e => e,
-            })
-            .map_err(fail)?
-        };
+            }
+            q.clone_from(&self.state.q);
+        }
+        let (mut obj, parts) = step_objective(self, t_next, ccd);
+        let report = newton::minimize(
+            &mut obj,
+            &mut q,
+            &parts.settings.newton,
+            parts.newton,
+            parts.timers,
+        )
+        .map_err(|e| match e {
+            NewtonError::InfeasibleStart { value, detail } => {
+                let why: Vec<String> = parts_explain(&self.energies, &self.model);
+                NewtonError::InfeasibleStart {
+                    value,
+                    detail: if why.is_empty() {
+                        detail
+                    } else {
+                        why.join("; ")
+                    },
+                }
+            }
+            e => e,
+        })
+        .map_err(fail)?;
+        Ok(self.accept(q, report, ccd))
+    }
 
+    /// Takes `q` as `θ^{t+1}`: diagnostics of the step (`fallback`: it was
+    /// solved again with certified line-search segments, see
+    /// [`Simulator::step`]), then the state advances.
+    fn accept(&mut self, q: DVector<f64>, report: NewtonReport, fallback: bool) -> StepDiagnostics {
+        let step_index = self.state.step + 1;
         let t0 = Instant::now();
         self.scratch
             .kin
@@ -470,6 +515,9 @@ impl Simulator {
         for e in self.energies.iter_mut() {
             e.report(&mut diag, &mut self.timers);
         }
+        if fallback {
+            diag.ccd.fallbacks += 1;
+        }
         let st = &mut self.state;
         st.q_prev = std::mem::replace(&mut st.q, q);
         st.poses_prev = std::mem::replace(&mut st.poses, new_poses);
@@ -477,7 +525,7 @@ impl Simulator {
         st.time = step_index as f64 * self.settings.dt;
         st.recenter_charts(&self.model);
         self.timers.add("accept", t0.elapsed());
-        Ok(diag)
+        diag
     }
 
     fn diagnostics(&self, new_poses: &[Pose], newton: NewtonReport) -> StepDiagnostics {
@@ -537,7 +585,11 @@ struct SolverParts<'a> {
 
 /// The objective of the step following `sim.state` (after
 /// [`Simulator::begin_next_step`]), borrowing the simulator field by field.
-fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, SolverParts<'_>) {
+fn step_objective(
+    sim: &mut Simulator,
+    t_next: f64,
+    certify_segments: bool,
+) -> (StepObjective<'_>, SolverParts<'_>) {
     let Simulator {
         model,
         settings,
@@ -565,6 +617,7 @@ fn step_objective(sim: &mut Simulator, t_next: f64) -> (StepObjective<'_>, Solve
         acc,
         assemble,
         work: energy_balance.then_some(work),
+        certify_segments,
     };
     (
         obj,
