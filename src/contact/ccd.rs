@@ -1,8 +1,10 @@
 //! Continuous collision detection for articulated motion: the largest
-//! fraction `α` of a Newton step `θ → θ + Δθ` along which no hull pair can
-//! touch, by conservative advancement (Mirtich; Zhang et al. 2006; Rigid-IPC)
-//! on the curved world paths that forward kinematics makes of the straight
-//! joint-space segment.
+//! fraction `α` of a joint-space segment `θ → θ + Δθ` along which no hull
+//! pair can touch, by conservative advancement (Mirtich; Zhang et al. 2006;
+//! Rigid-IPC) on the curved world paths that forward kinematics makes of the
+//! straight joint-space segment. The simulator certifies each step's
+//! straight path `θ^t → θ^{t+1}`, and line-search segments only for steps
+//! whose straight path fails (see [`crate::sim::Simulator::step`]).
 //!
 //! # What is certified
 //!

@@ -46,6 +46,11 @@
 //! These are sums of fixed inter-joint distances, prismatic/free travel on
 //! the segment and hull radii times angular rates: rigid lever arms, valid at
 //! every `α ∈ [0, 1]`, not only at the start.
+//!
+//! This *lever bound* is tight when the joints turn the same way and loose
+//! when they turn against each other; [`SegmentMotion::update`] also
+//! computes a *rate bound* from the exact rates at the start and keeps the
+//! smaller of the two.
 
 use crate::math::{Pose, rot};
 use crate::model::{JointKind, Model};

@@ -27,6 +27,8 @@
 //! of it collision-free, not only its end); if only `[0, α']` can be, the
 //! search runs again from `α'` ([`NewtonReport::ccd_cuts`]). Starting from
 //! `θ^t`, the accepted segments chain into a certified path `θ^t → θ^{t+1}`.
+//! The simulator asks for this only when a step's straight path could not be
+//! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
 use super::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
