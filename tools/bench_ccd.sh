@@ -5,11 +5,12 @@
 # chain, 200 steps each. Prints, per N, the median ms/step on and off, the
 # slowdown, Newton iterations and the `ccd` stage's share of the step time.
 #
-#   tools/bench_ccd.sh [OUT_DIR] [REPS]     (defaults out/bench_ccd, 3)
+#   [STEPS=200] tools/bench_ccd.sh [OUT_DIR] [REPS]     (defaults out/bench_ccd, 3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-out/bench_ccd}
 REPS=${2:-3}
+STEPS=${STEPS:-200}
 BIN=${SDRS_BIN:-target/release/sdrs}
 [ -n "${SDRS_BIN:-}" ] || cargo build --release -q
 mkdir -p "$OUT"
@@ -18,7 +19,7 @@ sed 's/^contact: {\(.*\)}$/contact: {\1, ccd: {enabled: false}}/' robots/four_ch
 grep -q "enabled: false" "$OUT/off.yaml" || { echo "could not switch CCD off in $OUT/off.yaml"; exit 2; }
 for i in $(seq 1 "$REPS"); do
   for s in on off; do
-    nice -n 5 "$BIN" bench --scene "$OUT/$s.yaml" --steps 200 --json "$OUT/${s}_$i.json" > /dev/null
+    nice -n 5 "$BIN" bench --scene "$OUT/$s.yaml" --steps "$STEPS" --json "$OUT/${s}_$i.json" > /dev/null
   done
 done
 .venv/bin/python - "$OUT" "$REPS" <<'PY'
