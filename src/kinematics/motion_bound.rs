@@ -175,11 +175,7 @@ impl SegmentMotion {
             let rate = rate_compose(&pre_rate, &local) + rotate_rate(&pre[i], &local_rate);
             self.pose_rate[i] = rate;
             let spin = rate.fixed_view::<3, 3>(0, 0) * rot(&pose[i]).transpose();
-            self.omega0[i] = Vector3::new(
-                spin[(2, 1)] - spin[(1, 2)],
-                spin[(0, 2)] - spin[(2, 0)],
-                spin[(1, 0)] - spin[(0, 1)],
-            ) * 0.5;
+            self.omega0[i] = axial(&spin);
             self.origin_rate0[i] = rate.column(3).into_owned();
 
             let (w, rate_t, travel) = match &link.joint {
@@ -299,6 +295,16 @@ impl SegmentMotion {
     }
 }
 
+/// `ω` from `[ω]× + E`: the axial vector of a matrix's skew part
+/// (`Ṙ Rᵀ` of a rotation `R` gives its space angular velocity).
+fn axial(m: &Matrix3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    ) * 0.5
+}
+
 /// The rate of `T · B` for a constant pose `B`, given `Ṫ` (the
 /// translation column of `B` is carried by the rotation rate only).
 fn rate_compose(t_rate: &Pose, b: &Pose) -> Pose {
@@ -360,6 +366,29 @@ mod tests {
             chart: None,
             collides: true,
         }
+    }
+
+    /// The bounds of the segment `q → q + dq` and the link poses at
+    /// `steps + 1` evenly spaced points of it.
+    fn bound_and_path(
+        model: &Model,
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+        steps: usize,
+    ) -> (SegmentMotion, Vec<f64>, Vec<Vec<Pose>>) {
+        let mut kin = Kinematics::new(model);
+        kin.update(model, q, charts, KinOrder::Pose);
+        let mut radius = Vec::new();
+        hull_radii(model, &mut radius);
+        let mut m = SegmentMotion::default();
+        m.update(model, &kin.pre, &kin.pose, charts, &radius, q, dq);
+        let poses = (0..=steps)
+            .map(|k| {
+                crate::kinematics::link_poses(model, &(q + dq * (k as f64 / steps as f64)), charts)
+            })
+            .collect();
+        (m, radius, poses)
     }
 
     /// A tree with every joint kind: free root → revolute → prismatic →
@@ -428,19 +457,8 @@ mod tests {
             let scale = [0.05, 0.5, 2.0][case % 3];
             let q = DVector::from_fn(n, |_, _| rng.random_range(-1.5..1.5));
             let dq = DVector::from_fn(n, |_, _| scale * rng.random_range(-1.0..1.0));
-            let mut kin = Kinematics::new(&model);
-            kin.update(&model, &q, &charts, KinOrder::Pose);
-            let mut radius = Vec::new();
-            hull_radii(&model, &mut radius);
-            let mut m = SegmentMotion::default();
-            m.update(&model, &kin.pre, &kin.pose, &charts, &radius, &q, &dq);
             let steps = 200;
-            let poses: Vec<Vec<Pose>> = (0..=steps)
-                .map(|k| {
-                    let qa = &q + &dq * (k as f64 / steps as f64);
-                    crate::kinematics::link_poses(&model, &qa, &charts)
-                })
-                .collect();
+            let (m, _, poses) = bound_and_path(&model, &q, &dq, &charts, steps);
             let dirs: Vec<Vector3<f64>> = (0..4)
                 .map(|_| Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize())
                 .collect();
@@ -506,11 +524,7 @@ mod tests {
             let r = crate::math::so3::exp(&phi);
             // Body angular velocity: vee(Rᵀ Ṙ).
             let w = r.transpose() * (rp - rm) / (2.0 * h);
-            let omega = Vector3::new(
-                w[(2, 1)] - w[(1, 2)],
-                w[(0, 2)] - w[(2, 0)],
-                w[(1, 0)] - w[(0, 1)],
-            ) * 0.5;
+            let omega = axial(&w);
             let ratio = omega.norm() / d.norm();
             assert!(ratio <= 1.0 + 1e-6, "ratio {ratio} at φ = {phi:?}");
             max_ratio = max_ratio.max(ratio);
@@ -548,11 +562,7 @@ mod tests {
             for i in 0..model.links.len() {
                 let dr = (rot(&plus[i]) - rot(&minus[i])) / (2.0 * h);
                 let spin = dr * rot(&kin.pose[i]).transpose();
-                let w = Vector3::new(
-                    spin[(2, 1)] - spin[(1, 2)],
-                    spin[(0, 2)] - spin[(2, 0)],
-                    spin[(1, 0)] - spin[(0, 1)],
-                ) * 0.5;
+                let w = axial(&spin);
                 let v = (plus[i].column(3) - minus[i].column(3)) / (2.0 * h);
                 assert!(
                     (w - m.omega0[i]).norm() <= 1e-6 * (1.0 + w.norm()),
@@ -578,11 +588,7 @@ mod tests {
             let s = (crate::math::so3::exp(&(phi + d * h)) - crate::math::so3::exp(&(phi - d * h)))
                 / (2.0 * h)
                 * r.transpose();
-            Vector3::new(
-                s[(2, 1)] - s[(1, 2)],
-                s[(0, 2)] - s[(2, 0)],
-                s[(1, 0)] - s[(0, 1)],
-            ) * 0.5
+            axial(&s)
         };
         let mut worst: f64 = 0.0;
         for k in 0..4000 {
@@ -644,22 +650,8 @@ mod tests {
             sign * 0.03 + rng.random_range(-1e-3..1e-3)
         });
         let charts: Vec<Matrix3<f64>> = Vec::new();
-        let mut kin = Kinematics::new(&model);
-        kin.update(&model, &q, &charts, KinOrder::Pose);
-        let mut radius = Vec::new();
-        hull_radii(&model, &mut radius);
-        let mut m = SegmentMotion::default();
-        m.update(&model, &kin.pre, &kin.pose, &charts, &radius, &q, &dq);
         let steps = 400;
-        let poses: Vec<Vec<Pose>> = (0..=steps)
-            .map(|k| {
-                crate::kinematics::link_poses(
-                    &model,
-                    &(&q + &dq * (k as f64 / steps as f64)),
-                    &charts,
-                )
-            })
-            .collect();
+        let (m, radius, poses) = bound_and_path(&model, &q, &dq, &charts, steps);
         let tip = n_links - 1;
         let mut moved_max: f64 = 0.0;
         for i in 0..n_links {
