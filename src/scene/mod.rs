@@ -178,6 +178,9 @@ impl Scene {
                     .contact_energies(self, c)
                     .map_err(|e| e.at(&self.source))?;
                 sim.energies.extend(energies);
+                // IPC's barrier makes the joint-space Hessian's kinematic
+                // part indefinite: see `NewtonOptions::eig_abs`.
+                sim.settings.newton.eig_abs = true;
             }
         }
         crate::calibrate::effects::install(&self.effects, &mut sim);

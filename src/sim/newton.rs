@@ -53,6 +53,20 @@ pub struct NewtonOptions {
     /// scene's length scale, at least 1 m) is accepted as converged to
     /// working precision. Default `1e-9` m.
     pub step_floor: f64,
+    /// Negative eigenvalues become `max(|λ|, eig_clamp)` ("absolute-value
+    /// projection") instead of `eig_clamp`. Default `false` (the paper's
+    /// clamp; SDRS runs unchanged). The IPC baseline sets it
+    /// ([`crate::scene::Scene::simulator_with`]): its barrier forces are
+    /// large, and the second-order kinematic part of the joint-space Hessian
+    /// (`⟨Q_b, S_k S_l⟩`, force × curvature of the link motion) is then
+    /// indefinite with eigenvalues of −1…−400 on the four chains; clamping
+    /// them to `1e-3` gives Newton steps `|g|/1e-3` long (10²–10⁴ rad) that
+    /// CCD must cut to 1e-2…1e-9, and the solve stalls. With `|λ|` the step
+    /// along such a direction has the length its curvature implies. Not a
+    /// scene key (set by the contact model).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub eig_abs: bool,
 }
 
 impl Default for NewtonOptions {
@@ -63,6 +77,7 @@ impl Default for NewtonOptions {
             eig_clamp: 1e-3,
             max_backtracks: 60,
             step_floor: 1e-9,
+            eig_abs: false,
         }
     }
 }
@@ -243,6 +258,7 @@ pub fn minimize(
                 &scratch.hess,
                 &scratch.grad,
                 opts.eig_clamp,
+                opts.eig_abs,
                 &mut scratch.dir,
                 &mut scratch.comp,
             )
@@ -392,7 +408,14 @@ fn max_row_sum(h: &DMatrix<f64>) -> f64 {
 /// factorization, every eigenvalue of `H` exceeds `clamp`, clamping changes
 /// nothing and `Ĥ = H`: the step is a Cholesky solve (about ten times
 /// cheaper than an eigendecomposition). Otherwise eigen-decompose and clamp.
-fn clamped_block_solve(block: DMatrix<f64>, g: &DVector<f64>, clamp: f64) -> DVector<f64> {
+/// With `abs`, eigenvalues become `max(|λ|, clamp)` (see
+/// [`NewtonOptions::eig_abs`]); the Cholesky shortcut is exact either way.
+fn clamped_block_solve(
+    block: DMatrix<f64>,
+    g: &DVector<f64>,
+    clamp: f64,
+    abs: bool,
+) -> DVector<f64> {
     let m = block.nrows();
     let shifted = &block - DMatrix::identity(m, m) * clamp;
     if shifted.cholesky().is_some()
@@ -403,19 +426,20 @@ fn clamped_block_solve(block: DMatrix<f64>, g: &DVector<f64>, clamp: f64) -> DVe
     let eig = block.symmetric_eigen();
     let mut coeff = eig.eigenvectors.transpose() * g;
     for (c, &lam) in coeff.iter_mut().zip(eig.eigenvalues.iter()) {
-        *c /= lam.max(clamp);
+        *c /= if abs { lam.abs() } else { lam }.max(clamp);
     }
     -(eig.eigenvectors * coeff)
 }
 
 /// `dir = −Ĥ⁻¹ g`, where `Ĥ` has the eigenvectors of `H` and eigenvalues
-/// `max(λ, clamp)`. `H` is split into the connected components of its
+/// `max(λ, clamp)` (`max(|λ|, clamp)` with `abs`). `H` is split into the connected components of its
 /// sparsity graph and each block is decomposed separately (exact: the
 /// eigendecomposition of a block-diagonal matrix is the union of its blocks').
 pub fn clamped_newton_direction(
     h: &DMatrix<f64>,
     g: &DVector<f64>,
     clamp: f64,
+    abs: bool,
     dir: &mut DVector<f64>,
     comp: &mut Vec<usize>,
 ) {
@@ -457,7 +481,7 @@ pub fn clamped_newton_direction(
             0.5 * (h[(idx[a], idx[b])] + h[(idx[b], idx[a])])
         });
         let gb = DVector::from_fn(m, |a, _| g[idx[a]]);
-        let d = clamped_block_solve(block, &gb, clamp);
+        let d = clamped_block_solve(block, &gb, clamp, abs);
         for (a, &i) in idx.iter().enumerate() {
             dir[i] = d[a];
         }
@@ -490,8 +514,22 @@ mod tests {
             let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
             let clamp = 1e-3;
             let want = eigen_direction(&h, &g, clamp);
-            let got = clamped_block_solve(h.clone(), &g, clamp);
+            let got = clamped_block_solve(h.clone(), &g, clamp, false);
             assert!((&got - &want).norm() <= 1e-8 * want.norm(), "case {case}");
+            // Absolute-value projection: a descent direction whose length
+            // along each eigenvector is |g_i| / max(|λ_i|, clamp).
+            let eig = h.clone().symmetric_eigen();
+            let abs = clamped_block_solve(h.clone(), &g, clamp, true);
+            let c = eig.eigenvectors.transpose() * &abs;
+            let gc = eig.eigenvectors.transpose() * &g;
+            for i in 0..n {
+                let want = -gc[i] / eig.eigenvalues[i].abs().max(clamp);
+                assert!(
+                    (c[i] - want).abs() <= 1e-8 * (1.0 + want.abs()),
+                    "case {case}"
+                );
+            }
+            assert!(abs.dot(&g) < 0.0);
         }
     }
 }
