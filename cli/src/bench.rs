@@ -23,6 +23,10 @@ pub struct BenchArgs {
     /// Write the table as JSON here.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Newton options overriding the scene's `solver`, as a YAML mapping,
+    /// e.g. `--solver '{predictor: previous, indefinite: shift}'`.
+    #[arg(long)]
+    pub solver: Option<String>,
     #[command(flatten)]
     pub contact: crate::contact_model::ContactArgs,
 }
@@ -37,11 +41,16 @@ pub fn run(a: BenchArgs) -> Result<()> {
     };
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-    let base: sdrs::scene::SceneSpec =
+    let mut base: sdrs::scene::SceneSpec =
         serde_yaml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    if let Some(over) = &a.solver {
+        base.solver = override_solver(&base.solver, over)?;
+    }
     let mut rows = Vec::new();
-    println!("| links/chain | dof | ms/step | Newton it/step | stage breakdown (ms/step) |");
-    println!("|---:|---:|---:|---:|---|");
+    println!(
+        "| links/chain | dof | ms/step | Newton it/step | eigen solves % | stage breakdown (ms/step) |"
+    );
+    println!("|---:|---:|---:|---:|---:|---|");
     for &n in &a.links {
         let mut spec = base.clone();
         for r in &mut spec.robots {
@@ -61,22 +70,45 @@ pub fn run(a: BenchArgs) -> Result<()> {
             .iter()
             .map(|st| format!("{} {:.3}", st.stage, 1e3 * st.seconds / a.steps as f64))
             .collect();
+        // Share of Newton iterations whose step needed an
+        // eigendecomposition (a Hessian block with an eigenvalue ≤ clamp).
+        let lin = sim.linear_solve_stats();
+        let eigen_pct = 100.0 * lin.eigen_solves as f64 / lin.solves.max(1) as f64;
         println!(
-            "| {n} | {} | {:.3} | {:.2} | {} |",
+            "| {n} | {} | {:.3} | {:.2} | {:.1} | {} |",
             scene.model.ndof(),
             1e3 * s.seconds_per_step,
             s.newton.mean_iterations,
+            eigen_pct,
             stages.join(", ")
         );
         rows.push(serde_json::json!({
             "links_per_chain": n, "dof": scene.model.ndof(), "ms_per_step": 1e3 * s.seconds_per_step,
             "newton_iterations_per_step": s.newton.mean_iterations, "stages": s.stages,
+            "linear_solve": lin, "eigen_solve_percent": eigen_pct,
         }));
     }
     if let Some(p) = &a.json {
         write_atomic(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;
     }
     Ok(())
+}
+
+/// `base` with the keys of the YAML mapping `over` replaced.
+fn override_solver(
+    base: &sdrs::sim::NewtonOptions,
+    over: &str,
+) -> Result<sdrs::sim::NewtonOptions> {
+    let mut v = serde_yaml::to_value(base)?;
+    let o: serde_yaml::Value =
+        serde_yaml::from_str(over).with_context(|| format!("--solver {over:?}: not YAML"))?;
+    let (Some(vm), Some(om)) = (v.as_mapping_mut(), o.as_mapping()) else {
+        anyhow::bail!("--solver {over:?}: expected a mapping such as '{{predictor: previous}}'");
+    };
+    for (k, x) in om {
+        vm.insert(k.clone(), x.clone());
+    }
+    serde_yaml::from_value(v).with_context(|| format!("--solver {over:?}"))
 }
 
 /// `robots/four_chains.yaml` in the current directory or above the binary.

@@ -169,18 +169,44 @@ impl Scene {
         &self,
         factory: &dyn ContactModelFactory,
     ) -> Result<Simulator, SceneError> {
+        self.simulator_from(factory, false)
+    }
+
+    /// [`Scene::simulator_with`] for the backward pass of a trajectory
+    /// recorded with it: the factory's [`ContactModelFactory::adjoint_energies`]
+    /// (e.g. exact instead of PSD-projected Hessians). SDRS scenes get
+    /// exactly [`Scene::simulator`].
+    pub fn adjoint_simulator_with(
+        &self,
+        factory: &dyn ContactModelFactory,
+    ) -> Result<Simulator, SceneError> {
+        self.simulator_from(factory, true)
+    }
+
+    fn simulator_from(
+        &self,
+        factory: &dyn ContactModelFactory,
+        adjoint: bool,
+    ) -> Result<Simulator, SceneError> {
         let mut sim = self.bare_simulator();
         if let Some(c) = &self.contact_settings() {
             if c.model.is_sdrs() {
                 push_sdrs_contact(&mut sim, &self.model, c, self.settings.dt);
             } else {
-                let energies = factory
-                    .contact_energies(self, c)
-                    .map_err(|e| e.at(&self.source))?;
+                let energies = if adjoint {
+                    factory.adjoint_energies(self, c)
+                } else {
+                    factory.contact_energies(self, c)
+                }
+                .map_err(|e| e.at(&self.source))?;
                 sim.energies.extend(energies);
                 // IPC's barrier makes the joint-space Hessian's kinematic
                 // part indefinite: see `NewtonOptions::eig_abs`.
                 sim.settings.newton.eig_abs = true;
+                // The IPC baseline keeps the paper's start θ^t: with the
+                // 2θ^t − θ^{t−1} predictor its four-chain run stops
+                // converging at step 1596 (notes/perf.md).
+                sim.settings.newton.predictor = crate::sim::Predictor::Previous;
             }
         }
         crate::calibrate::effects::install(&self.effects, &mut sim);
@@ -229,4 +255,20 @@ pub trait ContactModelFactory {
         scene: &Scene,
         settings: &ContactSettings,
     ) -> Result<Vec<Box<dyn crate::energy::Energy>>, Invalid>;
+
+    /// The terms a backward pass linearizes a trajectory recorded with
+    /// [`ContactModelFactory::contact_energies`] with: the same functions,
+    /// with whatever the Newton solve approximates made exact (IPC: the
+    /// per-primitive Hessians without PSD projection). Default: the same
+    /// terms.
+    fn adjoint_energies(
+        &self,
+        scene: &Scene,
+        settings: &ContactSettings,
+    ) -> Result<Vec<Box<dyn crate::energy::Energy>>, Invalid> {
+        self.contact_energies(scene, settings)
+    }
 }
+
+/// A shareable contact-model factory (co-design problems carry one).
+pub type SharedContactFactory = std::sync::Arc<dyn ContactModelFactory + Send + Sync>;

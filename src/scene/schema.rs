@@ -11,6 +11,8 @@
 //!   max_iters: 100
 //!   eig_clamp: 1.0e-3        #   Hessian eigenvalue floor
 //!   max_backtracks: 60
+//!   predictor: extrapolate   #   start at 2θ^t − θ^{t−1} (or `previous`: θ^t)
+//!   indefinite: shift        #   Newton model of blocks with λ ≤ eig_clamp (or `clamp`)
 //! robots:
 //!   - name: arm
 //!     base: {xyz: [0, 0, 1], rpy: [0, 0, 0]}   # world pose of the root attachment (default identity)

@@ -9,6 +9,7 @@
 
 pub mod assemble;
 pub mod counters;
+pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
 pub mod run;
@@ -17,7 +18,7 @@ pub mod state;
 pub use counters::{StageTime, StageTimers};
 
 /// Stages of a step, in order, as named in the timers.
-pub use newton::{NewtonError, NewtonOptions, NewtonReport};
+pub use newton::{Indefinite, NewtonError, NewtonOptions, NewtonReport, Predictor};
 pub use state::SimState;
 
 use crate::control::Controller;
@@ -122,6 +123,8 @@ struct StepScratch {
     assemble: AssembleScratch,
     newton: NewtonScratch,
     targets: Vec<PdTarget>,
+    /// The step's initial guess ([`Predictor`]).
+    guess: DVector<f64>,
     /// Per-term work of the current step (when `energy_balance` is on).
     work: StepWork,
 }
@@ -318,6 +321,7 @@ impl Simulator {
             assemble: AssembleScratch::default(),
             newton: NewtonScratch::default(),
             targets: Vec::new(),
+            guess: DVector::zeros(0),
             work: StepWork::default(),
         };
         Simulator {
@@ -394,6 +398,12 @@ impl Simulator {
         Ok((g, h))
     }
 
+    /// Work of the Newton step's linear solver since the simulator was
+    /// made (blocks, eigen-decomposed blocks; see [`linear_solve`]).
+    pub fn linear_solve_stats(&self) -> linear_solve::LinearSolveStats {
+        self.scratch.newton.linear.stats
+    }
+
     /// Kinematics of the last [`Simulator::linearize`] point.
     pub fn kinematics(&self) -> &Kinematics {
         &self.scratch.kin
@@ -448,29 +458,46 @@ impl Simulator {
         // polyline θ^t → θ^{t+1}. Either way a collision-free path joins the
         // two states, and when nothing is fast the trajectory is
         // bit-identical to one without collision detection.
+        // The predictor (`Predictor`) starts the ordinary solve; a solve
+        // that fails from it is repeated from θ^t (with collision detection
+        // on, that is the certified fallback below).
+        let predict = self.settings.newton.predictor == Predictor::Extrapolate;
+        let mut guess = std::mem::take(&mut self.scratch.guess);
+        if predict {
+            guess.clone_from(&self.state.q);
+            guess.axpy(-1.0, &self.state.q_prev, 2.0);
+        }
+        let guess_ref = predict.then_some(&guess);
         let ccd = self.energies.iter().any(|e| e.certifies());
-        if ccd {
+        if ccd || predict {
             let (mut obj, parts) = step_objective(self, t_next, false);
-            let solved = newton::minimize(
+            let solved = newton::minimize_from(
                 &mut obj,
                 &mut q,
+                guess_ref,
                 &parts.settings.newton,
                 parts.newton,
                 parts.timers,
             );
             if let Ok(report) = solved {
-                let q_prev = obj.ctx.q_prev;
-                let path = &q - q_prev;
-                obj.certify_segments = true;
-                let whole = obj
-                    .certify(q_prev, &path, 1.0, parts.timers)
-                    .map_err(|e| fail(e.into()))?;
-                if whole >= 1.0 {
+                let certified = if ccd {
+                    let q_prev = obj.ctx.q_prev;
+                    let path = &q - q_prev;
+                    obj.certify_segments = true;
+                    obj.certify(q_prev, &path, 1.0, parts.timers)
+                        .map_err(|e| fail(e.into()))?
+                        >= 1.0
+                } else {
+                    true
+                };
+                if certified {
+                    self.scratch.guess = guess;
                     return Ok(self.accept(q, report, false));
                 }
             }
             q.clone_from(&self.state.q);
         }
+        self.scratch.guess = guess;
         let (mut obj, parts) = step_objective(self, t_next, ccd);
         let report = newton::minimize(
             &mut obj,
@@ -607,6 +634,7 @@ fn step_objective(
         newton,
         targets,
         work,
+        guess: _,
     } = scratch;
     let ctx = make_context(model, settings, state, targets, t_next);
     let obj = StepObjective {

@@ -1,7 +1,7 @@
 //! Newton's method for the per-step objective (paper, `Forward Simulation`):
-//! the `|θ|×|θ|` Hessian is eigen-decomposed (block by block: independent
-//! bodies give independent blocks), eigenvalues are clamped to at least
-//! `eig_clamp`, and a backtracking line search accepts only finite, decreasing
+//! the `|θ|×|θ|` Hessian's eigenvalues are clamped to at least `eig_clamp`
+//! (block by block, Cholesky where clamping changes nothing: see
+//! [`super::linear_solve`]), and a backtracking line search accepts only finite, decreasing
 //! objective values (an infeasible, interpenetrating trial point has `+∞`
 //! energy and is rejected). Stops when `‖∇O‖∞ < tol`. When the objective's
 //! round-off hides the remaining decrease, the gradient norm decides (see
@@ -31,6 +31,7 @@
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
 use super::counters::StageTimers;
+use super::linear_solve::{BlockSolver, Mode};
 use crate::energy::{EnergyError, Need};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -67,6 +68,61 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub eig_abs: bool,
+    /// Starting point of each step's Newton solve. Default `extrapolate`
+    /// (`2θ^t − θ^{t−1}`, falling back to `θ^t` where the objective is not
+    /// finite): fewer iterations, same solution to within `tol` (see
+    /// [`Predictor`]).
+    pub predictor: Predictor,
+    /// Newton model on Hessian blocks with an eigenvalue `≤ eig_clamp`
+    /// (elsewhere the model is the Hessian itself). Default `shift`
+    /// (Cholesky only; measured on the four chains: same step solutions to
+    /// within the stopping test's bound, fewer iterations than `clamp`, see
+    /// `notes/perf.md`). Ignored when [`NewtonOptions::eig_abs`] is set.
+    pub indefinite: Indefinite,
+}
+
+/// Positive-definite Newton model of an indefinite (or nearly singular)
+/// Hessian block (see [`super::linear_solve`]). Only the path to the
+/// solution depends on it: every variant stops at `‖∇O‖∞ < tol`.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Indefinite {
+    /// Eigenvalues clamped to at least `eig_clamp` (paper): an
+    /// eigendecomposition of the block.
+    Clamp,
+    /// `H + τI`, the smallest `τ = τ₀ 4^k` that has a Cholesky
+    /// factorization (modified Newton; Cholesky only).
+    #[default]
+    Shift,
+}
+
+/// Initial guess of a step's Newton solve. The solution is the same to
+/// within the Newton tolerance whichever is used (Newton stops at the first
+/// iterate with `‖∇O‖∞ < tol`; a different start reaches a different such
+/// iterate), so trajectories differ by at most the solver's own error.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Predictor {
+    /// `θ^{t+1}_0 = θ^t` (the paper's choice).
+    Previous,
+    /// `θ^{t+1}_0 = 2θ^t − θ^{t−1}` (constant generalized velocity: the
+    /// explicit, first-order prediction; exact for uniform motion). When the
+    /// objective is not finite there (the predicted hulls would
+    /// interpenetrate, or a joint would pass its limit), larger than at
+    /// `θ^t` (after an impact), or the jump `θ^t → 2θ^t − θ^{t−1}` is not
+    /// allowed by the terms' line-search bounds ([`Objective::max_step`]:
+    /// IPC's CCD filter — a guess past an obstacle is finite too — and the
+    /// joint-limit and chart bounds), the solve starts at the
+    /// collision-free `θ^t` instead. With continuous collision detection
+    /// the predictor needs no check of its own: the straight path
+    /// `θ^t → θ^{t+1}` is certified after the solve (see
+    /// [`crate::sim::Simulator::step`]).
+    #[default]
+    Extrapolate,
 }
 
 impl Default for NewtonOptions {
@@ -78,6 +134,8 @@ impl Default for NewtonOptions {
             max_backtracks: 60,
             step_floor: 1e-9,
             eig_abs: false,
+            predictor: Predictor::Extrapolate,
+            indefinite: Indefinite::Shift,
         }
     }
 }
@@ -137,6 +195,9 @@ pub struct NewtonReport {
     /// `64 ε ‖H‖∞ (‖θ‖∞ + L)` (J per unit coordinate; `L` the scene's length
     /// scale from [`Objective::length_scale`]).
     pub grad_floor: f64,
+    /// Iterations whose shifted-Cholesky step ([`Indefinite::Shift`]) found
+    /// no acceptable point and were repeated with the clamped eigen step.
+    pub shift_fallbacks: usize,
 }
 
 /// An objective with value, gradient and Hessian.
@@ -207,7 +268,8 @@ pub struct NewtonScratch {
     dir: DVector<f64>,
     trial: DVector<f64>,
     trial_grad: DVector<f64>,
-    comp: Vec<usize>,
+    /// Block-wise Cholesky / clamped-eigen solver and its work space.
+    pub(crate) linear: BlockSolver,
 }
 
 /// Minimizes `obj` starting from `q` (updated in place).
@@ -218,19 +280,69 @@ pub fn minimize(
     scratch: &mut NewtonScratch,
     timers: &mut StageTimers,
 ) -> Result<NewtonReport, NewtonError> {
+    minimize_from(obj, q, None, opts, scratch, timers)
+}
+
+/// [`minimize`], starting from `guess` when the objective is finite (and
+/// evaluates without error) there and not larger than at `q`, else from `q`
+/// (which must be feasible).
+pub fn minimize_from(
+    obj: &mut dyn Objective,
+    q: &mut DVector<f64>,
+    guess: Option<&DVector<f64>>,
+    opts: &NewtonOptions,
+    scratch: &mut NewtonScratch,
+    timers: &mut StageTimers,
+) -> Result<NewtonReport, NewtonError> {
     let n = q.len();
-    scratch.grad = DVector::zeros(n);
-    scratch.hess = DMatrix::zeros(n, n);
-    scratch.dir = DVector::zeros(n);
-    scratch.trial_grad = DVector::zeros(n);
+    if scratch.grad.len() != n {
+        scratch.grad = DVector::zeros(n);
+        scratch.hess = DMatrix::zeros(n, n);
+        scratch.dir = DVector::zeros(n);
+        scratch.trial_grad = DVector::zeros(n);
+    }
     let mut report = NewtonReport::default();
-    let mut value = obj.eval(
-        q,
-        Need::Hessian,
-        &mut scratch.grad,
-        &mut scratch.hess,
-        timers,
-    )?;
+    // The guess replaces `q` when its objective is finite and not larger
+    // than at `q` (one extra value evaluation; after an impact the extrapolated
+    // point lies deep in the barrier or past it and `q` is the better start).
+    // (The guess is evaluated with derivatives right away: it usually wins.)
+    let mut value = f64::NAN;
+    if let Some(g) = guess {
+        let at_q = obj.eval(q, Need::Value, &mut scratch.grad, &mut scratch.hess, timers)?;
+        // The jump q → guess must pass the terms' own line-search bounds
+        // (IPC's CCD filter, joint-limit approach, chart step): a guess on
+        // the far side of an obstacle has a finite objective too.
+        scratch.dir.copy_from(g);
+        scratch.dir.axpy(-1.0, q, 1.0);
+        let reachable = obj.max_step(q, &scratch.dir, timers)? >= 1.0;
+        let at_g = if reachable {
+            obj.eval(
+                g,
+                Need::Hessian,
+                &mut scratch.grad,
+                &mut scratch.hess,
+                timers,
+            )
+        } else {
+            Ok(f64::INFINITY)
+        };
+        if let Ok(v) = at_g
+            && v.is_finite()
+            && (v <= at_q || at_q.is_nan())
+        {
+            q.copy_from(g);
+            value = v;
+        }
+    }
+    if value.is_nan() {
+        value = obj.eval(
+            q,
+            Need::Hessian,
+            &mut scratch.grad,
+            &mut scratch.hess,
+            timers,
+        )?;
+    }
     if !value.is_finite() {
         return Err(NewtonError::InfeasibleStart {
             value,
@@ -253,109 +365,125 @@ pub fn minimize(
         if iter == opts.max_iters {
             break;
         }
-        timers.time("linear_solve", || {
-            clamped_newton_direction(
-                &scratch.hess,
-                &scratch.grad,
-                opts.eig_clamp,
-                opts.eig_abs,
-                &mut scratch.dir,
-                &mut scratch.comp,
-            )
-        });
-        // Predicted decrease of the quadratic model, −gᵀΔ > 0.
-        let predicted = -scratch.grad.dot(&scratch.dir);
-        // Below ~1e-9 of the objective's magnitude, or near its absolute
-        // round-off floor (from the terms' magnitudes), the value cannot
-        // rank trial points: the decrease is smaller than the noise.
-        let floor = 1e-9 * value.abs() + obj.value_noise();
-        let resolvable = predicted > 10.0 * floor;
-        // Chart and joint-limit bound on the step.
-        let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
-        let t0 = std::time::Instant::now();
-        // Time spent in the search's objective evaluations and in continuous
-        // collision detection is counted by their own stages;
-        // `line_search` gets only the remainder.
-        let mut in_evals = std::time::Duration::ZERO;
-        // The search runs from `start`; once an accepted segment has been
-        // cut by collision detection it runs again from the cut, where every
-        // shorter step is certified too (a sub-segment).
-        let mut start = alpha_max;
-        let mut cut = false;
-        let accepted = loop {
-            let mut accepted = false;
-            let mut alpha = start;
-            if resolvable {
-                // Backtracking with Armijo sufficient decrease on a finite value.
-                for _ in 0..=opts.max_backtracks {
-                    if alpha * predicted <= 10.0 * floor {
-                        // Shorter steps cannot be ranked by value either; an
-                        // Armijo test passed on round-off would accept a step
-                        // that changes nothing.
-                        break;
-                    }
-                    scratch.trial.clone_from(q);
-                    scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                    let te = std::time::Instant::now();
-                    let v = obj.eval(
-                        &scratch.trial,
-                        Need::Value,
-                        &mut scratch.trial_grad,
-                        &mut scratch.hess,
-                        timers,
-                    )?;
-                    in_evals += te.elapsed();
-                    if v.is_finite() && v < value - 1e-4 * alpha * predicted {
-                        accepted = true;
-                        break;
-                    }
-                    alpha *= 0.5;
-                    report.backtracks += 1;
-                }
-            }
-            // Otherwise (or if that failed) the gradient norm is the merit
-            // function: accept a finite trial point whose value is not larger
-            // beyond noise and whose ‖∇O‖∞ is smaller.
-            if !accepted {
-                let noise = 1e-10 * value.abs().max(1.0);
-                alpha = start;
-                for _ in 0..8 {
-                    scratch.trial.clone_from(q);
-                    scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                    let te = std::time::Instant::now();
-                    let v = obj.eval(
-                        &scratch.trial,
-                        Need::Gradient,
-                        &mut scratch.trial_grad,
-                        &mut scratch.hess,
-                        timers,
-                    )?;
-                    in_evals += te.elapsed();
-                    if v.is_finite() && v <= value + noise && scratch.trial_grad.amax() < grad_inf {
-                        accepted = true;
-                        report.gradient_merit_steps += 1;
-                        break;
-                    }
-                    alpha *= 0.5;
-                    report.backtracks += 1;
-                }
-            }
-            if !accepted || cut {
-                break accepted;
-            }
-            // Continuous collision detection of the accepted segment
-            // `q → q + α Δ` (see `Objective::certify`).
-            let tc = std::time::Instant::now();
-            let certified = obj.certify(q, &scratch.dir, alpha, timers)?;
-            in_evals += tc.elapsed();
-            if certified >= alpha {
-                break true;
-            }
-            report.ccd_cuts += 1;
-            cut = true;
-            start = certified.max(0.0);
+        let mut mode = match (opts.eig_abs, opts.indefinite) {
+            (true, _) => Mode::Clamped { abs: true },
+            (false, Indefinite::Clamp) => Mode::Clamped { abs: false },
+            (false, Indefinite::Shift) => Mode::Shift,
         };
-        timers.add("line_search", t0.elapsed().saturating_sub(in_evals));
+        // With `Indefinite::Shift`, an iteration whose line search fails is
+        // repeated once with the paper's clamped eigen step.
+        let (accepted, resolvable) = loop {
+            timers.time("linear_solve", || {
+                scratch.linear.direction(
+                    &scratch.hess,
+                    &scratch.grad,
+                    opts.eig_clamp,
+                    mode,
+                    &mut scratch.dir,
+                )
+            });
+            // Predicted decrease of the quadratic model, −gᵀΔ > 0.
+            let predicted = -scratch.grad.dot(&scratch.dir);
+            // Below ~1e-9 of the objective's magnitude, or near its absolute
+            // round-off floor (from the terms' magnitudes), the value cannot
+            // rank trial points: the decrease is smaller than the noise.
+            let floor = 1e-9 * value.abs() + obj.value_noise();
+            let resolvable = predicted > 10.0 * floor;
+            // Chart and joint-limit bound on the step.
+            let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
+            let t0 = std::time::Instant::now();
+            // Time spent in the search's objective evaluations and in continuous
+            // collision detection is counted by their own stages;
+            // `line_search` gets only the remainder.
+            let mut in_evals = std::time::Duration::ZERO;
+            // The search runs from `start`; once an accepted segment has been
+            // cut by collision detection it runs again from the cut, where every
+            // shorter step is certified too (a sub-segment).
+            let mut start = alpha_max;
+            let mut cut = false;
+            let accepted = loop {
+                let mut accepted = false;
+                let mut alpha = start;
+                if resolvable {
+                    // Backtracking with Armijo sufficient decrease on a finite value.
+                    for _ in 0..=opts.max_backtracks {
+                        if alpha * predicted <= 10.0 * floor {
+                            // Shorter steps cannot be ranked by value either; an
+                            // Armijo test passed on round-off would accept a step
+                            // that changes nothing.
+                            break;
+                        }
+                        scratch.trial.clone_from(q);
+                        scratch.trial.axpy(alpha, &scratch.dir, 1.0);
+                        let te = std::time::Instant::now();
+                        let v = obj.eval(
+                            &scratch.trial,
+                            Need::Value,
+                            &mut scratch.trial_grad,
+                            &mut scratch.hess,
+                            timers,
+                        )?;
+                        in_evals += te.elapsed();
+                        if v.is_finite() && v < value - 1e-4 * alpha * predicted {
+                            accepted = true;
+                            break;
+                        }
+                        alpha *= 0.5;
+                        report.backtracks += 1;
+                    }
+                }
+                // Otherwise (or if that failed) the gradient norm is the merit
+                // function: accept a finite trial point whose value is not larger
+                // beyond noise and whose ‖∇O‖∞ is smaller.
+                if !accepted {
+                    let noise = 1e-10 * value.abs().max(1.0);
+                    alpha = start;
+                    for _ in 0..8 {
+                        scratch.trial.clone_from(q);
+                        scratch.trial.axpy(alpha, &scratch.dir, 1.0);
+                        let te = std::time::Instant::now();
+                        let v = obj.eval(
+                            &scratch.trial,
+                            Need::Gradient,
+                            &mut scratch.trial_grad,
+                            &mut scratch.hess,
+                            timers,
+                        )?;
+                        in_evals += te.elapsed();
+                        if v.is_finite()
+                            && v <= value + noise
+                            && scratch.trial_grad.amax() < grad_inf
+                        {
+                            accepted = true;
+                            report.gradient_merit_steps += 1;
+                            break;
+                        }
+                        alpha *= 0.5;
+                        report.backtracks += 1;
+                    }
+                }
+                if !accepted || cut {
+                    break accepted;
+                }
+                // Continuous collision detection of the accepted segment
+                // `q → q + α Δ` (see `Objective::certify`).
+                let tc = std::time::Instant::now();
+                let certified = obj.certify(q, &scratch.dir, alpha, timers)?;
+                in_evals += tc.elapsed();
+                if certified >= alpha {
+                    break true;
+                }
+                report.ccd_cuts += 1;
+                cut = true;
+                start = certified.max(0.0);
+            };
+            timers.add("line_search", t0.elapsed().saturating_sub(in_evals));
+            if accepted || mode != Mode::Shift {
+                break (accepted, resolvable);
+            }
+            mode = Mode::Clamped { abs: false };
+            report.shift_fallbacks += 1;
+        };
         if !accepted && grad_inf <= report.grad_floor {
             // No trial point can be ranked and the gradient is within its
             // own round-off: this is the solution to working precision.
@@ -402,134 +530,4 @@ fn max_row_sum(h: &DMatrix<f64>) -> f64 {
     h.row_iter()
         .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())
         .fold(0.0, f64::max)
-}
-
-/// `−Ĥ⁻¹ g` for one symmetric block. If `H − clamp·I` has a Cholesky
-/// factorization, every eigenvalue of `H` exceeds `clamp`, clamping changes
-/// nothing and `Ĥ = H`: the step is a Cholesky solve (about ten times
-/// cheaper than an eigendecomposition). Otherwise eigen-decompose and clamp.
-/// With `abs`, eigenvalues become `max(|λ|, clamp)` (see
-/// [`NewtonOptions::eig_abs`]); the Cholesky shortcut is exact either way.
-fn clamped_block_solve(
-    block: DMatrix<f64>,
-    g: &DVector<f64>,
-    clamp: f64,
-    abs: bool,
-) -> DVector<f64> {
-    let m = block.nrows();
-    let shifted = &block - DMatrix::identity(m, m) * clamp;
-    if shifted.cholesky().is_some()
-        && let Some(ch) = block.clone().cholesky()
-    {
-        return -ch.solve(g);
-    }
-    let eig = block.symmetric_eigen();
-    let mut coeff = eig.eigenvectors.transpose() * g;
-    for (c, &lam) in coeff.iter_mut().zip(eig.eigenvalues.iter()) {
-        *c /= if abs { lam.abs() } else { lam }.max(clamp);
-    }
-    -(eig.eigenvectors * coeff)
-}
-
-/// `dir = −Ĥ⁻¹ g`, where `Ĥ` has the eigenvectors of `H` and eigenvalues
-/// `max(λ, clamp)` (`max(|λ|, clamp)` with `abs`). `H` is split into the connected components of its
-/// sparsity graph and each block is decomposed separately (exact: the
-/// eigendecomposition of a block-diagonal matrix is the union of its blocks').
-pub fn clamped_newton_direction(
-    h: &DMatrix<f64>,
-    g: &DVector<f64>,
-    clamp: f64,
-    abs: bool,
-    dir: &mut DVector<f64>,
-    comp: &mut Vec<usize>,
-) {
-    let n = g.len();
-    // Union–find over nonzero entries.
-    comp.clear();
-    comp.extend(0..n);
-    fn find(c: &mut [usize], mut i: usize) -> usize {
-        while c[i] != i {
-            c[i] = c[c[i]];
-            i = c[i];
-        }
-        i
-    }
-    for j in 0..n {
-        for i in 0..j {
-            if h[(i, j)] != 0.0 || h[(j, i)] != 0.0 {
-                let (a, b) = (find(comp, i), find(comp, j));
-                if a != b {
-                    comp[a.max(b)] = a.min(b);
-                }
-            }
-        }
-    }
-    let roots: Vec<usize> = (0..n).map(|i| find(comp, i)).collect();
-    dir.fill(0.0);
-    let mut done = vec![false; n];
-    for start in 0..n {
-        if done[start] {
-            continue;
-        }
-        let r = roots[start];
-        let idx: Vec<usize> = (start..n).filter(|&i| roots[i] == r).collect();
-        for &i in &idx {
-            done[i] = true;
-        }
-        let m = idx.len();
-        let block = DMatrix::from_fn(m, m, |a, b| {
-            0.5 * (h[(idx[a], idx[b])] + h[(idx[b], idx[a])])
-        });
-        let gb = DVector::from_fn(m, |a, _| g[idx[a]]);
-        let d = clamped_block_solve(block, &gb, clamp, abs);
-        for (a, &i) in idx.iter().enumerate() {
-            dir[i] = d[a];
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use rand::{RngExt, SeedableRng};
-
-    fn eigen_direction(h: &DMatrix<f64>, g: &DVector<f64>, clamp: f64) -> DVector<f64> {
-        let eig = h.clone().symmetric_eigen();
-        let mut c = eig.eigenvectors.transpose() * g;
-        for (x, &l) in c.iter_mut().zip(eig.eigenvalues.iter()) {
-            *x /= l.max(clamp);
-        }
-        -(eig.eigenvectors * c)
-    }
-
-    #[test]
-    fn cholesky_shortcut_equals_clamped_eigen_step() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        for case in 0..40 {
-            let n = 2 + case % 9;
-            let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-            // Positive definite, indefinite and nearly singular matrices.
-            let shift = [3.0, -0.5, 1e-4][case % 3];
-            let h = &a * a.transpose() + DMatrix::identity(n, n) * shift;
-            let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
-            let clamp = 1e-3;
-            let want = eigen_direction(&h, &g, clamp);
-            let got = clamped_block_solve(h.clone(), &g, clamp, false);
-            assert!((&got - &want).norm() <= 1e-8 * want.norm(), "case {case}");
-            // Absolute-value projection: a descent direction whose length
-            // along each eigenvector is |g_i| / max(|λ_i|, clamp).
-            let eig = h.clone().symmetric_eigen();
-            let abs = clamped_block_solve(h.clone(), &g, clamp, true);
-            let c = eig.eigenvectors.transpose() * &abs;
-            let gc = eig.eigenvectors.transpose() * &g;
-            for i in 0..n {
-                let want = -gc[i] / eig.eigenvalues[i].abs().max(clamp);
-                assert!(
-                    (c[i] - want).abs() <= 1e-8 * (1.0 + want.abs()),
-                    "case {case}"
-                );
-            }
-            assert!(abs.dot(&g) < 0.0);
-        }
-    }
 }
