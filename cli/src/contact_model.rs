@@ -70,3 +70,59 @@ impl ContactArgs {
 pub fn simulator(scene: &Scene) -> Result<Simulator> {
     Ok(scene.simulator_with(&sdrs_ipc::IpcFactory::default())?)
 }
+
+/// `sdrs optimize --contact … [--cage coarse|fine|k]`: applies the contact
+/// overrides to every trajectory of `problem`, gives it the IPC baseline's
+/// factory (SDRS scenes never use it), and with `cage` replaces the design
+/// by the cage vertices of the task's `design.vertices` links (automatic
+/// box cages, mean value coordinates; see `sdrs_ipc::cage`), bounded by the
+/// task's `design.bound`.
+pub fn configure_problem(
+    problem: &mut sdrs::optimize::Problem,
+    args: &ContactArgs,
+    cage: Option<&str>,
+    design_on: bool,
+) -> Result<()> {
+    let factory: sdrs::scene::SharedContactFactory =
+        std::sync::Arc::new(sdrs_ipc::IpcFactory::default());
+    args.apply(&mut problem.scene)?;
+    problem.contact_factory = Some(factory.clone());
+    for o in &mut problem.others {
+        args.apply(&mut o.scene)?;
+        o.contact_factory = Some(factory.clone());
+    }
+    let Some(cage) = cage else { return Ok(()) };
+    let res = sdrs_ipc::cage::CageResolution::parse(cage).map_err(anyhow::Error::msg)?;
+    let is_ipc = |s: &Scene| {
+        s.contact
+            .as_ref()
+            .is_some_and(|c| c.model == ContactModelKind::Ipc)
+    };
+    if !is_ipc(&problem.scene) {
+        bail!(
+            "--cage {cage}: a cage deforms the IPC baseline's meshes, but {} uses contact.model: {} (add --contact ipc)",
+            problem.scene.source.display(),
+            problem
+                .scene
+                .contact
+                .as_ref()
+                .map_or("none (no contact section)", |c| c.model.name())
+        );
+    }
+    if !design_on {
+        bail!("--cage {cage} with --design off: the cage vertices are the design");
+    }
+    let summary = sdrs_ipc::cage::cage_problem(problem, res)?;
+    eprintln!(
+        "--cage {cage}: {} cage(s) of {} vertices replace the design ({} variables); IPC surfaces keep their rest triangulation",
+        summary.cage_vertices.len(),
+        summary
+            .cage_vertices
+            .iter()
+            .map(|n| n.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        summary.variables
+    );
+    Ok(())
+}

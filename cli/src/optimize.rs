@@ -37,6 +37,15 @@ pub struct OptimizeArgs {
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub contact: crate::contact_model::ContactArgs,
+    /// Cage-based design (IPC baseline only, `--contact ipc`): the vertices
+    /// of an automatic box cage around each `design.vertices` link become
+    /// the design, the hull vertices fixed mean-value combinations of them.
+    /// `coarse` (26 cage vertices), `fine` (98) or `k` segments per box
+    /// edge (6k² + 2 vertices).
+    #[arg(long)]
+    pub cage: Option<String>,
 }
 
 pub fn run(a: OptimizeArgs) -> Result<()> {
@@ -58,7 +67,13 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         );
     }
     let design_on = a.design == "on";
-    let problem = sdrs::optimize::Problem::load(&a.task, design_on)?;
+    let mut problem = sdrs::optimize::Problem::load(&a.task, design_on)?;
+    crate::contact_model::configure_problem(
+        &mut problem,
+        &a.contact,
+        a.cage.as_deref(),
+        design_on,
+    )?;
     let metrics = sdrs::optimize::metrics::Metrics::from_problem(&problem)?;
     let key = checkpoint::RunKey::new(&a.task, &problem.scene.source, design_on, a.seed)
         .with_context(|| format!("{}: cannot hash the task and scene", a.task.display()))?;

@@ -147,6 +147,7 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
 
     let mut acc = VjpAccumulator::new(&model, nch);
     let mut dpose = zero_pose();
+    let mut linear = crate::sim::linear_solve::BlockSolver::default();
     for t in (1..=h).rev() {
         let rec = &tape.steps[t - 1];
         let err = |source| BackwardError::Energy { step: t, source };
@@ -155,13 +156,18 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
         let kin = sim.kinematics().clone();
         let abar = contract_gradient(&model, &kin, &pose_lvl[t + 1]) + &q_lvl[t + 1];
         add_attachment(&model, &kin, &pose_lvl[t + 1], 1.0, &mut g.attachments);
-        let lambda = match hess.clone().cholesky() {
-            Some(ch) => ch.solve(&abar),
-            None => hess
+        // The forward pass never factors this matrix (Newton stops at the
+        // first iterate whose gradient is below tolerance, before
+        // factoring its Hessian), so there is no factorization to reuse:
+        // block-wise Cholesky (faer), pivoted LU when a block is not
+        // positive definite.
+        let mut lambda = DVector::zeros(n);
+        if !linear.spd_solve(&hess, &abar, &mut lambda) {
+            lambda = hess
                 .lu()
                 .solve(&abar)
-                .ok_or(BackwardError::Singular { step: t })?,
-        };
+                .ok_or(BackwardError::Singular { step: t })?;
+        }
         // δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i, accumulated down the tree.
         let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); nl];
         for (i, link) in model.links.iter().enumerate() {

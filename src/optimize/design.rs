@@ -21,7 +21,7 @@ use nalgebra::{DVector, Vector3};
 pub type TieGroup = Vec<(usize, usize, usize)>;
 
 /// Where a design variable is written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Target {
     Attachment {
         link: usize,
@@ -32,6 +32,20 @@ pub enum Target {
         hull: usize,
         vertex: usize,
         axis: usize,
+    },
+    /// A linear blend (cage-based deformation, built outside the core):
+    /// the coordinate is `Σ weight · d` over every variable with a `Blend`
+    /// target on it (so [`DesignSpace::apply`] first zeroes blended
+    /// coordinates), and its gradient is `weight · ∂L/∂x`. `rest` is the
+    /// variable's value in the undeformed model (what
+    /// [`DesignSpace::values`] returns for it).
+    Blend {
+        link: usize,
+        hull: usize,
+        vertex: usize,
+        axis: usize,
+        weight: f64,
+        rest: f64,
     },
 }
 
@@ -60,6 +74,7 @@ fn read(model: &Model, t: Target) -> f64 {
             vertex,
             axis,
         } => model.links[link].hulls[hull].x_local[vertex][axis],
+        Target::Blend { rest, .. } => rest,
     }
 }
 
@@ -239,6 +254,18 @@ impl DesignSpace {
     /// Writes `d` into every target (ties stay identical) and refreshes the
     /// mass moments.
     pub fn apply(&self, model: &mut Model, d: &DVector<f64>) {
+        for t in self.vars.iter().flat_map(|v| &v.targets) {
+            if let Target::Blend {
+                link,
+                hull,
+                vertex,
+                axis,
+                ..
+            } = *t
+            {
+                model.links[link].hulls[hull].x_local[vertex][axis] = 0.0;
+            }
+        }
         for (v, &x) in self.vars.iter().zip(d.iter()) {
             for t in &v.targets {
                 match *t {
@@ -249,6 +276,14 @@ impl DesignSpace {
                         vertex,
                         axis,
                     } => model.links[link].hulls[hull].x_local[vertex][axis] = x,
+                    Target::Blend {
+                        link,
+                        hull,
+                        vertex,
+                        axis,
+                        weight,
+                        ..
+                    } => model.links[link].hulls[hull].x_local[vertex][axis] += weight * x,
                 }
             }
         }
@@ -270,6 +305,14 @@ impl DesignSpace {
                             vertex,
                             axis,
                         } => g.vertices[link][hull][vertex][axis],
+                        Target::Blend {
+                            link,
+                            hull,
+                            vertex,
+                            axis,
+                            weight,
+                            ..
+                        } => weight * g.vertices[link][hull][vertex][axis],
                     })
                     .sum::<f64>()
             }),
@@ -295,6 +338,10 @@ impl DesignSpace {
     /// within its bounds.
     pub fn check(&self, model: &Model) -> Result<(), String> {
         for v in &self.vars {
+            if matches!(v.targets.first(), Some(Target::Blend { .. })) {
+                // Blended coordinates are sums over variables: no tie to check.
+                continue;
+            }
             let x = read(model, v.targets[0]);
             if !(v.lower..=v.upper).contains(&x) {
                 return Err(format!(

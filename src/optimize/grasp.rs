@@ -92,7 +92,7 @@ fn measure_one(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Resul
     let mut scene = p.scene.clone();
     scene.model = model.clone();
     scene.controller = controller;
-    let mut sim = scene.simulator();
+    let mut sim = p.simulator(&scene)?;
     let at = |sim: &crate::sim::Simulator| {
         let poses = link_poses(&model, &sim.state.q, &sim.state.charts);
         let co = crate::math::transform_point(&poses[obj], &c_local);

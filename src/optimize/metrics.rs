@@ -139,7 +139,7 @@ impl Metrics {
         p.controls.apply(&mut controller, c);
         scene.model = model.clone();
         scene.controller = controller;
-        let mut sim = scene.simulator();
+        let mut sim = p.simulator(&scene)?;
         let com = |q: &DVector<f64>, charts: &[Matrix3<f64>]| {
             let poses = link_poses(&model, q, charts);
             let mass: f64 = self.links.iter().map(|&i| model.first_moment[i][3]).sum();

@@ -67,6 +67,10 @@ pub struct Problem {
     /// Further trajectories optimized collectively with this one (same
     /// design and controller spaces; see [`multi`]).
     pub others: Vec<Problem>,
+    /// Provider of the contact terms of a scene whose `contact.model` the
+    /// core does not implement (`ipc`: the baseline's factory, set by the
+    /// CLI); `None` runs SDRS scenes only.
+    pub contact_factory: Option<crate::scene::SharedContactFactory>,
 }
 
 impl Problem {
@@ -159,6 +163,7 @@ impl Problem {
             controls,
             horizon,
             others: Vec::new(),
+            contact_factory: None,
         })
     }
 
@@ -173,6 +178,35 @@ impl Problem {
         }
     }
 
+    /// The factory `scene` needs: `None` for SDRS (or contact-free) scenes,
+    /// [`Problem::contact_factory`] otherwise (an error without one).
+    fn factory_for(
+        &self,
+        scene: &Scene,
+    ) -> anyhow::Result<Option<&dyn crate::scene::ContactModelFactory>> {
+        match scene.contact.as_ref().filter(|c| !c.model.is_sdrs()) {
+            None => Ok(None),
+            Some(c) => match &self.contact_factory {
+                Some(f) => Ok(Some(f.as_ref())),
+                None => anyhow::bail!(
+                    "{}: contact.model: {} needs the contact model's provider (the `sdrs` CLI passes the IPC baseline's)",
+                    scene.source.display(),
+                    c.model.name()
+                ),
+            },
+        }
+    }
+
+    /// The simulator of `scene` (a variant of this problem's scene) with
+    /// its contact model: [`Scene::simulator`] for SDRS scenes (unchanged),
+    /// the factory's terms otherwise.
+    pub fn simulator(&self, scene: &Scene) -> anyhow::Result<crate::sim::Simulator> {
+        Ok(match self.factory_for(scene)? {
+            None => scene.simulator(),
+            Some(f) => scene.simulator_with(f)?,
+        })
+    }
+
     /// [`Problem::evaluate`] of this trajectory alone.
     pub fn evaluate_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
         let mut model = self.model.clone();
@@ -182,18 +216,14 @@ impl Problem {
         let mut scene = self.scene.clone();
         scene.model = model.clone();
         scene.controller = controller;
-        if let Some(c) = scene.contact.as_ref().filter(|c| !c.model.is_sdrs()) {
-            anyhow::bail!(
-                "{}: contact.model: {} is not supported by `optimize` (only sdrs)",
-                scene.source.display(),
-                c.model.name()
-            );
-        }
-        let mut sim = scene.simulator();
+        let mut sim = self.simulator(&scene)?;
         let t0 = Instant::now();
         let tape = record(&mut sim, self.horizon)?;
         let forward = t0.elapsed().as_secs_f64();
-        let grads = backward(&mut sim, &tape, &self.loss)?;
+        let grads = match self.factory_for(&scene)? {
+            None => backward(&mut sim, &tape, &self.loss)?,
+            Some(f) => backward(&mut scene.adjoint_simulator_with(f)?, &tape, &self.loss)?,
+        };
         if !grads.unavailable.is_empty() {
             anyhow::bail!(
                 "the gradient needs derivatives that are not available yet: {}",

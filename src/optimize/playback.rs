@@ -35,7 +35,7 @@ pub fn rollout(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Resul
     p.controls.apply(&mut controller, c);
     scene.model = model;
     scene.controller = controller;
-    let mut sim = scene.simulator();
+    let mut sim = p.simulator(&scene)?;
     let traj = crate::sim::run::run_recording(&mut sim, p.horizon, true, |_| {})?;
     let contacts = match &scene.contact {
         Some(cs) => active_contacts(&scene.model, cs.s, &cs.excluded, &traj.poses)?,

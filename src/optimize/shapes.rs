@@ -15,7 +15,7 @@ pub fn designed_links(p: &Problem) -> Vec<usize> {
         .iter()
         .flat_map(|v| v.targets.iter())
         .filter_map(|t| match t {
-            Target::Vertex { link, .. } => Some(*link),
+            Target::Vertex { link, .. } | Target::Blend { link, .. } => Some(*link),
             Target::Attachment { .. } => None,
         })
         .collect();

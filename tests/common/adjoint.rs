@@ -6,7 +6,7 @@ use nalgebra::{DVector, Matrix3};
 use sdrs::control::Controller;
 use sdrs::diff::{Gradients, Loss, backward, loss_of, record};
 use sdrs::model::Model;
-use sdrs::scene::Scene;
+use sdrs::scene::{Scene, SharedContactFactory};
 use sdrs::sim::{SimSettings, SimState, Simulator};
 use std::path::Path;
 
@@ -22,6 +22,11 @@ pub struct Setup {
     pub qdot0: DVector<f64>,
     pub charts: Vec<Matrix3<f64>>,
     pub steps: usize,
+    /// The contact model's factory when it is not the core's (the IPC
+    /// baseline's tests set it): the trajectory is recorded with
+    /// `Scene::simulator_with` and linearized with
+    /// `Scene::adjoint_simulator_with`. `None`: the core's simulator for both.
+    pub factory: Option<SharedContactFactory>,
 }
 
 impl Setup {
@@ -36,15 +41,30 @@ impl Setup {
             charts: scene.charts.clone(),
             steps,
             scene,
+            factory: None,
         }
     }
 
     pub fn simulator(&self) -> Simulator {
+        self.simulator_for(false)
+    }
+
+    /// The simulator of this setup's state; `adjoint`: the one the backward
+    /// pass linearizes (differs from the forward one only with a factory).
+    fn simulator_for(&self, adjoint: bool) -> Simulator {
         let mut sc = self.scene.clone();
         sc.model = self.model.clone();
         sc.settings = self.settings.clone();
         sc.controller = self.controller.clone();
-        let mut sim = sc.simulator();
+        if self.factory.is_some() {
+            // The IPC baseline checks the start for intersections.
+            sc.q0 = self.q0.clone();
+        }
+        let mut sim = match &self.factory {
+            None => sc.simulator(),
+            Some(f) if adjoint => sc.adjoint_simulator_with(f.as_ref()).unwrap(),
+            Some(f) => sc.simulator_with(f.as_ref()).unwrap(),
+        };
         sim.state = SimState::new(
             &self.model,
             self.q0.clone(),
@@ -64,6 +84,10 @@ impl Setup {
     pub fn gradients(&self, loss: &Loss) -> Gradients {
         let mut sim = self.simulator();
         let tape = record(&mut sim, self.steps).unwrap();
+        if self.factory.is_some() {
+            let mut adj = self.simulator_for(true);
+            return backward(&mut adj, &tape, loss).unwrap();
+        }
         backward(&mut sim, &tape, loss).unwrap()
     }
 

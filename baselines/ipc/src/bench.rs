@@ -228,6 +228,7 @@ pub fn time_case(
             dhat * dhat,
             true,
             true,
+            true,
         )
     };
     let e = eval_ipc(&mut c);

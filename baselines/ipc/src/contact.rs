@@ -52,6 +52,12 @@ pub struct IpcContact {
     time_ccd: Duration,
     last_active: usize,
     last_min_distance: f64,
+    /// Exact per-primitive Hessians instead of PSD-projected ones (for the
+    /// simulator the backward pass linearizes with; default false).
+    pub exact_hessian: bool,
+    /// Whether `κ` is the scene's `contact.kappa` (then `∂Φ/∂κ` goes to the
+    /// physical gradient); false when this baseline chose it.
+    pub kappa_given: bool,
 }
 
 impl IpcContact {
@@ -95,6 +101,8 @@ impl IpcContact {
             time_ccd: Duration::ZERO,
             last_active: 0,
             last_min_distance: f64::INFINITY,
+            exact_hessian: false,
+            kappa_given: true,
         }
     }
 
@@ -167,6 +175,7 @@ impl Energy for IpcContact {
         let (meshes, world, cands) = (&self.meshes, &self.world, &self.cands);
         let derivs = need >= Need::Gradient;
         let hess = need >= Need::Hessian;
+        let project = !self.exact_hessian;
         self.link_pairs
             .par_iter()
             .zip(cands.par_iter())
@@ -175,7 +184,7 @@ impl Energy for IpcContact {
                     mesh: [&meshes[a], &meshes[b]],
                     world: [&world[a], &world[b]],
                 };
-                evaluate_pair(&geo, c, dhat2, derivs, hess)
+                evaluate_pair(&geo, c, dhat2, derivs, hess, project)
             })
             .collect_into_vec(&mut self.results);
         self.pair_slots.clear();
@@ -205,6 +214,68 @@ impl Energy for IpcContact {
         }
         self.last_active = active;
         self.last_min_distance = min_d2.sqrt();
+        Ok(())
+    }
+
+    /// Adjoint product (see [`crate::adjoint_stencil`], [`crate::adjoint`]):
+    /// for every active stencil at `θ^t = q`, `κ (∂²P/∂X²) δX` (exact
+    /// Hessian) into pose and hull-vertex space, the mollifier threshold's
+    /// dependence on link-frame edge lengths, and `∂Φ/∂κ = Φ/κ` when `κ` is
+    /// the scene's. `d̂` is not differentiated (the physical `s` gradient
+    /// belongs to the SDRS barrier and stays untouched).
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        kin: &Kinematics,
+        dir: &sdrs::diff::AdjointDirection,
+        out: &mut sdrs::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let mut tmp = EnergyAccumulator::new(ctx.model);
+        // World vertices and candidates at θ^t.
+        self.accumulate(ctx, q, kin, Need::Value, &mut tmp)?;
+        if !tmp.value.is_finite() {
+            return Err(EnergyError::Failed {
+                term: "ipc_contact",
+                msg: "intersecting state in the backward pass".into(),
+            });
+        }
+        let dhat2 = self.params.dhat * self.params.dhat;
+        let kappa = self.params.kappa;
+        let poses = crate::adjoint::PoseSet {
+            pose: &kin.pose,
+            dpose: dir.dpose,
+            prev: ctx.poses_prev,
+        };
+        for (k, &(a, b)) in self.link_pairs.iter().enumerate() {
+            let geo = PairGeometry {
+                mesh: [&self.meshes[a], &self.meshes[b]],
+                world: [&self.world[a], &self.world[b]],
+            };
+            geo.for_each_stencil(&self.cands[k], |kind, ids| {
+                let (x, _, _) = geo.stencil(ids);
+                let (d, ty) = crate::primitive::stencil_distance(kind, &x);
+                if !(d > 0.0 && d < dhat2) {
+                    return;
+                }
+                let st = crate::adjoint::StencilRef {
+                    ids,
+                    links: [a, b],
+                    meshes: geo.mesh,
+                };
+                let piece = crate::adjoint_stencil::ContactPiece {
+                    ty,
+                    mollifier: crate::primitive::mollified(kind, &x),
+                    dhat2,
+                };
+                let dx = crate::adjoint::directions(&st, dir.dpose);
+                let v = crate::adjoint_stencil::contact_vjp(&x, &dx, &piece);
+                if self.kappa_given {
+                    out.physical.kappa += v.phi;
+                }
+                crate::adjoint::scatter(&st, &poses, &v, kappa, out);
+            });
+        }
         Ok(())
     }
 

@@ -19,6 +19,32 @@ use sdrs::scene::{ContactModelFactory, ContactSettings, Invalid, Scene};
 pub struct IpcFactory {
     /// CCD settings (defaults documented on [`CcdOptions`]).
     pub ccd: CcdOptions,
+    /// Exact (unprojected) per-primitive Hessians (default false: IPC's PSD
+    /// projection, for Newton). The simulator a backward pass linearizes
+    /// with needs the exact ones ([`IpcFactory::adjoint`]).
+    pub exact_hessian: bool,
+    /// Frozen surface triangulation (default `None`: each link's surface is
+    /// re-triangulated from its hulls for every simulator). With `Some`,
+    /// every link keeps these triangles and edges and only its vertex
+    /// positions follow the model's hull vertices ([`LinkMesh::source`]):
+    /// what a cage-based design needs, since re-triangulating a planar face
+    /// whose vertices a deformation moves off-plane would flip its diagonal
+    /// between `d + h` and `d − h` (a jump in the contact energy).
+    pub topology: Option<std::sync::Arc<Vec<LinkMesh>>>,
+}
+
+impl IpcFactory {
+    /// The factory for the simulator of a backward pass
+    /// ([`sdrs::diff::backward`]): the same terms with exact Hessians, so the
+    /// step residual is linearized exactly. Trajectories are recorded with
+    /// `self` (projected Hessians, robust Newton steps); the solutions are the
+    /// same stationary points either way.
+    pub fn adjoint(&self) -> IpcFactory {
+        IpcFactory {
+            exact_hessian: true,
+            ..self.clone()
+        }
+    }
 }
 
 /// Barrier force magnitude per unit `κ` at distance `d` (m) for activation
@@ -64,7 +90,59 @@ pub fn link_meshes(scene: &Scene) -> Result<Vec<LinkMesh>, Invalid> {
         .collect()
 }
 
+/// The frozen `topology` with vertex positions from the scene's hull
+/// vertices (each template vertex's [`LinkMesh::source`]).
+pub fn meshes_with_topology(
+    scene: &Scene,
+    topology: &[LinkMesh],
+) -> Result<Vec<LinkMesh>, Invalid> {
+    let model = &scene.model;
+    if topology.len() != model.links.len() {
+        return Err(Invalid::new(
+            "contact.model",
+            format!(
+                "the frozen IPC surfaces are for {} links, the model has {}",
+                topology.len(),
+                model.links.len()
+            ),
+        ));
+    }
+    (0..model.links.len())
+        .map(|i| {
+            let mut m = topology[i].clone();
+            let l = &model.links[i];
+            for (k, &(h, v)) in m.source.iter().enumerate() {
+                let x = l
+                    .hulls
+                    .get(h as usize)
+                    .and_then(|hh| hh.x_local.get(v as usize))
+                    .ok_or_else(|| {
+                        Invalid::new(
+                            format!("robot \"{}\" link \"{}\"", model.robots[l.robot].name, l.name),
+                            format!("frozen IPC surface vertex {k} refers to hull {h} vertex {v}, which does not exist"),
+                        )
+                    })?;
+                m.x_local[k] = *x;
+            }
+            for (e, len2) in m.edges.iter().zip(m.edge_len2.iter_mut()) {
+                *len2 = (m.x_local[e[0] as usize] - m.x_local[e[1] as usize]).norm_squared();
+            }
+            m.radius = m.x_local.iter().map(|x| x.norm()).fold(0.0, f64::max);
+            Ok(m)
+        })
+        .collect()
+}
+
 impl ContactModelFactory for IpcFactory {
+    /// The same terms with exact per-primitive Hessians ([`IpcFactory::adjoint`]).
+    fn adjoint_energies(
+        &self,
+        scene: &Scene,
+        c: &ContactSettings,
+    ) -> Result<Vec<Box<dyn Energy>>, Invalid> {
+        self.adjoint().contact_energies(scene, c)
+    }
+
     fn contact_energies(
         &self,
         scene: &Scene,
@@ -77,7 +155,10 @@ impl ContactModelFactory for IpcFactory {
             ));
         }
         let model = &scene.model;
-        let meshes = link_meshes(scene)?;
+        let meshes = match &self.topology {
+            None => link_meshes(scene)?,
+            Some(t) => meshes_with_topology(scene, t)?,
+        };
         let kappa = if c.kappa_given {
             c.kappa
         } else {
@@ -89,6 +170,8 @@ impl ContactModelFactory for IpcFactory {
             ccd: self.ccd.clone(),
         };
         let mut contact = IpcContact::new(model, meshes.clone(), &c.excluded, params.clone());
+        contact.exact_hessian = self.exact_hessian;
+        contact.kappa_given = c.kappa_given;
         let mut kin = Kinematics::new(model);
         kin.update(model, &scene.q0, &scene.charts, KinOrder::Pose);
         let (mut d, mut pair) = contact.min_distance(&kin.pose);
@@ -113,7 +196,7 @@ impl ContactModelFactory for IpcFactory {
         }
         let mut out: Vec<Box<dyn Energy>> = vec![Box::new(contact)];
         if c.mu > 0.0 {
-            out.push(Box::new(IpcFriction::new(
+            let mut friction = IpcFriction::new(
                 model,
                 meshes,
                 &c.excluded,
@@ -124,7 +207,9 @@ impl ContactModelFactory for IpcFactory {
                     eps_v: c.eps_v,
                     dt: scene.settings.dt,
                 },
-            )));
+            );
+            friction.kappa_given = c.kappa_given;
+            out.push(Box::new(friction));
         }
         Ok(out)
     }

@@ -48,6 +48,9 @@ pub struct IpcFriction {
     world: Vec<Vec<Vector3<f64>>>,
     contacts: Vec<Contact>,
     pair_slots: BTreeMap<(usize, usize), usize>,
+    /// Whether `κ` is the scene's `contact.kappa` (then `∂Φ/∂κ` goes to the
+    /// physical gradient); false when the baseline chose it.
+    pub kappa_given: bool,
 }
 
 impl IpcFriction {
@@ -79,6 +82,7 @@ impl IpcFriction {
             meshes,
             contacts: Vec::new(),
             pair_slots: BTreeMap::new(),
+            kappa_given: true,
         }
     }
 
@@ -122,6 +126,34 @@ pub fn lag_pair(
             },
         ));
     });
+}
+
+/// The fixed pieces of a lagged stencil for its adjoint
+/// ([`crate::adjoint_stencil::friction_vjp`]): the distance type and
+/// tangent axis that [`lag_pair`] chose at the lagged points `xp`. A
+/// point–triangle stencil has one point on one side and three on the other;
+/// an edge–edge stencil two and two.
+pub fn lag_piece(
+    ids: &StencilIds,
+    xp: &[crate::distance::vec::V3<f64>; 4],
+    p: &IpcFrictionParams,
+) -> crate::adjoint_stencil::FrictionPiece {
+    let kind = if ids[0].0 == ids[1].0 {
+        crate::primitive::PrimitiveKind::EdgeEdge { eps_x: 0.0 }
+    } else {
+        crate::primitive::PrimitiveKind::PointTriangle
+    };
+    let (_, ty) = stencil_distance(kind, xp);
+    let w = closest_weights(xp, ty);
+    let v: Vector3<f64> = (0..4).map(|j| Vector3::from(xp[j]) * w[j]).sum();
+    crate::adjoint_stencil::FrictionPiece {
+        ty,
+        axis: crate::friction_stencil::tangent_axis(&(v / v.norm())),
+        dhat2: p.dhat * p.dhat,
+        kappa: p.kappa,
+        mu: p.mu,
+        eps: p.eps_v * p.dt,
+    }
 }
 
 /// `Σ_c D_c` over the lagged contacts of one link pair at the step-`t+1`
@@ -246,6 +278,46 @@ impl Energy for IpcFriction {
                     h.as_deref(),
                 );
             }
+        }
+        Ok(())
+    }
+
+    /// Adjoint product (see [`crate::adjoint_stencil::friction_vjp`]): per
+    /// lagged contact, `∂Φ/∂X` (step `t+1`) and `∂Φ/∂Xᵗ` (step `t`, through
+    /// the displacement and the lagged `λ`, `w`, `T`) into pose, lagged-pose
+    /// and hull-vertex space; `∂Φ/∂μ = Φ/μ`, and `∂Φ/∂κ = Φ/κ` when `κ` is
+    /// the scene's. `begin_step` has run for this step (the lagged set).
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        _q: &DVector<f64>,
+        kin: &Kinematics,
+        dir: &sdrs::diff::AdjointDirection,
+        out: &mut sdrs::diff::VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let p = &self.params;
+        let poses = crate::adjoint::PoseSet {
+            pose: &kin.pose,
+            dpose: dir.dpose,
+            prev: ctx.poses_prev,
+        };
+        for c in &self.contacts {
+            let (la, lb) = self.link_pairs[c.pair];
+            let st = crate::adjoint::StencilRef {
+                ids: c.ids,
+                links: [la, lb],
+                meshes: [&self.meshes[la], &self.meshes[lb]],
+            };
+            let x = st.points(&kin.pose);
+            let xp = st.points(ctx.poses_prev);
+            let dx = crate::adjoint::directions(&st, dir.dpose);
+            let piece = lag_piece(&c.ids, &xp, p);
+            let v = crate::adjoint_stencil::friction_vjp(&x, &xp, &dx, &piece);
+            out.physical.mu += v.phi / p.mu;
+            if self.kappa_given {
+                out.physical.kappa += v.phi / p.kappa;
+            }
+            crate::adjoint::scatter(&st, &poses, &v, 1.0, out);
         }
         Ok(())
     }

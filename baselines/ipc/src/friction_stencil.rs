@@ -105,15 +105,23 @@ impl FrictionStencil {
 /// An orthonormal tangent basis of the plane ⊥ `n` (unit): `e₁` from the
 /// coordinate axis least aligned with `n`, `e₂ = n × e₁`.
 pub fn tangent_basis(n: &Vector3<f64>) -> Matrix3x2<f64> {
-    let a = n.abs();
-    let axis = if a.x <= a.y && a.x <= a.z {
-        Vector3::x()
-    } else if a.y <= a.z {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
+    let mut axis = Vector3::zeros();
+    axis[tangent_axis(n)] = 1.0;
     let e1 = n.cross(&axis).normalize();
     let e2 = n.cross(&e1);
     Matrix3x2::from_columns(&[e1, e2])
+}
+
+/// The coordinate axis (0, 1, 2) least aligned with `n`, from which
+/// [`tangent_basis`] builds `e₁` (a piecewise-constant choice the adjoint
+/// holds fixed).
+pub fn tangent_axis(n: &Vector3<f64>) -> usize {
+    let a = n.abs();
+    if a.x <= a.y && a.x <= a.z {
+        0
+    } else if a.y <= a.z {
+        1
+    } else {
+        2
+    }
 }

@@ -18,9 +18,12 @@
 //! - [`factory`]: the [`sdrs::scene::ContactModelFactory`] the CLI passes to
 //!   `Scene::simulator_with`.
 
+pub mod adjoint;
+pub mod adjoint_stencil;
 pub mod barrier;
 pub mod bench;
 pub mod broad_phase;
+pub mod cage;
 pub mod ccd;
 pub mod contact;
 pub mod distance;

@@ -38,6 +38,12 @@ pub struct LinkMesh {
     pub edge_len2: Vec<f64>,
     /// `max ‖x̃‖` over vertices (m): the link-frame radius about its origin.
     pub radius: f64,
+    /// Where each vertex comes from: `(component, index)` — for
+    /// [`LinkMesh::from_hulls`] the model's hull and vertex (`x̃` is a copy of
+    /// `hulls[h].x_local[i]`), so design gradients w.r.t. mesh vertices land
+    /// on the model's hull vertices; for [`LinkMesh::add_closed`] the
+    /// component and the index in its vertex list.
+    pub source: Vec<(u32, u32)>,
 }
 
 impl LinkMesh {
@@ -48,7 +54,20 @@ impl LinkMesh {
             let poly = sdrs::import::polytope::convex_hull(&hull.x_local)
                 .map_err(|msg| MeshError::Hull { hull: h, msg })?;
             let tris: Vec<[usize; 3]> = poly.triangles.clone();
+            let first = m.x_local.len();
             m.add_closed(h, &poly.vertices, &tris)?;
+            // The hull's vertices are copies of input points: find each one.
+            for (k, v) in poly.vertices.iter().enumerate() {
+                let src =
+                    hull.x_local
+                        .iter()
+                        .position(|x| x == v)
+                        .ok_or_else(|| MeshError::Hull {
+                            hull: h,
+                            msg: format!("surface vertex {k} is not a hull vertex"),
+                        })?;
+                m.source[first + k] = (h as u32, src as u32);
+            }
         }
         m.radius = m.x_local.iter().map(|x| x.norm()).fold(0.0, f64::max);
         Ok(m)
@@ -79,6 +98,8 @@ impl LinkMesh {
         }
         let base = self.x_local.len() as u32;
         self.x_local.extend_from_slice(vertices);
+        self.source
+            .extend((0..vertices.len()).map(|i| (component as u32, i as u32)));
         self.tris.extend(
             tris.iter()
                 .map(|t| [t[0] as u32 + base, t[1] as u32 + base, t[2] as u32 + base]),

@@ -18,7 +18,7 @@ use crate::broad_phase::Candidates;
 use crate::distance::vec::V3;
 use crate::mesh::LinkMesh;
 use crate::mollifier::eps_x;
-use crate::primitive::{Primitive, PrimitiveKind, evaluate, stencil_distance};
+use crate::primitive::{Primitive, PrimitiveKind, evaluate_with, stencil_distance};
 use nalgebra::{Matrix3x4, SMatrix, Vector3, Vector4};
 
 /// 24×24 Hessian over the two links' poses.
@@ -60,7 +60,7 @@ pub struct PairGeometry<'a> {
 impl PairGeometry<'_> {
     /// The stencil of a candidate: points, their link side (0 = a, 1 = b)
     /// and local homogeneous coordinates.
-    fn stencil(&self, ids: [(usize, u32); 4]) -> ([V3<f64>; 4], [usize; 4], [Vector4<f64>; 4]) {
+    pub fn stencil(&self, ids: [(usize, u32); 4]) -> ([V3<f64>; 4], [usize; 4], [Vector4<f64>; 4]) {
         let x = ids.map(|(s, i)| {
             let p = self.world[s][i as usize];
             [p.x, p.y, p.z]
@@ -111,13 +111,16 @@ impl PairGeometry<'_> {
 }
 
 /// Evaluates `E_ab` and, when `derivatives`, its pose gradient and (when
-/// `hessian`) pose Hessian.
+/// `hessian`) pose Hessian, from per-primitive Hessians that are
+/// PSD-projected when `project` (Newton) and exact otherwise (the backward
+/// pass).
 pub fn evaluate_pair(
     geo: &PairGeometry,
     cand: &Candidates,
     dhat2: f64,
     derivatives: bool,
     hessian: bool,
+    project: bool,
 ) -> PairEval {
     let mut out = PairEval::new(hessian && derivatives && !cand.is_empty());
     geo.for_each_stencil(cand, |kind, ids| {
@@ -125,7 +128,7 @@ pub fn evaluate_pair(
             return;
         }
         let (x, side, loc) = geo.stencil(ids);
-        match evaluate(kind, &x, dhat2, derivatives) {
+        match evaluate_with(kind, &x, dhat2, derivatives, project) {
             Primitive::Inactive => {
                 out.min_d2 = out.min_d2.min(stencil_distance(kind, &x).0);
             }

@@ -47,7 +47,8 @@ pub struct PrimitiveEval {
     pub value: f64,
     /// `∂P/∂x` (m³), when derivatives were requested.
     pub grad: Vec12,
-    /// PSD-projected `∂²P/∂x²` (m²), when requested.
+    /// `∂²P/∂x²` (m²), when requested: PSD-projected unless the caller asked
+    /// for the exact one ([`evaluate_with`]).
     pub hess: Mat12,
 }
 
@@ -62,7 +63,7 @@ pub enum Primitive {
 }
 
 /// Whether the mollifier is active and its `ε_x`.
-fn mollified(kind: PrimitiveKind, x: &[V3<f64>; 4]) -> Option<f64> {
+pub fn mollified(kind: PrimitiveKind, x: &[V3<f64>; 4]) -> Option<f64> {
     match kind {
         PrimitiveKind::PointTriangle => None,
         PrimitiveKind::EdgeEdge { eps_x } => {
@@ -83,6 +84,19 @@ pub fn stencil_distance(kind: PrimitiveKind, x: &[V3<f64>; 4]) -> (f64, Distance
 /// Evaluates the barrier potential of a stencil. With `derivatives` false
 /// only `value` is meaningful (gradient and Hessian are left zero).
 pub fn evaluate(kind: PrimitiveKind, x: &[V3<f64>; 4], dhat2: f64, derivatives: bool) -> Primitive {
+    evaluate_with(kind, x, dhat2, derivatives, true)
+}
+
+/// [`evaluate`] with the PSD projection of the Hessian optional: `project`
+/// false gives the exact Hessian (the backward pass linearizes the step
+/// residual exactly; Newton's steps use the projected one).
+pub fn evaluate_with(
+    kind: PrimitiveKind,
+    x: &[V3<f64>; 4],
+    dhat2: f64,
+    derivatives: bool,
+    project: bool,
+) -> Primitive {
     let (d, ty) = stencil_distance(kind, x);
     if d <= 0.0 || !d.is_finite() {
         return Primitive::Touching;
@@ -117,7 +131,7 @@ pub fn evaluate(kind: PrimitiveKind, x: &[V3<f64>; 4], dhat2: f64, derivatives: 
             &flat,
         );
         out.grad = g;
-        out.hess = project_psd(&h);
+        out.hess = if project { project_psd(&h) } else { h };
     }
     Primitive::Active(Box::new(out))
 }

@@ -1,0 +1,91 @@
+//! Turns a co-design problem into a cage-based one (`sdrs optimize
+//! --contact ipc --cage …`): the cage vertices of the task's
+//! `design.vertices` links become the design (bounds `design.bound`), and
+//! the IPC surfaces keep the rest triangulation while the cage moves their
+//! vertices ([`crate::IpcFactory::topology`]).
+
+use super::{CageDesign, CageError, CageResolution, LinkCage};
+use crate::IpcFactory;
+use sdrs::optimize::Problem;
+use sdrs::optimize::design::Target;
+use std::sync::Arc;
+
+/// Why a problem cannot be caged.
+#[derive(Debug, thiserror::Error)]
+pub enum CageSetupError {
+    #[error(
+        "{task}: the task designs no link's hull vertices (its `design.vertices` is empty), so there is nothing to cage"
+    )]
+    NoVertexDesign { task: String },
+    #[error(transparent)]
+    Cage(#[from] CageError),
+    #[error("{0}")]
+    Mesh(String),
+}
+
+/// The cages (one per designed link) and the number of design variables.
+pub struct CageSummary {
+    pub cage_vertices: Vec<usize>,
+    pub variables: usize,
+}
+
+/// Replaces `problem`'s design (and its other trajectories') by the cage
+/// vertices and gives it the IPC factory with frozen surfaces.
+pub fn cage_problem(
+    problem: &mut Problem,
+    res: CageResolution,
+) -> Result<CageSummary, CageSetupError> {
+    let mut links: Vec<usize> = problem
+        .design
+        .vars
+        .iter()
+        .flat_map(|v| &v.targets)
+        .filter_map(|t| match t {
+            Target::Vertex { link, .. } => Some(*link),
+            _ => None,
+        })
+        .collect();
+    links.sort_unstable();
+    links.dedup();
+    if links.is_empty() {
+        return Err(CageSetupError::NoVertexDesign {
+            task: problem.task_path.display().to_string(),
+        });
+    }
+    let bound = problem.task.design.as_ref().map_or(0.5, |d| d.bound);
+    let summary = cage_one(problem, &links, res, bound)?;
+    let mut others = std::mem::take(&mut problem.others);
+    let done: Result<(), CageSetupError> = others
+        .iter_mut()
+        .try_for_each(|o| cage_one(o, &links, res, bound).map(|_| ()));
+    problem.others = others;
+    done?;
+    Ok(summary)
+}
+
+/// One trajectory's cage design and frozen-surface factory.
+fn cage_one(
+    p: &mut Problem,
+    links: &[usize],
+    res: CageResolution,
+    bound: f64,
+) -> Result<CageSummary, CageSetupError> {
+    let cages = links
+        .iter()
+        .map(|&l| LinkCage::automatic(&p.model, l, res.segments()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let design = CageDesign { cages, bound };
+    let mut scene = p.scene.clone();
+    scene.model = p.model.clone();
+    let topology = crate::factory::link_meshes(&scene)
+        .map_err(|e| CageSetupError::Mesh(e.at(&scene.source).to_string()))?;
+    p.contact_factory = Some(Arc::new(IpcFactory {
+        topology: Some(Arc::new(topology)),
+        ..IpcFactory::default()
+    }));
+    p.design = design.design_space(&p.model);
+    Ok(CageSummary {
+        cage_vertices: design.cages.iter().map(|c| c.cage.vertices.len()).collect(),
+        variables: design.len(),
+    })
+}
