@@ -106,6 +106,29 @@ fn quick_suite_report_browser_gate_and_resume() {
         "{}",
         cd["fd"]
     );
+    // The mesh baseline (IPC + a coarse automatic cage) on the spider: it
+    // optimized 4 cages × 26 vertices × 3 coordinates, lowered the loss, kept
+    // every surface apart, and its row is in the report.
+    let spider = r["codesign"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "spider")
+        .unwrap();
+    let mesh = spider["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["method"] == "mesh baseline, coarse cage")
+        .expect("the quick suite runs the spider with a coarse cage");
+    assert_eq!(mesh["design_variables"], 4 * 26 * 3);
+    let (l0, l1) = (
+        mesh["initial_loss"].as_f64().unwrap(),
+        mesh["final_loss"].as_f64().unwrap(),
+    );
+    assert!(l1 < l0, "mesh baseline: loss {l0} -> {l1}");
+    assert!(mesh["min_distance"].as_f64().unwrap() > 0.0);
+    assert!(md.contains("| mesh baseline, coarse cage | 312 |"));
 
     // The browser: every plot drawn, no console message, a screenshot.
     let page = out.join("report.html");

@@ -31,7 +31,8 @@ pub fn run(
     };
     let p = load(true)?;
     let iters = spec.iters.unwrap_or(p.task.optimizer.iters);
-    pb.set_length(2 * (iters as u64 + 1) + u64::from(spec.fd_check));
+    let methods = 2 + spec.cages.len() as u64;
+    pb.set_length(methods * (iters as u64 + 1) + u64::from(spec.fd_check));
     let fd = if spec.fd_check && !p.design.is_empty() {
         pb.set_message(format!("{}: gradient check", spec.name));
         let r = fd_check(&p).with_context(|| format!("{}: gradient check", spec.name))?;
@@ -43,8 +44,30 @@ pub fn run(
     let metrics = sdrs::optimize::metrics::Metrics::from_problem(&p)?;
     let mut runs = Vec::new();
     let mut shapes_svg = None;
-    for (method, design) in [("co-design", true), ("controller-only", false)] {
-        let p = if design { p.clone() } else { load(false)? };
+    // (method, design on, cage resolution): SDRS with and without the
+    // design, then the mesh baseline with each cage of the suite.
+    let mut variants: Vec<(String, bool, Option<&str>)> = vec![
+        ("co-design".into(), true, None),
+        ("controller-only".into(), false, None),
+    ];
+    for c in &spec.cages {
+        variants.push((format!("mesh baseline, {c} cage"), true, Some(c.as_str())));
+    }
+    for (method, design, cage) in variants {
+        let p = match cage {
+            None if design => p.clone(),
+            None => load(false)?,
+            Some(c) => {
+                let mut q = load(true)?;
+                let ipc = crate::contact_model::ContactArgs {
+                    contact: Some("ipc".into()),
+                    ..Default::default()
+                };
+                crate::contact_model::configure_problem(&mut q, &ipc, Some(c), true)
+                    .with_context(|| format!("{}: {method}", spec.name))?;
+                q
+            }
+        };
         pb.set_message(format!("{}: {method}", spec.name));
         let t0 = Instant::now();
         let out = optimize(&p, iters, |_, _| pb.inc(1))
@@ -56,7 +79,7 @@ pub fn run(
             Some(m) => Some(m.measure(&p, &out.design, &out.controller)?),
             None => None,
         };
-        if design {
+        if design && cage.is_none() {
             let (d0, _) = sdrs::optimize::start(&p, 0);
             if let Some(svg) =
                 sdrs::optimize::shapes::initial_vs_optimized_svg(&p, &d0, &out.design)
@@ -68,7 +91,7 @@ pub fn run(
             }
         }
         runs.push(CodesignRun {
-            method: method.into(),
+            method: method.clone(),
             design_variables: p.design.len(),
             controller_variables: p.controls.len(),
             initial_loss: out.initial_loss,
@@ -106,7 +129,7 @@ fn min_distance(
     scene.model = p.model.clone();
     p.design.apply(&mut scene.model, d);
     p.controls.apply(&mut scene.controller, c);
-    let mut sim = scene.simulator();
+    let mut sim = p.simulator(&scene)?;
     let traj = sdrs::sim::run::run(&mut sim, p.horizon, |_| {})?;
     Ok(
         Summary::new("compare", scene.settings.dt, &traj, 0.0, vec![])

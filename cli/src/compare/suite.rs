@@ -92,6 +92,13 @@ pub struct CodesignSpec {
     /// magnitude at the initial design (default true).
     #[serde(default = "yes")]
     pub fd_check: bool,
+    /// Also run the mesh-based co-design (Xu et al. 2021): the same task
+    /// under the IPC baseline with the cage vertices of an automatic cage
+    /// of each listed resolution as the design (`coarse` = 26 vertices,
+    /// `fine` = 98, or `k` segments per box edge; see `sdrs optimize
+    /// --cage`). Default none.
+    #[serde(default)]
+    pub cages: Vec<String>,
 }
 
 fn four() -> usize {
