@@ -15,7 +15,7 @@ const SCENE: &str = r#"
 version: 1
 dt: 0.01
 gravity: [0, 0, -9.81]
-solver: {tol: 1.0e-10}
+solver: {tol: 1.0e-12}
 ground: {height: 0}
 contact: {model: ipc, dhat: 1.0e-3, mu: 0.4, eps_v: 1.0e-2}
 robots:
