@@ -41,7 +41,7 @@ fn ipc_setup(text: &str, steps: usize) -> Setup {
 const PUSH: &str = r#"
 dt: 0.01
 gravity: [0, 0, -9.81]
-solver: {tol: 1.0e-10}
+solver: {tol: 1.0e-12}
 ground: {height: 0}
 contact: {model: ipc, dhat: 1.0e-3, kappa: {KAPPA}, mu: 0.4, eps_v: 1.0e-2}
 robots:
@@ -113,7 +113,7 @@ fn push_loss(setup: &Setup) -> Loss {
 /// 60 steps of Δt = 0.01 s: the box rests on the ground's barrier and is
 /// pushed by the finger (both contacts and their friction active for most
 /// of the run, asserted below); central differences with h = 1e-6 (1e-4 in
-/// θ̇⁰), Newton tolerance 1e-10: every gradient within 1e-4 relative.
+/// θ̇⁰), Newton tolerance 1e-12: every gradient within 1e-4 relative.
 #[test]
 fn ipc_trajectory_gradients_match_finite_differences_with_contact_and_friction() {
     let t0 = std::time::Instant::now();
@@ -210,7 +210,7 @@ fn ipc_trajectory_gradients_match_finite_differences_with_contact_and_friction()
     let a = fd(&setup, &loss, 1e-3, |s, d| s.controller.channels[0].kp += d);
     check("kp", g.channels[0].kp, a, tol, &mut worst);
     eprintln!(
-        "worst relative error {worst:.2e} (h = {h}, Newton tol 1e-10), {:.1} s",
+        "worst relative error {worst:.2e} (h = {h}, Newton tol 1e-12), {:.1} s",
         t0.elapsed().as_secs_f64()
     );
 }
