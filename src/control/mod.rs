@@ -5,7 +5,22 @@ pub mod signal;
 
 pub use signal::{Signal, SignalError};
 
-use crate::energy::PdTarget;
+/// Target of one controlled coordinate for the current step: what the
+/// controller hands the stable-PD term (`crate::energy::pd`). It lives here,
+/// below `energy` and `sim`, so that `control` depends on neither.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PdTarget {
+    /// Coordinate index in `θ`.
+    pub dof: usize,
+    /// Stiffness `k_p` (J/rad² or J/m²).
+    pub kp: f64,
+    /// Damping `k_d` (J·s²/rad² or J·s²/m²).
+    pub kd: f64,
+    /// `θ*^{t+1}` (rad or m).
+    pub q: f64,
+    /// `θ̇*^{t+1}` (rad/s or m/s).
+    pub qdot: f64,
+}
 
 /// One controlled coordinate.
 #[derive(Clone, Debug, PartialEq)]

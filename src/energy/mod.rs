@@ -25,7 +25,8 @@ pub use gravity::Gravity;
 pub use inertia::Inertia;
 pub use joint_limit::JointLimits;
 pub use mimic::MimicTies;
-pub use pd::{PdController, PdTarget};
+pub use crate::control::PdTarget;
+pub use pd::PdController;
 
 use crate::kinematics::Kinematics;
 use crate::math::Pose;

@@ -10,19 +10,6 @@ use crate::diff::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;
 
-/// Target of one controlled coordinate for the current step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PdTarget {
-    /// Coordinate index in `θ`.
-    pub dof: usize,
-    pub kp: f64,
-    pub kd: f64,
-    /// `θ*^{t+1}`.
-    pub q: f64,
-    /// `θ̇*^{t+1}`.
-    pub qdot: f64,
-}
-
 /// The PD term; targets come from the step context.
 #[derive(Default, Clone, Debug)]
 pub struct PdController;
