@@ -45,7 +45,7 @@ $PY - "$OUT" $TASKS <<'PY'
 import json, sys
 from pathlib import Path
 out = Path(sys.argv[1])
-print("| task | design | iterations | loss initial → final | grasped before → after | topology changed | lifted (all) | wall (s) | fcl check |")
+print("| task | design | iterations | loss initial → final (best) | grasped before → after | topology (b0,b1,b2) before → after | lifted (all) | wall (s) | fcl check |")
 print("|---|---|---|---|---|---|---|---|---|")
 for t in sys.argv[2:]:
     for mode in ("on", "off"):
@@ -58,7 +58,15 @@ for t in sys.argv[2:]:
         lifted = all(x["lifted"] for x in g["after"]) if g["after"] else None
         sep = (d / "separation.txt").read_text()
         ok = "ok" if "INTERPENETRATION" not in sep and sep.strip() else "FAIL"
-        print(f"| {t} | {mode} | {s['iterations']} | {s['initial_loss']:.3e} → {s['final_loss']:.3e} | "
+        betti = lambda x: f"({x['components']},{x['holes']},{x['cavities']})"
+        topo = "; ".join(f"{k}: {betti(v)} → {betti(m['topology']['after'][k])}"
+                         for k, v in m["topology"]["before"].items()) or "—"
+        best = s["initial_loss"]
+        hist = d / "history.csv"
+        if hist.exists():
+            rows = hist.read_text().splitlines()[1:]
+            best = min([float(r.split(",")[2]) for r in rows] + [best])
+        print(f"| {t} | {mode} | {s['iterations']} | {s['initial_loss']:.3e} → {s['final_loss']:.3e} ({best:.3e}) | "
               f"{g['grasped_before']}/{g['trajectories']} → {g['grasped_after']}/{g['trajectories']} | "
-              f"{m['topology']['changed']} | {lifted} | {float((d / 'wall_seconds.txt').read_text()):.0f} | {ok} |")
+              f"{topo} | {lifted} | {float((d / 'wall_seconds.txt').read_text()):.0f} | {ok} |")
 PY

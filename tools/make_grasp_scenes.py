@@ -6,7 +6,7 @@ paper's block design space) + one object (imported OBJ, V-HACD hulls) on a
 ground plane, with the prescribed base path and the closed-pose targets of
 the task header. Run from the repository root after `cargo build --release`:
 
-    .venv/bin/python tools/make_grasp_scenes.py [--blocks 156]
+    .venv/bin/python tools/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw]
 
 The outputs are committed; rerun only to regenerate them.
 """
@@ -86,6 +86,48 @@ def parallel_jaw(blocks, tmp):
               f"# see task.yaml for the settings). Lift rise {rise} m.\n")
 
 
+# Single-jaw path (task.yaml header): four stages of 1.2 s (H = 480, dt = 0.01):
+# knots at the stage boundaries, coordinates of the free root relative to
+# the URDF pose (palm 0.4 m up). x, y, z (m), then the rotation vector (rad).
+SJ_TIMES = [0.0, 1.2, 2.4, 3.6, 4.8]
+SJ_PATH = {
+    "x": [0.0, 0.0, 0.04, 0.04, 0.04],      # approach: the left leg meets the X
+    "y": [0.0, 0.0, 0.0, 0.0, 0.0],
+    "z": [0.0, -0.262, -0.262, -0.262, -0.062],  # lower (leg tips 18 mm up), lift 0.2 m
+    "rx": [0.0, 0.0, 0.0, 0.0, 0.0],
+    "ry": [0.0, 0.0, 0.0, 0.0, 0.0],
+    "rz": [0.0, 0.0, 0.3, 0.0, 0.0],        # turn while grasping, re-orient
+}
+
+
+def single_jaw(blocks, tmp):
+    d = ROOT / "robots" / "single_jaw_gripper"
+    g = sdrs_import(d / "single_jaw_gripper.urdf", Path(tmp) / "sj.yaml", "--decomposer", "grid",
+                    "--max-hulls", str(blocks), "--designable", "jaw")
+    robot = g["robots"][0]
+    robot["name"] = "gripper"
+    hulls = object_hulls(d / "objects" / "x_object.obj", tmp, False)
+    zmin = min(v[2] for h in hulls for v in h["vertices"])
+    robot["controller"] = {
+        "kp": 0.0, "kd": 0.0,
+        "gains": {"base": {"kp": 3000.0, "kd": 3.0}},
+        "targets": {"base": [{"type": "table", "times": list(SJ_TIMES), "values": list(SJ_PATH[k])}
+                             for k in ["x", "y", "z", "rx", "ry", "rz"]]},
+    }
+    scene = {
+        "version": 1, "dt": 0.01, "steps": 480,
+        "solver": {"tol": 1e-6, "max_iters": 100},
+        "robots": [robot],
+        "objects": [{"name": "x_object", "mass": 0.05, "hulls": hulls,
+                     "initial": {"q": [0.0, 0.0, -zmin + 0.001, 0.0, 0.0, 0.0]}}],
+        "ground": {"height": 0.0},
+        "contact": {**g["contact"], "s": 0.003, "mu": 0.05},
+    }
+    write(d / "scene.yaml", scene,
+          "# Single-jaw gripper and the X-shaped object (written by tools/make_grasp_scenes.py;\n"
+          "# see task.yaml for the settings and the prescribed base path).\n")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--blocks", type=int, default=156)
@@ -94,6 +136,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         if "parallel_jaw" in a.which:
             parallel_jaw(a.blocks, tmp)
+        if "single_jaw" in a.which:
+            single_jaw(a.blocks, tmp)
 
 
 if __name__ == "__main__":

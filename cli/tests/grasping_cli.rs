@@ -59,10 +59,20 @@ fn parallel_jaw_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
         off["extra"]["metrics"]["grasp"]["grasped_after"], 0,
         "nothing changed, nothing grasped"
     );
-    // Bounds: every design variable within ±bound of its initial value.
-    let p = Problem::load(&robots("parallel_jaw_gripper/task.yaml"), true).unwrap();
+    check_bounds("parallel_jaw_gripper/task.yaml", &on);
+    let scenes: Vec<_> = ["scene_cube", "scene_cylinder", "scene_ball", "scene_plus"]
+        .iter()
+        .map(|n| dir.join("on/scenes").join(format!("{n}.yaml")))
+        .collect();
+    check_ties("parallel_jaw_gripper/scene_cube.yaml", &scenes);
+}
+
+/// Every design variable of `task` within ±bound of its initial value in
+/// the run's summary.
+fn check_bounds(task: &str, summary: &serde_json::Value) {
+    let p = Problem::load(&robots(task), true).unwrap();
     let (lo, hi) = (p.design.lower(), p.design.upper());
-    let vals = on["design"].as_object().unwrap();
+    let vals = summary["design"].as_object().unwrap();
     assert_eq!(vals.len(), p.design.len());
     for (i, v) in p.design.vars.iter().enumerate() {
         let x = vals[&v.name].as_f64().unwrap();
@@ -74,29 +84,67 @@ fn parallel_jaw_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
             hi[i]
         );
     }
-    // Ties: in every optimized scene, tied block corners are still one point,
-    // and the design moved (some vertex differs from the initial scene).
-    let initial: SceneSpec = serde_yaml::from_str(
-        &std::fs::read_to_string(robots("parallel_jaw_gripper/scene_cube.yaml")).unwrap(),
-    )
-    .unwrap();
+}
+
+/// In every optimized scene, tied block corners are still one point, and
+/// the design moved (some tied corner differs from the initial scene).
+fn check_ties(initial: &str, scenes: &[std::path::PathBuf]) {
+    let initial: SceneSpec =
+        serde_yaml::from_str(&std::fs::read_to_string(robots(initial)).unwrap()).unwrap();
     let ties = &initial.robots[0].design.as_ref().unwrap().ties;
     assert!(ties.len() > 100);
     let mut moved = false;
-    for name in ["scene_cube", "scene_cylinder", "scene_ball", "scene_plus"] {
-        let f = dir.join("on/scenes").join(format!("{name}.yaml"));
-        let spec: SceneSpec = serde_yaml::from_str(&std::fs::read_to_string(&f).unwrap()).unwrap();
+    for f in scenes {
+        let spec: SceneSpec = serde_yaml::from_str(&std::fs::read_to_string(f).unwrap()).unwrap();
         for group in ties {
             let x = vertex(&spec, &group[0].link, group[0].hull, group[0].vertex);
             for t in &group[1..] {
                 assert_eq!(
                     x,
                     vertex(&spec, &t.link, t.hull, t.vertex),
-                    "{name}: tie {group:?}"
+                    "{}: tie {group:?}",
+                    f.display()
                 );
             }
             moved |= x != vertex(&initial, &group[0].link, group[0].hull, group[0].vertex);
         }
     }
-    assert!(moved, "two Adam steps moved no tied corner");
+    assert!(moved, "two optimizer steps moved no tied corner");
+}
+
+/// The single-jaw task at its full horizon (480 steps take ≈ 0.5 s per
+/// evaluation, so the two iterations and the twin run in seconds).
+#[test]
+fn single_jaw_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
+    let dir = scratch_dir("grasp_sj");
+    let task = "single_jaw_gripper/task.yaml";
+    let on = run(task, "on", &dir.join("on"));
+    let off = run(task, "off", &dir.join("off"));
+    for s in [&on, &off] {
+        let m = &s["extra"]["metrics"];
+        assert_eq!(m["grasp"]["trajectories"], 1);
+        // The benchmark's premise (paper): the initial jaw cannot lift the X.
+        assert_eq!(m["grasp"]["grasped_before"], 0, "{m}");
+        assert!(m["topology"]["changed"].is_boolean(), "{m}");
+    }
+    let t = &on["extra"]["metrics"]["topology"]["before"]["gripper/jaw"];
+    assert_eq!(
+        (
+            t["components"].as_u64(),
+            t["holes"].as_u64(),
+            t["cavities"].as_u64()
+        ),
+        (Some(1), Some(0), Some(0)),
+        "{t}"
+    );
+    assert_eq!(off["design_variables"], 0);
+    assert_eq!(
+        off["controller_variables"], 30,
+        "the path is still optimized"
+    );
+    check_bounds(task, &on);
+    check_ties(
+        "single_jaw_gripper/scene.yaml",
+        &[dir.join("on/scenes/scene.yaml")],
+    );
 }

@@ -1,8 +1,10 @@
 //! Controllers: target signals `θ*(t)` with their time derivatives `θ̇*(t)`,
 //! turned into stable-PD targets each step (`u^t = (θ*^{t+1}, θ̇*^{t+1})`).
 
+pub mod pose_target;
 pub mod signal;
 
+pub use pose_target::PoseTarget;
 pub use signal::{Signal, SignalError};
 
 /// Target of one controlled coordinate for the current step: what the
@@ -36,6 +38,10 @@ pub struct ControlChannel {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Controller {
     pub channels: Vec<ControlChannel>,
+    /// Free root joints whose six channels form one pose target (their
+    /// channels are driven by [`crate::energy::pd_pose`], not per
+    /// coordinate). Default none.
+    pub pose_targets: Vec<PoseTarget>,
 }
 
 impl Controller {

@@ -18,6 +18,7 @@ pub mod joint_limit;
 pub mod mimic;
 pub mod pairs;
 pub mod pd;
+pub mod pd_pose;
 
 pub use contact::ContactEnergy;
 pub use friction::FrictionEnergy;
@@ -70,6 +71,9 @@ pub struct StepContext<'a> {
     pub q_prev2: &'a DVector<f64>,
     /// PD targets for this step (`u^t`).
     pub targets: &'a [PdTarget],
+    /// Free root joints whose six `targets` (from `first`) are one pose
+    /// target ([`pd_pose`]).
+    pub pose_targets: &'a [crate::control::PoseTarget],
 }
 
 /// Output buffers for the terms; reused across evaluations.

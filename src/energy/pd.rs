@@ -4,6 +4,10 @@
 //! Note the paper's convention has no factor ½: the restoring generalized
 //! force is `2 k_p (θ* − θ)`, and the damping force is `(2 k_d/Δt)(θ̇* − θ̇)`.
 //! Units: `k_p` in J/rad² (or J/m²), `k_d` in J·s²/rad².
+//!
+//! The channels of a free root joint's pose target are not per coordinate:
+//! they are handled by [`super::pd_pose`] (chart-free), called from here so
+//! that the controller's work stays one term (`pd`).
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::diff::{AdjointDirection, VjpAccumulator};
@@ -23,12 +27,15 @@ impl Energy for PdController {
         &mut self,
         ctx: &StepContext,
         q: &DVector<f64>,
-        _kin: &Kinematics,
+        kin: &Kinematics,
         need: Need,
         acc: &mut EnergyAccumulator,
     ) -> Result<(), EnergyError> {
         let inv_dt = 1.0 / ctx.dt;
-        for t in ctx.targets {
+        for (ch, t) in ctx.targets.iter().enumerate() {
+            if in_pose_target(ctx, ch) {
+                continue;
+            }
             let k = t.dof;
             let ep = t.q - q[k];
             let ev = t.qdot - (q[k] - ctx.q_prev[k]) * inv_dt;
@@ -40,6 +47,7 @@ impl Energy for PdController {
                 acc.dof_hess[(k, k)] += 2.0 * t.kp + 2.0 * t.kd * inv_dt * inv_dt;
             }
         }
+        super::pd_pose::accumulate(ctx, kin, need, acc);
         Ok(())
     }
 
@@ -50,12 +58,15 @@ impl Energy for PdController {
         &mut self,
         ctx: &StepContext,
         q: &DVector<f64>,
-        _kin: &Kinematics,
+        kin: &Kinematics,
         dir: &AdjointDirection,
         out: &mut VjpAccumulator,
     ) -> Result<(), EnergyError> {
         let inv_dt = 1.0 / ctx.dt;
         for (ch, t) in ctx.targets.iter().enumerate() {
+            if in_pose_target(ctx, ch) {
+                continue;
+            }
             let k = t.dof;
             let l = dir.lambda[k];
             let ep = t.q - q[k];
@@ -67,6 +78,14 @@ impl Energy for PdController {
             c[2] -= 2.0 * ep * l;
             c[3] -= 2.0 * ev * l * inv_dt;
         }
+        super::pd_pose::vjp(ctx, kin, dir, out);
         Ok(())
     }
+}
+
+/// Whether channel `ch` belongs to a free root's pose target.
+fn in_pose_target(ctx: &StepContext, ch: usize) -> bool {
+    ctx.pose_targets
+        .iter()
+        .any(|p| (p.first..p.first + 6).contains(&ch))
 }

@@ -2,7 +2,7 @@
 
 use super::schema::*;
 use super::{Invalid, Scene, chain, environment};
-use crate::control::{ControlChannel, Controller};
+use crate::control::{ControlChannel, Controller, PoseTarget};
 use crate::math::{pose_from, rpy_to_matrix, so3};
 use crate::model::{
     Hull, Inertial, JointKind, JointLimit, Link, MassModel, MimicTie, Model, RobotInfo,
@@ -142,12 +142,20 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         for (joint, signals) in &c.targets {
             let l = find("controller.targets", joint)?;
             let link = &model.links[l];
-            if link.joint.has_chart() {
+            // A free root's six signals are one pose target (chart-free,
+            // `control::pose_target`); other charted joints have none.
+            let pose = matches!(link.joint, JointKind::Free) && link.parent.is_none();
+            if link.joint.has_chart() && !pose {
                 return Err(Invalid::new(
                     el("controller.targets", joint),
                     format!(
-                        "PD targets are not supported on {} joints",
-                        link.joint.type_name()
+                        "PD targets are supported on free joints of a robot's root link only, not on {} joints{}",
+                        link.joint.type_name(),
+                        if matches!(link.joint, JointKind::Free) {
+                            " below a parent link"
+                        } else {
+                            ""
+                        }
                     ),
                 ));
             }
@@ -169,6 +177,13 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
                     el("controller.gains", joint),
                     format!("gains must be finite and ≥ 0, got kp={kp}, kd={kd}"),
                 ));
+            }
+            if pose {
+                controller.pose_targets.push(PoseTarget {
+                    link: l,
+                    first: controller.channels.len(),
+                    frame: link.attach,
+                });
             }
             for (k, s) in sigs.iter().enumerate() {
                 s.validate().map_err(|e| {

@@ -347,6 +347,7 @@ impl Simulator {
             &self.settings,
             &self.state,
             &self.scratch.targets,
+            &self.controller.pose_targets,
             t_next,
         );
         self.scratch.kin.update(
@@ -427,6 +428,7 @@ impl Simulator {
             &self.settings,
             &self.state,
             &self.scratch.targets,
+            &self.controller.pose_targets,
             t_next,
         );
         for e in self.energies.iter_mut() {
@@ -588,6 +590,7 @@ fn make_context<'a>(
     settings: &SimSettings,
     state: &'a SimState,
     targets: &'a [PdTarget],
+    pose_targets: &'a [crate::control::PoseTarget],
     time: f64,
 ) -> StepContext<'a> {
     StepContext {
@@ -600,6 +603,7 @@ fn make_context<'a>(
         q_prev: &state.q,
         q_prev2: &state.q_prev,
         targets,
+        pose_targets,
     }
 }
 
@@ -620,6 +624,7 @@ fn step_objective(
     let Simulator {
         model,
         settings,
+        controller,
         energies,
         state,
         timers,
@@ -636,7 +641,14 @@ fn step_objective(
         work,
         guess: _,
     } = scratch;
-    let ctx = make_context(model, settings, state, targets, t_next);
+    let ctx = make_context(
+        model,
+        settings,
+        state,
+        targets,
+        &controller.pose_targets,
+        t_next,
+    );
     let obj = StepObjective {
         ctx,
         charts: &state.charts,
