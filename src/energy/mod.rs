@@ -20,13 +20,13 @@ pub mod pairs;
 pub mod pd;
 pub mod pd_pose;
 
+pub use crate::control::PdTarget;
 pub use contact::ContactEnergy;
 pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
 pub use joint_limit::JointLimits;
 pub use mimic::MimicTies;
-pub use crate::control::PdTarget;
 pub use pd::PdController;
 
 use crate::kinematics::Kinematics;
