@@ -86,6 +86,8 @@ pub struct Scene {
 pub struct ContactSettings {
     /// The contact model (`contact.model`; default SDRS).
     pub model: schema::ContactModelKind,
+    /// The IPC baseline's contact surface (`contact.surface`; default hulls).
+    pub surface: schema::SurfaceKind,
     /// IPC activation distance `d̂` (m; unused by the SDRS model).
     pub dhat: f64,
     /// IPC friction smoothing speed `ε_v` (m/s; unused by the SDRS model).

@@ -77,7 +77,7 @@ fn cage_one(
     let design = CageDesign { cages, bound };
     let mut scene = p.scene.clone();
     scene.model = p.model.clone();
-    let topology = crate::factory::link_meshes(&scene)
+    let topology = crate::factory::link_meshes(&scene, crate::factory::surface_kind(&scene))
         .map_err(|e| CageSetupError::Mesh(e.at(&scene.source).to_string()))?;
     p.contact_factory = Some(Arc::new(IpcFactory {
         topology: Some(Arc::new(topology)),
