@@ -76,7 +76,8 @@ pub fn export_surfaces(dir: &std::path::Path, scene: &Scene) -> Result<()> {
     if c.model != ContactModelKind::Ipc || c.surface.is_hulls() {
         return Ok(());
     }
-    let meshes = sdrs_ipc::factory::link_meshes(scene, c.surface).map_err(|e| e.at(&scene.source))?;
+    let meshes =
+        sdrs_ipc::factory::link_meshes(scene, c.surface).map_err(|e| e.at(&scene.source))?;
     if let Some(json) = sdrs_ipc::surface::export::surfaces_json(&scene.model, &meshes) {
         sdrs::output::write_atomic(
             &dir.join("surfaces.json"),
@@ -111,7 +112,10 @@ pub fn configure_problem(
         args.apply(&mut o.scene)?;
         o.contact_factory = Some(factory.clone());
     }
-    let Some(cage) = cage else { return Ok(()) };
+    let Some(cage) = cage else {
+        sdrs_ipc::surface::design::check_vertex_design(problem)?;
+        return Ok(());
+    };
     let res = sdrs_ipc::cage::CageResolution::parse(cage).map_err(anyhow::Error::msg)?;
     let is_ipc = |s: &Scene| {
         s.contact

@@ -24,6 +24,7 @@
 //!
 //! [`LinkMesh`]: crate::mesh::LinkMesh
 
+pub mod design;
 pub mod export;
 pub mod intersect;
 pub mod load;
