@@ -31,36 +31,61 @@ pub fn write_obj(path: &Path, (v, t): &Mesh) {
 /// z = 0, a slot 0.3 wide (|x| ≤ 0.15) from z = 0.1 to the top. Its convex
 /// hull is the box `[-0.3, 0.3] × [-0.3, 0.3] × [0, 0.3]`.
 pub fn channel() -> Mesh {
-    // Cross-section, counter-clockwise in (x, z).
-    let p = [
-        (-0.3, 0.0),
-        (0.3, 0.0),
-        (0.3, 0.3),
-        (0.15, 0.3),
-        (0.15, 0.1),
-        (-0.15, 0.1),
-        (-0.15, 0.3),
-        (-0.3, 0.3),
-    ];
-    let cap = [
-        [0, 1, 4],
-        [1, 2, 4],
-        [2, 3, 4],
-        [0, 4, 5],
-        [0, 5, 7],
-        [5, 6, 7],
-    ];
+    extrude(
+        &[
+            (-0.3, 0.0),
+            (0.3, 0.0),
+            (0.3, 0.3),
+            (0.15, 0.3),
+            (0.15, 0.1),
+            (-0.15, 0.1),
+            (-0.15, 0.3),
+            (-0.3, 0.3),
+        ],
+        &[
+            [0, 1, 4],
+            [1, 2, 4],
+            [2, 3, 4],
+            [0, 4, 5],
+            [0, 5, 7],
+            [5, 6, 7],
+        ],
+        0.3,
+    )
+}
+
+/// An L-shaped bar along y (|y| ≤ 0.1): a foot `[0, 0.2] × [0, 0.05]` and a
+/// leg `[0, 0.05] × [0.05, 0.2]` in (x, z); its convex hulls are those two
+/// boxes.
+pub fn l_shape() -> Mesh {
+    extrude(
+        &[
+            (0.0, 0.0),
+            (0.2, 0.0),
+            (0.2, 0.05),
+            (0.05, 0.05),
+            (0.05, 0.2),
+            (0.0, 0.2),
+        ],
+        &[[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]],
+        0.1,
+    )
+}
+
+/// The prism of a polygon `p` (counter-clockwise in (x, z), triangulated by
+/// `cap`) over `|y| ≤ hw`, outward.
+pub fn extrude(p: &[(f64, f64)], cap: &[[usize; 3]], hw: f64) -> Mesh {
     let mut v = Vec::new();
-    for y in [-0.3, 0.3] {
-        for &(x, z) in &p {
+    for y in [-hw, hw] {
+        for &(x, z) in p {
             v.push([x, y, z]);
         }
     }
     let n = p.len();
     let mut t = Vec::new();
-    // Counter-clockwise in (x, z) faces −y: the front cap (y = −0.3).
+    // Counter-clockwise in (x, z) faces −y: the front cap (y = −hw).
     for c in cap {
-        t.push(c);
+        t.push(*c);
         t.push([c[0] + n, c[2] + n, c[1] + n]);
     }
     for i in 0..n {
