@@ -131,7 +131,12 @@ fn optimize_with_ipc_and_a_coarse_cage_lowers_the_loss_and_starts_from_the_fd_gr
             p.evaluate(&d, &c0).unwrap().loss
         };
         let fd = (f(h) - f(-h)) / (2.0 * h);
-        let rel = (fd - g[i]).abs() / fd.abs().max(g[i].abs()).max(1e-8);
+        // Relative to max(|fd|, |g_i|, 1e-3 max|g|): the 40th-largest entry
+        // (3.45e-6, 5.5e3 times below the largest) differs from its central
+        // difference by 4.5e-10 (1.3e-4 of itself), the Newton-tolerance noise
+        // of a loss difference at h = 1e-6 (measured the same on main after the
+        // solver defaults changed; notes/ipc4.md).
+        let rel = (fd - g[i]).abs() / fd.abs().max(g[i].abs()).max(1e-3 * g.amax());
         eprintln!(
             "{}: adjoint {:+.9e} fd {fd:+.9e} rel {rel:.1e}",
             p.design.vars[i].name, g[i]
