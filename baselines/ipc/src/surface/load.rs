@@ -49,7 +49,7 @@ pub fn surface_from_triangles(
     check_metric(file, vertices, tris)?;
     // Components are vertex-disjoint: the edge analysis of the whole mesh
     // is that of each component.
-    check_closed_oriented(file, tris)?;
+    check_closed_oriented(file, vertices, tris)?;
     let mut mesh = LinkMesh {
         origin: MeshOrigin::Source {
             file: file.to_path_buf(),
@@ -64,6 +64,8 @@ pub fn surface_from_triangles(
                 t2,
                 v1: tris[t1],
                 v2: tris[t2],
+                p1: tris[t1].map(|k| super::xyz(&vertices[k])),
+                p2: tris[t2].map(|k| super::xyz(&vertices[k])),
             });
         }
         let mut local: Vec<usize> = comp.iter().flat_map(|&t| tris[t]).collect();

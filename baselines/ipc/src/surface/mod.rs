@@ -36,12 +36,20 @@ pub mod tri_tri;
 pub use load::{load_surface, surface_from_triangles};
 pub use paths::{SurfacePath, surface_paths};
 
+use nalgebra::Vector3;
 use std::path::PathBuf;
 
+/// `[x, y, z]` of a vertex, for messages.
+pub(crate) fn xyz(p: &Vector3<f64>) -> [f64; 3] {
+    [p.x, p.y, p.z]
+}
+
 /// Why a source mesh cannot be an IPC contact surface. `file` is the mesh
-/// file; triangle and vertex indices are 0-based in the mesh as read
-/// (coincident vertices welded, triangles that collapse to a segment or a
-/// point by the welding dropped, in file order otherwise).
+/// file; triangles are numbered 0-based in file order (faces triangulated,
+/// coincident vertices welded, triangles that collapse to a segment or a
+/// point by the welding dropped); vertex indices are the reader's (an OBJ
+/// reader numbers vertices by first use), so every message also gives the
+/// vertices' coordinates (m, mesh frame).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceError {
     #[error("{}: cannot read the mesh: {msg}", file.display())]
@@ -55,40 +63,45 @@ pub enum SurfaceError {
         point: [f64; 3],
     },
     #[error(
-        "{}: triangle {tri} (vertices {vertices:?}) is degenerate: area {area:.3e} m² for a mesh of extent {extent:.3e} m",
+        "{}: triangle {tri} (vertices {vertices:?} at {points:?}) is degenerate: area {area:.3e} m² for a mesh of extent {extent:.3e} m",
         file.display()
     )]
     Degenerate {
         file: PathBuf,
         tri: usize,
         vertices: [usize; 3],
+        points: [[f64; 3]; 3],
         area: f64,
         extent: f64,
     },
     #[error(
-        "{}: the mesh is not closed: edge {a}–{b} bounds {count} triangle(s) {tris:?}; a closed surface needs exactly 2 per edge",
+        "{}: the mesh is not closed: edge {a}–{b} ({pa:?}–{pb:?}) bounds {count} triangle(s) {tris:?}; a closed surface needs exactly 2 per edge",
         file.display()
     )]
     Open {
         file: PathBuf,
         a: usize,
         b: usize,
+        pa: [f64; 3],
+        pb: [f64; 3],
         count: usize,
         tris: Vec<usize>,
     },
     #[error(
-        "{}: the mesh is not consistently oriented: triangles {t1} and {t2} both run edge {a}→{b} in the same direction",
+        "{}: the mesh is not consistently oriented: triangles {t1} and {t2} both run edge {a}→{b} ({pa:?}→{pb:?}) in the same direction",
         file.display()
     )]
     Orientation {
         file: PathBuf,
         a: usize,
         b: usize,
+        pa: [f64; 3],
+        pb: [f64; 3],
         t1: usize,
         t2: usize,
     },
     #[error(
-        "{}: the mesh intersects itself: triangles {t1} (vertices {v1:?}) and {t2} (vertices {v2:?}) meet but share no vertex",
+        "{}: the mesh intersects itself: triangles {t1} (vertices {v1:?} at {p1:?}) and {t2} (vertices {v2:?} at {p2:?}) meet but share no vertex",
         file.display()
     )]
     SelfIntersection {
@@ -97,5 +110,7 @@ pub enum SurfaceError {
         t2: usize,
         v1: [usize; 3],
         v2: [usize; 3],
+        p1: [[f64; 3]; 3],
+        p2: [[f64; 3]; 3],
     },
 }

@@ -47,6 +47,7 @@ pub fn check_metric(
                 file: file.to_path_buf(),
                 tri: i,
                 vertices: *t,
+                points: t.map(|k| super::xyz(&v[k])),
                 area,
                 extent,
             });
@@ -57,7 +58,11 @@ pub fn check_metric(
 
 /// Checks that the mesh is closed and consistently oriented (the first
 /// offending edge, in `(min, max)` vertex order, is reported).
-pub fn check_closed_oriented(file: &Path, tris: &[[usize; 3]]) -> Result<(), SurfaceError> {
+pub fn check_closed_oriented(
+    file: &Path,
+    v: &[Vector3<f64>],
+    tris: &[[usize; 3]],
+) -> Result<(), SurfaceError> {
     // Undirected edge → the triangles using it and the direction each runs it.
     let mut edges: BTreeMap<(usize, usize), Vec<(usize, bool)>> = BTreeMap::new();
     for (i, t) in tris.iter().enumerate() {
@@ -75,6 +80,8 @@ pub fn check_closed_oriented(file: &Path, tris: &[[usize; 3]]) -> Result<(), Sur
                 file: file.to_path_buf(),
                 a,
                 b,
+                pa: super::xyz(&v[a]),
+                pb: super::xyz(&v[b]),
                 count: uses.len(),
                 tris: uses.iter().map(|u| u.0).collect(),
             });
@@ -85,6 +92,8 @@ pub fn check_closed_oriented(file: &Path, tris: &[[usize; 3]]) -> Result<(), Sur
                 file: file.to_path_buf(),
                 a,
                 b,
+                pa: super::xyz(&v[a]),
+                pb: super::xyz(&v[b]),
                 t1: uses[0].0,
                 t2: uses[1].0,
             });
