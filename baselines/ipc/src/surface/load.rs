@@ -64,8 +64,8 @@ pub fn surface_from_triangles(
                 t2,
                 v1: tris[t1],
                 v2: tris[t2],
-                p1: tris[t1].map(|k| super::xyz(&vertices[k])),
-                p2: tris[t2].map(|k| super::xyz(&vertices[k])),
+                p1: Box::new(tris[t1].map(|k| super::xyz(&vertices[k]))),
+                p2: Box::new(tris[t2].map(|k| super::xyz(&vertices[k]))),
             });
         }
         let mut local: Vec<usize> = comp.iter().flat_map(|&t| tris[t]).collect();

@@ -70,7 +70,7 @@ pub enum SurfaceError {
         file: PathBuf,
         tri: usize,
         vertices: [usize; 3],
-        points: [[f64; 3]; 3],
+        points: Box<[[f64; 3]; 3]>,
         area: f64,
         extent: f64,
     },
@@ -110,7 +110,7 @@ pub enum SurfaceError {
         t2: usize,
         v1: [usize; 3],
         v2: [usize; 3],
-        p1: [[f64; 3]; 3],
-        p2: [[f64; 3]; 3],
+        p1: Box<[[f64; 3]; 3]>,
+        p2: Box<[[f64; 3]; 3]>,
     },
 }

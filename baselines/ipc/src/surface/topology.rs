@@ -47,7 +47,7 @@ pub fn check_metric(
                 file: file.to_path_buf(),
                 tri: i,
                 vertices: *t,
-                points: t.map(|k| super::xyz(&v[k])),
+                points: Box::new(t.map(|k| super::xyz(&v[k]))),
                 area,
                 extent,
             });
