@@ -197,3 +197,113 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
         assert!(((a - b) - nalgebra::Vector3::new(0.01, 0.0, 0.0)).norm() < 1e-12);
     }
 }
+
+/// pybullet_data's torus (`torus/torus_textured.obj`: major radius 0.5 m,
+/// minor 0.25 m, axis y, 1002 triangles, closed) imported as one convex
+/// hull (`--decomposer hull`, which fills the hole), fixed upright on the
+/// ground, with a 0.1 m box in its hole. With its source mesh the box falls
+/// onto the inside of the ring (below the ring's centre, python-fcl clean);
+/// with its hull the start is rejected (the box is inside the hull).
+#[test]
+fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
+    let dir = scratch_dir("ipc_source_torus");
+    let input = support::pybullet_data().join("torus/torus_textured.obj");
+    let design = dir.join("torus.yaml");
+    support::run_ok(
+        sdrs()
+            .args([
+                "import",
+                "-q",
+                "--decomposer",
+                "hull",
+                "--base",
+                "fixed",
+                "--ground",
+                "--out",
+            ])
+            .arg(&design)
+            .arg(&input),
+    );
+    let text = std::fs::read_to_string(&design).unwrap();
+    assert!(text.contains("torus_meshes/torus_textured.source.obj"));
+    let base = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("base: {xyz: ["))
+        .unwrap();
+    let zc: f64 = base
+        .split(['[', ']'])
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(2)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    assert!(!text.contains("\nobjects:"));
+    let with_box = |surface: &str| {
+        let s = text.replacen(
+            "contact:\n",
+            &format!("contact:\n  model: ipc\n  surface: {surface}\n"),
+            1,
+        ) + &format!(
+            "objects:\n  - name: peg\n    mass: 0.2\n    hulls: [{{box: {{size: [0.1, 0.1, 0.1]}}}}]\n    initial: {{q: [0, 0, {zc}, 0, 0, 0]}}\n"
+        );
+        let p = dir.join(format!("torus_{surface}.yaml"));
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let out = dir.join("run");
+    std::fs::create_dir_all(&out).unwrap();
+    let summary = support::simulate_export(&out, &["--steps", "400"], &with_box("source"));
+    let r = support::python_fcl_check(&out);
+    eprintln!(
+        "torus: ring centre z {zc:.4}; python-fcl {} steps, min distance {:.3e} m, surface links {}; {} steps in contact",
+        r["steps_checked"],
+        r["min_distance"].as_f64().unwrap(),
+        r["surface_links"],
+        summary["contact"]["steps_in_contact"]
+    );
+    assert_eq!(r["surface_links"].as_array().unwrap().len(), 1);
+    assert!(r["min_distance"].as_f64().unwrap() > 0.0);
+    let csv = dir.join("run.csv");
+    support::run_ok(
+        sdrs()
+            .args(["simulate", "-q", "--steps", "400", "--out"])
+            .arg(&csv)
+            .arg(with_box("source")),
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = head.iter().position(|c| *c == "peg/peg:z").unwrap();
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    eprintln!(
+        "peg centre z after 0.4 s: {:.5} (ring centre {zc:.5}, hole radius 0.2551)",
+        last[col]
+    );
+    // Resting on the inside of the ring: the box's lower corners (±0.05 m)
+    // meet the 0.255 m hole at 0.250 m below the centre.
+    assert!(
+        last[col] < zc - 0.15 && last[col] > zc - 0.255,
+        "{} vs {zc}",
+        last[col]
+    );
+    // With the hull the box starts inside the torus.
+    let o = sdrs()
+        .args(["simulate", "-q", "--steps", "1"])
+        .arg(with_box("hulls"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("initial state") && e.contains("peg/peg") && e.contains("torus_textured"),
+        "{e}"
+    );
+}
