@@ -85,7 +85,7 @@ pub fn link_meshes(scene: &Scene, surface: SurfaceKind) -> Result<Vec<LinkMesh>,
                 return Ok(LinkMesh::default());
             }
             if let Some(p) = &paths[i] {
-                return crate::surface::load_surface(&p.file, &p.element)
+                return crate::surface::load::load_surface_cached(&p.file, &p.element)
                     .map_err(|e| Invalid::new(&p.element, e.to_string()));
             }
             if l.hulls.is_empty() {

@@ -10,7 +10,37 @@ use super::topology::{check_closed_oriented, check_metric, components, signed_vo
 use crate::mesh::{LinkMesh, MeshOrigin};
 use nalgebra::Vector3;
 use sdrs::import::mesh::{MeshContext, load_mesh};
-use std::path::Path;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+use std::time::SystemTime;
+
+/// Checked surfaces already built in this process, by file, keyed by the
+/// file's length and modification time (a changed file is read again).
+type Cache = Mutex<HashMap<PathBuf, (u64, Option<SystemTime>, LinkMesh)>>;
+static CACHE: OnceLock<Cache> = OnceLock::new();
+
+/// [`load_surface`] through a per-process cache: every simulator the IPC
+/// factory builds (each optimizer evaluation, finite differences, the
+/// backward pass) would otherwise re-read and re-check the file (0.18 s for
+/// a 39,600-triangle mesh). Errors are not cached.
+pub fn load_surface_cached(file: &Path, element: &str) -> Result<LinkMesh, SurfaceError> {
+    let meta = std::fs::metadata(file).ok();
+    let key = meta.as_ref().map(|m| (m.len(), m.modified().ok()));
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let (Some((len, time)), Ok(c)) = (key, cache.lock())
+        && let Some((l, t, m)) = c.get(file)
+        && *l == len
+        && *t == time
+    {
+        return Ok(m.clone());
+    }
+    let m = load_surface(file, element)?;
+    if let (Some((len, time)), Ok(mut c)) = (key, cache.lock()) {
+        c.insert(file.to_path_buf(), (len, time, m.clone()));
+    }
+    Ok(m)
+}
 
 /// Reads `file` (named in errors; `element` is the scene key that refers to
 /// it, for the reader's own messages) and builds its checked surface.
