@@ -22,15 +22,11 @@ fn col(t: &Trajectory, name: &str) -> usize {
     t.names.iter().position(|n| n == name).unwrap()
 }
 
-/// `predictor: previous`: the IPC baseline always starts Newton at θ^t
-/// (`Scene::simulator_with`, notes/perf.md), while the SDRS default
-/// extrapolates `2θ^t − θ^{t−1}`; the comparison is at equal solver
-/// settings (as `cli/tests/ipc.rs` does). With the default predictor the
-/// two differ by Newton-tolerance amounts (notes/ipc4.md).
+/// Default solver settings: both models start Newton from the same
+/// predictor (notes/ipc4.md).
 const TWO_BOXES_APART: &str = "
 version: 1
 dt: 0.002
-solver: {predictor: previous}
 contact: {model: MODEL, mu: 0.3}
 objects:
   - name: a
