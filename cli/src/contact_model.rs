@@ -66,6 +66,27 @@ impl ContactArgs {
     }
 }
 
+/// With `--export` under IPC with `contact.surface: source`: writes
+/// `DIR/surfaces.json` (the source-mesh surfaces, link frame), which
+/// `tools/check_separation.py` uses instead of those links' hulls.
+pub fn export_surfaces(dir: &std::path::Path, scene: &Scene) -> Result<()> {
+    let Some(c) = scene.contact.as_ref() else {
+        return Ok(());
+    };
+    if c.model != ContactModelKind::Ipc || c.surface.is_hulls() {
+        return Ok(());
+    }
+    let meshes =
+        sdrs_ipc::factory::link_meshes(scene, c.surface).map_err(|e| e.at(&scene.source))?;
+    if let Some(json) = sdrs_ipc::surface::export::surfaces_json(&scene.model, &meshes) {
+        sdrs::output::write_atomic(
+            &dir.join("surfaces.json"),
+            serde_json::to_string(&json)?.as_bytes(),
+        )?;
+    }
+    Ok(())
+}
+
 /// The scene's simulator with the selected contact model.
 pub fn simulator(scene: &Scene) -> Result<Simulator> {
     Ok(scene.simulator_with(&sdrs_ipc::IpcFactory::default())?)
@@ -91,7 +112,10 @@ pub fn configure_problem(
         args.apply(&mut o.scene)?;
         o.contact_factory = Some(factory.clone());
     }
-    let Some(cage) = cage else { return Ok(()) };
+    let Some(cage) = cage else {
+        sdrs_ipc::surface::design::check_vertex_design(problem)?;
+        return Ok(());
+    };
     let res = sdrs_ipc::cage::CageResolution::parse(cage).map_err(anyhow::Error::msg)?;
     let is_ipc = |s: &Scene| {
         s.contact

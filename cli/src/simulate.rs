@@ -98,6 +98,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
             .unwrap_or_default();
         sdrs::output::export_run(dir, &scene.model, excluded, &traj)?;
+        crate::contact_model::export_surfaces(dir, &scene)?;
     }
     // Contact planes are recomputed from the recorded poses: the run above
     // is the same with or without them.

@@ -475,6 +475,7 @@ mod tests {
             hulls: vec![Hull::new(Hull::cuboid(size, centre), 0.1).unwrap()],
             mass_model: MassModel::Vertices,
             solid_triangles: Vec::new(),
+            surface: Vec::new(),
             dof_offset: 0,
             chart: None,
             collides: true,

@@ -34,6 +34,9 @@ pub struct Gradients {
     pub attachments: Vec<Vector3<f64>>,
     /// `dL/dx_local` per link, hull, vertex (link frame).
     pub vertices: Vec<Vec<Vec<Vector3<f64>>>>,
+    /// `dL/ds` per link and contact-surface vertex
+    /// ([`crate::model::Link::surface`]; empty for links without one).
+    pub surface: Vec<Vec<Vector3<f64>>>,
     /// Per controller channel.
     pub channels: Vec<ChannelGrad>,
     pub physical: PhysicalGrad,
@@ -115,6 +118,11 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
         qdot0: DVector::zeros(n),
         attachments: vec![Vector3::zeros(); nl],
         vertices: zero_vertex(),
+        surface: model
+            .links
+            .iter()
+            .map(|l| vec![Vector3::zeros(); l.surface.len()])
+            .collect(),
         channels: sim
             .controller
             .channels
@@ -219,6 +227,14 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
             .flatten()
             .flatten()
             .zip(acc.vertex.iter().flatten().flatten())
+        {
+            *gl -= al;
+        }
+        for (gl, al) in g
+            .surface
+            .iter_mut()
+            .flatten()
+            .zip(acc.surface.iter().flatten())
         {
             *gl -= al;
         }

@@ -59,6 +59,9 @@ pub struct VjpAccumulator {
     pub q_prev2: DVector<f64>,
     /// `∂Φ/∂x_local` per link, hull, vertex (link frame).
     pub vertex: Vec<Vec<Vec<Vector3<f64>>>>,
+    /// `∂Φ/∂s` per link and contact-surface vertex
+    /// ([`crate::model::Link::surface`]; empty for links without one).
+    pub surface: Vec<Vec<Vector3<f64>>>,
     /// Whether vertex gradients are wanted (terms may skip them otherwise).
     pub want_vertices: bool,
     /// `(∂Φ/∂θ*, ∂Φ/∂θ̇*, ∂Φ/∂k_p, ∂Φ/∂k_d)` per controller channel.
@@ -93,6 +96,11 @@ impl VjpAccumulator {
                         .collect()
                 })
                 .collect(),
+            surface: model
+                .links
+                .iter()
+                .map(|l| vec![Vector3::zeros(); l.surface.len()])
+                .collect(),
             want_vertices: true,
             channels: vec![[0.0; 4]; nchannels],
             physical: PhysicalGrad::default(),
@@ -113,6 +121,7 @@ impl VjpAccumulator {
             .flatten()
             .flatten()
             .for_each(|g| g.fill(0.0));
+        self.surface.iter_mut().flatten().for_each(|g| g.fill(0.0));
         self.channels.iter_mut().for_each(|c| *c = [0.0; 4]);
         self.physical = PhysicalGrad::default();
     }

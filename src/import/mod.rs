@@ -580,6 +580,8 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
                 })
                 .collect(),
             collide: l.collides,
+            // Filled in by `write::write_outputs` (relative to the design).
+            surface_mesh: None,
         });
         imported_links.push(ImportedLink {
             name: l.name.clone(),

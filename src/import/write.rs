@@ -1,5 +1,8 @@
 //! Writing an import's outputs: the design YAML, `<stem>_meshes/<link>.obj`
-//! (each hull as one OBJ object, for viewing) and the JSON report.
+//! (each hull as one OBJ object, for viewing), `<stem>_meshes/<link>.source.obj`
+//! (the link's source meshes in its frame, named by the link's
+//! `surface_mesh`: the IPC baseline's `contact.surface: source`) and the
+//! JSON report.
 //!
 //! Safety rules: an existing output is never replaced without `force`; the
 //! input is never written (nor a directory containing it removed); every
@@ -146,7 +149,7 @@ fn stage(
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     );
-    let yaml = header + &super::write::to_yaml(&imported.scene);
+    let yaml = header + &super::write::to_yaml(&with_surface_meshes(imported, paths));
     std::fs::write(design_tmp, yaml).map_err(io(&paths.design))?;
     std::fs::create_dir_all(meshes_tmp).map_err(io(&paths.meshes))?;
     for l in &imported.links {
@@ -170,6 +173,10 @@ fn stage(
         }
         let f = meshes_tmp.join(format!("{}.obj", super::source::sanitize(&l.name)));
         std::fs::write(&f, obj).map_err(io(&paths.meshes))?;
+        if !l.sources.is_empty() {
+            let f = meshes_tmp.join(source_obj_name(&l.name));
+            std::fs::write(&f, sources_obj(l)).map_err(io(&paths.meshes))?;
+        }
     }
     if let (Some(r), Some((tmp, _))) = (&paths.report, staged.get(2)) {
         let json =
@@ -180,6 +187,57 @@ fn stage(
         std::fs::write(tmp, json).map_err(io(r))?;
     }
     Ok(())
+}
+
+/// `<link>.source.obj`: the link's source surface (IPC `contact.surface: source`).
+fn source_obj_name(link: &str) -> String {
+    format!("{}.source.obj", super::source::sanitize(link))
+}
+
+/// The link's source meshes in its frame, one OBJ object per mesh (each a
+/// separate component of the IPC surface).
+fn sources_obj(l: &super::ImportedLink) -> String {
+    let mut obj = format!("# source meshes of link {} (link frame)\n", l.name);
+    let mut base = 1;
+    for (k, m) in l.sources.iter().enumerate() {
+        obj.push_str(&format!("o source_{k}\n"));
+        for v in &m.vertices {
+            obj.push_str(&format!("v {} {} {}\n", v.x, v.y, v.z));
+        }
+        for t in &m.triangles {
+            obj.push_str(&format!(
+                "f {} {} {}\n",
+                t[0] + base,
+                t[1] + base,
+                t[2] + base
+            ));
+        }
+        base += m.vertices.len();
+    }
+    obj
+}
+
+/// The scene with each link's `surface_mesh` pointing at its
+/// `<stem>_meshes/<link>.source.obj` (relative to the design file).
+fn with_surface_meshes(imported: &Imported, paths: &OutputPaths) -> crate::scene::SceneSpec {
+    let mut scene = imported.scene.clone();
+    let dir = paths
+        .meshes
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    for r in &mut scene.robots {
+        for link in &mut r.links {
+            if imported
+                .links
+                .iter()
+                .any(|l| l.name == link.name && !l.sources.is_empty())
+            {
+                link.surface_mesh = Some(format!("{dir}/{}", source_obj_name(&link.name)));
+            }
+        }
+    }
+    scene
 }
 
 /// Renames staged outputs into place, design last; undoes on failure.

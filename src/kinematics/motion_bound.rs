@@ -362,6 +362,7 @@ mod tests {
             ],
             mass_model: MassModel::Vertices,
             solid_triangles: Vec::new(),
+            surface: Vec::new(),
             dof_offset: 0,
             chart: None,
             collides: true,

@@ -51,6 +51,14 @@ pub struct Link {
     /// Whether the link takes part in contact (objects and robot links do;
     /// massless helper links may not). Reserved for the contact stage.
     pub collides: bool,
+    /// Vertices (link frame, m) of a contact surface a factory-provided
+    /// contact model uses instead of the hulls, when a design moves it: the
+    /// IPC baseline's source mesh under a cage design (`sdrs_ipc::cage`).
+    /// Empty by default; no core term reads it. It lives in the model so
+    /// design variables can write it ([`crate::optimize::design::Target::SurfaceBlend`])
+    /// and the backward pass can return its gradient
+    /// ([`crate::diff::Gradients::surface`]).
+    pub surface: Vec<Vector3<f64>>,
 }
 
 impl Link {

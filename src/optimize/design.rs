@@ -47,6 +47,17 @@ pub enum Target {
         weight: f64,
         rest: f64,
     },
+    /// A [`Target::Blend`] on vertex `vertex` of the link's contact
+    /// surface ([`crate::model::Link::surface`]) instead of a hull vertex:
+    /// the IPC baseline's source mesh moved by a cage. Gradient
+    /// `weight · ∂L/∂s` from [`Gradients::surface`].
+    SurfaceBlend {
+        link: usize,
+        vertex: usize,
+        axis: usize,
+        weight: f64,
+        rest: f64,
+    },
 }
 
 /// One scalar design variable.
@@ -74,7 +85,7 @@ fn read(model: &Model, t: Target) -> f64 {
             vertex,
             axis,
         } => model.links[link].hulls[hull].x_local[vertex][axis],
-        Target::Blend { rest, .. } => rest,
+        Target::Blend { rest, .. } | Target::SurfaceBlend { rest, .. } => rest,
     }
 }
 
@@ -265,6 +276,12 @@ impl DesignSpace {
             {
                 model.links[link].hulls[hull].x_local[vertex][axis] = 0.0;
             }
+            if let Target::SurfaceBlend {
+                link, vertex, axis, ..
+            } = *t
+            {
+                model.links[link].surface[vertex][axis] = 0.0;
+            }
         }
         for (v, &x) in self.vars.iter().zip(d.iter()) {
             for t in &v.targets {
@@ -284,6 +301,13 @@ impl DesignSpace {
                         weight,
                         ..
                     } => model.links[link].hulls[hull].x_local[vertex][axis] += weight * x,
+                    Target::SurfaceBlend {
+                        link,
+                        vertex,
+                        axis,
+                        weight,
+                        ..
+                    } => model.links[link].surface[vertex][axis] += weight * x,
                 }
             }
         }
@@ -313,6 +337,17 @@ impl DesignSpace {
                             weight,
                             ..
                         } => weight * g.vertices[link][hull][vertex][axis],
+                        Target::SurfaceBlend {
+                            link,
+                            vertex,
+                            axis,
+                            weight,
+                            ..
+                        } => g
+                            .surface
+                            .get(link)
+                            .and_then(|s| s.get(vertex))
+                            .map_or(0.0, |gs| weight * gs[axis]),
                     })
                     .sum::<f64>()
             }),
@@ -338,7 +373,10 @@ impl DesignSpace {
     /// within its bounds.
     pub fn check(&self, model: &Model) -> Result<(), String> {
         for v in &self.vars {
-            if matches!(v.targets.first(), Some(Target::Blend { .. })) {
+            if matches!(
+                v.targets.first(),
+                Some(Target::Blend { .. } | Target::SurfaceBlend { .. })
+            ) {
                 // Blended coordinates are sums over variables: no tie to check.
                 continue;
             }

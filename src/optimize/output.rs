@@ -174,6 +174,9 @@ pub fn design_scene(spec: &SceneSpec, model: &Model, controller: &Controller) ->
                         })
                         .collect(),
                     collide: link.collides,
+                    // The source surface is not re-written (a cage-deformed
+                    // one would need its own file): the design is its hulls.
+                    surface_mesh: None,
                 }
             })
             .collect();

@@ -15,7 +15,9 @@ pub fn designed_links(p: &Problem) -> Vec<usize> {
         .iter()
         .flat_map(|v| v.targets.iter())
         .filter_map(|t| match t {
-            Target::Vertex { link, .. } | Target::Blend { link, .. } => Some(*link),
+            Target::Vertex { link, .. }
+            | Target::Blend { link, .. }
+            | Target::SurfaceBlend { link, .. } => Some(*link),
             Target::Attachment { .. } => None,
         })
         .collect();

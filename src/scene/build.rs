@@ -612,6 +612,7 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             hulls,
             mass_model,
             solid_triangles: Vec::new(),
+            surface: Vec::new(),
             dof_offset: 0,
             chart: None,
             collides: l.collide,

@@ -29,6 +29,7 @@ pub fn expand(spec: &ChainSpec) -> Vec<LinkSpec> {
             mass_model: None,
             hulls: vec![HullSpec::cuboid([w, w, l], [0.0, 0.0, -l / 2.0])],
             collide: true,
+            surface_mesh: None,
         })
         .collect()
 }

@@ -43,6 +43,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
                 mass_model: o.mass_model.clone(),
                 hulls: o.hulls.clone(),
                 collide: true,
+                surface_mesh: o.surface_mesh.clone(),
             }],
             chain: None,
             controller: ControllerSpec::default(),
@@ -87,6 +88,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             mass_model: None,
             hulls: vec![HullSpec::cuboid(size, [0.0, 0.0, -g.thickness / 2.0])],
             collide: true,
+            surface_mesh: None,
         });
     }
     for o in &spec.obstacles {
@@ -99,6 +101,7 @@ pub fn expand_bodies(spec: &SceneSpec) -> Result<Vec<RobotSpec>, Invalid> {
             mass_model: None,
             hulls: o.hulls.clone(),
             collide: true,
+            surface_mesh: o.surface_mesh.clone(),
         });
     }
     if !env.is_empty() {
@@ -212,6 +215,7 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
     }
     Ok(ContactSettings {
         model: c.model,
+        surface: c.surface,
         dhat,
         eps_v,
         s: c.s,

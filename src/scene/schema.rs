@@ -36,6 +36,7 @@
 //!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
 //!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
 //!         # collide: false   # no contact for this link (default true)
+//!         # surface_mesh: arm_meshes/upper.source.obj   # source mesh (IPC `contact.surface: source`)
 //!     # chain: {links: 8, ...}   # generates `links` instead (see ChainSpec)
 //!     controller:
 //!       kp: 100              # default gains for every target (J/rad²; default 0)
@@ -138,6 +139,14 @@ pub struct ObjectSpec {
     pub mass_model: Option<MassModelSpec>,
     /// Convex hulls in the object's frame (m).
     pub hulls: Vec<HullSpec>,
+    /// Source surface mesh of this body (`.obj`, `.stl` or `.dae`; path
+    /// relative to the scene file; coordinates in the body's frame, m): the
+    /// mesh its hulls were made from. `sdrs import` writes one per link
+    /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
+    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// non-self-intersecting triangle mesh is required then). Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_mesh: Option<String>,
     /// Initial pose `[x, y, z, rx, ry, rz]` (m, rotation vector) and velocity
     /// `[vx, vy, vz, ωx, ωy, ωz]` (world linear, body angular). Default zero.
     #[serde(default)]
@@ -190,6 +199,14 @@ pub struct ObstacleSpec {
     pub origin: Origin,
     /// Convex hulls in the obstacle's frame (m).
     pub hulls: Vec<HullSpec>,
+    /// Source surface mesh of this body (`.obj`, `.stl` or `.dae`; path
+    /// relative to the scene file; coordinates in the body's frame, m): the
+    /// mesh its hulls were made from. `sdrs import` writes one per link
+    /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
+    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// non-self-intersecting triangle mesh is required then). Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_mesh: Option<String>,
 }
 
 /// Contact and friction parameters (paper, `contact.tex`, `friction.tex`).
@@ -203,6 +220,13 @@ pub struct ContactSpec {
     /// IPC keys below are ignored and nothing changes.
     #[serde(default, skip_serializing_if = "ContactModelKind::is_sdrs")]
     pub model: ContactModelKind,
+    /// IPC only: which triangle mesh is each link's contact surface:
+    /// `hulls` (default: the triangulated boundaries of its convex hulls,
+    /// the shapes SDRS uses) or `source` (the link's `surface_mesh`, the
+    /// mesh its hulls were made from; links without one keep their hulls).
+    /// The SDRS model always uses the hulls.
+    #[serde(default, skip_serializing_if = "SurfaceKind::is_hulls")]
+    pub surface: SurfaceKind,
     /// IPC only: barrier activation distance `d̂` (m, unsquared; the barrier
     /// acts on squared distances below `d̂²`). Default 1e-3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -266,6 +290,32 @@ pub enum ContactModelKind {
     Ipc,
 }
 
+/// The IPC baseline's contact surface of each link (`contact.surface`).
+#[derive(
+    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceKind {
+    /// The triangulated boundaries of the link's convex hulls.
+    #[default]
+    Hulls,
+    /// The link's `surface_mesh` (its hulls where it has none).
+    Source,
+}
+
+impl SurfaceKind {
+    pub fn is_hulls(&self) -> bool {
+        *self == SurfaceKind::Hulls
+    }
+    /// Name as written in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SurfaceKind::Hulls => "hulls",
+            SurfaceKind::Source => "source",
+        }
+    }
+}
+
 impl ContactModelKind {
     pub fn is_sdrs(&self) -> bool {
         *self == ContactModelKind::Sdrs
@@ -299,6 +349,7 @@ impl Default for ContactSpec {
     fn default() -> Self {
         ContactSpec {
             model: ContactModelKind::Sdrs,
+            surface: SurfaceKind::Hulls,
             dhat: None,
             eps_v: None,
             s: Self::default_s(),
@@ -380,6 +431,14 @@ pub struct LinkSpec {
     /// never collides).
     #[serde(default = "default_true", skip_serializing_if = "is_true")]
     pub collide: bool,
+    /// Source surface mesh of this body (`.obj`, `.stl` or `.dae`; path
+    /// relative to the scene file; coordinates in the body's frame, m): the
+    /// mesh its hulls were made from. `sdrs import` writes one per link
+    /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
+    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// non-self-intersecting triangle mesh is required then). Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface_mesh: Option<String>,
 }
 
 fn default_true() -> bool {

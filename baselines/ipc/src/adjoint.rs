@@ -14,11 +14,12 @@
 //! (`R`, `δR`, `Rᵗ` the rotation blocks of `A`, `δA`, `Aᵗ`), the same
 //! contraction as the core's `sdrs::energy::pairs::scatter_vertex_products`.
 //! Mesh vertex `k` is the model's hull vertex [`LinkMesh::source`], so the
-//! vertex gradient lands where the SDRS terms put theirs.
+//! vertex gradient lands where the SDRS terms put theirs; a source-mesh
+//! vertex is `Link::surface[k]` ([`crate::mesh::MeshOrigin::Source`]).
 
 use crate::adjoint_stencil::StencilVjp;
 use crate::distance::vec::V3;
-use crate::mesh::LinkMesh;
+use crate::mesh::{LinkMesh, MeshOrigin};
 use nalgebra::{Matrix3, Vector3};
 use sdrs::diff::VjpAccumulator;
 use sdrs::math::Pose;
@@ -104,9 +105,21 @@ pub fn scatter(
     }
 }
 
+/// Mesh vertex `i`'s gradient to the model quantity it copies: a hull
+/// vertex, or for a source mesh `Link::surface[i]` when a design carries
+/// the surface (otherwise the source mesh is fixed geometry: nothing to add).
 fn add_vertex(out: &mut VjpAccumulator, link: usize, mesh: &LinkMesh, i: u32, g: Vector3<f64>) {
-    let (h, v) = mesh.source[i as usize];
-    out.vertex[link][h as usize][v as usize] += g;
+    match mesh.origin {
+        MeshOrigin::Hulls => {
+            let (h, v) = mesh.source[i as usize];
+            out.vertex[link][h as usize][v as usize] += g;
+        }
+        MeshOrigin::Source { .. } => {
+            if let Some(s) = out.surface[link].get_mut(i as usize) {
+                *s += g;
+            }
+        }
+    }
 }
 
 /// The stencil's direction `δX_k = δA x̃_k`.

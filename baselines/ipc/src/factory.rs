@@ -8,10 +8,10 @@ use crate::barrier::barrier_derivative;
 use crate::contact::{IpcContact, IpcParams};
 use crate::friction::{IpcFriction, IpcFrictionParams};
 use crate::line_search::CcdOptions;
-use crate::mesh::LinkMesh;
+use crate::mesh::{LinkMesh, MeshOrigin};
 use sdrs::energy::Energy;
 use sdrs::kinematics::{KinOrder, Kinematics};
-use sdrs::scene::schema::ContactModelKind;
+use sdrs::scene::schema::{ContactModelKind, SurfaceKind};
 use sdrs::scene::{ContactModelFactory, ContactSettings, Invalid, Scene};
 
 /// Provides the IPC baseline's terms.
@@ -68,13 +68,27 @@ pub fn adaptive_kappa(scene: &Scene, dhat: f64) -> f64 {
     mass.max(1e-3) * g / force_per_kappa(0.5 * dhat, dhat)
 }
 
-/// Surface meshes of every link (empty for links that do not collide).
-pub fn link_meshes(scene: &Scene) -> Result<Vec<LinkMesh>, Invalid> {
+/// Surface meshes of every link (empty for links that do not collide):
+/// the hull surfaces, or with `surface: source` the link's `surface_mesh`
+/// where it has one ([`crate::surface`]; errors name the scene key, the
+/// mesh file and the triangle or edge).
+pub fn link_meshes(scene: &Scene, surface: SurfaceKind) -> Result<Vec<LinkMesh>, Invalid> {
     let model = &scene.model;
+    let paths = match surface {
+        SurfaceKind::Hulls => vec![None; model.links.len()],
+        SurfaceKind::Source => crate::surface::surface_paths(scene)?,
+    };
     (0..model.links.len())
         .map(|i| {
             let l = &model.links[i];
-            if !l.collides || l.hulls.is_empty() {
+            if !l.collides {
+                return Ok(LinkMesh::default());
+            }
+            if let Some(p) = &paths[i] {
+                return crate::surface::load::load_surface_cached(&p.file, &p.element)
+                    .map_err(|e| Invalid::new(&p.element, e.to_string()));
+            }
+            if l.hulls.is_empty() {
                 return Ok(LinkMesh::default());
             }
             LinkMesh::from_hulls(model, i).map_err(|e| {
@@ -90,8 +104,18 @@ pub fn link_meshes(scene: &Scene) -> Result<Vec<LinkMesh>, Invalid> {
         .collect()
 }
 
+/// The IPC surface setting of a scene (hulls without a contact section).
+pub fn surface_kind(scene: &Scene) -> SurfaceKind {
+    scene
+        .contact
+        .as_ref()
+        .map_or(SurfaceKind::Hulls, |c| c.surface)
+}
+
 /// The frozen `topology` with vertex positions from the scene's hull
-/// vertices (each template vertex's [`LinkMesh::source`]).
+/// vertices (each template vertex's [`LinkMesh::source`]); a source-mesh
+/// surface takes its positions from `Link::surface` when a design carries
+/// it (same length), and keeps the template's otherwise.
 pub fn meshes_with_topology(
     scene: &Scene,
     topology: &[LinkMesh],
@@ -111,6 +135,11 @@ pub fn meshes_with_topology(
         .map(|i| {
             let mut m = topology[i].clone();
             let l = &model.links[i];
+            if let MeshOrigin::Source { .. } = m.origin {
+                if l.surface.len() == m.x_local.len() {
+                    m.x_local.clone_from(&l.surface);
+                }
+            } else {
             for (k, &(h, v)) in m.source.iter().enumerate() {
                 let x = l
                     .hulls
@@ -123,6 +152,7 @@ pub fn meshes_with_topology(
                         )
                     })?;
                 m.x_local[k] = *x;
+            }
             }
             for (e, len2) in m.edges.iter().zip(m.edge_len2.iter_mut()) {
                 *len2 = (m.x_local[e[0] as usize] - m.x_local[e[1] as usize]).norm_squared();
@@ -156,7 +186,7 @@ impl ContactModelFactory for IpcFactory {
         }
         let model = &scene.model;
         let meshes = match &self.topology {
-            None => link_meshes(scene)?,
+            None => link_meshes(scene, c.surface)?,
             Some(t) => meshes_with_topology(scene, t)?,
         };
         let kappa = if c.kappa_given {
@@ -175,9 +205,12 @@ impl ContactModelFactory for IpcFactory {
         let mut kin = Kinematics::new(model);
         kin.update(model, &scene.q0, &scene.charts, KinOrder::Pose);
         let (mut d, mut pair) = contact.min_distance(&kin.pose);
-        if let Some(p) =
-            crate::start_check::first_intersecting(model, &kin.pose, &contact.link_pairs)
-        {
+        if let Some(p) = crate::start_check::first_intersecting_surfaces(
+            model,
+            &meshes,
+            &kin.pose,
+            &contact.link_pairs,
+        ) {
             (d, pair) = (0.0, Some(p));
         }
         if let (true, Some((a, b))) = (d <= 0.0, pair) {

@@ -10,7 +10,7 @@
 //!   distances, the parallel-edge mollifier, per-primitive value, gradient
 //!   and PSD-projected Hessian;
 //! - [`mesh`]: each link's surface as a triangle mesh (the triangulated
-//!   surfaces of its convex hulls);
+//!   surfaces of its convex hulls, or its source mesh: [`surface`]);
 //! - [`ccd`]: additive CCD on linear trajectories and the conservative
 //!   curved-path bound used by the line search;
 //! - [`contact`], [`friction`]: the IPC contact and lagged friction terms
@@ -36,6 +36,7 @@ pub mod mollifier;
 pub mod pair;
 pub mod primitive;
 pub mod start_check;
+pub mod surface;
 
 pub use contact::{IpcContact, IpcParams};
 pub use factory::IpcFactory;

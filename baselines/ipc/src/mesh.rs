@@ -1,7 +1,8 @@
 //! Each link's surface as a closed triangle mesh in the link frame: the
 //! triangulated boundary of each of its convex hulls (the same shapes SDRS
-//! uses, for apples-to-apples comparisons), with unique edges and the
-//! per-link bounds the broad phase and the CCD step bound need.
+//! uses, for apples-to-apples comparisons), or the link's source mesh
+//! (`contact.surface: source`, [`crate::surface`]), with unique edges and
+//! the per-link bounds the broad phase and the CCD step bound need.
 
 use nalgebra::Vector3;
 use sdrs::model::Model;
@@ -21,6 +22,19 @@ pub enum MeshError {
         b: usize,
         count: usize,
     },
+}
+
+/// Where a [`LinkMesh`]'s vertices come from (what design gradients w.r.t.
+/// its vertices are gradients of).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum MeshOrigin {
+    /// The model's hull vertices ([`LinkMesh::source`] = `(hull, vertex)`).
+    #[default]
+    Hulls,
+    /// The link's source mesh, read from `file` ([`LinkMesh::source`] =
+    /// `(component, index)`); vertex `k` is `Link::surface[k]` when a cage
+    /// design moves it.
+    Source { file: std::path::PathBuf },
 }
 
 /// A link's surface mesh (link frame). Hulls of one link are kept as
@@ -44,6 +58,8 @@ pub struct LinkMesh {
     /// on the model's hull vertices; for [`LinkMesh::add_closed`] the
     /// component and the index in its vertex list.
     pub source: Vec<(u32, u32)>,
+    /// Hull surfaces (default) or a source mesh.
+    pub origin: MeshOrigin,
 }
 
 impl LinkMesh {

@@ -22,14 +22,11 @@ fn col(t: &Trajectory, name: &str) -> usize {
     t.names.iter().position(|n| n == name).unwrap()
 }
 
-/// `predictor: previous`: the IPC baseline always starts Newton at θ^t
-/// (`Scene::simulator_with` sets it for a factory's contact model), while an
-/// SDRS scene defaults to the extrapolating predictor; the comparison is of
-/// the two contact models at equal solver settings.
+/// Default solver settings: both models start Newton from the same
+/// predictor (notes/ipc4.md).
 const TWO_BOXES_APART: &str = "
 version: 1
 dt: 0.002
-solver: {predictor: previous}
 contact: {model: MODEL, mu: 0.3}
 objects:
   - name: a

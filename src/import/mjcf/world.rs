@@ -74,6 +74,7 @@ pub(super) fn world<'a>(
             hulls: vec![HullSpec::from_vertices(
                 hull.iter().map(|v| [v.x, v.y, v.z]).collect(),
             )],
+            surface_mesh: None,
         });
         obstacle_geoms.push(*g);
     }

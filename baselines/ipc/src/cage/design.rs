@@ -21,6 +21,10 @@ pub struct LinkCage {
     /// `(hull, vertex, φ)`: the coordinates of each hull vertex (length =
     /// cage vertices).
     pub weights: Vec<(usize, usize, Vec<f64>)>,
+    /// `ψ_k`: the coordinates of each vertex `k` of the link's source-mesh
+    /// contact surface (`Link::surface`), when the IPC surface is the
+    /// source mesh ([`LinkCage::with_surface`]); empty otherwise.
+    pub surface_weights: Vec<Vec<f64>>,
 }
 
 /// The cage design space over several links.
@@ -74,13 +78,55 @@ impl LinkCage {
             link,
             cage,
             weights,
+            surface_weights: Vec::new(),
         })
+    }
+
+    /// Adds the coordinates `ψ_k` of the source-surface vertices `surface`
+    /// (link frame), which the cage must enclose too: the design then
+    /// moves `s_k = Σ_j ψ_kj c_j` with the hull vertices.
+    pub fn with_surface(
+        mut self,
+        model: &Model,
+        surface: &[Vector3<f64>],
+    ) -> Result<LinkCage, CageError> {
+        let name = link_name(model, self.link);
+        self.surface_weights = Vec::with_capacity(surface.len());
+        for (k, x) in surface.iter().enumerate() {
+            let wn = super::validate::winding_number(&self.cage, x);
+            let mut w = vec![0.0; self.cage.vertices.len()];
+            if (wn - 1.0).abs() > 1e-6
+                || !mean_value_coordinates(x, &self.cage.vertices, &self.cage.tris, &mut w)
+            {
+                return Err(CageError::NotEnclosingSurface {
+                    link: name,
+                    vertex: k,
+                    point: [x.x, x.y, x.z],
+                    winding: wn,
+                });
+            }
+            self.surface_weights.push(w);
+        }
+        Ok(self)
     }
 
     /// The automatic box cage with `k` segments per edge around link
     /// `link`'s hulls, inflated by 5 % of their extent.
     pub fn automatic(model: &Model, link: usize, k: u32) -> Result<LinkCage, CageError> {
-        let pts: Vec<Vector3<f64>> = hull_points(model, link).into_iter().map(|p| p.2).collect();
+        Self::automatic_around(model, link, k, &[])
+    }
+
+    /// [`LinkCage::automatic`] around the hulls and the points `extra`
+    /// (a source-mesh surface, link frame).
+    pub fn automatic_around(
+        model: &Model,
+        link: usize,
+        k: u32,
+        extra: &[Vector3<f64>],
+    ) -> Result<LinkCage, CageError> {
+        let mut pts: Vec<Vector3<f64>> =
+            hull_points(model, link).into_iter().map(|p| p.2).collect();
+        pts.extend_from_slice(extra);
         let (mut lo, mut hi) = (
             Vector3::repeat(f64::INFINITY),
             Vector3::repeat(f64::NEG_INFINITY),
@@ -132,6 +178,14 @@ impl CageDesign {
                 let x: Vector3<f64> = w.iter().enumerate().map(|(j, &wj)| cv(j) * wj).sum();
                 model.links[lc.link].hulls[*h].x_local[*v] = x;
             }
+            let surface: Vec<Vector3<f64>> = lc
+                .surface_weights
+                .iter()
+                .map(|w| w.iter().enumerate().map(|(j, &wj)| cv(j) * wj).sum())
+                .collect();
+            if !surface.is_empty() {
+                model.links[lc.link].surface = surface;
+            }
             off += 3 * n;
         }
         model.refresh_moments();
@@ -150,6 +204,16 @@ impl CageDesign {
                     }
                 }
             }
+            for (k, w) in lc.surface_weights.iter().enumerate() {
+                let Some(gs) = g.surface.get(lc.link).and_then(|s| s.get(k)) else {
+                    continue;
+                };
+                for (j, &wj) in w.iter().enumerate() {
+                    for e in 0..3 {
+                        out[off + 3 * j + e] += wj * gs[e];
+                    }
+                }
+            }
             off += 3 * lc.cage.vertices.len();
         }
         out
@@ -161,9 +225,10 @@ impl CageDesign {
     /// runs them like any other design): one variable per cage-vertex
     /// coordinate, named `robot/link.cage[j].x`, bounded by rest ± `bound`,
     /// with a [`Target::Blend`] of weight `φ_ij` on coordinate `axis` of
-    /// every hull vertex `i` (weights below 1e-15 are dropped; MVC weights
-    /// in a box cage are all positive). Size: cage vertices × hull vertices
-    /// × 3 targets.
+    /// every hull vertex `i` and a [`Target::SurfaceBlend`] of weight `ψ_kj`
+    /// on every source-surface vertex `k` (weights below 1e-15 are dropped;
+    /// MVC weights in a box cage are all positive). Size: cage vertices ×
+    /// (hull + surface vertices) × 3 targets.
     pub fn design_space(&self, model: &Model) -> DesignSpace {
         let mut vars = Vec::with_capacity(self.len());
         for lc in &self.cages {
@@ -183,6 +248,20 @@ impl CageDesign {
                             rest: c[axis],
                         })
                         .collect::<Vec<_>>();
+                    let mut targets = targets;
+                    targets.extend(
+                        lc.surface_weights
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, w)| w[j].abs() > 1e-15)
+                            .map(|(k, w)| Target::SurfaceBlend {
+                                link: lc.link,
+                                vertex: k,
+                                axis,
+                                weight: w[j],
+                                rest: c[axis],
+                            }),
+                    );
                     let targets = if targets.is_empty() {
                         // Keep the variable readable (`values`): a zero-weight
                         // blend on the first vertex.

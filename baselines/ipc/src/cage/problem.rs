@@ -2,10 +2,13 @@
 //! --contact ipc --cage …`): the cage vertices of the task's
 //! `design.vertices` links become the design (bounds `design.bound`), and
 //! the IPC surfaces keep the rest triangulation while the cage moves their
-//! vertices ([`crate::IpcFactory::topology`]).
+//! vertices ([`crate::IpcFactory::topology`]) — the hull surfaces' or, with
+//! `contact.surface: source`, the source mesh's.
 
 use super::{CageDesign, CageError, CageResolution, LinkCage};
 use crate::IpcFactory;
+use crate::mesh::MeshOrigin;
+use nalgebra::Vector3;
 use sdrs::optimize::Problem;
 use sdrs::optimize::design::Target;
 use std::sync::Arc;
@@ -63,22 +66,37 @@ pub fn cage_problem(
     Ok(summary)
 }
 
-/// One trajectory's cage design and frozen-surface factory.
+/// One trajectory's cage design and frozen-surface factory. A caged link
+/// whose IPC surface is its source mesh (`contact.surface: source`) gets
+/// the mesh's vertices as `Link::surface`, the cage around hulls and mesh,
+/// and the mesh's coordinates in the cage ([`LinkCage::with_surface`]), so
+/// the cage deforms the contact surface and the hulls (mass) together.
 fn cage_one(
     p: &mut Problem,
     links: &[usize],
     res: CageResolution,
     bound: f64,
 ) -> Result<CageSummary, CageSetupError> {
-    let cages = links
-        .iter()
-        .map(|&l| LinkCage::automatic(&p.model, l, res.segments()))
-        .collect::<Result<Vec<_>, _>>()?;
-    let design = CageDesign { cages, bound };
     let mut scene = p.scene.clone();
     scene.model = p.model.clone();
-    let topology = crate::factory::link_meshes(&scene)
+    let topology = crate::factory::link_meshes(&scene, crate::factory::surface_kind(&scene))
         .map_err(|e| CageSetupError::Mesh(e.at(&scene.source).to_string()))?;
+    let mut cages = Vec::with_capacity(links.len());
+    for &l in links {
+        let surface: Vec<Vector3<f64>> = match topology[l].origin {
+            MeshOrigin::Source { .. } => topology[l].x_local.clone(),
+            MeshOrigin::Hulls => Vec::new(),
+        };
+        let cage = LinkCage::automatic_around(&p.model, l, res.segments(), &surface)?;
+        let cage = if surface.is_empty() {
+            cage
+        } else {
+            p.model.links[l].surface = surface.clone();
+            cage.with_surface(&p.model, &surface)?
+        };
+        cages.push(cage);
+    }
+    let design = CageDesign { cages, bound };
     p.contact_factory = Some(Arc::new(IpcFactory {
         topology: Some(Arc::new(topology)),
         ..IpcFactory::default()

@@ -50,6 +50,15 @@ pub enum CageError {
         point: [f64; 3],
         winding: f64,
     },
+    #[error(
+        "cage of link \"{link}\" does not enclose source-surface vertex {vertex} at {point:?} (winding number {winding:.3}, inside needs 1)"
+    )]
+    NotEnclosingSurface {
+        link: String,
+        vertex: usize,
+        point: [f64; 3],
+        winding: f64,
+    },
 }
 
 /// Signed solid angle of triangle `(a, b, c)` seen from `x` (sr).
