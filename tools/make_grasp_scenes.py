@@ -131,9 +131,9 @@ def single_jaw(blocks, tmp):
 # Three-fingered hand (task.yaml header): the URDF's six finger links are
 # carried by an added palm on a free root joint (the prescribed base path);
 # the palm frame's origin is the grasp point, HAND_Z above the ground.
-HAND_Z = 0.045           # palm origin (grasp point) height at the start (m)
+HAND_Z = 0.05           # palm origin (grasp point) height at the start (m)
 HAND_JOINTS_Z = 0.085    # finger base joints above the palm origin (m)
-HAND_OPEN, HAND_CLOSED = 0.5, -0.1   # finger base angles (rad) initial / θ⋆; mid joints 0
+HAND_OPEN, HAND_CLOSED = 0.75, -0.1  # finger base angles (rad) initial / θ⋆; mid joints 0
 HAND_TIMES = [0.0, 0.6, 1.4, 2.0]    # hold while closing, move, hold (s)
 
 
