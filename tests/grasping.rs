@@ -181,10 +181,12 @@ fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
 }
 
 /// Ties and bounds after each of 2 optimizer iterations of `name`
-/// (horizon `h`): far fewer variables than block vertices (shared corners are
-/// one variable), a corner shared by ≥ 4 blocks, and after every iteration
-/// each tie group one point and every variable within its box.
-fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize) {
+/// (horizon `h`): fewer variables than hull-vertex coordinates (shared
+/// points are one variable), a point shared by ≥ `shared` hull vertices (4
+/// for block corners, 2 for V-HACD hulls' coincident vertices), and after
+/// every iteration each tie group one point and every variable within its
+/// box.
+fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
     let p = shortened(name, Some(h), 1e-6);
     let verts: usize = links
         .iter()
@@ -197,14 +199,21 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize) {
                 .sum::<usize>()
         })
         .sum();
+    // Block corners are shared by up to 8 blocks: under half the coordinates
+    // remain; V-HACD hulls share only a few vertices.
+    let most = if shared >= 4 {
+        verts * 3 / 2
+    } else {
+        verts * 3
+    };
     assert!(
-        p.design.len() < verts * 3 / 2,
+        p.design.len() < most,
         "{name}: {} variables for {verts} vertices",
         p.design.len()
     );
     assert!(
-        p.design.vars.iter().any(|v| v.targets.len() >= 4),
-        "{name}: a corner shared by ≥ 4 blocks"
+        p.design.vars.iter().any(|v| v.targets.len() >= shared),
+        "{name}: a point shared by ≥ {shared} hull vertices"
     );
     let mut checked = 0;
     let lo = p.design.lower();
@@ -225,12 +234,13 @@ fn block_ties_and_bounds_hold_after_optimizer_iterations() {
         "parallel_jaw_gripper",
         &["gripper/jaw_left", "gripper/jaw_right"],
         30,
+        4,
     );
 }
 
 #[test]
 fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
-    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120);
+    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120, 4);
 }
 
 /// Horizon 240 of 480 (stages 1–2: the approach, where the jaw's left leg
@@ -244,4 +254,29 @@ fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
 #[test]
 fn single_jaw_design_gradient_matches_central_differences() {
     fd_check("single_jaw_gripper", horizon(240), 1e-7, 2e-3);
+}
+
+/// The hand's six finger links (4 V-HACD hulls each; only a few coincident
+/// vertices per link are tied), horizon 60 of 200 (the fingers closing on
+/// the object; the loss is final-time, so at step 60).
+#[test]
+fn three_finger_ties_and_bounds_hold_after_optimizer_iterations() {
+    let links: Vec<String> = (0..3)
+        .flat_map(|f| ["proximal", "distal"].map(|l| format!("hand/finger{f}_{l}")))
+        .collect();
+    let links: Vec<&str> = links.iter().map(String::as_str).collect();
+    ties_and_bounds_hold("three_finger_hand", &links, 60, 2);
+}
+
+/// Horizon 60 of 200 (`FD_H` overrides; the fingers have closed on the
+/// object, the loss is final-time): the 12 vertex coordinates with the
+/// largest |∂L/∂d| at h = 1e-6, all asserted (cut 0, fixed before
+/// measuring); figures in notes/hand.md.
+#[test]
+fn three_finger_design_gradient_matches_central_differences() {
+    let h: usize = std::env::var("FD_H")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(60);
+    fd_check("three_finger_hand", horizon(h), 1e-6, 0.0);
 }
