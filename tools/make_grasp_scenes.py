@@ -2,9 +2,10 @@
 """Writes the grasping benchmarks' scenes (robots/<gripper>/scene_*.yaml).
 
 Each scene = the gripper imported by `sdrs import --decomposer grid` (the
-paper's block design space) + one object (imported OBJ, V-HACD hulls) on a
-ground plane, with the prescribed base path and the closed-pose targets of
-the task header. Run from the repository root after `cargo build --release`:
+paper's block design space; the three-fingered hand: `--decomposer vhacd
+--max-hulls 4`, the paper's 4 V-HACD hulls per link) + one object (imported
+OBJ, V-HACD hulls) on a ground plane, with the prescribed base path and the
+closed-pose targets of the task header. Run from the repository root after `cargo build --release`:
 
     .venv/bin/python tools/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw,three_finger]
 
