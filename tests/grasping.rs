@@ -67,7 +67,12 @@ fn fd_check(name: &str, h: Option<usize>, eps: f64, resolved: f64) {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1e-11);
-    let p = shortened(name, h, tol);
+    fd_check_problem(&shortened(name, h, tol), name, eps, resolved);
+}
+
+/// [`fd_check`] on a loaded problem (a task, or one trajectory of a
+/// collective task), `name` labelling the output.
+fn fd_check_problem(p: &Problem, name: &str, eps: f64, resolved: f64) {
     let d = p.design.values(&p.model);
     let c = p.controls.values(&p.controller);
     let ev = p.evaluate(&d, &c).unwrap();
@@ -181,10 +186,12 @@ fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
 }
 
 /// Ties and bounds after each of 2 optimizer iterations of `name`
-/// (horizon `h`): far fewer variables than block vertices (shared corners are
-/// one variable), a corner shared by ≥ 4 blocks, and after every iteration
-/// each tie group one point and every variable within its box.
-fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize) {
+/// (horizon `h`): fewer variables than hull-vertex coordinates (shared
+/// points are one variable), a point shared by ≥ `shared` hull vertices (4
+/// for block corners, 2 for V-HACD hulls' coincident vertices), and after
+/// every iteration each tie group one point and every variable within its
+/// box.
+fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
     let p = shortened(name, Some(h), 1e-6);
     let verts: usize = links
         .iter()
@@ -197,14 +204,21 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize) {
                 .sum::<usize>()
         })
         .sum();
+    // Block corners are shared by up to 8 blocks: under half the coordinates
+    // remain; V-HACD hulls share only a few vertices.
+    let most = if shared >= 4 {
+        verts * 3 / 2
+    } else {
+        verts * 3
+    };
     assert!(
-        p.design.len() < verts * 3 / 2,
+        p.design.len() < most,
         "{name}: {} variables for {verts} vertices",
         p.design.len()
     );
     assert!(
-        p.design.vars.iter().any(|v| v.targets.len() >= 4),
-        "{name}: a corner shared by ≥ 4 blocks"
+        p.design.vars.iter().any(|v| v.targets.len() >= shared),
+        "{name}: a point shared by ≥ {shared} hull vertices"
     );
     let mut checked = 0;
     let lo = p.design.lower();
@@ -225,12 +239,13 @@ fn block_ties_and_bounds_hold_after_optimizer_iterations() {
         "parallel_jaw_gripper",
         &["gripper/jaw_left", "gripper/jaw_right"],
         30,
+        4,
     );
 }
 
 #[test]
 fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
-    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120);
+    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120, 4);
 }
 
 /// Horizon 240 of 480 (stages 1–2: the approach, where the jaw's left leg
@@ -244,4 +259,85 @@ fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
 #[test]
 fn single_jaw_design_gradient_matches_central_differences() {
     fd_check("single_jaw_gripper", horizon(240), 1e-7, 2e-3);
+}
+
+/// The hand's six finger links (4 V-HACD hulls each; only a few coincident
+/// vertices per link are tied), horizon 60 of 200 (the fingers closing on
+/// the object; the loss is final-time, so at step 60).
+#[test]
+fn three_finger_ties_and_bounds_hold_after_optimizer_iterations() {
+    let links: Vec<String> = (0..3)
+        .flat_map(|f| ["proximal", "distal"].map(|l| format!("hand/finger{f}_{l}")))
+        .collect();
+    let links: Vec<&str> = links.iter().map(String::as_str).collect();
+    ties_and_bounds_hold("three_finger_hand", &links, 60, 2);
+}
+
+/// Horizon 60 of 200 (`FD_H` overrides; the fingers have closed on the
+/// object, the loss is final-time): the 12 vertex coordinates with the
+/// largest |∂L/∂d| at h = 1e-6, all asserted (cut 0, fixed before
+/// measuring); figures in notes/hand.md. With `FULL=1` (horizon 200) it
+/// fails: the ball rolls away from the initial hand and its loss is not
+/// differentiable in practice (see `three_finger_full_horizon_probe`).
+#[test]
+fn three_finger_design_gradient_matches_central_differences() {
+    let h: usize = std::env::var("FD_H")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(60);
+    fd_check("three_finger_hand", horizon(h), 1e-6, 0.0);
+}
+
+/// Probe (ignored; `cargo test --release --test grasping -- --ignored
+/// three_finger_full_horizon_probe --nocapture`): at the full horizon 200,
+/// for the variable with the largest |∂L/∂d|, each trajectory's analytic
+/// derivative and its central differences at h = 1e-5 … 1e-9 (Newton tol
+/// 1e-11). Figures in notes/hand.md.
+#[test]
+#[ignore]
+fn three_finger_full_horizon_probe() {
+    let p = shortened("three_finger_hand", None, 1e-11);
+    let d = p.design.values(&p.model);
+    let c = p.controls.values(&p.controller);
+    let ev = p.evaluate(&d, &c).unwrap();
+    let i = (0..p.design.len())
+        .max_by(|&a, &b| ev.grad_design[a].abs().total_cmp(&ev.grad_design[b].abs()))
+        .unwrap();
+    eprintln!("variable {}", p.design.vars[i].name);
+    let all = multi::all(&p);
+    for (k, q) in all.iter().enumerate() {
+        let e = q.evaluate_one(&d, &c).unwrap();
+        eprintln!(
+            "trajectory {k}: loss {:.9e} analytic {:.6e}",
+            e.loss, e.grad_design[i]
+        );
+        for h in [1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {
+            let mut dp = d.clone();
+            dp[i] += h;
+            let mut dm = d.clone();
+            dm[i] -= h;
+            let (lp, lm) = (
+                q.evaluate_one(&dp, &c).unwrap().loss,
+                q.evaluate_one(&dm, &c).unwrap().loss,
+            );
+            eprintln!(
+                "  h {h:e}: L+ {lp:.12e} L- {lm:.12e} central {:.6e}",
+                (lp - lm) / (2.0 * h)
+            );
+        }
+    }
+    // The cube and cylinder trajectories alone (the ball's loss does not
+    // converge under central differences above; this selection was made
+    // after seeing that), Richardson at h = 1e-7, all 12 asserted.
+    // (`all[0]` carries the others: a copy without them is the cube alone.)
+    let mut cube = p.clone();
+    cube.others.clear();
+    for (q, label) in [(&cube, "cube"), (all[1], "cylinder")] {
+        fd_check_problem(
+            q,
+            &format!("three_finger_hand/{label} (H = 200)"),
+            1e-7,
+            0.0,
+        );
+    }
 }

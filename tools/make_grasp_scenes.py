@@ -2,11 +2,12 @@
 """Writes the grasping benchmarks' scenes (robots/<gripper>/scene_*.yaml).
 
 Each scene = the gripper imported by `sdrs import --decomposer grid` (the
-paper's block design space) + one object (imported OBJ, V-HACD hulls) on a
-ground plane, with the prescribed base path and the closed-pose targets of
-the task header. Run from the repository root after `cargo build --release`:
+paper's block design space; the three-fingered hand: `--decomposer vhacd
+--max-hulls 4`, the paper's 4 V-HACD hulls per link) + one object (imported
+OBJ, V-HACD hulls) on a ground plane, with the prescribed base path and the
+closed-pose targets of the task header. Run from the repository root after `cargo build --release`:
 
-    .venv/bin/python tools/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw]
+    .venv/bin/python tools/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw,three_finger]
 
 The outputs are committed; rerun only to regenerate them.
 """
@@ -128,6 +129,94 @@ def single_jaw(blocks, tmp):
           "# see task.yaml for the settings and the prescribed base path).\n")
 
 
+# Three-fingered hand (task.yaml header): the URDF's six finger links are
+# carried by an added palm on a free root joint (the prescribed base path);
+# the palm frame's origin is the grasp point, HAND_Z above the ground.
+HAND_Z = 0.05           # palm origin (grasp point) height at the start (m)
+HAND_JOINTS_Z = 0.085    # finger base joints above the palm origin (m)
+HAND_OPEN, HAND_CLOSED = 0.75, -0.1  # finger base angles (rad) initial / θ⋆; mid joints 0
+HAND_TIMES = [0.0, 0.6, 1.4, 2.0]    # hold while closing, move, hold (s)
+
+
+def random_target(rng):
+    """The paper's "target position located in any orientation", drawn once per
+    object: rise U(0.10, 0.20) m, horizontal offset U(−0.05, 0.05) m per axis,
+    rotation by U(0, 0.4) rad about a uniformly random axis."""
+    import math
+    dx, dy = (round(rng.uniform(-0.05, 0.05), 3) for _ in range(2))
+    dz = round(rng.uniform(0.10, 0.20), 3)
+    u, ph = rng.uniform(-1.0, 1.0), rng.uniform(0.0, 2.0 * math.pi)
+    axis = [math.sqrt(1 - u * u) * math.cos(ph), math.sqrt(1 - u * u) * math.sin(ph), u]
+    ang = rng.uniform(0.0, 0.4)
+    return [dx, dy, dz], [round(ang * a, 4) for a in axis]
+
+
+def three_finger(tmp):
+    d = ROOT / "robots" / "three_finger_hand"
+    g = sdrs_import(d / "three_finger_hand.urdf", Path(tmp) / "hand.yaml", "--decomposer", "vhacd",
+                    "--max-hulls", "4")
+    robot = g["robots"][0]
+    robot["name"] = "hand"
+    for link in robot["links"]:
+        if link["parent"] is None:  # a finger base on the URDF's world: now on the palm
+            link["parent"] = "palm"
+            o = link["joint"]["origin"]["xyz"]
+            link["joint"]["origin"]["xyz"] = [o[0], o[1], HAND_JOINTS_Z]
+    fingers = [l["name"] for l in robot["links"]]
+    palm = {
+        "name": "palm", "parent": None,
+        "joint": {"name": "base", "type": "free",
+                  "origin": {"xyz": [0.0, 0.0, HAND_Z], "rpy": [0.0, 0.0, 0.0]}},
+        "mass_model": {"type": "given", "mass": 0.5, "com": [0.0, 0.0, HAND_JOINTS_Z + 0.04],
+                       "inertia": [0.001, 0.0, 0.0, 0.001, 0.0, 0.001]},
+        # a plate above the finger joints (clear of the proximal links' swing)
+        "hulls": [{"box": {"size": [0.14, 0.14, 0.02], "center": [0.0, 0.0, HAND_JOINTS_Z + 0.04]}}],
+    }
+    robot["links"] = [palm] + robot["links"]
+    design = robot["design"]
+    design["designable"] = fingers
+    exclude = [[a.replace("three_finger_hand/", "hand/") for a in pair] for pair in g["contact"]["exclude"]]
+    exclude += [["hand/palm", f"hand/{f}"] for f in fingers]
+    rng = random.Random(12)
+    for name in ["cube", "cylinder", "ball"]:
+        hulls = object_hulls(d / "objects" / f"{name}.obj", tmp, True)
+        zmin = min(v[2] for h in hulls for v in h["vertices"])
+        zc = -zmin + 0.001  # the object's centre on the ground (1 mm clearance)
+        pos, rot = random_target(rng)
+        r = dict(robot)
+        finger_targets = {}
+        for f in fingers:
+            j = next(l["joint"]["name"] for l in robot["links"] if l["name"] == f)
+            if j.endswith("_base"):  # the closed pose θ⋆ as the target throughout (paper)
+                finger_targets[j] = {"type": "constant", "value": HAND_CLOSED}
+            else:
+                finger_targets[j] = {"type": "constant", "value": 0.0}
+        # position in the attachment frame (relative to the start), rotation vector
+        base = [{"type": "table", "times": list(HAND_TIMES), "values": [0.0, 0.0, pos[i], pos[i]]}
+                for i in range(3)]
+        base += [{"type": "table", "times": list(HAND_TIMES), "values": [0.0, 0.0, rot[i], rot[i]]}
+                 for i in range(3)]
+        r["controller"] = {
+            "kp": 300.0, "kd": 3.0,
+            "gains": {"base": {"kp": 3000.0, "kd": 30.0}},
+            "targets": {"base": base, **finger_targets},
+        }
+        r["initial"] = {j: {"q": [HAND_OPEN]} for j in finger_targets if j.endswith("_base")}
+        scene = {
+            "version": 1, "dt": 0.01, "steps": 200,
+            "solver": {"tol": 1e-6, "max_iters": 100},
+            "robots": [r],
+            "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
+                         "initial": {"q": [0.0, 0.0, zc, 0.0, 0.0, 0.0]}}],
+            "ground": {"height": 0.0},
+            "contact": {**g["contact"], "exclude": exclude, "s": 0.003, "mu": 0.05},
+        }
+        write(d / f"scene_{name}.yaml", scene,
+              f"# Three-fingered hand grasping the {name} (written by tools/make_grasp_scenes.py;\n"
+              f"# see task.yaml for the settings). Object centre {zc:.4f} m; target offset {pos} m,\n"
+              f"# rotation vector {rot} rad.\n")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--blocks", type=int, default=156)
@@ -138,6 +227,8 @@ def main():
             parallel_jaw(a.blocks, tmp)
         if "single_jaw" in a.which:
             single_jaw(a.blocks, tmp)
+        if "three_finger" in a.which:
+            three_finger(tmp)
 
 
 if __name__ == "__main__":
