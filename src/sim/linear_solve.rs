@@ -174,10 +174,14 @@ impl BlockSolver {
             }
             i
         }
-        for j in 0..n {
-            let col = h.column(j);
-            for i in 0..j {
-                if col[i] != 0.0 || h[(j, i)] != 0.0 {
+        // Every entry once, column by column (contiguous; the transposed
+        // read `h[(j, i)]` strided by `n` and dominated this scan). The
+        // components do not depend on the order in which edges are joined,
+        // and each root is the smallest index of its component, so the
+        // grouping below is the same whatever the order.
+        for (j, col) in h.column_iter().enumerate() {
+            for (i, &v) in col.iter().enumerate() {
+                if v != 0.0 && i != j {
                     let (a, b) = (find(p, i), find(p, j));
                     if a != b {
                         p[a.max(b)] = a.min(b);
