@@ -179,12 +179,34 @@ impl BlockSolver {
         // components do not depend on the order in which edges are joined,
         // and each root is the smallest index of its component, so the
         // grouping below is the same whatever the order.
-        for (j, col) in h.column_iter().enumerate() {
-            for (i, &v) in col.iter().enumerate() {
-                if v != 0.0 && i != j {
-                    let (a, b) = (find(p, i), find(p, j));
-                    if a != b {
-                        p[a.max(b)] = a.min(b);
+        // (Plain slices: nalgebra's generic matrix iterator does not
+        // vectorize and cost more than the scan itself.)
+        if n > 0 {
+            for (j, col) in h.as_slice().chunks_exact(n).enumerate() {
+                let mut rj = find(p, j);
+                // Entry `(i, j)` needs a union only when non-zero and `i` is
+                // not already known to be in `j`'s component (`p[i] == rj`:
+                // path compression makes this the common case inside a dense
+                // block). Chunks of 8 are tested branch-free first (the test
+                // vectorizes; most chunks need nothing).
+                for start in (0..n).step_by(8) {
+                    let end = (start + 8).min(n);
+                    let busy = col[start..end]
+                        .iter()
+                        .zip(&p[start..end])
+                        .fold(false, |b, (&v, &pi)| b | ((v != 0.0) & (pi != rj)));
+                    if !busy {
+                        continue;
+                    }
+                    for i in start..end {
+                        if col[i] != 0.0 && p[i] != rj {
+                            let a = find(p, i);
+                            if a != rj {
+                                let r = a.min(rj);
+                                p[a.max(rj)] = r;
+                                rj = r;
+                            }
+                        }
                     }
                 }
             }

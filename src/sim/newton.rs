@@ -356,7 +356,7 @@ pub fn minimize_from(
         report.iters = iter;
         report.grad_inf = grad_inf;
         report.value = value;
-        if !grad_inf.is_finite() || scratch.hess.iter().any(|v| !v.is_finite()) {
+        if !grad_inf.is_finite() || scratch.hess.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(NewtonError::NonFinite { iter });
         }
         if grad_inf < opts.tol {
@@ -539,8 +539,11 @@ fn max_row_sum(h: &DMatrix<f64>, sums: &mut Vec<f64>) -> f64 {
     sums.clear();
     // `Sum for f64` folds from −0.0; the same start keeps every bit.
     sums.resize(n, -0.0);
-    for col in h.column_iter() {
-        for (s, v) in sums.iter_mut().zip(col.iter()) {
+    if n == 0 {
+        return 0.0;
+    }
+    for col in h.as_slice().chunks_exact(n) {
+        for (s, v) in sums.iter_mut().zip(col) {
             *s += v.abs();
         }
     }
