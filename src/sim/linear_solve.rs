@@ -314,15 +314,9 @@ impl BlockSolver {
             for b in 0..nb {
                 let idx = &self.order[self.starts[b]..self.starts[b + 1]];
                 let mut stats = LinearSolveStats::default();
-                let rec = self.main.solve_block(
-                    h,
-                    g,
-                    idx,
-                    clamp,
-                    mode,
-                    &mut self.last_shift,
-                    &mut stats,
-                );
+                let rec =
+                    self.main
+                        .solve_block(h, g, idx, clamp, mode, &mut self.last_shift, &mut stats);
                 self.stats.add(&stats);
                 any_eigen |= rec;
                 for (a, &i) in idx.iter().enumerate() {
@@ -396,8 +390,7 @@ impl BlockSolver {
                     let idx = &order[starts[b]..starts[b + 1]];
                     let mut rec = BlockRecord::default();
                     let before = shift;
-                    rec.eigen =
-                        sc.solve_block(h, g, idx, clamp, mode, &mut shift, &mut rec.stats);
+                    rec.eigen = sc.solve_block(h, g, idx, clamp, mode, &mut shift, &mut rec.stats);
                     rec.read_shift = rec.stats.shift_attempts > 0;
                     rec.shift_out = shift;
                     // Later blocks of this chunk start from the chunk's
@@ -420,15 +413,9 @@ impl BlockSolver {
             if rec.read_shift && shift != shift0 {
                 self.main.reserve(n);
                 rec = BlockRecord::default();
-                rec.eigen = self.main.solve_block(
-                    h,
-                    g,
-                    idx,
-                    clamp,
-                    mode,
-                    &mut shift,
-                    &mut rec.stats,
-                );
+                rec.eigen =
+                    self.main
+                        .solve_block(h, g, idx, clamp, mode, &mut shift, &mut rec.stats);
                 for (a, &i) in idx.iter().enumerate() {
                     dir[i] = self.main.rhs[(a, 0)];
                 }
@@ -630,10 +617,7 @@ impl BlockScratch {
         stats: &mut LinearSolveStats,
     ) -> bool {
         let m = idx.len();
-        let dmax = idx
-            .iter()
-            .map(|&i| h[(i, i)].abs())
-            .fold(0.0, f64::max);
+        let dmax = idx.iter().map(|&i| h[(i, i)].abs()).fold(0.0, f64::max);
         let floor = (2.0 * clamp).max(1e-6 * dmax);
         let mut tau = if *last_shift > 0.0 {
             (0.25 * *last_shift).max(floor)

@@ -194,26 +194,30 @@ impl Objective for StepObjective<'_> {
         let track = need >= Need::Gradient && self.work.is_some();
         let mut work = StepWork::default();
         // `Σ ⟨∂E/∂A, A − A^t⟩ + …` of the accumulator so far: a term's work
-        // is the change across it, and the value after one term is the value
-        // before the next (computed once).
-        let mut before = if track {
-            gradient_dot_step(self.acc, self.kin, &self.ctx, q)
-        } else {
-            0.0
-        };
+        // is the change across it. It is taken only around terms whose work
+        // is kept (not inertia and gravity), and the value after one term is
+        // the value before the next (computed once; the same bits as
+        // computing it again).
+        let mut before: Option<f64> = None;
         for e in self.energies.iter_mut() {
+            let name = e.name();
+            let kept = track && !matches!(name, "inertia" | "gravity");
+            if kept && before.is_none() {
+                before = Some(gradient_dot_step(self.acc, self.kin, &self.ctx, q));
+            }
             e.accumulate(&self.ctx, q, self.kin, need, self.acc)?;
-            if track {
+            if kept {
                 let after = gradient_dot_step(self.acc, self.kin, &self.ctx, q);
-                let w = before - after;
-                before = after;
-                match e.name() {
-                    "inertia" | "gravity" => {}
+                let w = before.unwrap_or(0.0) - after;
+                before = Some(after);
+                match name {
                     "pd" => work.controller += w,
                     "friction" | "ipc_friction" => work.friction += w,
                     "contact" | "ipc_contact" => work.contact += w,
                     _ => work.other += w,
                 }
+            } else {
+                before = None;
             }
             let now = Instant::now();
             timers.add(e.name(), now - mark);
