@@ -230,7 +230,7 @@ impl Objective for StepObjective<'_> {
             *w = work;
         }
         if need >= Need::Gradient {
-            assemble::assemble(model, self.kin, self.acc, need, grad, hess, self.assemble);
+            assemble::assemble_swapping(model, self.kin, self.acc, need, grad, hess, self.assemble);
             timers.add("assembly", mark.elapsed());
         }
         Ok(self.acc.value)
