@@ -240,4 +240,58 @@ mod tests {
         assert!(brute.len() > pairs.len());
         assert_eq!(swept, brute);
     }
+
+    /// Repeated queries on moving boxes reuse the sweep order (and switch
+    /// axes as the spread changes): every query equals brute force.
+    #[test]
+    fn incremental_sweep_matches_brute_force_while_moving() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let n = 60;
+        let mut centers: Vec<Vector3<f64>> = (0..n)
+            .map(|_| {
+                Vector3::new(
+                    rng.random_range(0.0..6.0),
+                    rng.random_range(0.0..2.0),
+                    rng.random_range(0.0..1.0),
+                )
+            })
+            .collect();
+        let excluded: BTreeSet<(usize, usize)> = [(0, 1), (5, 9)].into_iter().collect();
+        let mut bp = BroadPhase::default();
+        let mut pairs = Vec::new();
+        for q in 0..40 {
+            // Drift, and after 20 queries stretch the cloud along z.
+            for c in &mut centers {
+                *c += Vector3::new(
+                    rng.random_range(-0.05..0.05),
+                    rng.random_range(-0.05..0.05),
+                    rng.random_range(-0.05..0.05),
+                );
+                if q == 20 {
+                    c.z *= 12.0;
+                }
+            }
+            let mut w = WorldHulls::default();
+            for (i, c) in centers.iter().enumerate() {
+                let start = w.vertices.len();
+                w.vertices.extend(cube(*c));
+                w.ranges.push(start..w.vertices.len());
+                w.ids.push(HullId { link: i, hull: 0 });
+            }
+            let range = 0.05;
+            bp.candidate_pairs(&w, range, &excluded, &mut pairs);
+            let mut brute = Vec::new();
+            for a in 0..n {
+                for b in a + 1..n {
+                    let gap = (centers[a] - centers[b]).abs().map(|d| d - 1.0).max();
+                    if gap <= range && !excluded.contains(&(a, b)) {
+                        brute.push((a, b));
+                    }
+                }
+            }
+            assert_eq!(pairs, brute, "query {q}");
+        }
+        assert_eq!(bp.axis, 2, "the sweep follows the largest spread");
+    }
 }

@@ -128,6 +128,8 @@ pub struct BlockSolver {
     bounds: Vec<usize>,
     /// Last successful shift `τ` of [`Mode::Shift`] (0: none yet).
     last_shift: f64,
+    /// [`PARALLEL_MIN_CUBES`] (tests lower or raise it).
+    parallel_min_cubes: usize,
     pub stats: LinearSolveStats,
 }
 
@@ -144,6 +146,7 @@ impl Default for BlockSolver {
             sols: Vec::new(),
             bounds: Vec::new(),
             last_shift: 0.0,
+            parallel_min_cubes: PARALLEL_MIN_CUBES,
             stats: LinearSolveStats::default(),
         }
     }
@@ -306,7 +309,7 @@ impl BlockSolver {
         let total: usize = (0..nb).map(cubes).sum();
         let threads = rayon::current_num_threads();
         let mut any_eigen = false;
-        if nb < 2 || threads < 2 || total < PARALLEL_MIN_CUBES {
+        if nb < 2 || threads < 2 || total < self.parallel_min_cubes {
             // Sized for the whole problem, as the scratch always was: the
             // blocks' column stride (and so the kernels' arithmetic) is
             // then the same on every path.
@@ -895,5 +898,57 @@ mod tests {
         let _ = solve(&mut reused, &h2, &g2, 1e-3, false);
         let got = solve(&mut reused, &h1, &g1, 1e-3, false);
         assert_eq!(want, got);
+    }
+
+    /// The parallel path (forced on small blocks, and on a pool of 3
+    /// threads so that chunks hold several blocks) equals the sequential
+    /// one bit for bit — directions, the running shift and the counters —
+    /// across calls, with indefinite blocks whose shifted factorization
+    /// reads the shift carried from the blocks before them.
+    #[test]
+    fn parallel_blocks_are_bitwise_the_sequential_solve() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let sizes = [7usize, 12, 5, 9, 16, 3, 11, 8];
+        let n: usize = sizes.iter().sum();
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, rng.random_range(0..=i));
+        }
+        let mut seq = BlockSolver::default();
+        seq.parallel_min_cubes = usize::MAX;
+        let mut par = BlockSolver::default();
+        par.parallel_min_cubes = 0;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        for call in 0..12 {
+            let mut h = DMatrix::zeros(n, n);
+            let mut off = 0;
+            for (b, &m) in sizes.iter().enumerate() {
+                let a = DMatrix::from_fn(m, m, |_, _| rng.random_range(-1.0..1.0));
+                // Every other block indefinite (shifted), by a call-dependent amount.
+                let shift = if (b + call) % 2 == 0 {
+                    0.5
+                } else {
+                    -0.3 - 0.1 * b as f64
+                };
+                let blk = &a * a.transpose() + DMatrix::identity(m, m) * shift;
+                for i in 0..m {
+                    for j in 0..m {
+                        h[(perm[off + i], perm[off + j])] = blk[(i, j)];
+                    }
+                }
+                off += m;
+            }
+            let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let (mut ds, mut dp) = (DVector::zeros(n), DVector::zeros(n));
+            seq.direction(&h, &g, 1e-3, Mode::Shift, &mut ds);
+            pool.install(|| par.direction(&h, &g, 1e-3, Mode::Shift, &mut dp));
+            assert_eq!(ds, dp, "call {call}");
+            assert_eq!(seq.last_shift.to_bits(), par.last_shift.to_bits());
+            assert_eq!(seq.stats, par.stats);
+        }
+        assert!(seq.stats.shifted_blocks > 20);
     }
 }
