@@ -101,10 +101,24 @@ struct BlockRecord {
 }
 
 /// Total `Σ m_b³` (flops of the blocks' factorizations, up to a constant)
-/// from which the blocks of one solve are spread over the thread pool: four
-/// 64-coordinate blocks (one per chain at 32 links per chain, ~0.1 ms) are;
-/// below that, handing work to the pool costs about as much as it saves.
-pub const PARALLEL_MIN_CUBES: usize = 400_000;
+/// from which the blocks of one solve are spread over the thread pool.
+/// **Off by default** (`usize::MAX`): on the shared 2-core machine the
+/// benchmarks run on (load 3–7 from other builds), handing the four
+/// 64-coordinate blocks of the 32-link chains to a second thread made the
+/// linear solve 1.5–4× *slower* (0.55–0.63 → 0.86–2.4 ms per step; the
+/// worker waits for a core). Set the environment variable
+/// `SDRS_PARALLEL_SOLVE_MIN_CUBES` (e.g. `400000`: four 46-coordinate
+/// blocks) to turn it on where cores are free; results are bitwise the same
+/// either way.
+pub const PARALLEL_MIN_CUBES: usize = usize::MAX;
+
+/// [`PARALLEL_MIN_CUBES`], or `SDRS_PARALLEL_SOLVE_MIN_CUBES` when set.
+fn parallel_min_cubes() -> usize {
+    std::env::var("SDRS_PARALLEL_SOLVE_MIN_CUBES")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(PARALLEL_MIN_CUBES)
+}
 
 /// Block-wise clamped Newton solver with persistent scratch.
 pub struct BlockSolver {
@@ -128,7 +142,7 @@ pub struct BlockSolver {
     bounds: Vec<usize>,
     /// Last successful shift `τ` of [`Mode::Shift`] (0: none yet).
     last_shift: f64,
-    /// [`PARALLEL_MIN_CUBES`] (tests lower or raise it).
+    /// [`parallel_min_cubes`] (tests lower or raise it).
     parallel_min_cubes: usize,
     pub stats: LinearSolveStats,
 }
@@ -146,7 +160,7 @@ impl Default for BlockSolver {
             sols: Vec::new(),
             bounds: Vec::new(),
             last_shift: 0.0,
-            parallel_min_cubes: PARALLEL_MIN_CUBES,
+            parallel_min_cubes: parallel_min_cubes(),
             stats: LinearSolveStats::default(),
         }
     }
@@ -281,8 +295,9 @@ impl BlockSolver {
     /// `dir = −B⁻¹ g` with `B = H` on blocks where `H − c I` is positive
     /// definite and the `mode`'s positive-definite model elsewhere.
     ///
-    /// **Independent blocks in parallel.** When there are several blocks
-    /// and `Σ m_b³ ≥` [`PARALLEL_MIN_CUBES`], the blocks are cut into one
+    /// **Independent blocks in parallel** (off by default, see
+    /// [`PARALLEL_MIN_CUBES`]). When there are several blocks and
+    /// `Σ m_b³ ≥` the threshold, the blocks are cut into one
     /// contiguous chunk per pool thread, balanced by `m_b³`
     /// ([`crate::geometry::parallel::balanced_bounds`]), and each chunk is
     /// solved with its own scratch. A block's result depends on nothing
