@@ -23,6 +23,7 @@
 use super::hulls::WorldHulls;
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::math::Vector;
+use std::cmp::Ordering;
 use std::collections::BTreeSet;
 
 /// Broad-phase state: the padded boxes of the last query and the persistent
@@ -162,7 +163,12 @@ impl BroadPhase {
                 let bb = &boxes[b];
                 // Sorted by lower bound: no later box can overlap `a` along
                 // the axis once one starts past its upper bound.
-                if !(bb.mins[axis] <= ba.maxs[axis]) {
+                // (NaN bounds compare as "past" too: no pair, as in the
+                // overlap test.)
+                if !matches!(
+                    bb.mins[axis].partial_cmp(&ba.maxs[axis]),
+                    Some(Ordering::Less | Ordering::Equal)
+                ) {
                     break;
                 }
                 if !(ba.mins[axis] <= bb.maxs[axis] && overlap(ba, bb, o1) && overlap(ba, bb, o2)) {
