@@ -3,8 +3,9 @@
 //!
 //! Stages per evaluation: world vertices → broad phase (boxes inflated by
 //! `2s/(1−s)`) → narrow phase, one [`contact_pair`](crate::contact::contact_pair) per candidate, in
-//! parallel (rayon), results reduced in pair order (deterministic for any
-//! thread count) → scatter into pose space. An intersecting pair makes the
+//! parallel (rayon) in fixed chunks balanced by vertex count when there is
+//! enough work ([`PairWork`]), results reduced in pair order (bitwise the
+//! same for any thread count) → scatter into pose space. An intersecting pair makes the
 //! energy `+∞`, so Newton's line search rejects the trial point and an
 //! interpenetrating state is never accepted. Each pair's optimal plane warm
 //! starts its next solve (used only when still strictly feasible).
@@ -18,13 +19,12 @@ use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_direction
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
-use crate::geometry::{BroadPhase, WorldHulls};
+use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use crate::scene::ContactSettings;
 use crate::sim::StepDiagnostics;
 use nalgebra::{DVector, Vector4};
-use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
 
@@ -36,6 +36,8 @@ pub struct ContactEnergy {
     broad: BroadPhase,
     pairs: Vec<(usize, usize)>,
     results: Vec<Result<PairOutcome, contact::ContactError>>,
+    /// Vertex-balanced chunks of the pair evaluations (see [`PairWork`]).
+    work: PairWork<Result<PairOutcome, contact::ContactError>>,
     warm: HashMap<(usize, usize), Vector4<f64>>,
     pair_slots: BTreeMap<(usize, usize), usize>,
     /// Time spent in the broad phase since the last [`ContactEnergy::take_broad_phase_time`].
@@ -59,6 +61,7 @@ impl ContactEnergy {
             broad: BroadPhase::default(),
             pairs: Vec::new(),
             results: Vec::new(),
+            work: PairWork::default(),
             warm: HashMap::new(),
             pair_slots: BTreeMap::new(),
             broad_time: Duration::ZERO,
@@ -127,9 +130,11 @@ impl Energy for ContactEnergy {
         };
         let (hulls, params, warm) = (&self.hulls, &self.params, &self.warm);
         let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
-        self.pairs
-            .par_iter()
-            .map_init(ContactScratch::new, |scratch, &(a, b)| {
+        self.work.map(
+            &self.pairs,
+            |&(a, b)| hulls.ranges[a].len() + hulls.ranges[b].len(),
+            ContactScratch::new,
+            |scratch, &(a, b)| {
                 let w = warm.get(&(a, b)).copied();
                 let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
                 if let Err(e) = &res {
@@ -138,8 +143,9 @@ impl Energy for ContactEnergy {
                     contact::capture::dump("contact", &case);
                 }
                 res
-            })
-            .collect_into_vec(&mut self.results);
+            },
+            &mut self.results,
+        );
 
         self.pair_slots.clear();
         self.last_intersecting = None;

@@ -24,12 +24,11 @@ use crate::contact::{
     self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch,
     LaggedContact, PairOutcome,
 };
-use crate::geometry::{BroadPhase, WorldHulls};
+use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use crate::scene::ContactSettings;
 use nalgebra::{DVector, Vector4};
-use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 
 /// A hull pair (indices into the world hulls) in contact at step `t`, its
@@ -49,6 +48,11 @@ pub struct FrictionEnergy {
     /// it was built from (needed by the adjoint).
     lagged: Vec<LaggedPair>,
     results: Vec<Result<contact::FrictionPair, contact::FrictionError>>,
+    /// Vertex-balanced chunks of the pair evaluations (see [`PairWork`]).
+    work: PairWork<Result<contact::FrictionPair, contact::FrictionError>>,
+    /// The same for the lagged contact solves of [`Energy::begin_step`].
+    begin_work: PairWork<Result<Option<LaggedPair>, EnergyError>>,
+    lagged_work: Vec<Result<Option<LaggedPair>, EnergyError>>,
     pair_slots: BTreeMap<(usize, usize), usize>,
 }
 
@@ -67,6 +71,9 @@ impl FrictionEnergy {
             warm: HashMap::new(),
             lagged: Vec::new(),
             results: Vec::new(),
+            work: PairWork::default(),
+            begin_work: PairWork::default(),
+            lagged_work: Vec::new(),
             pair_slots: BTreeMap::new(),
         }
     }
@@ -87,28 +94,23 @@ impl Energy for FrictionEnergy {
             &self.settings.excluded,
             &mut self.pairs,
         );
-        let this = &*self;
+        let (hulls, params, warm_planes) = (&self.hulls, &self.contact, &self.warm);
         let kappa = self.settings.kappa;
-        let lagged: Vec<Result<Option<LaggedPair>, EnergyError>> = self
-            .pairs
-            .par_iter()
-            .map_init(ContactScratch::new, |scratch, &(a, b)| {
+        let mut lagged = std::mem::take(&mut self.lagged_work);
+        self.begin_work.map(
+            &self.pairs,
+            |&(a, b)| hulls.ranges[a].len() + hulls.ranges[b].len(),
+            ContactScratch::new,
+            |scratch, &(a, b)| {
                 let (pa, pb) = (
-                    this.hulls.hull_pose(model, poses, a),
-                    this.hulls.hull_pose(model, poses, b),
+                    hulls.hull_pose(model, poses, a),
+                    hulls.hull_pose(model, poses, b),
                 );
-                let warm = this.warm.get(&(a, b)).copied();
-                match contact::contact_pair(
-                    pa,
-                    pb,
-                    &this.contact,
-                    warm,
-                    contact::Need::Value,
-                    scratch,
-                ) {
+                let warm = warm_planes.get(&(a, b)).copied();
+                match contact::contact_pair(pa, pb, params, warm, contact::Need::Value, scratch) {
                     Ok(PairOutcome::Separated(c)) => Ok(Some((
                         (a, b),
-                        LaggedContact::from_contact(&c, pa, pb, &this.contact, kappa),
+                        LaggedContact::from_contact(&c, pa, pb, params, kappa),
                         c.plane,
                     ))),
                     Ok(_) => Ok(None),
@@ -116,7 +118,7 @@ impl Energy for FrictionEnergy {
                         let case = contact::capture::ContactCase::new(
                             pa,
                             pb,
-                            &this.contact,
+                            params,
                             warm,
                             contact::Need::Value,
                             &e,
@@ -128,16 +130,25 @@ impl Energy for FrictionEnergy {
                         })
                     }
                 }
-            })
-            .collect();
+            },
+            &mut lagged,
+        );
         self.lagged.clear();
         self.warm.clear();
-        for item in lagged {
-            if let Some(lag) = item? {
-                self.lagged.push(lag);
+        let mut out = Ok(());
+        for item in lagged.drain(..) {
+            match item {
+                Ok(Some(lag)) => self.lagged.push(lag),
+                Ok(None) => {}
+                Err(e) => {
+                    out = Err(e);
+                    break;
+                }
             }
         }
-        Ok(())
+        lagged.clear();
+        self.lagged_work = lagged;
+        out
     }
 
     fn accumulate(
@@ -156,9 +167,11 @@ impl Energy for FrictionEnergy {
         };
         let (hulls, friction) = (&self.hulls, &self.friction);
         let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
-        self.lagged
-            .par_iter()
-            .map_init(FrictionScratch::new, |scratch, ((a, b), lag, _)| {
+        self.work.map(
+            &self.lagged,
+            |((a, b), _, _)| hulls.ranges[*a].len() + hulls.ranges[*b].len(),
+            FrictionScratch::new,
+            |scratch, ((a, b), lag, _)| {
                 let frame = lag.frame();
                 let res =
                     contact::friction_pair(&frame, pose(*a), pose(*b), friction, fneed, scratch);
@@ -174,8 +187,9 @@ impl Energy for FrictionEnergy {
                     contact::capture::dump("friction", &case);
                 }
                 res
-            })
-            .collect_into_vec(&mut self.results);
+            },
+            &mut self.results,
+        );
         self.pair_slots.clear();
         // As in the contact term: an unsolvable inner problem at a
         // line-search trial point rejects the point.

@@ -3,8 +3,10 @@
 
 pub mod broad_phase;
 pub mod hulls;
+pub mod parallel;
 pub mod sampling;
 pub mod topology;
 
 pub use broad_phase::BroadPhase;
 pub use hulls::{HullId, WorldHulls};
+pub use parallel::PairWork;

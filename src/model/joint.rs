@@ -12,7 +12,7 @@
 //! between steps when `‖φ‖` grows (see `sim::state`), so `exp` is never used
 //! near its singular set `‖φ‖ = 2π` and there is no gimbal lock.
 
-use crate::math::{Pose, so3};
+use crate::math::{Pose, skew, so3};
 use nalgebra::{Const, Matrix3, SVector, Vector3};
 use num_dual::{Dual2Vec, Dual64, DualNum, hessian};
 
@@ -166,9 +166,64 @@ impl JointKind {
         )
     }
 
-    /// `J(q)`, `∂J/∂q_k` and `∂²J/∂q_k∂q_l` (exact, by second-order dual
-    /// numbers). `d1[k]` and `d2[k][l]` are filled for `k, l < ndof`.
+    /// `J(q)`, `∂J/∂q_k` and `∂²J/∂q_k∂q_l`. `d1[k]` and `d2[k][l]` are
+    /// filled for `k, l < ndof`.
+    ///
+    /// Hinge-type joints in closed form (exact): with `K = [a]×`,
+    /// `d/dq exp(qK) = K exp(qK) = exp(qK) K`, so a revolute joint has
+    /// `∂R/∂q = K R`, `∂²R/∂q² = K² R`, and the ball joint `R = R₁R₂` has
+    /// `∂R/∂q₁ = K₁R`, `∂R/∂q₂ = R K₂`, `∂²R/∂q₁² = K₁²R`,
+    /// `∂²R/∂q₁∂q₂ = K₁ R K₂`, `∂²R/∂q₂² = R K₂²`; a prismatic joint has
+    /// `∂t/∂q = a` and no curvature. `J(q)` itself is [`JointKind::transform`]
+    /// (the same bits as a pose-only evaluation). Charted joints (spherical,
+    /// free) use second-order dual numbers ([`JointKind::transform_derivatives_dual`]);
+    /// the dual-number evaluation of the hinges was a third of a step with
+    /// two links per chain.
     pub fn transform_derivatives(
+        &self,
+        chart: &Matrix3<f64>,
+        q: &[f64],
+        out: &mut JointDerivatives,
+    ) {
+        let set_rot = |p: &mut Pose, r: &Matrix3<f64>| {
+            p.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+            p.set_column(3, &Vector3::zeros());
+        };
+        match self {
+            JointKind::Revolute { axis } => {
+                out.value = self.transform(chart, q);
+                let r = out.value.fixed_view::<3, 3>(0, 0).into_owned();
+                let k = skew(axis);
+                let kr = k * r;
+                set_rot(&mut out.d1[0], &kr);
+                set_rot(&mut out.d2[0][0], &(k * kr));
+            }
+            JointKind::Ball { axes } => {
+                out.value = self.transform(chart, q);
+                let r = out.value.fixed_view::<3, 3>(0, 0).into_owned();
+                let (k1, k2) = (skew(&axes[0]), skew(&axes[1]));
+                let (k1r, rk2) = (k1 * r, r * k2);
+                set_rot(&mut out.d1[0], &k1r);
+                set_rot(&mut out.d1[1], &rk2);
+                set_rot(&mut out.d2[0][0], &(k1 * k1r));
+                let mixed = k1r * k2;
+                set_rot(&mut out.d2[0][1], &mixed);
+                set_rot(&mut out.d2[1][0], &mixed);
+                set_rot(&mut out.d2[1][1], &(rk2 * k2));
+            }
+            JointKind::Prismatic { axis } => {
+                out.value = self.transform(chart, q);
+                out.d1[0] = Pose::zeros();
+                out.d1[0].set_column(3, axis);
+                out.d2[0][0] = Pose::zeros();
+            }
+            _ => self.transform_derivatives_dual(chart, q, out),
+        }
+    }
+
+    /// [`JointKind::transform_derivatives`] by second-order dual numbers
+    /// (exact; every kind).
+    pub fn transform_derivatives_dual(
         &self,
         chart: &Matrix3<f64>,
         q: &[f64],
@@ -340,6 +395,40 @@ mod tests {
                     for l in 0..n {
                         let fd2 = (pp.d1[l] - mm.d1[l]) / (2.0 * h);
                         assert!((fd2 - d.d2[k][l]).norm() < 1e-7, "{kind:?} d2[{k}][{l}]");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The closed-form hinge derivatives equal the dual-number ones to
+    /// round-off (value bit for bit up to the dual path's own rounding).
+    #[test]
+    fn closed_form_hinge_derivatives_match_dual_numbers() {
+        let chart = Matrix3::identity();
+        let tilted = Vector3::new(0.3, -0.5, 0.8).normalize();
+        let kinds = [
+            JointKind::Revolute { axis: tilted },
+            JointKind::Prismatic { axis: tilted },
+            JointKind::Ball {
+                axes: [Vector3::x(), Vector3::y()],
+            },
+            JointKind::Ball {
+                axes: [tilted, tilted.cross(&Vector3::z()).normalize()],
+            },
+        ];
+        for kind in kinds {
+            let n = kind.ndof();
+            for q in [[0.3, -0.7], [0.0, 0.0], [3.0, -2.9], [1e-9, 2e-12]] {
+                let (mut a, mut b) = (JointDerivatives::default(), JointDerivatives::default());
+                kind.transform_derivatives(&chart, &q, &mut a);
+                kind.transform_derivatives_dual(&chart, &q, &mut b);
+                assert!((a.value - b.value).amax() <= 4e-16, "{kind:?} value");
+                for k in 0..n {
+                    assert!((a.d1[k] - b.d1[k]).amax() <= 1e-14, "{kind:?} d1[{k}]");
+                    for l in 0..n {
+                        let e = (a.d2[k][l] - b.d2[k][l]).amax();
+                        assert!(e <= 1e-14, "{kind:?} d2[{k}][{l}]: {e:e}");
                     }
                 }
             }

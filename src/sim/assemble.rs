@@ -52,6 +52,48 @@ pub fn assemble(
     hess: &mut DMatrix<f64>,
     scratch: &mut AssembleScratch,
 ) {
+    if need >= Need::Hessian {
+        hess.copy_from(&acc.dof_hess);
+    }
+    assemble_onto_dof_hess(model, kin, acc, need, grad, hess, scratch);
+}
+
+/// [`assemble`], taking the coordinate Hessian `acc.dof_hess` by swapping
+/// buffers instead of copying it (`acc.dof_hess` then holds the old
+/// contents of `hess`: stale until the accumulator's next
+/// [`EnergyAccumulator::reset`] with [`Need::Hessian`], which clears it
+/// anyway). At 256 coordinates the copy was a 512 kB read and write per
+/// Hessian evaluation. The result is bitwise [`assemble`]'s.
+pub fn assemble_swapping(
+    model: &Model,
+    kin: &Kinematics,
+    acc: &mut EnergyAccumulator,
+    need: Need,
+    grad: &mut DVector<f64>,
+    hess: &mut DMatrix<f64>,
+    scratch: &mut AssembleScratch,
+) {
+    if need >= Need::Hessian {
+        if hess.shape() == acc.dof_hess.shape() {
+            std::mem::swap(hess, &mut acc.dof_hess);
+        } else {
+            hess.copy_from(&acc.dof_hess);
+        }
+    }
+    assemble_onto_dof_hess(model, kin, acc, need, grad, hess, scratch);
+}
+
+/// [`assemble`] with `hess` already holding `acc.dof_hess` (when `need`
+/// asks for the Hessian).
+fn assemble_onto_dof_hess(
+    model: &Model,
+    kin: &Kinematics,
+    acc: &EnergyAccumulator,
+    need: Need,
+    grad: &mut DVector<f64>,
+    hess: &mut DMatrix<f64>,
+    scratch: &mut AssembleScratch,
+) {
     let nlink = model.links.len();
     if need < Need::Gradient {
         return;
@@ -62,7 +104,6 @@ pub fn assemble(
     if need < Need::Hessian {
         return;
     }
-    hess.copy_from(&acc.dof_hess);
     // First-order part, diagonal link blocks.
     for i in 0..nlink {
         if !acc.link_hess_set[i] {

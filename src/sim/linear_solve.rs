@@ -53,6 +53,73 @@ pub struct LinearSolveStats {
     pub refine_fallbacks: u64,
 }
 
+/// Work space of one block solve: the gathered block / its factor,
+/// eigenvectors, eigenvalues, two vectors and the kernels' memory, sized for
+/// blocks of up to `dim` coordinates (grown on demand, never shrunk).
+struct BlockScratch {
+    /// Gathered block / its factor (capacity `dim × dim`).
+    work: Mat<f64>,
+    /// Eigenvectors of an eigen-decomposed block.
+    vecs: Mat<f64>,
+    /// Eigenvalues; also the previous iterate of [`BlockScratch::refine`].
+    vals: Mat<f64>,
+    /// Right-hand side / solution of a block, and a second vector.
+    rhs: Mat<f64>,
+    tmp: Mat<f64>,
+    /// Work space of the kernels, sized for `dim`.
+    mem: Option<MemBuffer>,
+    dim: usize,
+}
+
+impl Default for BlockScratch {
+    fn default() -> Self {
+        BlockScratch {
+            work: Mat::new(),
+            vecs: Mat::new(),
+            vals: Mat::new(),
+            rhs: Mat::new(),
+            tmp: Mat::new(),
+            mem: None,
+            dim: 0,
+        }
+    }
+}
+
+/// What one block solve did (for the in-order replay of a parallel solve,
+/// see [`BlockSolver::direction`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct BlockRecord {
+    /// Eigen-decomposed.
+    eigen: bool,
+    /// Entered [`BlockScratch::shifted_factor`], which reads the running
+    /// shift `τ₀`: its result depends on the blocks before it.
+    read_shift: bool,
+    /// The running shift after the block.
+    shift_out: f64,
+    /// The block's counters.
+    stats: LinearSolveStats,
+}
+
+/// Total `Σ m_b³` (flops of the blocks' factorizations, up to a constant)
+/// from which the blocks of one solve are spread over the thread pool.
+/// **Off by default** (`usize::MAX`): on the shared 2-core machine the
+/// benchmarks run on (load 3–7 from other builds), handing the four
+/// 64-coordinate blocks of the 32-link chains to a second thread made the
+/// linear solve 1.5–4× *slower* (0.55–0.63 → 0.86–2.4 ms per step; the
+/// worker waits for a core). Set the environment variable
+/// `SDRS_PARALLEL_SOLVE_MIN_CUBES` (e.g. `400000`: four 46-coordinate
+/// blocks) to turn it on where cores are free; results are bitwise the same
+/// either way.
+pub const PARALLEL_MIN_CUBES: usize = usize::MAX;
+
+/// [`PARALLEL_MIN_CUBES`], or `SDRS_PARALLEL_SOLVE_MIN_CUBES` when set.
+fn parallel_min_cubes() -> usize {
+    std::env::var("SDRS_PARALLEL_SOLVE_MIN_CUBES")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(PARALLEL_MIN_CUBES)
+}
+
 /// Block-wise clamped Newton solver with persistent scratch.
 pub struct BlockSolver {
     /// Union–find parents over coordinates.
@@ -64,20 +131,19 @@ pub struct BlockSolver {
     starts: Vec<usize>,
     /// Per-block cursor used while grouping.
     cursor: Vec<usize>,
-    /// Gathered block / its factor (capacity `n × n`).
-    work: Mat<f64>,
-    /// Eigenvectors of an eigen-decomposed block (capacity `n × n`).
-    vecs: Mat<f64>,
-    /// Eigenvalues (capacity `n`).
-    vals: Mat<f64>,
-    /// Right-hand side / solution of a block, and a second vector.
-    rhs: Mat<f64>,
-    tmp: Mat<f64>,
-    /// Work space of the kernels, sized for `dim`.
-    mem: Option<MemBuffer>,
-    dim: usize,
+    /// Scratch of the sequential path (and of the in-order replay).
+    main: BlockScratch,
+    /// One scratch per chunk of a parallel solve.
+    workers: Vec<BlockScratch>,
+    /// Per-block records and solutions (in `order`) of a parallel solve.
+    records: Vec<BlockRecord>,
+    sols: Vec<f64>,
+    /// Chunk bounds (in blocks) of a parallel solve.
+    bounds: Vec<usize>,
     /// Last successful shift `τ` of [`Mode::Shift`] (0: none yet).
     last_shift: f64,
+    /// [`parallel_min_cubes`] (tests lower or raise it).
+    parallel_min_cubes: usize,
     pub stats: LinearSolveStats,
 }
 
@@ -88,14 +154,13 @@ impl Default for BlockSolver {
             order: Vec::new(),
             starts: Vec::new(),
             cursor: Vec::new(),
-            work: Mat::new(),
-            vecs: Mat::new(),
-            vals: Mat::new(),
-            rhs: Mat::new(),
-            tmp: Mat::new(),
-            mem: None,
-            dim: 0,
+            main: BlockScratch::default(),
+            workers: Vec::new(),
+            records: Vec::new(),
+            sols: Vec::new(),
+            bounds: Vec::new(),
             last_shift: 0.0,
+            parallel_min_cubes: parallel_min_cubes(),
             stats: LinearSolveStats::default(),
         }
     }
@@ -114,7 +179,7 @@ impl Clone for BlockSolver {
 impl std::fmt::Debug for BlockSolver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BlockSolver")
-            .field("dim", &self.dim)
+            .field("dim", &self.main.dim)
             .field("stats", &self.stats)
             .finish()
     }
@@ -134,31 +199,6 @@ pub enum Mode {
 }
 
 impl BlockSolver {
-    /// Sizes every buffer for problems of dimension `n` (no-op when large
-    /// enough already).
-    fn reserve(&mut self, n: usize) {
-        if n <= self.dim && self.mem.is_some() {
-            return;
-        }
-        let par = Par::Seq;
-        let req = StackReq::any_of(&[
-            llt::cholesky_in_place_scratch::<f64>(n, par, Default::default()),
-            evd::self_adjoint_evd_scratch::<f64>(
-                n,
-                evd::ComputeEigenvectors::Yes,
-                par,
-                Default::default(),
-            ),
-        ]);
-        self.mem = Some(MemBuffer::new(req));
-        self.work = Mat::zeros(n, n);
-        self.vecs = Mat::zeros(n, n);
-        self.vals = Mat::zeros(n, 1);
-        self.rhs = Mat::zeros(n, 1);
-        self.tmp = Mat::zeros(n, 1);
-        self.dim = n;
-    }
-
     /// Groups the coordinates into the connected components of the
     /// sparsity graph of `h` (an entry `(i, j)` or `(j, i)` non-zero joins
     /// `i` and `j`).
@@ -174,13 +214,39 @@ impl BlockSolver {
             }
             i
         }
-        for j in 0..n {
-            let col = h.column(j);
-            for i in 0..j {
-                if col[i] != 0.0 || h[(j, i)] != 0.0 {
-                    let (a, b) = (find(p, i), find(p, j));
-                    if a != b {
-                        p[a.max(b)] = a.min(b);
+        // Every entry once, column by column (contiguous; the transposed
+        // read `h[(j, i)]` strided by `n` and dominated this scan). The
+        // components do not depend on the order in which edges are joined,
+        // and each root is the smallest index of its component, so the
+        // grouping below is the same whatever the order.
+        // (Plain slices: nalgebra's generic matrix iterator does not
+        // vectorize and cost more than the scan itself.)
+        if n > 0 {
+            for (j, col) in h.as_slice().chunks_exact(n).enumerate() {
+                let mut rj = find(p, j);
+                // Entry `(i, j)` needs a union only when non-zero and `i` is
+                // not already known to be in `j`'s component (`p[i] == rj`:
+                // path compression makes this the common case inside a dense
+                // block). Chunks of 8 are tested branch-free first (the test
+                // vectorizes; most chunks need nothing).
+                for start in (0..n).step_by(8) {
+                    let end = (start + 8).min(n);
+                    let busy = col[start..end]
+                        .iter()
+                        .zip(&p[start..end])
+                        .fold(false, |b, (&v, &pi)| b | ((v != 0.0) & (pi != rj)));
+                    if !busy {
+                        continue;
+                    }
+                    for i in start..end {
+                        if col[i] != 0.0 && p[i] != rj {
+                            let a = find(p, i);
+                            if a != rj {
+                                let r = a.min(rj);
+                                p[a.max(rj)] = r;
+                                rj = r;
+                            }
+                        }
                     }
                 }
             }
@@ -228,6 +294,21 @@ impl BlockSolver {
 
     /// `dir = −B⁻¹ g` with `B = H` on blocks where `H − c I` is positive
     /// definite and the `mode`'s positive-definite model elsewhere.
+    ///
+    /// **Independent blocks in parallel** (off by default, see
+    /// [`PARALLEL_MIN_CUBES`]). When there are several blocks and
+    /// `Σ m_b³ ≥` the threshold, the blocks are cut into one
+    /// contiguous chunk per pool thread, balanced by `m_b³`
+    /// ([`crate::geometry::parallel::balanced_bounds`]), and each chunk is
+    /// solved with its own scratch. A block's result depends on nothing
+    /// outside it except the running shift `τ₀` of [`Mode::Shift`], which
+    /// the sequential loop carries from block to block. The chunks start
+    /// from the shift at the call's start; then the blocks are replayed in
+    /// order, and a block that read the shift (entered the shifted
+    /// factorization) while the in-order running shift differs is solved
+    /// again, sequentially, with the right one. The result — directions,
+    /// the shift carried to the next call and the counters — is therefore
+    /// bitwise the sequential one for any thread count.
     pub fn direction(
         &mut self,
         h: &DMatrix<f64>,
@@ -236,18 +317,139 @@ impl BlockSolver {
         mode: Mode,
         dir: &mut DVector<f64>,
     ) {
-        let n = g.len();
-        self.reserve(n);
         self.partition(h);
         self.stats.solves += 1;
+        let nb = self.starts.len() - 1;
+        let cubes = |b: usize| (self.starts[b + 1] - self.starts[b]).pow(3);
+        let total: usize = (0..nb).map(cubes).sum();
+        let threads = rayon::current_num_threads();
         let mut any_eigen = false;
-        for b in 0..self.starts.len() - 1 {
-            let (s, e) = (self.starts[b], self.starts[b + 1]);
-            any_eigen |= self.solve_block(h, g, s, e, clamp, mode, dir);
+        if nb < 2 || threads < 2 || total < self.parallel_min_cubes {
+            // Sized for the whole problem, as the scratch always was: the
+            // blocks' column stride (and so the kernels' arithmetic) is
+            // then the same on every path.
+            self.main.reserve(g.len());
+            for b in 0..nb {
+                let idx = &self.order[self.starts[b]..self.starts[b + 1]];
+                let mut stats = LinearSolveStats::default();
+                let rec =
+                    self.main
+                        .solve_block(h, g, idx, clamp, mode, &mut self.last_shift, &mut stats);
+                self.stats.add(&stats);
+                any_eigen |= rec;
+                for (a, &i) in idx.iter().enumerate() {
+                    dir[i] = self.main.rhs[(a, 0)];
+                }
+            }
+        } else {
+            any_eigen = self.direction_parallel(h, g, clamp, mode, dir, threads);
         }
         if any_eigen {
             self.stats.eigen_solves += 1;
         }
+    }
+
+    /// The parallel path of [`BlockSolver::direction`].
+    fn direction_parallel(
+        &mut self,
+        h: &DMatrix<f64>,
+        g: &DVector<f64>,
+        clamp: f64,
+        mode: Mode,
+        dir: &mut DVector<f64>,
+        threads: usize,
+    ) -> bool {
+        use rayon::prelude::*;
+        let nb = self.starts.len() - 1;
+        let starts = &self.starts;
+        let order = &self.order;
+        crate::geometry::parallel::balanced_bounds(
+            (0..nb).map(|b| (starts[b + 1] - starts[b]).pow(3)),
+            threads,
+            &mut self.bounds,
+        );
+        self.workers.resize_with(threads, BlockScratch::default);
+        self.records.clear();
+        self.records.resize(nb, BlockRecord::default());
+        self.sols.clear();
+        self.sols.resize(order.len(), 0.0);
+        let shift0 = self.last_shift;
+        let n = g.len();
+        // Chunk j owns blocks bounds[j]..bounds[j + 1], i.e. the
+        // coordinates starts[bounds[j]]..starts[bounds[j + 1]] of `order`.
+        let mut rec_parts: Vec<&mut [BlockRecord]> = Vec::with_capacity(threads);
+        let mut sol_parts: Vec<&mut [f64]> = Vec::with_capacity(threads);
+        {
+            let (mut recs, mut sols) = (&mut self.records[..], &mut self.sols[..]);
+            for j in 0..threads {
+                let (b0, b1) = (self.bounds[j], self.bounds[j + 1]);
+                let (r, rest) = recs.split_at_mut(b1 - b0);
+                let (s, srest) = sols.split_at_mut(starts[b1] - starts[b0]);
+                rec_parts.push(r);
+                sol_parts.push(s);
+                recs = rest;
+                sols = srest;
+            }
+        }
+        let bounds = &self.bounds;
+        self.workers
+            .par_iter_mut()
+            .zip(rec_parts)
+            .zip(sol_parts)
+            .enumerate()
+            .for_each(|(j, ((sc, recs), sols))| {
+                let (b0, b1) = (bounds[j], bounds[j + 1]);
+                if b0 == b1 {
+                    return;
+                }
+                sc.reserve(n);
+                let mut shift = shift0;
+                for (k, b) in (b0..b1).enumerate() {
+                    let idx = &order[starts[b]..starts[b + 1]];
+                    let mut rec = BlockRecord::default();
+                    let before = shift;
+                    rec.eigen = sc.solve_block(h, g, idx, clamp, mode, &mut shift, &mut rec.stats);
+                    rec.read_shift = rec.stats.shift_attempts > 0;
+                    rec.shift_out = shift;
+                    // Later blocks of this chunk start from the chunk's
+                    // start shift too (the replay fixes what differs).
+                    shift = before;
+                    recs[k] = rec;
+                    let off = starts[b] - starts[b0];
+                    for a in 0..idx.len() {
+                        sols[off + a] = sc.rhs[(a, 0)];
+                    }
+                }
+            });
+        // In-order replay.
+        let mut any_eigen = false;
+        let mut shift = shift0;
+        for b in 0..nb {
+            let (s, e) = (self.starts[b], self.starts[b + 1]);
+            let idx = &self.order[s..e];
+            let mut rec = self.records[b];
+            if rec.read_shift && shift != shift0 {
+                self.main.reserve(n);
+                rec = BlockRecord::default();
+                rec.eigen =
+                    self.main
+                        .solve_block(h, g, idx, clamp, mode, &mut shift, &mut rec.stats);
+                for (a, &i) in idx.iter().enumerate() {
+                    dir[i] = self.main.rhs[(a, 0)];
+                }
+            } else {
+                if rec.read_shift {
+                    shift = rec.shift_out;
+                }
+                for (a, &i) in idx.iter().enumerate() {
+                    dir[i] = self.sols[s + a];
+                }
+            }
+            self.stats.add(&rec.stats);
+            any_eigen |= rec.eigen;
+        }
+        self.last_shift = shift;
+        any_eigen
     }
 
     /// `x = H⁻¹ b` block by block with Cholesky (the adjoint's solve with
@@ -255,33 +457,72 @@ impl BlockSolver {
     /// not positive definite (`x` is then unspecified; the caller falls
     /// back to a pivoted LU).
     pub fn spd_solve(&mut self, h: &DMatrix<f64>, b: &DVector<f64>, x: &mut DVector<f64>) -> bool {
-        let n = b.len();
-        self.reserve(n);
         self.partition(h);
+        let sc = &mut self.main;
+        sc.reserve(b.len());
         for k in 0..self.starts.len() - 1 {
-            let (s, e) = (self.starts[k], self.starts[k + 1]);
-            let m = e - s;
-            self.gather(h, s, e, 0.0);
-            if !self.cholesky(m) {
+            let idx = &self.order[self.starts[k]..self.starts[k + 1]];
+            let m = idx.len();
+            sc.gather(h, idx, 0.0);
+            if !sc.cholesky(m) {
                 return false;
             }
-            for (a, &i) in self.order[s..e].iter().enumerate() {
-                self.rhs[(a, 0)] = b[i];
+            for (a, &i) in idx.iter().enumerate() {
+                sc.rhs[(a, 0)] = b[i];
             }
-            let l = self.work.as_ref().submatrix(0, 0, m, m);
-            let mut r = self.rhs.as_mut().submatrix_mut(0, 0, m, 1);
+            let l = sc.work.as_ref().submatrix(0, 0, m, m);
+            let mut r = sc.rhs.as_mut().submatrix_mut(0, 0, m, 1);
             cholesky_solve(l, r.rb_mut());
-            for (a, &i) in self.order[s..e].iter().enumerate() {
-                x[i] = self.rhs[(a, 0)];
+            for (a, &i) in idx.iter().enumerate() {
+                x[i] = sc.rhs[(a, 0)];
             }
         }
         true
     }
+}
 
-    /// Copies block `order[s..e]` of `(h + hᵀ)/2 − shift I` into `work`.
-    fn gather(&mut self, h: &DMatrix<f64>, s: usize, e: usize, shift: f64) {
-        let idx = &self.order[s..e];
-        let m = e - s;
+impl LinearSolveStats {
+    fn add(&mut self, o: &LinearSolveStats) {
+        self.blocks += o.blocks;
+        self.eigen_blocks += o.eigen_blocks;
+        self.eigen_solves += o.eigen_solves;
+        self.solves += o.solves;
+        self.shifted_blocks += o.shifted_blocks;
+        self.shift_attempts += o.shift_attempts;
+        self.refine_sweeps += o.refine_sweeps;
+        self.refine_fallbacks += o.refine_fallbacks;
+    }
+}
+
+impl BlockScratch {
+    /// Sizes every buffer for problems of dimension `n` (no-op when large
+    /// enough already).
+    fn reserve(&mut self, n: usize) {
+        if n <= self.dim && self.mem.is_some() {
+            return;
+        }
+        let par = Par::Seq;
+        let req = StackReq::any_of(&[
+            llt::cholesky_in_place_scratch::<f64>(n, par, Default::default()),
+            evd::self_adjoint_evd_scratch::<f64>(
+                n,
+                evd::ComputeEigenvectors::Yes,
+                par,
+                Default::default(),
+            ),
+        ]);
+        self.mem = Some(MemBuffer::new(req));
+        self.work = Mat::zeros(n, n);
+        self.vecs = Mat::zeros(n, n);
+        self.vals = Mat::zeros(n, 1);
+        self.rhs = Mat::zeros(n, 1);
+        self.tmp = Mat::zeros(n, 1);
+        self.dim = n;
+    }
+
+    /// Copies block `idx` of `(h + hᵀ)/2 − shift I` into `work`.
+    fn gather(&mut self, h: &DMatrix<f64>, idx: &[usize], shift: f64) {
+        let m = idx.len();
         let mut w = self.work.as_mut().submatrix_mut(0, 0, m, m);
         for (b, &jb) in idx.iter().enumerate() {
             for (a, &ia) in idx.iter().enumerate().skip(b) {
@@ -291,52 +532,48 @@ impl BlockSolver {
         }
     }
 
-    /// One block; returns whether it was eigen-decomposed.
+    /// One block `idx`; its direction is left in `rhs[..m]`. Returns
+    /// whether it was eigen-decomposed. `last_shift` is the running shift
+    /// of [`Mode::Shift`]; counters go to `stats`.
     #[allow(clippy::too_many_arguments)]
     fn solve_block(
         &mut self,
         h: &DMatrix<f64>,
         g: &DVector<f64>,
-        s: usize,
-        e: usize,
+        idx: &[usize],
         clamp: f64,
         mode: Mode,
-        dir: &mut DVector<f64>,
+        last_shift: &mut f64,
+        stats: &mut LinearSolveStats,
     ) -> bool {
-        let m = e - s;
-        self.stats.blocks += 1;
-        for (a, &i) in self.order[s..e].iter().enumerate() {
+        let m = idx.len();
+        stats.blocks += 1;
+        for (a, &i) in idx.iter().enumerate() {
             self.rhs[(a, 0)] = -g[i];
         }
         // Shifted Cholesky: succeeds iff λ_min(H_B) > c.
-        self.gather(h, s, e, clamp);
+        self.gather(h, idx, clamp);
         let pd = self.cholesky(m);
-        if pd && self.refine(m, clamp) {
-            for (a, &i) in self.order[s..e].iter().enumerate() {
-                dir[i] = self.rhs[(a, 0)];
-            }
+        if pd && self.refine(m, clamp, stats) {
             return false;
         }
         let mut solved = pd && {
-            self.stats.refine_fallbacks += 1;
-            self.gather(h, s, e, 0.0);
+            stats.refine_fallbacks += 1;
+            self.gather(h, idx, 0.0);
             self.cholesky(m)
         };
         if !solved && mode == Mode::Shift {
-            solved = self.shifted_factor(h, s, e, clamp);
+            solved = self.shifted_factor(h, idx, clamp, last_shift, stats);
         }
         if solved {
             let l = self.work.as_ref().submatrix(0, 0, m, m);
             let mut x = self.rhs.as_mut().submatrix_mut(0, 0, m, 1);
             cholesky_solve(l, x.rb_mut());
         } else {
-            self.stats.eigen_blocks += 1;
-            self.gather(h, s, e, 0.0);
+            stats.eigen_blocks += 1;
+            self.gather(h, idx, 0.0);
             let abs = matches!(mode, Mode::Clamped { abs: true });
             self.eigen_solve(m, clamp, abs);
-        }
-        for (a, &i) in self.order[s..e].iter().enumerate() {
-            dir[i] = self.rhs[(a, 0)];
         }
         !solved
     }
@@ -349,7 +586,7 @@ impl BlockSolver {
     /// `m³/3` factorization). Converged when a sweep changes `x` by at most
     /// `4ε‖x‖∞` (or stops shrinking below `1e-13‖x‖∞`, round-off); `false`
     /// (rhs restored to `b`) after 30 sweeps, for `λ_min(H_B) ≲ 2c`.
-    fn refine(&mut self, m: usize, clamp: f64) -> bool {
+    fn refine(&mut self, m: usize, clamp: f64, stats: &mut LinearSolveStats) -> bool {
         for a in 0..m {
             self.tmp[(a, 0)] = self.rhs[(a, 0)];
         }
@@ -360,7 +597,7 @@ impl BlockSolver {
                 let mut x = self.rhs.as_mut().submatrix_mut(0, 0, m, 1);
                 cholesky_solve(l, x.rb_mut());
             }
-            self.stats.refine_sweeps += 1;
+            stats.refine_sweeps += 1;
             let (mut diff, mut size) = (0.0f64, 0.0f64);
             for a in 0..m {
                 let x = self.rhs[(a, 0)];
@@ -389,24 +626,28 @@ impl BlockSolver {
 
     /// [`Mode::Shift`]: factors `H_B + τ I` into `work` for the smallest
     /// `τ = τ₀ 4^k` (`k < 40`) that is positive definite; `false` if none.
-    fn shifted_factor(&mut self, h: &DMatrix<f64>, s: usize, e: usize, clamp: f64) -> bool {
-        let m = e - s;
-        let dmax = self.order[s..e]
-            .iter()
-            .map(|&i| h[(i, i)].abs())
-            .fold(0.0, f64::max);
+    fn shifted_factor(
+        &mut self,
+        h: &DMatrix<f64>,
+        idx: &[usize],
+        clamp: f64,
+        last_shift: &mut f64,
+        stats: &mut LinearSolveStats,
+    ) -> bool {
+        let m = idx.len();
+        let dmax = idx.iter().map(|&i| h[(i, i)].abs()).fold(0.0, f64::max);
         let floor = (2.0 * clamp).max(1e-6 * dmax);
-        let mut tau = if self.last_shift > 0.0 {
-            (0.25 * self.last_shift).max(floor)
+        let mut tau = if *last_shift > 0.0 {
+            (0.25 * *last_shift).max(floor)
         } else {
             floor
         };
         for _ in 0..40 {
-            self.stats.shift_attempts += 1;
-            self.gather(h, s, e, -tau);
+            stats.shift_attempts += 1;
+            self.gather(h, idx, -tau);
             if self.cholesky(m) {
-                self.last_shift = tau;
-                self.stats.shifted_blocks += 1;
+                *last_shift = tau;
+                stats.shifted_blocks += 1;
                 return true;
             }
             tau *= 4.0;
@@ -672,5 +913,57 @@ mod tests {
         let _ = solve(&mut reused, &h2, &g2, 1e-3, false);
         let got = solve(&mut reused, &h1, &g1, 1e-3, false);
         assert_eq!(want, got);
+    }
+
+    /// The parallel path (forced on small blocks, and on a pool of 3
+    /// threads so that chunks hold several blocks) equals the sequential
+    /// one bit for bit — directions, the running shift and the counters —
+    /// across calls, with indefinite blocks whose shifted factorization
+    /// reads the shift carried from the blocks before them.
+    #[test]
+    fn parallel_blocks_are_bitwise_the_sequential_solve() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let sizes = [7usize, 12, 5, 9, 16, 3, 11, 8];
+        let n: usize = sizes.iter().sum();
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, rng.random_range(0..=i));
+        }
+        let mut seq = BlockSolver::default();
+        seq.parallel_min_cubes = usize::MAX;
+        let mut par = BlockSolver::default();
+        par.parallel_min_cubes = 0;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        for call in 0..12 {
+            let mut h = DMatrix::zeros(n, n);
+            let mut off = 0;
+            for (b, &m) in sizes.iter().enumerate() {
+                let a = DMatrix::from_fn(m, m, |_, _| rng.random_range(-1.0..1.0));
+                // Every other block indefinite (shifted), by a call-dependent amount.
+                let shift = if (b + call) % 2 == 0 {
+                    0.5
+                } else {
+                    -0.3 - 0.1 * b as f64
+                };
+                let blk = &a * a.transpose() + DMatrix::identity(m, m) * shift;
+                for i in 0..m {
+                    for j in 0..m {
+                        h[(perm[off + i], perm[off + j])] = blk[(i, j)];
+                    }
+                }
+                off += m;
+            }
+            let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let (mut ds, mut dp) = (DVector::zeros(n), DVector::zeros(n));
+            seq.direction(&h, &g, 1e-3, Mode::Shift, &mut ds);
+            pool.install(|| par.direction(&h, &g, 1e-3, Mode::Shift, &mut dp));
+            assert_eq!(ds, dp, "call {call}");
+            assert_eq!(seq.last_shift.to_bits(), par.last_shift.to_bits());
+            assert_eq!(seq.stats, par.stats);
+        }
+        assert!(seq.stats.shifted_blocks > 20);
     }
 }
