@@ -14,6 +14,7 @@
 pub mod calibrate;
 pub mod contact;
 pub mod control;
+pub mod counters;
 pub mod diff;
 pub mod energy;
 pub mod geometry;

@@ -19,11 +19,11 @@ use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_direction
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
+use crate::counters::{StageTimers, StepDiagnostics};
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use crate::scene::ContactSettings;
-use crate::sim::StepDiagnostics;
 use nalgebra::{DVector, Vector4};
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -291,7 +291,7 @@ impl Energy for ContactEnergy {
         Ok(out)
     }
 
-    fn report(&mut self, d: &mut StepDiagnostics, timers: &mut crate::sim::StageTimers) {
+    fn report(&mut self, d: &mut StepDiagnostics, timers: &mut StageTimers) {
         if self.ccd.options.enabled {
             d.ccd.merge(&std::mem::take(&mut self.ccd.stats));
             timers.add("ccd", std::mem::take(&mut self.ccd_time));

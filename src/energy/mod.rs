@@ -168,8 +168,8 @@ pub trait Energy: Send + Sync {
     /// state (its last evaluation) and sub-stage times.
     fn report(
         &mut self,
-        _d: &mut crate::sim::StepDiagnostics,
-        _timers: &mut crate::sim::StageTimers,
+        _d: &mut crate::counters::StepDiagnostics,
+        _timers: &mut crate::counters::StageTimers,
     ) {
     }
 

@@ -8,14 +8,13 @@
 //! 3. `accept` — rotate the state, re-centre charts, diagnostics.
 
 pub mod assemble;
-pub mod counters;
 pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
 pub mod run;
 pub mod state;
 
-pub use counters::{StageTime, StageTimers};
+pub use crate::counters::{StageTime, StageTimers, StepDiagnostics, StepWork};
 
 /// Stages of a step, in order, as named in the timers.
 pub use newton::{Indefinite, NewtonError, NewtonOptions, NewtonReport, Predictor};
@@ -53,52 +52,6 @@ pub struct SimSettings {
     /// Gravity (m/s²).
     pub gravity: Vector3<f64>,
     pub newton: NewtonOptions,
-}
-
-/// Diagnostics of one completed step.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
-pub struct StepDiagnostics {
-    pub newton: NewtonReport,
-    /// `½ Σ ρ ‖(X^{t+1} − X^t)/Δt‖²` (J).
-    pub kinetic: f64,
-    /// `−Σ ρ g·X^{t+1}` (J).
-    pub potential: f64,
-    /// `Σ ρ (X^{t+1} − X^t)/Δt` (kg m/s).
-    pub momentum: [f64; 3],
-    /// Hull pairs with non-zero contact potential at `θ^{t+1}`.
-    pub contact_pairs: usize,
-    /// Smallest GJK distance among broad-phase candidate pairs at `θ^{t+1}`
-    /// (m; `+∞` when no pair is a candidate).
-    pub min_distance: f64,
-    /// Continuous collision detection of the step's Newton iterations
-    /// (zero when off or without contact).
-    pub ccd: crate::contact::ccd::CcdStats,
-    /// Work of each non-conservative or contact term over the step, when
-    /// [`Simulator::energy_balance`] is on (see [`StepWork`]).
-    pub work: Option<StepWork>,
-}
-
-/// Work done on the system over one step by the terms other than inertia
-/// and gravity (J): `W_e = −Σ_i ⟨∂E_e/∂A_i, A_i^{t+1} − A_i^t⟩ − ∂E_e/∂θ·Δθ`,
-/// each term's gradient taken at `θ^{t+1}` (the point where the step's
-/// optimality condition holds, so `Σ_e W_e + W_gravity` is the work the
-/// implicit scheme's momentum balance sees). Read off Newton's last
-/// gradient evaluation (at the accepted `θ^{t+1}`): no extra evaluation,
-/// and the trajectory is the same with or without it. With `E = kinetic + gravity
-/// potential`, `ΔE = W_controller + W_friction + W_contact + W_other −
-/// D_num`, where `D_num ≥ 0` is the integrator's own (numerical)
-/// dissipation, first order in Δt; [`crate::output::Summary`] reports it as
-/// the residual of the balance.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct StepWork {
-    /// PD controller (`pd`): positive when it drives the robot.
-    pub controller: f64,
-    /// Friction (`friction`, `ipc_friction`): ≤ 0 up to O(Δt²).
-    pub friction: f64,
-    /// Contact barrier (`contact`, `ipc_contact`): minus its potential's change.
-    pub contact: f64,
-    /// Every other term (calibration effects such as damping).
-    pub other: f64,
 }
 
 /// A simulator: model, energy terms, controller and state.

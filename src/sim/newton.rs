@@ -30,8 +30,9 @@
 //! The simulator asks for this only when a step's straight path could not be
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
-use super::counters::StageTimers;
 use super::linear_solve::{BlockSolver, Mode};
+pub use crate::counters::NewtonReport;
+use crate::counters::StageTimers;
 use crate::energy::{EnergyError, Need};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -170,34 +171,6 @@ pub enum NewtonError {
     NonFinite { iter: usize },
     #[error(transparent)]
     Energy(#[from] EnergyError),
-}
-
-/// Statistics of one solve.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct NewtonReport {
-    pub iters: usize,
-    pub grad_inf: f64,
-    pub backtracks: usize,
-    /// Iterations accepted by the gradient-norm merit (value below round-off).
-    pub gradient_merit_steps: usize,
-    pub value: f64,
-    /// The solve stalled above `tol` but within the gradient's round-off
-    /// floor (`grad_floor`), and its point was accepted (see [`minimize`]).
-    pub at_floor: bool,
-    /// Of those, accepted because the Newton step itself was below
-    /// [`NewtonOptions::step_floor`] (the gradient was noise above
-    /// `grad_floor`).
-    pub at_step_floor: bool,
-    /// Accepted line-search steps that continuous collision detection cut
-    /// short (the search then ran again from the cut).
-    pub ccd_cuts: usize,
-    /// The gradient's round-off floor at the last iterate,
-    /// `64 ε ‖H‖∞ (‖θ‖∞ + L)` (J per unit coordinate; `L` the scene's length
-    /// scale from [`Objective::length_scale`]).
-    pub grad_floor: f64,
-    /// Iterations whose shifted-Cholesky step ([`Indefinite::Shift`]) found
-    /// no acceptable point and were repeated with the clamped eigen step.
-    pub shift_fallbacks: usize,
 }
 
 /// An objective with value, gradient and Hessian.

@@ -1,0 +1,10 @@
+//! Counters of the time step (rapier's `counters/`): the stage timers that
+//! partition a step's wall time into named, ordered stages, and the
+//! diagnostics each step reports. They sit below `energy` and `sim`, which
+//! both write into them, so neither depends on the other for them.
+
+pub mod step;
+pub mod timers;
+
+pub use step::{NewtonReport, StepDiagnostics, StepWork};
+pub use timers::{StageTime, StageTimers};
