@@ -19,6 +19,13 @@ by the first argument (stdout without one):
 - ccd: linear trajectories x0 -> x1 of pt/ee stencils: ipctk's
   TightInclusionCCD hit flag and time of impact (minimum distance 0).
 - friction: IPC's smoothed f0, f1 at (y, eps).
+- friction_meshes: two triangle meshes at the lagged positions (va, fa, vb,
+  fb), the displacement du of every vertex over the step, dhat, kappa, mu
+  and eps (= eps_v dt, m): ipctk's TangentialCollisions built at the lagged
+  positions from NormalCollisions and BarrierPotential(dhat, kappa) with
+  friction coefficient mu, and FrictionPotential(eps) evaluated on the
+  displacements, i.e. sum over contacts of mu lambda f0(|T^T u|; eps);
+  value and gradient w.r.t. the displacements, between the two meshes only.
 """
 import json
 import sys
@@ -87,6 +94,32 @@ def mesh_pair(m):
     return {"value": vt - v1 - v2, "grad": list(g), "collisions": nt - n1 - n2}
 
 
+def friction(v, f, du, m):
+    v = np.asfortranarray(v)
+    f = np.asarray(f, dtype=np.int32)
+    mesh = ipctk.CollisionMesh(v, np.asfortranarray(edges_of(f)), np.asfortranarray(f))
+    col = ipctk.NormalCollisions()
+    col.build(mesh, v, m["dhat"])
+    tc = ipctk.TangentialCollisions()
+    tc.build(mesh, v, col, ipctk.BarrierPotential(m["dhat"], m["kappa"]), m["mu"])
+    pot = ipctk.FrictionPotential(m["eps"])
+    du = np.asfortranarray(du)
+    return pot(tc, mesh, du), np.asarray(pot.gradient(tc, mesh, du)), len(tc)
+
+
+def friction_pair(m):
+    # As mesh_pair: the combined meshes' friction minus each mesh's own.
+    va, vb = np.array(m["va"], dtype=float), np.array(m["vb"], dtype=float)
+    fa, fb = np.array(m["fa"]), np.array(m["fb"])
+    ua, ub = np.array(m["ua"], dtype=float), np.array(m["ub"], dtype=float)
+    na = len(va)
+    vt, gt, nt = friction(np.vstack([va, vb]), np.vstack([fa, fb + na]), np.vstack([ua, ub]), m)
+    v1, g1, n1 = friction(va, fa, ua, m)
+    v2, g2, n2 = friction(vb, fb, ub, m)
+    g = gt - np.concatenate([g1, g2])
+    return {"value": vt - v1 - v2, "grad": list(g), "collisions": nt - n1 - n2}
+
+
 def ccd(c, tool):
     a = [np.array(v, dtype=float) for v in c["x0"]]
     b = [np.array(v, dtype=float) for v in c["x1"]]
@@ -106,6 +139,7 @@ def main():
         "primitives": [primitive(p) for p in job.get("primitives", [])],
         "meshes": [mesh_pair(m) for m in job.get("meshes", [])],
         "ccd": [ccd(c, tool) for c in job.get("ccd", [])],
+        "friction_meshes": [friction_pair(m) for m in job.get("friction_meshes", [])],
         "friction": [
             {"f0": ipctk.smooth_friction_f0(y, e), "f1": ipctk.smooth_friction_f1(y, e)}
             for y, e in job.get("friction", [])

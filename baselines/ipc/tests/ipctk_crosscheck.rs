@@ -9,7 +9,10 @@
 //! - 1200 random linear trajectories: whenever ipctk's CCD reports a hit, ours
 //!   does too, no later (our ACCD may report extra hits: the conservative
 //!   side);
-//! - the smoothed friction `f₀`, `f₁` ≤ 1e-12.
+//! - the smoothed friction `f₀`, `f₁` ≤ 1e-12;
+//! - the lagged friction potential of whole mesh pairs (ipctk's
+//!   `TangentialCollisions` and `FrictionPotential`), sliding and sticking:
+//!   value and displacement gradient ≤ 1e-9 relative.
 
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
@@ -241,14 +244,15 @@ fn hull_mesh(points: &[Vector3<f64>]) -> LinkMesh {
     m
 }
 
-#[test]
-fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
+/// Pairs of random convex hull meshes (16 or 64 points on a 0.5 m sphere),
+/// the second translated along a random direction until the two are
+/// `0.5 d̂` apart (bisection on parry's intersection test and our
+/// primitive distances): `(mesh a, mesh b, b's world vertices)`.
+fn meshes_half_dhat_apart(seed: u64, dhat: f64) -> Vec<(LinkMesh, LinkMesh, Vec<Vector3<f64>>)> {
     use parry3d_f64::math::{Pose as PPose, Vector as PVec};
     use parry3d_f64::shape::ConvexPolyhedron;
-    let mut rng = ChaCha8Rng::seed_from_u64(78);
-    let dhat = 0.02;
-    let mut jobs = Vec::new();
-    let mut ours = Vec::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut pairs = Vec::new();
     for &n in &[16usize, 16, 64, 64] {
         let pts = |rng: &mut ChaCha8Rng| -> Vec<Vector3<f64>> {
             (0..n).map(|_| rv(rng, 1.0).normalize() * 0.5).collect()
@@ -293,6 +297,17 @@ fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
             }
         }
         wb = mb.x_local.iter().map(|x| x + dir * hi).collect();
+        pairs.push((ma, mb, wb));
+    }
+    pairs
+}
+
+#[test]
+fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
+    let dhat = 0.02;
+    let mut jobs = Vec::new();
+    let mut ours = Vec::new();
+    for (ma, mb, wb) in meshes_half_dhat_apart(78, dhat) {
         // Our potential in vertex space (sum over candidate stencils).
         let (mut ba, mut bb, mut c) = Default::default();
         sdrs_ipc::broad_phase::PrimitiveBoxes::build(&mut ba, &ma, &ma.x_local, None, 0.5 * dhat);
@@ -336,6 +351,85 @@ fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
             "mesh pair {k}: value {value:.6e} vs ipctk {tv:.6e} ({} collisions): value {ev:.1e}, gradient {eg:.1e}",
             r["collisions"]
         );
+        assert!(ev <= 1e-9 && eg <= 1e-9);
+    }
+}
+
+/// IPC's lagged friction on whole mesh pairs against ipctk's
+/// `TangentialCollisions` + `FrictionPotential`: lagged at the pair
+/// `0.5 d̂` apart (normal forces `λ = κ |b'(d)| 2√d`, closest-point weights
+/// and tangent bases there), evaluated on a displacement `u` of mesh b over
+/// the step, `D = Σ_c μ λ_c f₀(‖T_cᵀ Σ_k w_ck u_k‖; ε)`. Value and
+/// gradient w.r.t. the displacements ≤ 1e-9 relative, with displacements
+/// both above `ε` (sliding) and below it (the smoothed sticking branch).
+#[test]
+fn whole_mesh_pair_friction_agrees_with_ipctk() {
+    use sdrs_ipc::friction::{IpcFrictionParams, lag_pair};
+    let (dhat, kappa, mu, eps) = (0.02, 1e3, 0.4, 1e-4);
+    let params = IpcFrictionParams {
+        dhat,
+        kappa,
+        mu,
+        eps_v: eps,
+        dt: 1.0,
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(79);
+    let mut jobs = Vec::new();
+    let mut ours = Vec::new();
+    for (k, (ma, mb, wb)) in meshes_half_dhat_apart(78, dhat).into_iter().enumerate() {
+        let (mut ba, mut bb, mut c) = Default::default();
+        sdrs_ipc::broad_phase::PrimitiveBoxes::build(&mut ba, &ma, &ma.x_local, None, 0.5 * dhat);
+        sdrs_ipc::broad_phase::PrimitiveBoxes::build(&mut bb, &mb, &wb, None, 0.5 * dhat);
+        sdrs_ipc::broad_phase::candidates(&ba, &bb, &mut c);
+        let geo = sdrs_ipc::pair::PairGeometry {
+            mesh: [&ma, &mb],
+            world: [&ma.x_local, &wb],
+        };
+        let mut lagged = Vec::new();
+        lag_pair(&geo, &c, &params, &mut lagged);
+        assert!(!lagged.is_empty(), "pair {k} must have friction contacts");
+        // Even pairs slide (|u| ≈ 1e-3 ≫ ε), odd ones stick (|u| ≈ 3e-5 < ε).
+        let scale = if k % 2 == 0 { 1e-3 } else { 3e-5 };
+        let ub: Vec<Vector3<f64>> = wb.iter().map(|_| rv(&mut rng, scale)).collect();
+        let na = ma.x_local.len();
+        let mut grad = vec![0.0; 3 * (na + wb.len())];
+        let mut value = 0.0;
+        for (ids, stencil) in &lagged {
+            let dx = ids.map(|(s, i)| {
+                if s == 1 {
+                    ub[i as usize]
+                } else {
+                    Vector3::zeros()
+                }
+            });
+            let (v, g, _) = stencil.evaluate(&dx, eps, true);
+            value += v;
+            for (j, (s, i)) in ids.iter().enumerate() {
+                let row = 3 * *i as usize + if *s == 1 { 3 * na } else { 0 };
+                for cc in 0..3 {
+                    grad[row + cc] += g[3 * j + cc];
+                }
+            }
+        }
+        ours.push((value, grad, lagged.len()));
+        let v = |w: &[Vector3<f64>]| w.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
+        jobs.push(json!({
+            "va": v(&ma.x_local), "fa": ma.tris, "vb": v(&wb), "fb": mb.tris,
+            "ua": vec![[0.0; 3]; na], "ub": v(&ub),
+            "dhat": dhat, "kappa": kappa, "mu": mu, "eps": eps,
+        }));
+    }
+    let out = ipctk(&json!({ "friction_meshes": jobs }));
+    for (k, (value, grad, n)) in ours.iter().enumerate() {
+        let r = &out["friction_meshes"][k];
+        let tv = r["value"].as_f64().unwrap();
+        let eg = rel(grad, &nums(&r["grad"]));
+        let ev = (value - tv).abs() / tv.abs();
+        eprintln!(
+            "friction pair {k}: D {value:.6e} vs ipctk {tv:.6e} ({n} stencils, ipctk {} contacts): value {ev:.1e}, gradient {eg:.1e}",
+            r["collisions"]
+        );
+        assert!(tv > 0.0);
         assert!(ev <= 1e-9 && eg <= 1e-9);
     }
 }
