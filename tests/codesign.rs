@@ -55,3 +55,43 @@ fn chain_reaching_codesign_beats_controller_only_by_ninety_percent() {
     assert!(improvement >= 0.9);
     assert!(reach <= 0.3 * link);
 }
+
+/// `optimizer.result`: Adam is not monotone, and the run returns the
+/// lowest-loss iterate it passed through (`best`, the default) or its last
+/// iterate (`last`). The chain-reaching task with Adam at a learning rate
+/// large enough to overshoot; each returned design re-evaluates to the
+/// returned loss, bitwise.
+#[test]
+fn adam_returns_its_best_iterate_or_on_request_its_last() {
+    use sdrs::optimize::task::ResultIterate;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/python/chain_reach_adam.yaml");
+    let mut p = Problem::load(&path, true).unwrap();
+    p.task.optimizer.step_design = 0.05;
+    p.task.optimizer.step_controller = 0.5;
+    let run = |p: &Problem| optimize(p, 10, |_, _| {}).unwrap();
+    let best = run(&p);
+    let losses: Vec<f64> = best.history.iter().map(|r| r.loss).collect();
+    eprintln!("Adam losses: {losses:?}");
+    let (k, min) =
+        losses.iter().enumerate().fold(
+            (0, f64::INFINITY),
+            |(k, m), (i, &l)| if l < m { (i, l) } else { (k, m) },
+        );
+    assert!(
+        k + 1 < losses.len() && *losses.last().unwrap() > min,
+        "the test needs a run whose last iterate is not its best: {losses:?}"
+    );
+    assert_eq!((best.iter, best.loss.to_bits()), (k, min.to_bits()));
+    let again = p.evaluate(&best.design, &best.controller).unwrap().loss;
+    assert_eq!(again.to_bits(), min.to_bits());
+
+    p.task.optimizer.result = ResultIterate::Last;
+    let last = run(&p);
+    let last_losses: Vec<f64> = last.history.iter().map(|r| r.loss).collect();
+    assert_eq!(last_losses, losses, "the same run either way");
+    assert_eq!(last.iter, losses.len() - 1);
+    assert_eq!(last.loss.to_bits(), losses.last().unwrap().to_bits());
+    let again = p.evaluate(&last.design, &last.controller).unwrap().loss;
+    assert_eq!(again.to_bits(), last.loss.to_bits());
+}

@@ -160,6 +160,11 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             "design": a.design,
             "seed": a.seed,
             "resumed_from_iteration": resumed_from,
+            // Which iterate `final_loss`, the design and the metrics are.
+            "result": {
+                "iterate": problem.task.optimizer.result,
+                "iteration": outcome.iter,
+            },
             "trajectories": 1 + problem.others.len(),
             "metrics": metrics_json,
         }),

@@ -61,6 +61,10 @@ pub struct State {
     pub adam_controller: Adam,
     pub initial_loss: f64,
     pub history: Vec<IterRecord>,
+    /// The lowest-loss iterate so far (absent in checkpoints written before
+    /// `optimizer.result` existed: then the current iterate).
+    #[serde(default)]
+    pub best: Option<super::BestIterate>,
 }
 
 /// What a checkpoint must agree with to be resumed.

@@ -394,13 +394,26 @@ pub struct IterRecord {
     pub wall_seconds: f64,
 }
 
-/// Result of an optimization.
+/// The lowest-loss iterate of a run so far.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BestIterate {
+    pub iter: usize,
+    pub loss: f64,
+    pub design: DVector<f64>,
+    pub controller: DVector<f64>,
+}
+
+/// Result of an optimization: the iterate `optimizer.result` selects
+/// ([`task::ResultIterate`]), its loss and iteration, and the history of
+/// every iterate.
 pub struct Outcome {
     pub history: Vec<IterRecord>,
     pub design: DVector<f64>,
     pub controller: DVector<f64>,
     pub initial_loss: f64,
     pub loss: f64,
+    /// The iteration whose iterate this is (0 = the start).
+    pub iter: usize,
 }
 
 /// Runs the optimizer for `iters` iterations; `on_iter` sees each record
@@ -460,6 +473,7 @@ pub fn optimize_with(
         Adam::new(c.len(), o.step_controller),
     );
     let mut history = Vec::with_capacity(iters + 1);
+    let mut best: Option<BestIterate> = None;
     let mut first = 1;
     let mut wall0 = 0.0;
     if let Some(s) = &opts.resume {
@@ -477,6 +491,7 @@ pub fn optimize_with(
         (rd, rc) = (s.radius_design, s.radius_controller);
         adam = (s.adam_design.clone(), s.adam_controller.clone());
         history = s.history.clone();
+        best = s.best.clone();
         first = s.iter + 1;
         wall0 = history.last().map_or(0.0, |r: &IterRecord| r.wall_seconds);
     }
@@ -507,23 +522,47 @@ pub fn optimize_with(
         on_iter(&r, d);
         history.push(r);
     };
-    let state =
-        |it, d: &DVector<f64>, c: &DVector<f64>, rd, rc, adam: &(Adam, Adam), h: &[IterRecord]| {
-            checkpoint::State {
-                iter: it,
-                design: d.clone(),
-                controller: c.clone(),
-                radius_design: rd,
-                radius_controller: rc,
-                adam_design: adam.0.clone(),
-                adam_controller: adam.1.clone(),
-                initial_loss,
-                history: h.to_vec(),
+    // The lowest loss so far (strictly lower replaces: ties keep the earliest).
+    let keep =
+        |best: &mut Option<BestIterate>, it, loss: f64, d: &DVector<f64>, c: &DVector<f64>| {
+            if best.as_ref().is_none_or(|b| loss < b.loss) {
+                *best = Some(BestIterate {
+                    iter: it,
+                    loss,
+                    design: d.clone(),
+                    controller: c.clone(),
+                });
             }
         };
+    let state = |it,
+                 d: &DVector<f64>,
+                 c: &DVector<f64>,
+                 rd,
+                 rc,
+                 adam: &(Adam, Adam),
+                 h: &[IterRecord],
+                 best: &Option<BestIterate>| {
+        checkpoint::State {
+            iter: it,
+            design: d.clone(),
+            controller: c.clone(),
+            radius_design: rd,
+            radius_controller: rc,
+            adam_design: adam.0.clone(),
+            adam_controller: adam.1.clone(),
+            initial_loss,
+            history: h.to_vec(),
+            best: best.clone(),
+        }
+    };
+    if opts.resume.is_none() || best.is_none() {
+        // A fresh start, or a checkpoint from before `best` was kept: the
+        // current iterate is the best known.
+        keep(&mut best, first - 1, ev.loss, &d, &c);
+    }
     if opts.resume.is_none() {
         push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
-        on_state(&state(0, &d, &c, rd, rc, &adam, &history))?;
+        on_state(&state(0, &d, &c, rd, rc, &adam, &history, &best))?;
     }
     for it in first..=iters {
         let (dd, dc) = match o.method {
@@ -549,8 +588,9 @@ pub fn optimize_with(
                 d = d_new;
                 c = c_new;
                 ev = e;
-                let best = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                push(&mut history, it, &ev, &d, best, rd, rc, true);
+                keep(&mut best, it, ev.loss, &d, &c);
+                let best_loss = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+                push(&mut history, it, &ev, &d, best_loss, rd, rc, true);
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 d = d_new;
@@ -558,6 +598,7 @@ pub fn optimize_with(
                 ev = e;
                 rd = (rd * 1.25).min(4.0 * o.step_design);
                 rc = (rc * 1.25).min(4.0 * o.step_controller);
+                keep(&mut best, it, ev.loss, &d, &c);
                 push(&mut history, it, &ev, &d, ev.loss, rd, rc, true);
             }
             (Method::TrustRegion, Ok(e)) => {
@@ -574,13 +615,31 @@ pub fn optimize_with(
                 push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
             }
         }
-        on_state(&state(it, &d, &c, rd, rc, &adam, &history))?;
+        on_state(&state(it, &d, &c, rd, rc, &adam, &history, &best))?;
     }
-    Ok(Outcome {
-        history,
-        loss: ev.loss,
-        design: d,
-        controller: c,
-        initial_loss,
+    // The last accepted iterate's iteration (rejected trust-region trials
+    // leave the iterate where it was).
+    let last_iter = history
+        .iter()
+        .rev()
+        .find(|r| r.accepted)
+        .map_or(0, |r| r.iter);
+    Ok(match (o.result, best) {
+        (task::ResultIterate::Best, Some(b)) => Outcome {
+            history,
+            loss: b.loss,
+            design: b.design,
+            controller: b.controller,
+            initial_loss,
+            iter: b.iter,
+        },
+        _ => Outcome {
+            history,
+            loss: ev.loss,
+            design: d,
+            controller: c,
+            initial_loss,
+            iter: last_iter,
+        },
     })
 }

@@ -214,6 +214,22 @@ pub enum Method {
     Adam,
 }
 
+/// Which iterate an optimization run returns as its result.
+#[derive(
+    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ResultIterate {
+    /// The iterate with the lowest loss seen (ties: the earliest). The
+    /// trust region only accepts decreases, so for it this is always the
+    /// last accepted iterate; Adam is not monotone, and its last iterate can
+    /// be worse than one it passed through.
+    #[default]
+    Best,
+    /// The last iterate, whatever its loss.
+    Last,
+}
+
 /// Optimizer settings (defaults documented on each field).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
@@ -230,6 +246,10 @@ pub struct OptimizerSpec {
     /// controller parameter, drawn from ChaCha8 seeded by `--seed`.
     /// Default 0 (no randomness).
     pub init_noise: f64,
+    /// The iterate returned, exported and measured (`design.yaml`,
+    /// `summary.json`'s final loss and task metrics): `best` (default) or
+    /// `last`. `history.csv` lists every iterate either way.
+    pub result: ResultIterate,
 }
 
 impl Default for OptimizerSpec {
@@ -240,6 +260,7 @@ impl Default for OptimizerSpec {
             step_design: 0.05,
             step_controller: 0.2,
             init_noise: 0.0,
+            result: ResultIterate::Best,
         }
     }
 }
