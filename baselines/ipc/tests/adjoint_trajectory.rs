@@ -215,6 +215,38 @@ fn ipc_trajectory_gradients_match_finite_differences_with_contact_and_friction()
     );
 }
 
+/// `dL/dc` of a cage design against central differences (h = 1e-6) in the
+/// cage coordinates, ≤ 1e-4 relative: the six largest entries and six
+/// others spread over the cage. Returns the worst relative error.
+fn check_cage_gradient(
+    setup: &Setup,
+    loss: &Loss,
+    design: &sdrs_ipc::cage::CageDesign,
+    c0: &nalgebra::DVector<f64>,
+    gc: &nalgebra::DVector<f64>,
+) -> f64 {
+    let mut order: Vec<usize> = (0..gc.len()).collect();
+    order.sort_by(|&a, &b| gc[b].abs().total_cmp(&gc[a].abs()));
+    let mut picks: Vec<usize> = order[..6].to_vec();
+    picks.extend((0..6).map(|k| order[6 + k * (gc.len() - 7) / 5]));
+    let mut worst = 0.0;
+    for &i in &picks {
+        let a = fd(setup, loss, 1e-6, |s, d| {
+            let mut c = c0.clone();
+            c[i] += d;
+            design.apply(&mut s.model, &c);
+        });
+        check(
+            &format!("cage[{}].{}", i / 3, ["x", "y", "z"][i % 3]),
+            gc[i],
+            a,
+            1e-4,
+            &mut worst,
+        );
+    }
+    worst
+}
+
 /// The same run with the box's surface deformed by a cage (the automatic
 /// coarse cage, 26 vertices, mean value coordinates): `dL/dc = Φᵀ dL/dx`
 /// against central differences in the cage vertices (each moves every hull
@@ -238,26 +270,7 @@ fn ipc_trajectory_gradients_wrt_cage_vertices_match_finite_differences() {
     let g = setup.gradients(&loss);
     assert!(g.unavailable.is_empty());
     let gc = design.gradient(&g);
-    // The six largest entries and six others spread over the cage.
-    let mut order: Vec<usize> = (0..gc.len()).collect();
-    order.sort_by(|&a, &b| gc[b].abs().total_cmp(&gc[a].abs()));
-    let mut picks: Vec<usize> = order[..6].to_vec();
-    picks.extend((0..6).map(|k| order[6 + k * (gc.len() - 7) / 5]));
-    let mut worst = 0.0;
-    for &i in &picks {
-        let a = fd(&setup, &loss, 1e-6, |s, d| {
-            let mut c = c0.clone();
-            c[i] += d;
-            design.apply(&mut s.model, &c);
-        });
-        check(
-            &format!("cage[{}].{}", i / 3, ["x", "y", "z"][i % 3]),
-            gc[i],
-            a,
-            1e-4,
-            &mut worst,
-        );
-    }
+    let worst = check_cage_gradient(&setup, &loss, &design, &c0, &gc);
     eprintln!(
         "cage gradient: worst relative error {worst:.2e}, ‖dL/dc‖ = {:.3e}",
         gc.norm()
@@ -359,25 +372,7 @@ fn ipc_cage_gradients_through_a_source_mesh_surface_match_finite_differences() {
     eprintln!("Σ‖dL/ds_k‖ over the source-mesh vertices: {gs:.3e}");
     assert!(gs > 0.0, "no gradient reaches the source mesh");
     let gc = design.gradient(&g);
-    let mut order: Vec<usize> = (0..gc.len()).collect();
-    order.sort_by(|&a, &b| gc[b].abs().total_cmp(&gc[a].abs()));
-    let mut picks: Vec<usize> = order[..6].to_vec();
-    picks.extend((0..6).map(|k| order[6 + k * (gc.len() - 7) / 5]));
-    let mut worst = 0.0;
-    for &i in &picks {
-        let a = fd(&setup, &loss, 1e-6, |s, d| {
-            let mut c = c0.clone();
-            c[i] += d;
-            design.apply(&mut s.model, &c);
-        });
-        check(
-            &format!("cage[{}].{}", i / 3, ["x", "y", "z"][i % 3]),
-            gc[i],
-            a,
-            1e-4,
-            &mut worst,
-        );
-    }
+    let worst = check_cage_gradient(&setup, &loss, &design, &c0, &gc);
     eprintln!(
         "cage gradient through the source mesh: worst relative error {worst:.2e}, ‖dL/dc‖ = {:.3e}",
         gc.norm()

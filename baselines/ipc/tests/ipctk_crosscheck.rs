@@ -302,6 +302,18 @@ fn meshes_half_dhat_apart(seed: u64, dhat: f64) -> Vec<(LinkMesh, LinkMesh, Vec<
     pairs
 }
 
+/// Adds a stencil's 12-vector `g` (x, y, z per stencil point) into the
+/// pair's vertex gradient: mesh a's vertices first, then mesh b's (`na` of
+/// a's).
+fn scatter(grad: &mut [f64], ids: &[(usize, u32); 4], g: &[f64], na: usize) {
+    for (k, (side, i)) in ids.iter().enumerate() {
+        let row = 3 * *i as usize + if *side == 1 { 3 * na } else { 0 };
+        for c in 0..3 {
+            grad[row + c] += g[3 * k + c];
+        }
+    }
+}
+
 #[test]
 fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
     let dhat = 0.02;
@@ -324,13 +336,7 @@ fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
             let x = ids.map(|(s, i)| arr(geo.world[s][i as usize]));
             if let Primitive::Active(e) = evaluate(kind, &x, dhat * dhat, true) {
                 value += e.value;
-                for (k, (s, i)) in ids.iter().enumerate() {
-                    let row =
-                        3 * (i as &u32).to_owned() as usize + if *s == 1 { 3 * na } else { 0 };
-                    for cc in 0..3 {
-                        grad[row + cc] += e.grad[3 * k + cc];
-                    }
-                }
+                scatter(&mut grad, &ids, e.grad.as_slice(), na);
             }
         });
         assert!(value > 0.0, "the pair must be in contact");
@@ -404,12 +410,7 @@ fn whole_mesh_pair_friction_agrees_with_ipctk() {
             });
             let (v, g, _) = stencil.evaluate(&dx, eps, true);
             value += v;
-            for (j, (s, i)) in ids.iter().enumerate() {
-                let row = 3 * *i as usize + if *s == 1 { 3 * na } else { 0 };
-                for cc in 0..3 {
-                    grad[row + cc] += g[3 * j + cc];
-                }
-            }
+            scatter(&mut grad, ids, g.as_slice(), na);
         }
         ours.push((value, grad, lagged.len()));
         let v = |w: &[Vector3<f64>]| w.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
