@@ -150,7 +150,10 @@ class Task:
     ) -> Rollout:
         """The forward pass of :func:`sdrs.torch.rollout`, keeping the tape."""
     def optimize(self, iters: int | None = None, seed: int = 0) -> dict[str, Any]:
-        """The Rust optimizer of ``sdrs optimize``: ``{loss, initial_loss, history, design, controller}``."""
+        """The Rust optimizer of ``sdrs optimize``: ``{loss, initial_loss, history, design, controller}``.
+
+        ``design``, ``controller`` and ``loss`` are the iterate the task's ``optimizer.result``
+        selects (default ``best``: the lowest loss seen); ``history`` holds every iterate's loss."""
 
 def import_robot(
     input: _Path,

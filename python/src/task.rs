@@ -270,7 +270,9 @@ impl PyTask {
     /// sizes and bounds) for `iters` iterations (default: the task's) from
     /// the start for `seed`, GIL released. Returns `{loss, initial_loss,
     /// history (loss per iteration), design, controller}` — the same numbers
-    /// as `sdrs optimize TASK --seed SEED --iters ITERS`.
+    /// as `sdrs optimize TASK --seed SEED --iters ITERS`: `design`,
+    /// `controller` and `loss` are the iterate `optimizer.result` selects
+    /// (default `best`, the lowest loss seen).
     #[pyo3(signature = (iters=None, seed=0))]
     fn optimize<'py>(
         &self,
