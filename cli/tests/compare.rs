@@ -273,6 +273,28 @@ fn bad_suite_and_tolerance_files_get_clear_errors() {
         std::fs::read_to_string(other.join("notes.txt")).unwrap(),
         "keep"
     );
+    // A run that fails half-way (its task does not load) can be re-run into
+    // the same --out: the second attempt reports the same task error, not
+    // "not a compare run".
+    std::fs::write(
+        dir.join("bad_task.yaml"),
+        "version: 1\nscene: no_such_scene.yaml\nhorizon: 5\nloss: []\n",
+    )
+    .unwrap();
+    let half = dir.join("half.yaml");
+    std::fs::write(
+        &half,
+        "suite: half\ncodesign:\n  - {name: bad, task: bad_task.yaml, iters: 1}\n",
+    )
+    .unwrap();
+    for attempt in 0..2 {
+        let o = run_compare(&["--suite", half.to_str().unwrap()], &dir.join("o4"));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains("no_such_scene.yaml"),
+            "attempt {attempt}: {e}"
+        );
+    }
     // A malformed tolerance file names itself.
     let tol = dir.join("tol.yaml");
     std::fs::write(&tol, "loss: {relative: -1}\n").unwrap();

@@ -126,8 +126,13 @@ pub fn run(a: CompareArgs) -> Result<()> {
         );
     }
     let work = a.out.join("work");
-    std::fs::create_dir_all(&work)
-        .with_context(|| format!("{}: cannot create the output directory", a.out.display()))?;
+    // `parts/` marks the folder as a compare run from the start, so a run
+    // that fails half-way (e.g. a task that does not load) can be re-run
+    // into the same --out once the input is fixed.
+    for d in [&work, &a.out.join("parts")] {
+        std::fs::create_dir_all(d)
+            .with_context(|| format!("{}: cannot create the output directory", a.out.display()))?;
+    }
     let mut r = Results {
         suite: suite.suite.clone(),
         threads: rayon::current_num_threads(),
