@@ -5,10 +5,10 @@
 
 mod common;
 
-use common::adjoint::{Setup, check, fd};
+use common::adjoint::{Setup, check, fd, push_loss};
 use nalgebra::Vector3;
 use sdrs::contact::{ContactParams, ContactScratch, VertexOutcome, contact_vertices};
-use sdrs::diff::{Loss, LossTerm, When};
+use sdrs::diff::Loss;
 use sdrs::math::transform_point;
 
 /// The pushing scene; `{KAPPA}`, `{FINGER_X}` and `{BOX_Z}` are filled in.
@@ -90,44 +90,6 @@ fn rest_height(kappa: f64) -> f64 {
 
 fn push_setup(finger_x: f64, steps: usize) -> Setup {
     Setup::new(&scene_text(KAPPA, finger_x, rest_height(KAPPA)), steps)
-}
-
-fn push_loss(setup: &Setup) -> Loss {
-    let bx = setup.link("box");
-    let finger = setup.link("pusher");
-    Loss {
-        terms: vec![
-            LossTerm::LinkPoint {
-                link: bx,
-                point: Vector3::new(0.1, 0.1, 0.1),
-                target: Vector3::new(0.2, 0.1, 0.3),
-                weight: 1.0,
-                when: When::Final,
-            },
-            LossTerm::CenterOfMass {
-                links: vec![bx],
-                target: Vector3::new(0.03, 0.01, 0.0),
-                axes: Vector3::new(1.0, 1.0, 0.0),
-                weight: 2.0,
-                when: When::Running,
-            },
-            LossTerm::Relative {
-                link_a: bx,
-                point_a: Vector3::new(-0.1, 0.05, 0.15),
-                link_b: finger,
-                point_b: Vector3::new(0.0, 0.0, 0.0),
-                offset: Vector3::new(0.01, 0.02, 0.0),
-                weight: 3.0,
-                when: When::Final,
-            },
-            LossTerm::Joint {
-                dof: setup.model.links[finger].dof_offset,
-                target: 0.05,
-                weight: 0.5,
-                when: When::Running,
-            },
-        ],
-    }
 }
 
 /// Runs the scene and asserts both contacts (box–ground and finger–box) are

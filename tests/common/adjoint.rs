@@ -2,9 +2,10 @@
 //! everything a trajectory depends on, central finite differences of the
 //! loss (re-simulating), and a relative-error check.
 
+use nalgebra::Vector3;
 use nalgebra::{DVector, Matrix3};
 use sdrs::control::Controller;
-use sdrs::diff::{Gradients, Loss, backward, loss_of, record};
+use sdrs::diff::{Gradients, Loss, LossTerm, When, backward, loss_of, record};
 use sdrs::model::Model;
 use sdrs::scene::{Scene, SharedContactFactory};
 use sdrs::sim::{SimSettings, SimState, Simulator};
@@ -126,4 +127,47 @@ pub fn check(name: &str, adjoint: f64, finite: f64, tol: f64, worst: &mut f64) {
         rel <= tol,
         "{name}: adjoint {adjoint} vs finite difference {finite} (relative error {rel:.2e})"
     );
+}
+
+/// The loss of the pushing tests (a prismatic finger `pusher` pushes a box
+/// `box`; SDRS contact in `tests/adjoint_contact_gradients.rs`, IPC in
+/// `baselines/ipc/tests/adjoint_trajectory.rs`): one term of each kind —
+/// a final link point, a running centre of mass, a final relative
+/// position and a running joint target — so every loss path is exercised.
+pub fn push_loss(setup: &Setup) -> Loss {
+    let bx = setup.link("box");
+    let finger = setup.link("pusher");
+    Loss {
+        terms: vec![
+            LossTerm::LinkPoint {
+                link: bx,
+                point: Vector3::new(0.1, 0.1, 0.1),
+                target: Vector3::new(0.2, 0.1, 0.3),
+                weight: 1.0,
+                when: When::Final,
+            },
+            LossTerm::CenterOfMass {
+                links: vec![bx],
+                target: Vector3::new(0.03, 0.01, 0.0),
+                axes: Vector3::new(1.0, 1.0, 0.0),
+                weight: 2.0,
+                when: When::Running,
+            },
+            LossTerm::Relative {
+                link_a: bx,
+                point_a: Vector3::new(-0.1, 0.05, 0.15),
+                link_b: finger,
+                point_b: Vector3::new(0.0, 0.0, 0.0),
+                offset: Vector3::new(0.01, 0.02, 0.0),
+                weight: 3.0,
+                when: When::Final,
+            },
+            LossTerm::Joint {
+                dof: setup.model.links[finger].dof_offset,
+                target: 0.05,
+                weight: 0.5,
+                when: When::Running,
+            },
+        ],
+    }
 }

@@ -13,9 +13,8 @@
 #[allow(dead_code)]
 mod adjoint;
 
-use adjoint::{Setup, check, fd};
-use nalgebra::Vector3;
-use sdrs::diff::{Loss, LossTerm, When};
+use adjoint::{Setup, check, fd, push_loss};
+use sdrs::diff::Loss;
 use sdrs_ipc::IpcFactory;
 
 /// The setup of `text` under the IPC baseline (recorded with PSD-projected
@@ -70,44 +69,6 @@ objects:
 fn kappa() -> f64 {
     // This baseline's adaptive rule (moving mass 0.7 kg).
     0.7 * 9.81 / sdrs_ipc::factory::force_per_kappa(0.5e-3, 1e-3)
-}
-
-fn push_loss(setup: &Setup) -> Loss {
-    let bx = setup.link("box");
-    let finger = setup.link("pusher");
-    Loss {
-        terms: vec![
-            LossTerm::LinkPoint {
-                link: bx,
-                point: Vector3::new(0.1, 0.1, 0.1),
-                target: Vector3::new(0.2, 0.1, 0.3),
-                weight: 1.0,
-                when: When::Final,
-            },
-            LossTerm::CenterOfMass {
-                links: vec![bx],
-                target: Vector3::new(0.03, 0.01, 0.0),
-                axes: Vector3::new(1.0, 1.0, 0.0),
-                weight: 2.0,
-                when: When::Running,
-            },
-            LossTerm::Relative {
-                link_a: bx,
-                point_a: Vector3::new(-0.1, 0.05, 0.15),
-                link_b: finger,
-                point_b: Vector3::new(0.0, 0.0, 0.0),
-                offset: Vector3::new(0.01, 0.02, 0.0),
-                weight: 3.0,
-                when: When::Final,
-            },
-            LossTerm::Joint {
-                dof: setup.model.links[finger].dof_offset,
-                target: 0.05,
-                weight: 0.5,
-                when: When::Running,
-            },
-        ],
-    }
 }
 
 /// 60 steps of Δt = 0.01 s: the box rests on the ground's barrier and is
