@@ -723,6 +723,18 @@ mod tests {
     use rand::{RngExt, SeedableRng};
 
     /// Reference: nalgebra's eigendecomposition of the whole matrix.
+    /// A random symmetric `A Aᵀ + shift·I` (entries of `A` uniform in
+    /// ±1) and a random right-hand side, both `n`-dimensional.
+    fn random_system(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        n: usize,
+        shift: f64,
+    ) -> (DMatrix<f64>, DVector<f64>) {
+        let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
+        let h = &a * a.transpose() + DMatrix::identity(n, n) * shift;
+        (h, DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0)))
+    }
+
     fn eigen_direction(h: &DMatrix<f64>, g: &DVector<f64>, clamp: f64, abs: bool) -> DVector<f64> {
         let eig = h.clone().symmetric_eigen();
         let mut c = eig.eigenvectors.transpose() * g;
@@ -750,11 +762,8 @@ mod tests {
         let mut solver = BlockSolver::default();
         for case in 0..40 {
             let n = 2 + case % 9;
-            let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
             // Positive definite, indefinite and nearly singular matrices.
-            let shift = [3.0, -0.5, 1e-4][case % 3];
-            let h = &a * a.transpose() + DMatrix::identity(n, n) * shift;
-            let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let (h, g) = random_system(&mut rng, n, [3.0, -0.5, 1e-4][case % 3]);
             let clamp = 1e-3;
             for abs in [false, true] {
                 let want = eigen_direction(&h, &g, clamp, abs);
@@ -847,10 +856,7 @@ mod tests {
         let mut solver = BlockSolver::default();
         for case in 0..30 {
             let n = 2 + case % 7;
-            let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-            let shift = [3.0, -0.5, 1e-4][case % 3];
-            let h = &a * a.transpose() + DMatrix::identity(n, n) * shift;
-            let g = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
+            let (h, g) = random_system(&mut rng, n, [3.0, -0.5, 1e-4][case % 3]);
             let mut d = DVector::zeros(n);
             solver.direction(&h, &g, 1e-3, Mode::Shift, &mut d);
             assert!(d.dot(&g) < 0.0, "case {case}: not a descent direction");
@@ -898,13 +904,7 @@ mod tests {
     #[test]
     fn scratch_reuse_is_bitwise_deterministic() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
-        let make = |rng: &mut rand_chacha::ChaCha8Rng, n: usize| {
-            let a = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-            (
-                &a * a.transpose() - DMatrix::identity(n, n) * 0.3,
-                DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0)),
-            )
-        };
+        let make = |rng: &mut rand_chacha::ChaCha8Rng, n: usize| random_system(rng, n, -0.3);
         let (h1, g1) = make(&mut rng, 7);
         let (h2, g2) = make(&mut rng, 40);
         let mut fresh = BlockSolver::default();
