@@ -173,6 +173,42 @@ fn quick_suite_report_browser_gate_and_resume() {
     );
     assert_eq!(json(&out.join("results.json")), r);
 
+    // Resume in the middle of a benchmark: the spider's finished methods and
+    // its gradient check are kept, only the method that "was interrupted"
+    // (its part removed) runs again.
+    std::fs::remove_file(out.join("parts/codesign_spider.json")).unwrap();
+    std::fs::remove_file(out.join("parts/codesign_spider/mesh_baseline__coarse_cage.json"))
+        .unwrap();
+    let o = run_compare(&["--suite", "quick"], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("spider: co-design finished earlier, kept")
+            && stderr.contains("spider: controller-only finished earlier, kept"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("coarse cage finished earlier"), "{stderr}");
+    let r2 = json(&out.join("results.json"));
+    let spider = |r: &serde_json::Value| {
+        r["codesign"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == "spider")
+            .unwrap()
+            .clone()
+    };
+    let (s1, s2) = (spider(&r), spider(&r2));
+    // Kept runs are the stored ones (their wall times included); the re-run
+    // reaches the same loss (the optimization is deterministic) in a wall
+    // time of its own.
+    assert_eq!(s1["runs"][0], s2["runs"][0]);
+    assert_eq!(s1["runs"][1], s2["runs"][1]);
+    assert_eq!(s1["fd"], s2["fd"]);
+    assert_eq!(s1["runs"][2]["final_loss"], s2["runs"][2]["final_loss"]);
+    assert_ne!(s1["runs"][2]["wall_seconds"], s2["runs"][2]["wall_seconds"]);
+    assert_eq!(s1["shapes_svg"], s2["shapes_svg"]);
+
     // A degraded run: the same suite with the co-design stopped after one
     // iteration (a worse design). Its other benchmarks resume from the
     // parts of the run above (same suite entries, same relative paths).

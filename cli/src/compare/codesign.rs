@@ -16,8 +16,16 @@ pub fn run(
     spec: &CodesignSpec,
     base_dir: &Path,
     out_dir: &Path,
+    force: bool,
     pb: &ProgressBar,
 ) -> Result<CodesignPart> {
+    // Each finished method and the gradient check are kept on their own,
+    // keyed by the suite entry, so an interrupted run resumes mid-benchmark.
+    let parts = out_dir
+        .join("parts")
+        .join(format!("codesign_{}", spec.name));
+    std::fs::create_dir_all(&parts)
+        .with_context(|| format!("{}: cannot create the output directory", parts.display()))?;
     let task = base_dir.join(&spec.task);
     let load = |design: bool| -> Result<Problem> {
         let mut p = Problem::load(&task, design)?;
@@ -35,7 +43,15 @@ pub fn run(
     pb.set_length(methods * (iters as u64 + 1) + u64::from(spec.fd_check));
     let fd = if spec.fd_check && !p.design.is_empty() {
         pb.set_message(format!("{}: gradient check", spec.name));
-        let r = fd_check(&p).with_context(|| format!("{}: gradient check", spec.name))?;
+        let file = parts.join("fd_check.json");
+        let r = match super::load_part(&file, spec)?.filter(|_| !force) {
+            Some(r) => r,
+            None => {
+                let r = fd_check(&p).with_context(|| format!("{}: gradient check", spec.name))?;
+                super::store_part(&file, spec, &r)?;
+                r
+            }
+        };
         pb.inc(1);
         Some(r)
     } else {
@@ -54,6 +70,17 @@ pub fn run(
         variants.push((format!("mesh baseline, {c} cage"), true, Some(c.as_str())));
     }
     for (method, design, cage) in variants {
+        let file = parts.join(format!("{}.json", slug(&method)));
+        let shapes_rel = format!("plots/shapes_{}.svg", spec.name);
+        if !force && let Some(run) = super::load_part::<_, CodesignRun>(&file, spec)? {
+            if design && cage.is_none() && out_dir.join(&shapes_rel).is_file() {
+                shapes_svg = Some(shapes_rel);
+            }
+            eprintln!("{}: {method} finished earlier, kept", spec.name);
+            pb.inc(iters as u64 + 1);
+            runs.push(run);
+            continue;
+        }
         let p = match cage {
             None if design => p.clone(),
             None => load(false)?,
@@ -84,13 +111,12 @@ pub fn run(
             if let Some(svg) =
                 sdrs::optimize::shapes::initial_vs_optimized_svg(&p, &d0, &out.design)
             {
-                let rel = format!("plots/shapes_{}.svg", spec.name);
                 std::fs::create_dir_all(out_dir.join("plots"))?;
-                sdrs::output::write_atomic(&out_dir.join(&rel), svg.as_bytes())?;
-                shapes_svg = Some(rel);
+                sdrs::output::write_atomic(&out_dir.join(&shapes_rel), svg.as_bytes())?;
+                shapes_svg = Some(shapes_rel);
             }
         }
-        runs.push(CodesignRun {
+        let run = CodesignRun {
             method: method.clone(),
             design_variables: p.design.len(),
             controller_variables: p.controls.len(),
@@ -106,7 +132,9 @@ pub fn run(
             first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
             grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
             grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
-        });
+        };
+        super::store_part(&file, spec, &run)?;
+        runs.push(run);
     }
     Ok(CodesignPart {
         name: spec.name.clone(),
@@ -117,6 +145,14 @@ pub fn run(
         fd,
         shapes_svg,
     })
+}
+
+/// A file name for a method ("mesh baseline, fine cage" → `mesh_baseline__fine_cage`).
+fn slug(method: &str) -> String {
+    method
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }
 
 /// The final design's trajectory: minimum hull distance (m).

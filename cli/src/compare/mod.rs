@@ -5,7 +5,10 @@
 //! Each benchmark's result is kept in `DIR/parts/<name>.json` together with
 //! the suite entry that produced it: re-running into the same directory
 //! skips finished benchmarks whose entry is unchanged (`--force` re-runs
-//! everything).
+//! everything). A co-design benchmark also keeps each finished method
+//! (co-design, controller-only, each cage) and its gradient check in
+//! `DIR/parts/codesign_<name>/`, so a multi-hour paper run interrupted in
+//! its middle loses at most the method it was running.
 
 mod chains;
 mod codesign;
@@ -56,6 +59,29 @@ struct Part<S, R> {
     result: R,
 }
 
+/// The result stored in `file` if it was produced by the same `spec`.
+fn load_part<S, R>(file: &Path, spec: &S) -> Result<Option<R>>
+where
+    S: Serialize,
+    R: DeserializeOwned,
+{
+    if let Ok(text) = std::fs::read_to_string(file)
+        && let Ok(p) = serde_json::from_str::<Part<serde_json::Value, R>>(&text)
+        && p.spec == serde_json::to_value(spec)?
+    {
+        return Ok(Some(p.result));
+    }
+    Ok(None)
+}
+
+/// Stores `result` with the `spec` that produced it (atomically: an
+/// interrupted run never leaves a half-written part).
+fn store_part<S: Serialize, R: Serialize>(file: &Path, spec: &S, result: &R) -> Result<()> {
+    let part = Part { spec, result };
+    write_atomic(file, serde_json::to_string_pretty(&part)?.as_bytes())?;
+    Ok(())
+}
+
 /// Runs `f` unless `parts/<name>.json` holds a result for the same `spec`.
 fn resumable<S, R>(
     dir: &Path,
@@ -70,13 +96,9 @@ where
     R: Serialize + DeserializeOwned,
 {
     let file = dir.join("parts").join(format!("{name}.json"));
-    if !force
-        && let Ok(text) = std::fs::read_to_string(&file)
-        && let Ok(p) = serde_json::from_str::<Part<serde_json::Value, R>>(&text)
-        && p.spec == serde_json::to_value(spec)?
-    {
+    if !force && let Some(r) = load_part(&file, spec)? {
         eprintln!("{name}: finished earlier, kept (--force re-runs it)");
-        return Ok(p.result);
+        return Ok(r);
     }
     let pb = progress(1, quiet);
     pb.set_style(
@@ -87,9 +109,8 @@ where
     );
     let r = f(&pb)?;
     pb.finish_with_message("done");
-    let part = Part { spec, result: r };
-    write_atomic(&file, serde_json::to_string_pretty(&part)?.as_bytes())?;
-    Ok(part.result)
+    store_part(&file, spec, &r)?;
+    Ok(r)
 }
 
 pub fn run(a: CompareArgs) -> Result<()> {
@@ -161,7 +182,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
             s,
             a.force,
             a.quiet,
-            |pb| codesign::run(s, &base, &a.out, pb),
+            |pb| codesign::run(s, &base, &a.out, a.force, pb),
         )?);
     }
     if suite.codesign.iter().all(|s| s.cages.is_empty()) {
