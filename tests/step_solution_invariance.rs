@@ -1,7 +1,8 @@
 //! The solver options that change only a step's cost — the initial guess
-//! (`solver.predictor`) and the Newton model of indefinite Hessian blocks
-//! (`solver.indefinite`) — do not change its solution beyond the Newton
-//! tolerance. Along a four-chain trajectory with contact, each step is
+//! (`solver.predictor`), the Newton model of indefinite Hessian blocks
+//! (`solver.indefinite`) and the zero step of independent blocks already
+//! below the tolerance (`solver.settle_blocks`) — do not change its solution
+//! beyond the Newton tolerance. Along a four-chain trajectory with contact, each step is
 //! solved from the same state `θ^t` with the paper's settings (`θ^t` start,
 //! clamped eigenvalues) and with every other combination; the two solutions
 //! must agree within the error the stopping test allows: Newton stops at
@@ -33,9 +34,12 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
     let tol = sim.settings.newton.tol;
     let n = sim.model.ndof();
     let variants = [
-        (Predictor::Extrapolate, Indefinite::Clamp),
-        (Predictor::Previous, Indefinite::Shift),
-        (Predictor::Extrapolate, Indefinite::Shift),
+        (Predictor::Extrapolate, Indefinite::Clamp, false),
+        (Predictor::Previous, Indefinite::Shift, false),
+        (Predictor::Extrapolate, Indefinite::Shift, false),
+        (Predictor::Previous, Indefinite::Clamp, true),
+        // The defaults.
+        (Predictor::Extrapolate, Indefinite::Shift, true),
     ];
     let mut worst = vec![0.0f64; variants.len()];
     let mut contact_steps = 0;
@@ -44,6 +48,7 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         // Reference: the paper's solver.
         sim.settings.newton.predictor = Predictor::Previous;
         sim.settings.newton.indefinite = Indefinite::Clamp;
+        sim.settings.newton.settle_blocks = false;
         let d = sim.step().unwrap();
         contact_steps += usize::from(d.contact_pairs > 0);
         let q_ref = sim.state.q.clone();
@@ -60,17 +65,18 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         let lmin = h.symmetric_eigen().eigenvalues.min();
         assert!(lmin > 0.0, "step {step}: solution is not a strict minimum");
         let bound = 2.0 * (n as f64).sqrt() * tol / lmin;
-        for (v, &(p, ind)) in variants.iter().enumerate() {
+        for (v, &(p, ind, settle)) in variants.iter().enumerate() {
             sim.state = start.clone();
             sim.settings.newton.predictor = p;
             sim.settings.newton.indefinite = ind;
+            sim.settings.newton.settle_blocks = settle;
             sim.step().unwrap();
             assert_eq!(sim.state.charts, charts_ref, "step {step}: charts differ");
             let diff = (&sim.state.q - &q_ref).amax();
             worst[v] = worst[v].max(diff / bound);
             assert!(
                 diff <= bound,
-                "step {step}, {p:?}/{ind:?}: solutions differ by {diff:.2e} > {bound:.2e}"
+                "step {step}, {p:?}/{ind:?}/settle {settle}: solutions differ by {diff:.2e} > {bound:.2e}"
             );
         }
         sim.state = after;
@@ -78,8 +84,12 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
     eprintln!("worst difference / bound per variant {variants:?}: {worst:?}");
     let lin = sim.linear_solve_stats();
     eprintln!("{lin:?}");
-    // Both models of an indefinite block were exercised.
-    assert!(lin.eigen_blocks > 0 && lin.shifted_blocks > 0, "{lin:?}");
+    // Both models of an indefinite block, and settled blocks, were
+    // exercised.
+    assert!(
+        lin.eigen_blocks > 0 && lin.shifted_blocks > 0 && lin.settled_blocks > 0,
+        "{lin:?}"
+    );
     assert!(
         contact_steps > 20,
         "too little contact ({contact_steps} steps)"

@@ -13,6 +13,7 @@
 //!   max_backtracks: 60
 //!   predictor: extrapolate   #   start at 2θ^t − θ^{t−1} (or `previous`: θ^t)
 //!   indefinite: shift        #   Newton model of blocks with λ ≤ eig_clamp (or `clamp`)
+//!   settle_blocks: true      #   no re-solve of independent blocks already below tol
 //! robots:
 //!   - name: arm
 //!     base: {xyz: [0, 0, 1], rpy: [0, 0, 0]}   # world pose of the root attachment (default identity)
