@@ -59,20 +59,19 @@ fn shortened(name: &str, h: Option<usize>, tol: f64) -> Problem {
 /// design against Richardson-extrapolated central differences with step
 /// `eps` (`FD_EPS` overrides; Newton tolerance 1e-11, `FD_TOL` overrides),
 /// for the 12 block-vertex variables with the largest |∂L/∂d|. Asserts
-/// ≤ 1e-4 relative for those with |∂L/∂d| ≥ `resolved` · max|∂L/∂d|; the
-/// others are printed (below that size the differences' absolute error,
-/// ~1e-8 here, dominates).
-fn fd_check(name: &str, h: Option<usize>, eps: f64, resolved: f64) {
+/// that at least `need` of them agree to 1e-4 relative and all 12 to 1e-3
+/// (every figure is printed).
+fn fd_check(name: &str, h: Option<usize>, eps: f64, need: usize) {
     let tol: f64 = std::env::var("FD_TOL")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1e-11);
-    fd_check_problem(&shortened(name, h, tol), name, eps, resolved);
+    fd_check_problem(&shortened(name, h, tol), name, eps, need);
 }
 
 /// [`fd_check`] on a loaded problem (a task, or one trajectory of a
 /// collective task), `name` labelling the output.
-fn fd_check_problem(p: &Problem, name: &str, eps: f64, resolved: f64) {
+fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
     let d = p.design.values(&p.model);
     let c = p.controls.values(&p.controller);
     let ev = p.evaluate(&d, &c).unwrap();
@@ -103,35 +102,29 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, resolved: f64) {
         dm[i] -= h;
         (p.evaluate(&dp, &c).unwrap().loss - p.evaluate(&dm, &c).unwrap().loss) / (2.0 * h)
     };
-    let mut worst = 0.0f64;
-    let mut checked = 0;
-    let big = ev.grad_design[idx[0]].abs();
+    // `need` of the 12 must agree to 1e-4 (the acceptance's figure), all 12
+    // to 1e-3.
+    let mut errors = Vec::new();
     for &i in &idx {
         let fd = (4.0 * central(i, eps) - central(i, 2.0 * eps)) / 3.0;
         let g = ev.grad_design[i];
         let rel = (fd - g).abs() / g.abs().max(fd.abs());
-        let asserted = g.abs() >= resolved * big;
         eprintln!(
-            "{name}: {} analytic {g:.9e} central {fd:.9e} rel {rel:.2e}{}",
-            p.design.vars[i].name,
-            if asserted {
-                ""
-            } else {
-                " (below the resolved size, not asserted)"
-            }
+            "{name}: {} analytic {g:.9e} central {fd:.9e} rel {rel:.2e}",
+            p.design.vars[i].name
         );
-        if asserted {
-            worst = worst.max(rel);
-            checked += 1;
-        }
+        errors.push(rel);
     }
+    let within = errors.iter().filter(|&&e| e <= 1e-4).count();
+    let worst = errors.iter().cloned().fold(0.0f64, f64::max);
     eprintln!(
-        "{name}: worst relative error {worst:.2e} over {checked} of {} vertices (h = {eps:e})",
+        "{name}: {within} of {} vertices within 1e-4, worst relative error {worst:.2e} (h = {eps:e})",
         idx.len()
     );
     assert!(
-        worst <= 1e-4,
-        "{name}: design gradient off by {worst:.2e} relative"
+        within >= need && worst <= 1e-3,
+        "{name}: {within} of {} design-gradient components within 1e-4 (need {need}), worst {worst:.2e}",
+        idx.len()
     );
 }
 
@@ -146,7 +139,7 @@ fn horizon(short: usize) -> Option<usize> {
 
 #[test]
 fn parallel_jaw_design_gradient_matches_central_differences() {
-    fd_check("parallel_jaw_gripper", horizon(60), 1e-6, 0.0);
+    fd_check("parallel_jaw_gripper", horizon(60), 1e-6, 12);
 }
 
 #[test]
@@ -248,17 +241,17 @@ fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
     ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120, 4);
 }
 
-/// Horizon 240 of 480 (stages 1–2: the approach, where the jaw's left leg
-/// pushes the X; the stage windows scale to 0–120 and 120–240). The loss is
-/// sharply curved in the normal components of the touching blocks: at
-/// h = 1e-6 the extrapolated differences are still 1e-3 off, at h = 1e-7
-/// 1e-7 off (a truncation error); at h = 1e-7 the differences' absolute
-/// error (~1e-9–1e-8) dominates gradients below 2e-3 of the largest (the
-/// cut was chosen after measuring: the 7th, at 1.1e-3, is 3.3e-4 off), which
-/// are printed but not asserted (notes/grasp2.md has the figures).
+/// The full horizon, 480 steps (all four stages), h = 1e-7, Newton
+/// tolerance 1e-11: the 12 vertex coordinates with the largest |∂L/∂d|;
+/// at least 10 must agree to 1e-4 (the acceptance: ≥ 10 block
+/// vertices), all 12 to 1e-3. Measured 2026-11-25: 11 of 12 within 2.2e-5,
+/// the 11th largest (hull7.v0.x, |g| 1.8e-3, a block grazing the X) 6.4e-4;
+/// 18 s. The count was set to the acceptance's after that measurement. (The
+/// earlier check at horizon 240, stages 1–2 only, had 6 of 12 within 1e-4:
+/// fewer blocks touch, and the small components drown in round-off.)
 #[test]
 fn single_jaw_design_gradient_matches_central_differences() {
-    fd_check("single_jaw_gripper", horizon(240), 1e-7, 2e-3);
+    fd_check("single_jaw_gripper", None, 1e-7, 10);
 }
 
 /// The hand's six finger links (4 V-HACD hulls each; only a few coincident
@@ -285,7 +278,7 @@ fn three_finger_design_gradient_matches_central_differences() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(60);
-    fd_check("three_finger_hand", horizon(h), 1e-6, 0.0);
+    fd_check("three_finger_hand", horizon(h), 1e-6, 12);
 }
 
 /// Probe (ignored; `cargo test --release --test grasping -- --ignored
@@ -337,7 +330,7 @@ fn three_finger_full_horizon_probe() {
             q,
             &format!("three_finger_hand/{label} (H = 200)"),
             1e-7,
-            0.0,
+            12,
         );
     }
 }
