@@ -45,10 +45,11 @@
 //! ground plane (a half-space cannot be tunnelled through) are not tested.
 
 use super::separation::{Separation, separate};
-use crate::geometry::{BroadPhase, WorldHulls};
+use crate::geometry::{BroadPhase, WorldHulls, hull_boxes};
 use crate::kinematics::{KinOrder, Kinematics, SegmentMotion, hull_radii};
 use crate::model::Model;
 use nalgebra::{DVector, Matrix3, Vector3};
+use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::query::gjk::VoronoiSimplex;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -189,11 +190,14 @@ pub struct Ccd {
     pad: Vec<f64>,
     kin: Kinematics,
     hulls: WorldHulls,
+    /// Per hull at the segment's start: its unpadded box.
+    boxes: Vec<Aabb>,
     broad: BroadPhase,
     candidates: Vec<(usize, usize)>,
     doubt: Vec<Doubt>,
-    /// Per hull at the segment's start: centroid and bounding radius.
-    spheres: Vec<(Vector3<f64>, f64)>,
+    /// Per hull at the segment's start: centroid and bounding radius,
+    /// computed on first use (`None`: not yet).
+    spheres: Vec<Option<(Vector3<f64>, f64)>>,
     /// Depth of every link in its tree (roots 0), for common ancestors.
     depth: Vec<usize>,
     trial: DVector<f64>,
@@ -212,6 +216,7 @@ impl Ccd {
             pad: Vec::new(),
             kin: Kinematics::new(model),
             hulls: WorldHulls::new(model),
+            boxes: Vec::new(),
             broad: BroadPhase::default(),
             candidates: Vec::new(),
             doubt: Vec::new(),
@@ -288,21 +293,115 @@ impl Ccd {
         }
     }
 
+    /// Centroid and bounding radius of hull `h` at the segment's start
+    /// (computed once per segment; `√(max ‖v − c‖²)` is bit for bit
+    /// `max ‖v − c‖`, see [`hull_radii`]).
+    fn sphere(&mut self, h: usize) -> (Vector3<f64>, f64) {
+        if let Some(s) = self.spheres[h] {
+            return s;
+        }
+        let x = self.hulls.hull(h);
+        let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
+        let r = x
+            .iter()
+            .map(|v| (v - c).norm_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        self.spheres[h] = Some((c, r));
+        (c, r)
+    }
+
+    /// Bound on the relative motion of hulls `a`, `b` over the segment,
+    /// direction-free (m per unit α): through their common ancestor's
+    /// frame when they have one, else the world-frame sum; `spread` is the
+    /// per-link `E` to use (`E_i`, or its upper bound `Ē_i`). Also returns
+    /// the relative bound alone (for [`Doubt::relative`]).
+    fn pair_bound(&self, model: &Model, a: usize, b: usize, spread: &[f64]) -> (f64, Option<f64>) {
+        let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
+        let m = &self.motion;
+        let relative = self
+            .common_ancestor(model, la, lb)
+            .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
+        let world = (m.drift[la] - m.drift[lb]).norm() + spread[la] + spread[lb];
+        (relative.map_or(world, |r| r.min(world)), relative)
+    }
+
+    /// Whether the lever bound alone shows that [`Ccd::fraction`]'s full
+    /// computation would clear every pair by its cheap skips (and so return
+    /// 1 with no pair tested): the candidates of boxes padded by the upper
+    /// reach `‖c‖ + Ē ≥ ‖c‖ + E` contain every candidate of the exactly
+    /// padded boxes, and for each of them the relative-motion bound with
+    /// `Ē` (at least the one with `E`, rounding being monotone) is 0 or at
+    /// most `(1 − η)` times a lower bound of the cheap gap: the exact
+    /// bounding-sphere gap, or the box gap minus `10⁻¹²` of the operands'
+    /// magnitudes (the exactly padded boxes' gap differs from the unpadded
+    /// one by a few roundings, `~10⁻¹⁶` of them). Needs the lever half of
+    /// the motion bound and the hulls and boxes at the start.
+    fn cleared_by_lever_bound(
+        &mut self,
+        model: &Model,
+        excluded: &BTreeSet<(usize, usize)>,
+    ) -> bool {
+        self.pad.clear();
+        let motion = &self.motion;
+        self.pad
+            .extend(self.hulls.ids.iter().map(|id| motion.reach_upper(id.link)));
+        if !self.pad.iter().all(|p| p.is_finite()) {
+            return false;
+        }
+        self.broad.swept_pairs(
+            &self.hulls,
+            &self.boxes,
+            &self.pad,
+            excluded,
+            &mut self.candidates,
+        );
+        let eta = self.options.keep_fraction;
+        for k in 0..self.candidates.len() {
+            let (a, b) = self.candidates[k];
+            let (bound, _) = self.pair_bound(model, a, b, &self.motion.spread_upper);
+            if bound == 0.0 {
+                continue;
+            }
+            let (ba, bb) = (&self.boxes[a], &self.boxes[b]);
+            let slack = 1e-12 * (self.pad[a] + self.pad[b]);
+            let box_gap = (0..3)
+                .map(|e| {
+                    let m = 1e-12 * (ba.mins[e].abs() + ba.maxs[e].abs())
+                        + 1e-12 * (bb.mins[e].abs() + bb.maxs[e].abs())
+                        + slack;
+                    (bb.mins[e] - ba.maxs[e]).max(ba.mins[e] - bb.maxs[e]) - m
+                })
+                .fold(f64::NEG_INFINITY, f64::max);
+            let (sa, sb) = (self.sphere(a), self.sphere(b));
+            let cheap = box_gap.max((sa.0 - sb.0).norm() - sa.1 - sb.1);
+            if !(bound <= (1.0 - eta) * cheap) {
+                return false;
+            }
+        }
+        true
+    }
+
     /// The largest certified `α' ≤ α` for the segment `q → q + α dir`
     /// (see the module docs); `excluded` are the link pairs that never
-    /// interact, `charts` the step's rotation-vector chart centres.
+    /// interact, `charts` the step's rotation-vector chart centres. `start`,
+    /// when given, is the kinematics at `q` as `Kinematics::update(q,
+    /// charts, KinOrder::Pose)` computes it (bit for bit; e.g. the step's
+    /// kinematics at `θ^t`), reused instead of evaluated again.
+    #[allow(clippy::too_many_arguments)]
     pub fn certify(
         &mut self,
         model: &Model,
         excluded: &BTreeSet<(usize, usize)>,
         q: &DVector<f64>,
+        start: Option<&Kinematics>,
         dir: &DVector<f64>,
         alpha: f64,
         charts: &[Matrix3<f64>],
     ) -> f64 {
         self.seg.clone_from(dir);
         self.seg *= alpha;
-        let frac = self.fraction(model, excluded, q, charts);
+        let frac = self.fraction(model, excluded, q, start, charts);
         self.stats.segments += 1;
         if frac < 1.0 {
             self.stats.alpha_caps += 1;
@@ -313,54 +412,57 @@ impl Ccd {
 
     /// The largest certified fraction `β ∈ [0, 1]` of the segment
     /// `q → q + seg`.
+    ///
+    /// Cost: the lever half of the motion bound (no trigonometry) and one
+    /// broad phase decide most segments
+    /// ([`Ccd::cleared_by_lever_bound`]); only when they cannot are the
+    /// exact start rates computed and the pairs examined as described in
+    /// the module docs. Either way the result is the same, bit for bit.
     fn fraction(
         &mut self,
         model: &Model,
         excluded: &BTreeSet<(usize, usize)>,
         q: &DVector<f64>,
+        start: Option<&Kinematics>,
         charts: &[Matrix3<f64>],
     ) -> f64 {
-        let dq = &self.seg;
-        self.kin.update(model, q, charts, KinOrder::Pose);
+        if start.is_none() {
+            self.kin.update(model, q, charts, KinOrder::Pose);
+        }
+        let kin = start.unwrap_or(&self.kin);
         hull_radii(model, &mut self.radius);
-        self.motion.update(
-            model,
-            &self.kin.pre,
-            &self.kin.pose,
-            charts,
-            &self.radius,
-            q,
-            dq,
-        );
-        self.hulls.update(model, &self.kin.pose);
+        self.motion
+            .update_lever(model, &kin.pre, &self.radius, q, &self.seg);
+        self.hulls.update(model, &kin.pose);
+        hull_boxes(&self.hulls, &mut self.boxes);
+        self.spheres.clear();
+        self.spheres.resize(self.hulls.ids.len(), None);
+        if self.cleared_by_lever_bound(model, excluded) {
+            return 1.0;
+        }
+        let kin = start.unwrap_or(&self.kin);
+        self.motion
+            .update_rates(model, &kin.pre, &kin.pose, charts, q, &self.seg);
         self.pad.clear();
         let motion = &self.motion;
         self.pad
             .extend(self.hulls.ids.iter().map(|id| motion.reach(id.link)));
-        self.broad
-            .swept_pairs(&self.hulls, &self.pad, excluded, &mut self.candidates);
+        self.broad.swept_pairs(
+            &self.hulls,
+            &self.boxes,
+            &self.pad,
+            excluded,
+            &mut self.candidates,
+        );
         let eta = self.options.keep_fraction;
-        self.spheres.clear();
-        for h in 0..self.hulls.ids.len() {
-            let x = self.hulls.hull(h);
-            let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
-            let r = x.iter().map(|v| (v - c).norm()).fold(0.0, f64::max);
-            self.spheres.push((c, r));
-        }
         self.doubt.clear();
         for k in 0..self.candidates.len() {
             let (a, b) = self.candidates[k];
-            let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
-            let m = &self.motion;
             // Relative motion bound, direction-free (m per unit α).
-            let relative = self
-                .common_ancestor(model, la, lb)
-                .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
-            let world = (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb];
-            let bound = relative.map_or(world, |r| r.min(world));
+            let (bound, relative) = self.pair_bound(model, a, b, &self.motion.spread);
             // Cheap skips: no relative motion, or less than a lower bound of
             // the distance from the boxes or the bounding spheres.
-            let (sa, sb) = (self.spheres[a], self.spheres[b]);
+            let (sa, sb) = (self.sphere(a), self.sphere(b));
             let cheap = self.box_gap(a, b).max((sa.0 - sb.0).norm() - sa.1 - sb.1);
             if bound == 0.0 || bound <= (1.0 - eta) * cheap {
                 continue;
@@ -556,7 +658,7 @@ mod tests {
         let mut ccd = Ccd::new(&m, CcdOptions::default());
         let charts = vec![Matrix3::identity(); m.nchart];
         let excluded = BTreeSet::new();
-        let a = ccd.certify(&m, &excluded, &q, &dir, 1.0, &charts);
+        let a = ccd.certify(&m, &excluded, &q, None, &dir, 1.0, &charts);
         // Gap 0.47 m, pure translation: the bound is exact, so the cut is
         // at (1 − η) g₀ / ‖Δx‖.
         let g0 = 0.5 - 0.025 - 0.005;
@@ -564,11 +666,11 @@ mod tests {
         assert!(min_gap_along(&m, &q, &dir, a, 400) >= 0.1 * g0 - 1e-9);
         assert_eq!(ccd.stats.alpha_caps, 1);
         // A half step stays clear of the wall: nothing to cut.
-        let b = ccd.certify(&m, &excluded, &q, &dir, 0.4, &charts);
+        let b = ccd.certify(&m, &excluded, &q, None, &dir, 0.4, &charts);
         assert_eq!(b, 0.4);
         // Tumbling while flying (free joint rotation): still certified.
         let dir = DVector::from_vec(vec![1.0, 0.2, 0.0, 4.0, -3.0, 6.0]);
-        let a = ccd.certify(&m, &excluded, &q, &dir, 1.0, &charts);
+        let a = ccd.certify(&m, &excluded, &q, None, &dir, 1.0, &charts);
         assert!(a > 0.1 && a < 0.5, "α = {a}");
         assert!(min_gap_along(&m, &q, &dir, a, 2000) > 0.0);
     }
@@ -626,6 +728,7 @@ mod tests {
             &m,
             &BTreeSet::from([(0, 1), (1, 2)]),
             &q,
+            None,
             &dir,
             1.0,
             &charts,

@@ -73,6 +73,16 @@ pub struct SegmentMotion {
     origin: Vec<f64>,
     /// `V'_i`: as `V_i` with the drift folded in (no split).
     origin_full: Vec<f64>,
+    /// `U_i ≥ V_i`: `V_i`'s recursion with the lever bound `W (1 + 10⁻¹²)`
+    /// in place of `Ŵ` (see [`SegmentMotion::update_lever`]).
+    origin_upper: Vec<f64>,
+    /// `Ē_i = U_i + W_i r_i ≥ E_i` (m per unit α), known before the rates.
+    pub spread_upper: Vec<f64>,
+    /// Per link, of its own joint: `w_i` (lever angular rate, rad per unit
+    /// α), `ℓ_i = ‖t_i‖ + τ̄_i` (m) and `‖τ̇_i‖` (m per unit α).
+    joint_rate: Vec<f64>,
+    arm: Vec<f64>,
+    travel_rate: Vec<f64>,
     /// `D_i = Σ_{j ≤ i} (‖t_j‖ + τ̄_j)`, summed along the chain from the root.
     lever: Vec<f64>,
     /// `r_i`.
@@ -139,45 +149,55 @@ impl SegmentMotion {
         q: &DVector<f64>,
         dq: &DVector<f64>,
     ) {
+        self.update_lever(model, pre, radius, q, dq);
+        self.update_rates(model, pre, pose, charts, q, dq);
+    }
+
+    /// The first half of [`SegmentMotion::update`]: everything that needs
+    /// no rates at the start — the drift `c_i`, the lever sums `W_i`,
+    /// `V'_i`, `D_i` (so [`SegmentMotion::relative_spread`] is final after
+    /// this), and the upper bound `Ē_i ≥ E_i` ([`SegmentMotion::spread_upper`],
+    /// [`SegmentMotion::reach_upper`]). No trigonometry: a few norms per link.
+    ///
+    /// `Ē_i` bounds `E_i` from above *in floating point*, whatever
+    /// [`SegmentMotion::update_rates`] later finds: `E_i` is
+    /// the minimum of the lever bound `V_i + Ŵ_i r_i` and the rate bound,
+    /// and `V_i` is a recursion of sums and products of non-negative terms
+    /// in `Ŵ_λ ≤ W_λ (1 + 10⁻¹²)`; the same recursion with `W (1 + 10⁻¹²)`
+    /// in place of `Ŵ`,
+    ///
+    /// ```text
+    /// U_i = U_λ [+ W_λ(1 + 10⁻¹²) ℓ_i + ‖τ̇_i‖ when W_λ > 0],   Ē_i = U_i + W_i r_i,
+    /// ```
+    ///
+    /// is at least as large term by term, and rounding is monotone (for
+    /// non-negative operands `a ≤ a'`, `b ≤ b'` give `fl(a + b) ≤ fl(a' + b')`
+    /// and `fl(a b) ≤ fl(a' b')`), so `Ē_i ≥ E_i` as computed, bit for bit
+    /// (and every sum of them with the same other operands, e.g. the reach).
+    /// [`crate::contact::ccd`] uses it to clear a segment before any rate is
+    /// computed.
+    pub fn update_lever(
+        &mut self,
+        model: &Model,
+        pre: &[Pose],
+        radius: &[f64],
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+    ) {
         let n = model.links.len();
         self.drift.resize(n, Vector3::zeros());
-        self.spread.resize(n, 0.0);
         self.angular.resize(n, 0.0);
-        self.angular_tight.resize(n, 0.0);
-        self.origin.resize(n, 0.0);
         self.origin_full.resize(n, 0.0);
         self.lever.resize(n, 0.0);
-        self.omega0.resize(n, Vector3::zeros());
-        self.origin_rate0.resize(n, Vector3::zeros());
-        self.omega_change.resize(n, 0.0);
-        self.origin_change.resize(n, 0.0);
-        self.pose_rate.resize(n, Pose::zeros());
+        self.joint_rate.resize(n, 0.0);
+        self.arm.resize(n, 0.0);
+        self.travel_rate.resize(n, 0.0);
+        self.origin_upper.resize(n, 0.0);
+        self.spread_upper.resize(n, 0.0);
         self.radius.clear();
         self.radius.extend_from_slice(radius);
         for (i, link) in model.links.iter().enumerate() {
             let o = link.dof_offset;
-            let nd = link.ndof();
-            // Exact rates at the start: dT_i/dα = dP_i/dα · J + P_i · dJ/dα,
-            // dP_i/dα = dT_λ/dα · A_i.
-            let chart = link
-                .chart
-                .map(|c| charts[c])
-                .unwrap_or_else(Matrix3::identity);
-            let (local, local_rate) = link.joint.transform_velocity(
-                &chart,
-                &q.as_slice()[o..o + nd],
-                &dq.as_slice()[o..o + nd],
-            );
-            let pre_rate = match link.parent {
-                Some(p) => rate_compose(&self.pose_rate[p], &link.attach),
-                None => Pose::zeros(),
-            };
-            let rate = rate_compose(&pre_rate, &local) + rotate_rate(&pre[i], &local_rate);
-            self.pose_rate[i] = rate;
-            let spin = rate.fixed_view::<3, 3>(0, 0) * rot(&pose[i]).transpose();
-            self.omega0[i] = axial(&spin);
-            self.origin_rate0[i] = rate.column(3).into_owned();
-
             let (w, rate_t, travel) = match &link.joint {
                 JointKind::Fixed => (0.0, Vector3::zeros(), 0.0),
                 JointKind::Revolute { .. } => (dq[o].abs(), Vector3::zeros(), 0.0),
@@ -207,19 +227,88 @@ impl SegmentMotion {
                     )
                 }
             };
-            let zero = Vector3::zeros();
-            let (parent_w, parent_wt, parent_v, parent_c, parent_full, parent_lever) =
-                match link.parent {
-                    Some(p) => (
-                        self.angular[p],
-                        self.angular_tight[p],
-                        self.origin[p],
-                        self.drift[p],
-                        self.origin_full[p],
-                        self.lever[p],
-                    ),
-                    None => (0.0, 0.0, 0.0, zero, 0.0, 0.0),
-                };
+            let (parent_w, parent_c, parent_full, parent_lever, parent_upper) = match link.parent {
+                Some(p) => (
+                    self.angular[p],
+                    self.drift[p],
+                    self.origin_full[p],
+                    self.lever[p],
+                    self.origin_upper[p],
+                ),
+                None => (0.0, Vector3::zeros(), 0.0, 0.0, 0.0),
+            };
+            let attach = link.attach.column(3).norm();
+            let ell = attach + travel;
+            let tau_rate = rate_t.norm();
+            self.joint_rate[i] = w;
+            self.arm[i] = ell;
+            self.travel_rate[i] = tau_rate;
+            self.lever[i] = parent_lever + ell;
+            self.origin_full[i] = parent_full + parent_w * ell + tau_rate;
+            self.angular[i] = parent_w + w;
+            let (drift, upper) = if parent_w == 0.0 {
+                // Pre-joint frame fixed on the segment: exact drift.
+                (parent_c + rot(&pre[i]) * rate_t, parent_upper)
+            } else {
+                let parent_wu = parent_w * (1.0 + 1e-12);
+                (parent_c, parent_upper + parent_wu * ell + tau_rate)
+            };
+            self.drift[i] = drift;
+            self.origin_upper[i] = upper;
+            self.spread_upper[i] = upper + self.angular[i] * radius[i];
+        }
+    }
+
+    /// The second half of [`SegmentMotion::update`] (after
+    /// [`SegmentMotion::update_lever`] on the same segment): the exact rates
+    /// at the start and the spread `E_i`.
+    pub fn update_rates(
+        &mut self,
+        model: &Model,
+        pre: &[Pose],
+        pose: &[Pose],
+        charts: &[Matrix3<f64>],
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+    ) {
+        let n = model.links.len();
+        self.spread.resize(n, 0.0);
+        self.angular_tight.resize(n, 0.0);
+        self.origin.resize(n, 0.0);
+        self.omega0.resize(n, Vector3::zeros());
+        self.origin_rate0.resize(n, Vector3::zeros());
+        self.omega_change.resize(n, 0.0);
+        self.origin_change.resize(n, 0.0);
+        self.pose_rate.resize(n, Pose::zeros());
+        for (i, link) in model.links.iter().enumerate() {
+            let o = link.dof_offset;
+            let nd = link.ndof();
+            // Exact rates at the start: dT_i/dα = dP_i/dα · J + P_i · dJ/dα,
+            // dP_i/dα = dT_λ/dα · A_i.
+            let chart = link
+                .chart
+                .map(|c| charts[c])
+                .unwrap_or_else(Matrix3::identity);
+            let (local, local_rate) = link.joint.transform_velocity(
+                &chart,
+                &q.as_slice()[o..o + nd],
+                &dq.as_slice()[o..o + nd],
+            );
+            let pre_rate = match link.parent {
+                Some(p) => rate_compose(&self.pose_rate[p], &link.attach),
+                None => Pose::zeros(),
+            };
+            let rate = rate_compose(&pre_rate, &local) + rotate_rate(&pre[i], &local_rate);
+            self.pose_rate[i] = rate;
+            let spin = rate.fixed_view::<3, 3>(0, 0) * rot(&pose[i]).transpose();
+            self.omega0[i] = axial(&spin);
+            self.origin_rate0[i] = rate.column(3).into_owned();
+
+            let (w, ell, tau_rate) = (self.joint_rate[i], self.arm[i], self.travel_rate[i]);
+            let (parent_w, parent_wt, parent_v) = match link.parent {
+                Some(p) => (self.angular[p], self.angular_tight[p], self.origin[p]),
+                None => (0.0, 0.0, 0.0),
+            };
             let (parent_omega0, parent_dw, parent_dv) = match link.parent {
                 Some(p) => (
                     self.omega0[p].norm(),
@@ -228,13 +317,6 @@ impl SegmentMotion {
                 ),
                 None => (0.0, 0.0, 0.0),
             };
-            let attach = link.attach.column(3).norm();
-            let ell = attach + travel;
-            let tau_rate = rate_t.norm();
-            // Lever bound.
-            self.lever[i] = parent_lever + ell;
-            self.origin_full[i] = parent_full + parent_w * ell + tau_rate;
-            self.angular[i] = parent_w + w;
             // Rate bound on the angular speed.
             let rel_change = match &link.joint {
                 JointKind::Fixed | JointKind::Prismatic { .. } => 0.0,
@@ -251,19 +333,19 @@ impl SegmentMotion {
                 + parent_dw * ell
                 + parent_omega0 * (parent_wt * ell + tau_rate)
                 + parent_wt * tau_rate;
-            let (drift, origin) = if parent_w == 0.0 {
-                // Pre-joint frame fixed on the segment: exact drift.
-                (parent_c + rot(&pre[i]) * rate_t, parent_v)
+            let origin = if parent_w == 0.0 {
+                parent_v
             } else {
-                (parent_c, parent_v + parent_wt * ell + tau_rate)
+                parent_v + parent_wt * ell + tau_rate
             };
-            self.drift[i] = drift;
+            let drift = self.drift[i];
             self.origin[i] = origin;
-            let lever_bound = origin + wt * radius[i];
+            let radius = self.radius[i];
+            let lever_bound = origin + wt * radius;
             let rate_bound =
-                (self.origin_rate0[i] - drift).norm() + self.origin_change[i] + wt * radius[i];
+                (self.origin_rate0[i] - drift).norm() + self.origin_change[i] + wt * radius;
             // Round-off guard on the rate bound's exact first-order part.
-            let guard = 1e-12 * (self.origin_full[i] + self.angular[i] * radius[i]);
+            let guard = 1e-12 * (self.origin_full[i] + self.angular[i] * radius);
             self.spread[i] = lever_bound.min(rate_bound * (1.0 + 1e-12) + guard);
         }
     }
@@ -292,6 +374,12 @@ impl SegmentMotion {
     /// whole segment (m).
     pub fn reach(&self, link: usize) -> f64 {
         self.drift[link].norm() + self.spread[link]
+    }
+
+    /// `‖c_i‖ + Ē_i ≥` [`SegmentMotion::reach`] (bit for bit), available
+    /// after [`SegmentMotion::update_lever`] alone (m).
+    pub fn reach_upper(&self, link: usize) -> f64 {
+        self.drift[link].norm() + self.spread_upper[link]
     }
 }
 
@@ -324,14 +412,17 @@ fn rotate_rate(p: &Pose, j_rate: &Pose) -> Pose {
 
 /// `r_i` per link: the largest distance of a hull vertex from the link
 /// frame's origin (m; 0 for a link without hulls), written into `out`.
+/// One square root per link: `√` is correctly rounded and monotone, so
+/// `√(max ‖x‖²)` is bit for bit `max √(‖x‖²) = max ‖x‖`.
 pub fn hull_radii(model: &Model, out: &mut Vec<f64>) {
     out.clear();
     out.extend(model.links.iter().map(|l| {
         l.hulls
             .iter()
             .flat_map(|h| h.x_local.iter())
-            .map(|x| x.norm())
+            .map(|x| x.norm_squared())
             .fold(0.0, f64::max)
+            .sqrt()
     }));
 }
 
