@@ -193,6 +193,9 @@ pub struct Ccd {
     /// Per hull at the segment's start: its unpadded box.
     boxes: Vec<Aabb>,
     broad: BroadPhase,
+    /// The broad phase of [`Ccd::cleared_by_lever_bound`] (its own sweep
+    /// order: its pads differ from the exact ones).
+    lever_broad: BroadPhase,
     candidates: Vec<(usize, usize)>,
     doubt: Vec<Doubt>,
     /// Per hull at the segment's start: centroid and bounding radius,
@@ -218,6 +221,7 @@ impl Ccd {
             hulls: WorldHulls::new(model),
             boxes: Vec::new(),
             broad: BroadPhase::default(),
+            lever_broad: BroadPhase::default(),
             candidates: Vec::new(),
             doubt: Vec::new(),
             spheres: Vec::new(),
@@ -244,21 +248,6 @@ impl Ccd {
             (d.dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0);
         // Both bound the closing rate: the smaller holds.
         d.relative.map_or(world, |r| r.min(world))
-    }
-
-    /// Lowest common ancestor of links `a` and `b` (`None`: different trees).
-    fn common_ancestor(&self, model: &Model, mut a: usize, mut b: usize) -> Option<usize> {
-        while self.depth[a] > self.depth[b] {
-            a = model.links[a].parent?;
-        }
-        while self.depth[b] > self.depth[a] {
-            b = model.links[b].parent?;
-        }
-        while a != b {
-            a = model.links[a].parent?;
-            b = model.links[b].parent?;
-        }
-        Some(a)
     }
 
     /// Lower bound of the distance of hulls `a`, `b` from their boxes
@@ -293,39 +282,6 @@ impl Ccd {
         }
     }
 
-    /// Centroid and bounding radius of hull `h` at the segment's start
-    /// (computed once per segment; `√(max ‖v − c‖²)` is bit for bit
-    /// `max ‖v − c‖`, see [`hull_radii`]).
-    fn sphere(&mut self, h: usize) -> (Vector3<f64>, f64) {
-        if let Some(s) = self.spheres[h] {
-            return s;
-        }
-        let x = self.hulls.hull(h);
-        let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
-        let r = x
-            .iter()
-            .map(|v| (v - c).norm_squared())
-            .fold(0.0, f64::max)
-            .sqrt();
-        self.spheres[h] = Some((c, r));
-        (c, r)
-    }
-
-    /// Bound on the relative motion of hulls `a`, `b` over the segment,
-    /// direction-free (m per unit α): through their common ancestor's
-    /// frame when they have one, else the world-frame sum; `spread` is the
-    /// per-link `E` to use (`E_i`, or its upper bound `Ē_i`). Also returns
-    /// the relative bound alone (for [`Doubt::relative`]).
-    fn pair_bound(&self, model: &Model, a: usize, b: usize, spread: &[f64]) -> (f64, Option<f64>) {
-        let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
-        let m = &self.motion;
-        let relative = self
-            .common_ancestor(model, la, lb)
-            .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
-        let world = (m.drift[la] - m.drift[lb]).norm() + spread[la] + spread[lb];
-        (relative.map_or(world, |r| r.min(world)), relative)
-    }
-
     /// Whether the lever bound alone shows that [`Ccd::fraction`]'s full
     /// computation would clear every pair by its cheap skips (and so return
     /// 1 with no pair tested): the candidates of boxes padded by the upper
@@ -335,8 +291,10 @@ impl Ccd {
     /// most `(1 − η)` times a lower bound of the cheap gap: the exact
     /// bounding-sphere gap, or the box gap minus `10⁻¹²` of the operands'
     /// magnitudes (the exactly padded boxes' gap differs from the unpadded
-    /// one by a few roundings, `~10⁻¹⁶` of them). Needs the lever half of
-    /// the motion bound and the hulls and boxes at the start.
+    /// one by a few roundings, `~10⁻¹⁶` of them). Stops at the first pair
+    /// it cannot clear (on long chains the lever bound is loose and the
+    /// padded boxes overlap a lot). Needs the lever half of the motion
+    /// bound and the hulls and boxes at the start.
     fn cleared_by_lever_bound(
         &mut self,
         model: &Model,
@@ -349,22 +307,25 @@ impl Ccd {
         if !self.pad.iter().all(|p| p.is_finite()) {
             return false;
         }
-        self.broad.swept_pairs(
-            &self.hulls,
-            &self.boxes,
-            &self.pad,
-            excluded,
-            &mut self.candidates,
-        );
-        let eta = self.options.keep_fraction;
-        for k in 0..self.candidates.len() {
-            let (a, b) = self.candidates[k];
-            let (bound, _) = self.pair_bound(model, a, b, &self.motion.spread_upper);
+        let Ccd {
+            options,
+            motion,
+            pad,
+            hulls,
+            boxes,
+            lever_broad,
+            spheres,
+            depth,
+            ..
+        } = self;
+        let one_minus_eta = 1.0 - options.keep_fraction;
+        lever_broad.swept_pairs_until(hulls, boxes, pad, excluded, |a, b| {
+            let (bound, _) = pair_bound(model, depth, hulls, motion, a, b, &motion.spread_upper);
             if bound == 0.0 {
-                continue;
+                return true;
             }
-            let (ba, bb) = (&self.boxes[a], &self.boxes[b]);
-            let slack = 1e-12 * (self.pad[a] + self.pad[b]);
+            let (ba, bb) = (&boxes[a], &boxes[b]);
+            let slack = 1e-12 * (pad[a] + pad[b]);
             let box_gap = (0..3)
                 .map(|e| {
                     let m = 1e-12 * (ba.mins[e].abs() + ba.maxs[e].abs())
@@ -373,13 +334,10 @@ impl Ccd {
                     (bb.mins[e] - ba.maxs[e]).max(ba.mins[e] - bb.maxs[e]) - m
                 })
                 .fold(f64::NEG_INFINITY, f64::max);
-            let (sa, sb) = (self.sphere(a), self.sphere(b));
+            let (sa, sb) = (sphere(hulls, spheres, a), sphere(hulls, spheres, b));
             let cheap = box_gap.max((sa.0 - sb.0).norm() - sa.1 - sb.1);
-            if !(bound <= (1.0 - eta) * cheap) {
-                return false;
-            }
-        }
-        true
+            bound <= one_minus_eta * cheap
+        })
     }
 
     /// The largest certified `α' ≤ α` for the segment `q → q + α dir`
@@ -459,10 +417,21 @@ impl Ccd {
         for k in 0..self.candidates.len() {
             let (a, b) = self.candidates[k];
             // Relative motion bound, direction-free (m per unit α).
-            let (bound, relative) = self.pair_bound(model, a, b, &self.motion.spread);
+            let (bound, relative) = pair_bound(
+                model,
+                &self.depth,
+                &self.hulls,
+                &self.motion,
+                a,
+                b,
+                &self.motion.spread,
+            );
             // Cheap skips: no relative motion, or less than a lower bound of
             // the distance from the boxes or the bounding spheres.
-            let (sa, sb) = (self.sphere(a), self.sphere(b));
+            let (sa, sb) = (
+                sphere(&self.hulls, &mut self.spheres, a),
+                sphere(&self.hulls, &mut self.spheres, b),
+            );
             let cheap = self.box_gap(a, b).max((sa.0 - sb.0).norm() - sa.1 - sb.1);
             if bound == 0.0 || bound <= (1.0 - eta) * cheap {
                 continue;
@@ -535,6 +504,65 @@ impl Ccd {
             alpha = next;
         }
     }
+}
+
+/// Lowest common ancestor of links `a` and `b` (`None`: different trees);
+/// `depth` is every link's depth in its tree.
+fn common_ancestor(model: &Model, depth: &[usize], mut a: usize, mut b: usize) -> Option<usize> {
+    while depth[a] > depth[b] {
+        a = model.links[a].parent?;
+    }
+    while depth[b] > depth[a] {
+        b = model.links[b].parent?;
+    }
+    while a != b {
+        a = model.links[a].parent?;
+        b = model.links[b].parent?;
+    }
+    Some(a)
+}
+
+/// Bound on the relative motion of hulls `a`, `b` over the segment,
+/// direction-free (m per unit α): through their common ancestor's frame
+/// when they have one, else the world-frame sum `‖c_a − c_b‖ + E_a + E_b`;
+/// `spread` is the per-link `E` to use (`E_i`, or its upper bound `Ē_i`).
+/// Also returns the relative bound alone (for [`Doubt::relative`]).
+fn pair_bound(
+    model: &Model,
+    depth: &[usize],
+    hulls: &WorldHulls,
+    m: &SegmentMotion,
+    a: usize,
+    b: usize,
+    spread: &[f64],
+) -> (f64, Option<f64>) {
+    let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+    let relative = common_ancestor(model, depth, la, lb)
+        .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
+    let world = (m.drift[la] - m.drift[lb]).norm() + spread[la] + spread[lb];
+    (relative.map_or(world, |r| r.min(world)), relative)
+}
+
+/// Centroid and bounding radius of hull `h` of `hulls`, cached in
+/// `cache[h]` (`√(max ‖v − c‖²)` is bit for bit `max ‖v − c‖`, see
+/// [`hull_radii`]).
+fn sphere(
+    hulls: &WorldHulls,
+    cache: &mut [Option<(Vector3<f64>, f64)>],
+    h: usize,
+) -> (Vector3<f64>, f64) {
+    if let Some(s) = cache[h] {
+        return s;
+    }
+    let x = hulls.hull(h);
+    let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
+    let r = x
+        .iter()
+        .map(|v| (v - c).norm_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    cache[h] = Some((c, r));
+    (c, r)
 }
 
 impl Doubt {

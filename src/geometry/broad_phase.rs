@@ -127,6 +127,26 @@ impl BroadPhase {
         &self.aabbs
     }
 
+    /// As [`BroadPhase::swept_pairs`], but each candidate pair is handed
+    /// to `visit` as it is found (in sweep order, not sorted) until `visit`
+    /// returns false; returns whether every candidate was visited. For a
+    /// test that must hold for every candidate and can stop at the first
+    /// failure.
+    pub fn swept_pairs_until(
+        &mut self,
+        hulls: &WorldHulls,
+        boxes: &[Aabb],
+        pad: &[f64],
+        excluded: &BTreeSet<(usize, usize)>,
+        visit: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
+        self.aabbs.clear();
+        for (b, &p) in boxes.iter().zip(pad).take(hulls.ids.len()) {
+            self.aabbs.push(padded(b, p));
+        }
+        self.sweep_until(hulls, excluded, visit)
+    }
+
     /// Sweep and prune over `self.aabbs` (see the module documentation).
     fn sweep(
         &mut self,
@@ -135,10 +155,25 @@ impl BroadPhase {
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
+        self.sweep_until(hulls, excluded, |a, b| {
+            out.push((a, b));
+            true
+        });
+        out.sort_unstable();
+    }
+
+    /// The sweep itself: every candidate pair `(a, b)`, `a < b`, goes to
+    /// `visit` until it returns false (then false is returned).
+    fn sweep_until(
+        &mut self,
+        hulls: &WorldHulls,
+        excluded: &BTreeSet<(usize, usize)>,
+        mut visit: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
         let boxes = &self.aabbs;
         let n = boxes.len();
         if n < 2 {
-            return;
+            return true;
         }
         // Axis of the largest spread of the box centres (NaN-free spreads
         // only; ties keep the lower axis).
@@ -199,12 +234,12 @@ impl BroadPhase {
                 }
                 let (a, b) = (a.min(b), a.max(b));
                 let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-                if la != lb && !excluded.contains(&(la.min(lb), la.max(lb))) {
-                    out.push((a, b));
+                if la != lb && !excluded.contains(&(la.min(lb), la.max(lb))) && !visit(a, b) {
+                    return false;
                 }
             }
         }
-        out.sort_unstable();
+        true
     }
 }
 
