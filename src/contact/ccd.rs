@@ -204,6 +204,10 @@ pub struct Ccd {
     /// Depth of every link in its tree (roots 0), for common ancestors.
     depth: Vec<usize>,
     trial: DVector<f64>,
+    /// Per advancement round: the links whose poses are needed, and the
+    /// hulls whose vertices are (with repeats).
+    needed_link: Vec<bool>,
+    needed_hull: Vec<usize>,
     /// The segment `α dir` being certified.
     seg: DVector<f64>,
     simplex: VoronoiSimplex,
@@ -235,6 +239,8 @@ impl Ccd {
                 })
                 .collect(),
             trial: DVector::zeros(model.ndof()),
+            needed_link: Vec::new(),
+            needed_hull: Vec::new(),
             seg: DVector::zeros(model.ndof()),
             simplex: VoronoiSimplex::new(),
         }
@@ -474,9 +480,27 @@ impl Ccd {
             self.stats.rounds += 1;
             self.trial.clone_from(q);
             self.trial.axpy(next, &self.seg, 1.0);
-            self.kin.update(model, &self.trial, charts, KinOrder::Pose);
-            self.hulls.update(model, &self.kin.pose);
             let soon = (2.0 * next - alpha).min(1.0);
+            // Kinematics and world vertices at the new α, of the pairs to be
+            // measured again only (their links and those links' ancestors).
+            self.needed_link.clear();
+            self.needed_link.resize(model.links.len(), false);
+            self.needed_hull.clear();
+            for d in self.doubt.iter().filter(|d| d.horizon < soon) {
+                for h in [d.a, d.b] {
+                    self.needed_hull.push(h);
+                    let mut link = Some(self.hulls.ids[h].link);
+                    while let Some(l) = link.filter(|&l| !self.needed_link[l]) {
+                        self.needed_link[l] = true;
+                        link = model.links[l].parent;
+                    }
+                }
+            }
+            self.kin
+                .update_poses_where(model, &self.trial, charts, &self.needed_link);
+            for &h in &self.needed_hull {
+                self.hulls.update_hull(model, &self.kin.pose, h);
+            }
             let mut doubt = std::mem::take(&mut self.doubt);
             let mut lost = false;
             doubt.retain_mut(|d| {
