@@ -37,6 +37,26 @@
 //! the step is a candidate even if its end poses are far apart. The cheap
 //! test that skips CCD for slow pairs is the first round itself: a pair with
 //! `ρ ≤ (1 − η) g₀` is cleared with one GJK query and never advanced.
+//! Before it, pairs whose direction-free relative-motion bound is 0 or at
+//! most `(1 − η)` of a lower bound of their distance (box or bounding-sphere
+//! gap) are skipped without GJK.
+//!
+//! # Cost
+//!
+//! Three shortcuts make the stage cheap without changing any result (the
+//! returned `α` and the statistics are those of the computation above, bit
+//! for bit; tested in `ccd_tests.rs`):
+//!
+//! - the kinematics at the segment's start is taken from the caller when it
+//!   has it (the simulator's at `θ^t`, evaluated once per step);
+//! - [`Ccd::cleared_by_lever_bound`]: the lever half of the motion bound
+//!   (no trigonometry) gives `Ē ≥ E` exactly in floating point; if every
+//!   pair of boxes padded by `‖c‖ + Ē` passes the cheap skip with `Ē`, the
+//!   full computation would skip them all with `E` too and return 1, so the
+//!   exact start rates (dual-number kinematics) are never evaluated. This
+//!   decides most segments of slow, separated motion;
+//! - each advancement round evaluates poses and world vertices only of the
+//!   pairs measured again there (their links and the links' ancestors).
 //!
 //! What is not certified: a pair that GJK cannot resolve as separated at the
 //! start of the segment (gap below its ~1e-8 relative tolerance; the barrier
@@ -45,10 +65,11 @@
 //! ground plane (a half-space cannot be tunnelled through) are not tested.
 
 use super::separation::{Separation, separate};
-use crate::geometry::{BroadPhase, WorldHulls};
+use crate::geometry::{BroadPhase, WorldHulls, hull_boxes};
 use crate::kinematics::{KinOrder, Kinematics, SegmentMotion, hull_radii};
 use crate::model::Model;
 use nalgebra::{DVector, Matrix3, Vector3};
+use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::query::gjk::VoronoiSimplex;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -189,17 +210,33 @@ pub struct Ccd {
     pad: Vec<f64>,
     kin: Kinematics,
     hulls: WorldHulls,
+    /// Per hull at the segment's start: its unpadded box.
+    boxes: Vec<Aabb>,
     broad: BroadPhase,
+    /// The broad phase of [`Ccd::cleared_by_lever_bound`] (its own sweep
+    /// order: its pads differ from the exact ones).
+    lever_broad: BroadPhase,
     candidates: Vec<(usize, usize)>,
     doubt: Vec<Doubt>,
-    /// Per hull at the segment's start: centroid and bounding radius.
-    spheres: Vec<(Vector3<f64>, f64)>,
+    /// Per hull at the segment's start: centroid and bounding radius,
+    /// computed on first use (`None`: not yet).
+    spheres: Vec<Option<(Vector3<f64>, f64)>>,
     /// Depth of every link in its tree (roots 0), for common ancestors.
     depth: Vec<usize>,
     trial: DVector<f64>,
+    /// Per advancement round: the links whose poses are needed, and the
+    /// hulls whose vertices are (with repeats).
+    needed_link: Vec<bool>,
+    needed_hull: Vec<usize>,
     /// The segment `α dir` being certified.
     seg: DVector<f64>,
     simplex: VoronoiSimplex,
+    /// Tests: whether [`Ccd::cleared_by_lever_bound`] is tried, and how
+    /// often it cleared a segment.
+    #[cfg(test)]
+    lever_shortcut: bool,
+    #[cfg(test)]
+    lever_cleared: usize,
 }
 
 impl Ccd {
@@ -212,7 +249,9 @@ impl Ccd {
             pad: Vec::new(),
             kin: Kinematics::new(model),
             hulls: WorldHulls::new(model),
+            boxes: Vec::new(),
             broad: BroadPhase::default(),
+            lever_broad: BroadPhase::default(),
             candidates: Vec::new(),
             doubt: Vec::new(),
             spheres: Vec::new(),
@@ -226,8 +265,14 @@ impl Ccd {
                 })
                 .collect(),
             trial: DVector::zeros(model.ndof()),
+            needed_link: Vec::new(),
+            needed_hull: Vec::new(),
             seg: DVector::zeros(model.ndof()),
             simplex: VoronoiSimplex::new(),
+            #[cfg(test)]
+            lever_shortcut: true,
+            #[cfg(test)]
+            lever_cleared: 0,
         }
     }
 
@@ -239,21 +284,6 @@ impl Ccd {
             (d.dir.dot(&(m.drift[la] - m.drift[lb])) + m.spread[la] + m.spread[lb]).max(0.0);
         // Both bound the closing rate: the smaller holds.
         d.relative.map_or(world, |r| r.min(world))
-    }
-
-    /// Lowest common ancestor of links `a` and `b` (`None`: different trees).
-    fn common_ancestor(&self, model: &Model, mut a: usize, mut b: usize) -> Option<usize> {
-        while self.depth[a] > self.depth[b] {
-            a = model.links[a].parent?;
-        }
-        while self.depth[b] > self.depth[a] {
-            b = model.links[b].parent?;
-        }
-        while a != b {
-            a = model.links[a].parent?;
-            b = model.links[b].parent?;
-        }
-        Some(a)
     }
 
     /// Lower bound of the distance of hulls `a`, `b` from their boxes
@@ -288,21 +318,84 @@ impl Ccd {
         }
     }
 
+    /// Whether the lever bound alone shows that [`Ccd::fraction`]'s full
+    /// computation would clear every pair by its cheap skips (and so return
+    /// 1 with no pair tested): the candidates of boxes padded by the upper
+    /// reach `‖c‖ + Ē ≥ ‖c‖ + E` contain every candidate of the exactly
+    /// padded boxes, and for each of them the relative-motion bound with
+    /// `Ē` (at least the one with `E`, rounding being monotone) is 0 or at
+    /// most `(1 − η)` times a lower bound of the cheap gap: the exact
+    /// bounding-sphere gap, or the box gap minus `10⁻¹²` of the operands'
+    /// magnitudes (the exactly padded boxes' gap differs from the unpadded
+    /// one by a few roundings, `~10⁻¹⁶` of them). Stops at the first pair
+    /// it cannot clear (on long chains the lever bound is loose and the
+    /// padded boxes overlap a lot). Needs the lever half of the motion
+    /// bound and the hulls and boxes at the start.
+    fn cleared_by_lever_bound(
+        &mut self,
+        model: &Model,
+        excluded: &BTreeSet<(usize, usize)>,
+    ) -> bool {
+        self.pad.clear();
+        let motion = &self.motion;
+        self.pad
+            .extend(self.hulls.ids.iter().map(|id| motion.reach_upper(id.link)));
+        if !self.pad.iter().all(|p| p.is_finite()) {
+            return false;
+        }
+        let Ccd {
+            options,
+            motion,
+            pad,
+            hulls,
+            boxes,
+            lever_broad,
+            spheres,
+            depth,
+            ..
+        } = self;
+        let one_minus_eta = 1.0 - options.keep_fraction;
+        lever_broad.swept_pairs_until(hulls, boxes, pad, excluded, |a, b| {
+            let (bound, _) = pair_bound(model, depth, hulls, motion, a, b, &motion.spread_upper);
+            if bound == 0.0 {
+                return true;
+            }
+            let (ba, bb) = (&boxes[a], &boxes[b]);
+            let slack = 1e-12 * (pad[a] + pad[b]);
+            let box_gap = (0..3)
+                .map(|e| {
+                    let m = 1e-12 * (ba.mins[e].abs() + ba.maxs[e].abs())
+                        + 1e-12 * (bb.mins[e].abs() + bb.maxs[e].abs())
+                        + slack;
+                    (bb.mins[e] - ba.maxs[e]).max(ba.mins[e] - bb.maxs[e]) - m
+                })
+                .fold(f64::NEG_INFINITY, f64::max);
+            let (sa, sb) = (sphere(hulls, spheres, a), sphere(hulls, spheres, b));
+            let cheap = box_gap.max((sa.0 - sb.0).norm() - sa.1 - sb.1);
+            bound <= one_minus_eta * cheap
+        })
+    }
+
     /// The largest certified `α' ≤ α` for the segment `q → q + α dir`
     /// (see the module docs); `excluded` are the link pairs that never
-    /// interact, `charts` the step's rotation-vector chart centres.
+    /// interact, `charts` the step's rotation-vector chart centres. `start`,
+    /// when given, is the kinematics at `q` as `Kinematics::update(q,
+    /// charts, KinOrder::Pose)` computes it (bit for bit; e.g. the step's
+    /// kinematics at `θ^t`), reused instead of evaluated again.
+    #[allow(clippy::too_many_arguments)]
     pub fn certify(
         &mut self,
         model: &Model,
         excluded: &BTreeSet<(usize, usize)>,
         q: &DVector<f64>,
+        start: Option<&Kinematics>,
         dir: &DVector<f64>,
         alpha: f64,
         charts: &[Matrix3<f64>],
     ) -> f64 {
         self.seg.clone_from(dir);
         self.seg *= alpha;
-        let frac = self.fraction(model, excluded, q, charts);
+        let frac = self.fraction(model, excluded, q, start, charts);
         self.stats.segments += 1;
         if frac < 1.0 {
             self.stats.alpha_caps += 1;
@@ -313,54 +406,76 @@ impl Ccd {
 
     /// The largest certified fraction `β ∈ [0, 1]` of the segment
     /// `q → q + seg`.
+    ///
+    /// Cost: the lever half of the motion bound (no trigonometry) and one
+    /// broad phase decide most segments
+    /// ([`Ccd::cleared_by_lever_bound`]); only when they cannot are the
+    /// exact start rates computed and the pairs examined as described in
+    /// the module docs. Either way the result is the same, bit for bit.
     fn fraction(
         &mut self,
         model: &Model,
         excluded: &BTreeSet<(usize, usize)>,
         q: &DVector<f64>,
+        start: Option<&Kinematics>,
         charts: &[Matrix3<f64>],
     ) -> f64 {
-        let dq = &self.seg;
-        self.kin.update(model, q, charts, KinOrder::Pose);
+        if start.is_none() {
+            self.kin.update(model, q, charts, KinOrder::Pose);
+        }
+        let kin = start.unwrap_or(&self.kin);
         hull_radii(model, &mut self.radius);
-        self.motion.update(
-            model,
-            &self.kin.pre,
-            &self.kin.pose,
-            charts,
-            &self.radius,
-            q,
-            dq,
-        );
-        self.hulls.update(model, &self.kin.pose);
+        self.motion
+            .update_lever(model, &kin.pre, &self.radius, q, &self.seg);
+        self.hulls.update(model, &kin.pose);
+        hull_boxes(&self.hulls, &mut self.boxes);
+        self.spheres.clear();
+        self.spheres.resize(self.hulls.ids.len(), None);
+        #[cfg(test)]
+        let shortcut = self.lever_shortcut;
+        #[cfg(not(test))]
+        let shortcut = true;
+        if shortcut && self.cleared_by_lever_bound(model, excluded) {
+            #[cfg(test)]
+            {
+                self.lever_cleared += 1;
+            }
+            return 1.0;
+        }
+        let kin = start.unwrap_or(&self.kin);
+        self.motion
+            .update_rates(model, &kin.pre, &kin.pose, charts, q, &self.seg);
         self.pad.clear();
         let motion = &self.motion;
         self.pad
             .extend(self.hulls.ids.iter().map(|id| motion.reach(id.link)));
-        self.broad
-            .swept_pairs(&self.hulls, &self.pad, excluded, &mut self.candidates);
+        self.broad.swept_pairs(
+            &self.hulls,
+            &self.boxes,
+            &self.pad,
+            excluded,
+            &mut self.candidates,
+        );
         let eta = self.options.keep_fraction;
-        self.spheres.clear();
-        for h in 0..self.hulls.ids.len() {
-            let x = self.hulls.hull(h);
-            let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
-            let r = x.iter().map(|v| (v - c).norm()).fold(0.0, f64::max);
-            self.spheres.push((c, r));
-        }
         self.doubt.clear();
         for k in 0..self.candidates.len() {
             let (a, b) = self.candidates[k];
-            let (la, lb) = (self.hulls.ids[a].link, self.hulls.ids[b].link);
-            let m = &self.motion;
             // Relative motion bound, direction-free (m per unit α).
-            let relative = self
-                .common_ancestor(model, la, lb)
-                .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
-            let world = (m.drift[la] - m.drift[lb]).norm() + m.spread[la] + m.spread[lb];
-            let bound = relative.map_or(world, |r| r.min(world));
+            let (bound, relative) = pair_bound(
+                model,
+                &self.depth,
+                &self.hulls,
+                &self.motion,
+                a,
+                b,
+                &self.motion.spread,
+            );
             // Cheap skips: no relative motion, or less than a lower bound of
             // the distance from the boxes or the bounding spheres.
-            let (sa, sb) = (self.spheres[a], self.spheres[b]);
+            let (sa, sb) = (
+                sphere(&self.hulls, &mut self.spheres, a),
+                sphere(&self.hulls, &mut self.spheres, b),
+            );
             let cheap = self.box_gap(a, b).max((sa.0 - sb.0).norm() - sa.1 - sb.1);
             if bound == 0.0 || bound <= (1.0 - eta) * cheap {
                 continue;
@@ -403,9 +518,27 @@ impl Ccd {
             self.stats.rounds += 1;
             self.trial.clone_from(q);
             self.trial.axpy(next, &self.seg, 1.0);
-            self.kin.update(model, &self.trial, charts, KinOrder::Pose);
-            self.hulls.update(model, &self.kin.pose);
             let soon = (2.0 * next - alpha).min(1.0);
+            // Kinematics and world vertices at the new α, of the pairs to be
+            // measured again only (their links and those links' ancestors).
+            self.needed_link.clear();
+            self.needed_link.resize(model.links.len(), false);
+            self.needed_hull.clear();
+            for d in self.doubt.iter().filter(|d| d.horizon < soon) {
+                for h in [d.a, d.b] {
+                    self.needed_hull.push(h);
+                    let mut link = Some(self.hulls.ids[h].link);
+                    while let Some(l) = link.filter(|&l| !self.needed_link[l]) {
+                        self.needed_link[l] = true;
+                        link = model.links[l].parent;
+                    }
+                }
+            }
+            self.kin
+                .update_poses_where(model, &self.trial, charts, &self.needed_link);
+            for &h in &self.needed_hull {
+                self.hulls.update_hull(model, &self.kin.pose, h);
+            }
             let mut doubt = std::mem::take(&mut self.doubt);
             let mut lost = false;
             doubt.retain_mut(|d| {
@@ -435,6 +568,65 @@ impl Ccd {
     }
 }
 
+/// Lowest common ancestor of links `a` and `b` (`None`: different trees);
+/// `depth` is every link's depth in its tree.
+fn common_ancestor(model: &Model, depth: &[usize], mut a: usize, mut b: usize) -> Option<usize> {
+    while depth[a] > depth[b] {
+        a = model.links[a].parent?;
+    }
+    while depth[b] > depth[a] {
+        b = model.links[b].parent?;
+    }
+    while a != b {
+        a = model.links[a].parent?;
+        b = model.links[b].parent?;
+    }
+    Some(a)
+}
+
+/// Bound on the relative motion of hulls `a`, `b` over the segment,
+/// direction-free (m per unit α): through their common ancestor's frame
+/// when they have one, else the world-frame sum `‖c_a − c_b‖ + E_a + E_b`;
+/// `spread` is the per-link `E` to use (`E_i`, or its upper bound `Ē_i`).
+/// Also returns the relative bound alone (for [`Doubt::relative`]).
+fn pair_bound(
+    model: &Model,
+    depth: &[usize],
+    hulls: &WorldHulls,
+    m: &SegmentMotion,
+    a: usize,
+    b: usize,
+    spread: &[f64],
+) -> (f64, Option<f64>) {
+    let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+    let relative = common_ancestor(model, depth, la, lb)
+        .map(|c| m.relative_spread(la, c) + m.relative_spread(lb, c));
+    let world = (m.drift[la] - m.drift[lb]).norm() + spread[la] + spread[lb];
+    (relative.map_or(world, |r| r.min(world)), relative)
+}
+
+/// Centroid and bounding radius of hull `h` of `hulls`, cached in
+/// `cache[h]` (`√(max ‖v − c‖²)` is bit for bit `max ‖v − c‖`, see
+/// [`hull_radii`]).
+fn sphere(
+    hulls: &WorldHulls,
+    cache: &mut [Option<(Vector3<f64>, f64)>],
+    h: usize,
+) -> (Vector3<f64>, f64) {
+    if let Some(s) = cache[h] {
+        return s;
+    }
+    let x = hulls.hull(h);
+    let c = x.iter().sum::<Vector3<f64>>() / x.len().max(1) as f64;
+    let r = x
+        .iter()
+        .map(|v| (v - c).norm_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    cache[h] = Some((c, r));
+    (c, r)
+}
+
 impl Doubt {
     /// Sets the horizon from the gap measured at `at` and the closing rate
     /// `rate`: `at + (g − η g₀)/ρ`. Returns false when that covers the
@@ -450,188 +642,5 @@ impl Doubt {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::math::{pose_from, transform_point};
-    use crate::model::{Hull, JointKind, Link, MassModel, RobotInfo};
-    use nalgebra::{Matrix3, Vector3};
-
-    fn link(
-        name: &str,
-        parent: Option<usize>,
-        joint: JointKind,
-        at: Vector3<f64>,
-        size: Vector3<f64>,
-        centre: Vector3<f64>,
-    ) -> Link {
-        Link {
-            name: name.into(),
-            robot: 0,
-            parent,
-            joint_name: name.into(),
-            joint,
-            limit: None,
-            attach: pose_from(&Matrix3::identity(), &at),
-            hulls: vec![Hull::new(Hull::cuboid(size, centre), 0.1).unwrap()],
-            mass_model: MassModel::Vertices,
-            solid_triangles: Vec::new(),
-            surface: Vec::new(),
-            dof_offset: 0,
-            chart: None,
-            collides: true,
-        }
-    }
-
-    fn model(links: Vec<Link>) -> Model {
-        let n = links.len();
-        Model::new(
-            links,
-            vec![RobotInfo {
-                name: "r".into(),
-                links: 0..n,
-            }],
-        )
-    }
-
-    /// Smallest certified gap of every candidate hull pair at `m` points of
-    /// `[0, alpha]` of `q + α dir`.
-    fn min_gap_along(
-        model: &Model,
-        q: &DVector<f64>,
-        dir: &DVector<f64>,
-        alpha: f64,
-        m: usize,
-    ) -> f64 {
-        let charts = vec![Matrix3::identity(); model.nchart];
-        let mut worst = f64::INFINITY;
-        for k in 0..=m {
-            let qa = q + dir * (alpha * k as f64 / m as f64);
-            let poses = crate::kinematics::link_poses(model, &qa, &charts);
-            let world = |l: usize| -> Vec<Vector3<f64>> {
-                model.links[l].hulls[0]
-                    .x_local
-                    .iter()
-                    .map(|x| transform_point(&poses[l], x))
-                    .collect()
-            };
-            for a in 0..model.links.len() {
-                for b in a + 1..model.links.len() {
-                    if model.links[b].parent == Some(a) {
-                        continue;
-                    }
-                    let (xa, xb) = (world(a), world(b));
-                    let g = match separate(&xa, &xb, None, &mut VoronoiSimplex::new()) {
-                        Ok(Separation::Separated { max_a, min_b, .. }) => min_b - max_a,
-                        _ => -1.0,
-                    };
-                    worst = worst.min(g);
-                }
-            }
-        }
-        worst
-    }
-
-    #[test]
-    fn a_box_shot_through_a_thin_wall_is_stopped_at_the_margin_exactly() {
-        let m = model(vec![
-            link(
-                "box",
-                None,
-                JointKind::Free,
-                Vector3::zeros(),
-                Vector3::new(0.05, 0.05, 0.05),
-                Vector3::zeros(),
-            ),
-            link(
-                "wall",
-                None,
-                JointKind::Fixed,
-                Vector3::zeros(),
-                Vector3::new(0.01, 1.0, 1.0),
-                Vector3::zeros(),
-            ),
-        ]);
-        let q = DVector::from_vec(vec![-0.5, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        let dir = DVector::from_vec(vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        let mut ccd = Ccd::new(&m, CcdOptions::default());
-        let charts = vec![Matrix3::identity(); m.nchart];
-        let excluded = BTreeSet::new();
-        let a = ccd.certify(&m, &excluded, &q, &dir, 1.0, &charts);
-        // Gap 0.47 m, pure translation: the bound is exact, so the cut is
-        // at (1 − η) g₀ / ‖Δx‖.
-        let g0 = 0.5 - 0.025 - 0.005;
-        assert!((a - 0.9 * g0).abs() < 1e-9, "α = {a}");
-        assert!(min_gap_along(&m, &q, &dir, a, 400) >= 0.1 * g0 - 1e-9);
-        assert_eq!(ccd.stats.alpha_caps, 1);
-        // A half step stays clear of the wall: nothing to cut.
-        let b = ccd.certify(&m, &excluded, &q, &dir, 0.4, &charts);
-        assert_eq!(b, 0.4);
-        // Tumbling while flying (free joint rotation): still certified.
-        let dir = DVector::from_vec(vec![1.0, 0.2, 0.0, 4.0, -3.0, 6.0]);
-        let a = ccd.certify(&m, &excluded, &q, &dir, 1.0, &charts);
-        assert!(a > 0.1 && a < 0.5, "α = {a}");
-        assert!(min_gap_along(&m, &q, &dir, a, 2000) > 0.0);
-    }
-
-    #[test]
-    fn a_whipped_chain_is_certified_along_its_curved_path() {
-        // Root revolute (z) → prismatic (x) → spherical: three 0.3 m links
-        // swept through a thin post at (0.5, 0.3).
-        let z = Vector3::z();
-        let rod = Vector3::new(0.3, 0.02, 0.02);
-        let mid = Vector3::new(0.15, 0.0, 0.0);
-        let m = model(vec![
-            link(
-                "a",
-                None,
-                JointKind::Revolute { axis: z },
-                Vector3::zeros(),
-                rod,
-                mid,
-            ),
-            link(
-                "b",
-                Some(0),
-                JointKind::Prismatic { axis: Vector3::x() },
-                Vector3::new(0.3, 0.0, 0.0),
-                rod,
-                mid,
-            ),
-            link(
-                "c",
-                Some(1),
-                JointKind::Spherical,
-                Vector3::new(0.3, 0.0, 0.0),
-                rod,
-                mid,
-            ),
-            link(
-                "post",
-                None,
-                JointKind::Fixed,
-                Vector3::new(0.5, 0.3, 0.0),
-                Vector3::new(0.01, 0.01, 0.5),
-                Vector3::zeros(),
-            ),
-        ]);
-        let q = DVector::from_vec(vec![-0.3, 0.0, 0.0, 0.0, 0.0]);
-        let dir = DVector::from_vec(vec![2.0, 0.05, 0.0, 0.0, 0.3]);
-        let charts = vec![Matrix3::identity(); m.nchart];
-        // Without CCD the segment's end is clear but the path is not.
-        assert!(min_gap_along(&m, &q, &dir, 1.0, 2000) < 0.0);
-        let end = min_gap_along(&m, &(&q + &dir), &dir, 0.0, 1);
-        assert!(end > 0.0, "end {end}");
-        let mut ccd = Ccd::new(&m, CcdOptions::default());
-        let a = ccd.certify(
-            &m,
-            &BTreeSet::from([(0, 1), (1, 2)]),
-            &q,
-            &dir,
-            1.0,
-            &charts,
-        );
-        assert!(a > 0.01 && a < 1.0, "α = {a}");
-        assert!(min_gap_along(&m, &q, &dir, a, 4000) > 0.0);
-        assert!(ccd.stats.pairs_advanced > 0 && ccd.stats.rounds > 0);
-    }
-}
+#[path = "ccd_tests.rs"]
+mod tests;

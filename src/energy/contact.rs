@@ -276,6 +276,7 @@ impl Energy for ContactEnergy {
         &mut self,
         ctx: &StepContext,
         q: &DVector<f64>,
+        start: Option<&Kinematics>,
         dq: &DVector<f64>,
         alpha: f64,
         charts: &[nalgebra::Matrix3<f64>],
@@ -284,9 +285,15 @@ impl Energy for ContactEnergy {
             return Ok(alpha);
         }
         let t0 = Instant::now();
-        let out = self
-            .ccd
-            .certify(ctx.model, &self.settings.excluded, q, dq, alpha, charts);
+        let out = self.ccd.certify(
+            ctx.model,
+            &self.settings.excluded,
+            q,
+            start,
+            dq,
+            alpha,
+            charts,
+        );
         self.ccd_time += t0.elapsed();
         Ok(out)
     }

@@ -225,11 +225,16 @@ pub trait Energy: Send + Sync {
     /// the line search accepted: the largest `α' ≤ α` such that the term
     /// stays finite (collision-free) at *every* point of `[q, q + α' dq]`,
     /// not only at its end. `charts` are the rotation-vector chart centres
-    /// of the step. Adds nothing to the objective. Default `α` (no check).
+    /// of the step; `start`, when given, the kinematics at `q` (poses only,
+    /// [`KinOrder::Pose`](crate::kinematics::KinOrder), with `charts`: the
+    /// step's kinematics at `θ^t` when `q = θ^t`). Adds nothing to the
+    /// objective. Default `α` (no check).
+    #[allow(clippy::too_many_arguments)]
     fn certify_step(
         &mut self,
         _ctx: &StepContext,
         _q: &DVector<f64>,
+        _start: Option<&Kinematics>,
         _dq: &DVector<f64>,
         alpha: f64,
         _charts: &[nalgebra::Matrix3<f64>],

@@ -37,8 +37,8 @@ pub struct BroadPhase {
     axis: usize,
 }
 
-/// The box of `x` padded by `half` on every side.
-fn padded_box(x: &[nalgebra::Vector3<f64>], half: f64) -> Aabb {
+/// The box of `x` (componentwise minimum and maximum).
+fn tight_box(x: &[nalgebra::Vector3<f64>]) -> Aabb {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for v in x {
         for e in 0..3 {
@@ -47,9 +47,29 @@ fn padded_box(x: &[nalgebra::Vector3<f64>], half: f64) -> Aabb {
         }
     }
     Aabb::new(
-        Vector::new(lo[0] - half, lo[1] - half, lo[2] - half),
-        Vector::new(hi[0] + half, hi[1] + half, hi[2] + half),
+        Vector::new(lo[0], lo[1], lo[2]),
+        Vector::new(hi[0], hi[1], hi[2]),
     )
+}
+
+/// `b` padded by `half` on every side.
+fn padded(b: &Aabb, half: f64) -> Aabb {
+    Aabb::new(
+        Vector::new(b.mins[0] - half, b.mins[1] - half, b.mins[2] - half),
+        Vector::new(b.maxs[0] + half, b.maxs[1] + half, b.maxs[2] + half),
+    )
+}
+
+/// The box of `x` padded by `half` on every side.
+fn padded_box(x: &[nalgebra::Vector3<f64>], half: f64) -> Aabb {
+    padded(&tight_box(x), half)
+}
+
+/// The (unpadded) box of every hull of `hulls`, written into `out`; for
+/// [`BroadPhase::swept_pairs`], which pads them as [`padded_box`] would.
+pub fn hull_boxes(hulls: &WorldHulls, out: &mut Vec<Aabb>) {
+    out.clear();
+    out.extend((0..hulls.ids.len()).map(|h| tight_box(hulls.hull(h))));
 }
 
 /// Whether the closed intervals of `a` and `b` overlap along axis `e`
@@ -84,17 +104,20 @@ impl BroadPhase {
     /// `pad[h]` on every side — how far any of its points can move on the
     /// segment being checked, so the padded box contains the hull's whole
     /// swept volume and a pair that could meet anywhere on the segment is a
-    /// candidate.
+    /// candidate. `boxes` are the hulls' unpadded boxes ([`hull_boxes`]):
+    /// one computation serves queries with different pads, and the padded
+    /// boxes are bit for bit those of [`padded_box`].
     pub fn swept_pairs(
         &mut self,
         hulls: &WorldHulls,
+        boxes: &[Aabb],
         pad: &[f64],
         excluded: &BTreeSet<(usize, usize)>,
         out: &mut Vec<(usize, usize)>,
     ) {
         self.aabbs.clear();
-        for (h, &p) in pad.iter().enumerate().take(hulls.ids.len()) {
-            self.aabbs.push(padded_box(hulls.hull(h), p));
+        for (b, &p) in boxes.iter().zip(pad).take(hulls.ids.len()) {
+            self.aabbs.push(padded(b, p));
         }
         self.sweep(hulls, excluded, out);
     }
@@ -102,6 +125,26 @@ impl BroadPhase {
     /// The padded boxes of the last query, per hull.
     pub fn boxes(&self) -> &[Aabb] {
         &self.aabbs
+    }
+
+    /// As [`BroadPhase::swept_pairs`], but each candidate pair is handed
+    /// to `visit` as it is found (in sweep order, not sorted) until `visit`
+    /// returns false; returns whether every candidate was visited. For a
+    /// test that must hold for every candidate and can stop at the first
+    /// failure.
+    pub fn swept_pairs_until(
+        &mut self,
+        hulls: &WorldHulls,
+        boxes: &[Aabb],
+        pad: &[f64],
+        excluded: &BTreeSet<(usize, usize)>,
+        visit: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
+        self.aabbs.clear();
+        for (b, &p) in boxes.iter().zip(pad).take(hulls.ids.len()) {
+            self.aabbs.push(padded(b, p));
+        }
+        self.sweep_until(hulls, excluded, visit)
     }
 
     /// Sweep and prune over `self.aabbs` (see the module documentation).
@@ -112,10 +155,25 @@ impl BroadPhase {
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
+        self.sweep_until(hulls, excluded, |a, b| {
+            out.push((a, b));
+            true
+        });
+        out.sort_unstable();
+    }
+
+    /// The sweep itself: every candidate pair `(a, b)`, `a < b`, goes to
+    /// `visit` until it returns false (then false is returned).
+    fn sweep_until(
+        &mut self,
+        hulls: &WorldHulls,
+        excluded: &BTreeSet<(usize, usize)>,
+        mut visit: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
         let boxes = &self.aabbs;
         let n = boxes.len();
         if n < 2 {
-            return;
+            return true;
         }
         // Axis of the largest spread of the box centres (NaN-free spreads
         // only; ties keep the lower axis).
@@ -176,12 +234,12 @@ impl BroadPhase {
                 }
                 let (a, b) = (a.min(b), a.max(b));
                 let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-                if la != lb && !excluded.contains(&(la.min(lb), la.max(lb))) {
-                    out.push((a, b));
+                if la != lb && !excluded.contains(&(la.min(lb), la.max(lb))) && !visit(a, b) {
+                    return false;
                 }
             }
         }
-        out.sort_unstable();
+        true
     }
 }
 
@@ -233,7 +291,9 @@ mod tests {
         // BVH query with those pads, and as brute force.
         let pad: Vec<f64> = (0..centers.len()).map(|i| 0.2 * (i % 5) as f64).collect();
         let mut swept = Vec::new();
-        bp.swept_pairs(&w, &pad, &excluded, &mut swept);
+        let mut boxes = Vec::new();
+        hull_boxes(&w, &mut boxes);
+        bp.swept_pairs(&w, &boxes, &pad, &excluded, &mut swept);
         let mut brute = Vec::new();
         for a in 0..centers.len() {
             for b in a + 1..centers.len() {

@@ -43,12 +43,18 @@ impl WorldHulls {
 
     /// Recomputes world vertices for link poses `poses`.
     pub fn update(&mut self, model: &Model, poses: &[Pose]) {
-        for (id, r) in self.ids.iter().zip(&self.ranges) {
-            let a = &poses[id.link];
-            let local = &model.links[id.link].hulls[id.hull].x_local;
-            for (x, xl) in self.vertices[r.clone()].iter_mut().zip(local) {
-                *x = transform_point(a, xl);
-            }
+        for h in 0..self.ids.len() {
+            self.update_hull(model, poses, h);
+        }
+    }
+
+    /// Recomputes the world vertices of hull `h` only.
+    pub fn update_hull(&mut self, model: &Model, poses: &[Pose], h: usize) {
+        let id = self.ids[h];
+        let a = &poses[id.link];
+        let local = &model.links[id.link].hulls[id.hull].x_local;
+        for (x, xl) in self.vertices[self.ranges[h].clone()].iter_mut().zip(local) {
+            *x = transform_point(a, xl);
         }
     }
 

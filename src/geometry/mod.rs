@@ -7,6 +7,6 @@ pub mod parallel;
 pub mod sampling;
 pub mod topology;
 
-pub use broad_phase::BroadPhase;
+pub use broad_phase::{BroadPhase, hull_boxes};
 pub use hulls::{HullId, WorldHulls};
 pub use parallel::PairWork;

@@ -138,6 +138,38 @@ impl Kinematics {
         }
     }
 
+    /// Poses only (as [`Kinematics::update`] with [`KinOrder::Pose`], the
+    /// same operations bit for bit) of the links with `needed[i]`; every
+    /// ancestor of a needed link must be needed too. The other links keep
+    /// whatever they held.
+    pub fn update_poses_where(
+        &mut self,
+        model: &Model,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+        needed: &[bool],
+    ) {
+        self.order = KinOrder::Pose;
+        for (i, link) in model.links.iter().enumerate() {
+            if !needed[i] {
+                continue;
+            }
+            let pre = match link.parent {
+                Some(p) => compose(&self.pose[p], &link.attach),
+                None => link.attach,
+            };
+            let chart = link
+                .chart
+                .map(|c| charts[c])
+                .unwrap_or_else(Matrix3::identity);
+            let qi = q.rows(link.dof_offset, link.ndof());
+            let local = &mut self.local[i];
+            local.value = link.joint.transform(&chart, qi.as_slice());
+            self.pose[i] = compose(&pre, &local.value);
+            self.pre[i] = pre;
+        }
+    }
+
     /// `∂A_i/∂θ_k` (zero when `k` does not move link `i`).
     pub fn dpose(&self, model: &Model, link: usize, k: usize) -> Pose {
         if model.ancestor_dofs[link].binary_search(&k).is_ok() {

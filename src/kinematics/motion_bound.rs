@@ -73,6 +73,16 @@ pub struct SegmentMotion {
     origin: Vec<f64>,
     /// `V'_i`: as `V_i` with the drift folded in (no split).
     origin_full: Vec<f64>,
+    /// `U_i ≥ V_i`: `V_i`'s recursion with the lever bound `W (1 + 10⁻¹²)`
+    /// in place of `Ŵ` (see [`SegmentMotion::update_lever`]).
+    origin_upper: Vec<f64>,
+    /// `Ē_i = U_i + W_i r_i ≥ E_i` (m per unit α), known before the rates.
+    pub spread_upper: Vec<f64>,
+    /// Per link, of its own joint: `w_i` (lever angular rate, rad per unit
+    /// α), `ℓ_i = ‖t_i‖ + τ̄_i` (m) and `‖τ̇_i‖` (m per unit α).
+    joint_rate: Vec<f64>,
+    arm: Vec<f64>,
+    travel_rate: Vec<f64>,
     /// `D_i = Σ_{j ≤ i} (‖t_j‖ + τ̄_j)`, summed along the chain from the root.
     lever: Vec<f64>,
     /// `r_i`.
@@ -139,45 +149,55 @@ impl SegmentMotion {
         q: &DVector<f64>,
         dq: &DVector<f64>,
     ) {
+        self.update_lever(model, pre, radius, q, dq);
+        self.update_rates(model, pre, pose, charts, q, dq);
+    }
+
+    /// The first half of [`SegmentMotion::update`]: everything that needs
+    /// no rates at the start — the drift `c_i`, the lever sums `W_i`,
+    /// `V'_i`, `D_i` (so [`SegmentMotion::relative_spread`] is final after
+    /// this), and the upper bound `Ē_i ≥ E_i` ([`SegmentMotion::spread_upper`],
+    /// [`SegmentMotion::reach_upper`]). No trigonometry: a few norms per link.
+    ///
+    /// `Ē_i` bounds `E_i` from above *in floating point*, whatever
+    /// [`SegmentMotion::update_rates`] later finds: `E_i` is
+    /// the minimum of the lever bound `V_i + Ŵ_i r_i` and the rate bound,
+    /// and `V_i` is a recursion of sums and products of non-negative terms
+    /// in `Ŵ_λ ≤ W_λ (1 + 10⁻¹²)`; the same recursion with `W (1 + 10⁻¹²)`
+    /// in place of `Ŵ`,
+    ///
+    /// ```text
+    /// U_i = U_λ [+ W_λ(1 + 10⁻¹²) ℓ_i + ‖τ̇_i‖ when W_λ > 0],   Ē_i = U_i + W_i r_i,
+    /// ```
+    ///
+    /// is at least as large term by term, and rounding is monotone (for
+    /// non-negative operands `a ≤ a'`, `b ≤ b'` give `fl(a + b) ≤ fl(a' + b')`
+    /// and `fl(a b) ≤ fl(a' b')`), so `Ē_i ≥ E_i` as computed, bit for bit
+    /// (and every sum of them with the same other operands, e.g. the reach).
+    /// [`crate::contact::ccd`] uses it to clear a segment before any rate is
+    /// computed.
+    pub fn update_lever(
+        &mut self,
+        model: &Model,
+        pre: &[Pose],
+        radius: &[f64],
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+    ) {
         let n = model.links.len();
         self.drift.resize(n, Vector3::zeros());
-        self.spread.resize(n, 0.0);
         self.angular.resize(n, 0.0);
-        self.angular_tight.resize(n, 0.0);
-        self.origin.resize(n, 0.0);
         self.origin_full.resize(n, 0.0);
         self.lever.resize(n, 0.0);
-        self.omega0.resize(n, Vector3::zeros());
-        self.origin_rate0.resize(n, Vector3::zeros());
-        self.omega_change.resize(n, 0.0);
-        self.origin_change.resize(n, 0.0);
-        self.pose_rate.resize(n, Pose::zeros());
+        self.joint_rate.resize(n, 0.0);
+        self.arm.resize(n, 0.0);
+        self.travel_rate.resize(n, 0.0);
+        self.origin_upper.resize(n, 0.0);
+        self.spread_upper.resize(n, 0.0);
         self.radius.clear();
         self.radius.extend_from_slice(radius);
         for (i, link) in model.links.iter().enumerate() {
             let o = link.dof_offset;
-            let nd = link.ndof();
-            // Exact rates at the start: dT_i/dα = dP_i/dα · J + P_i · dJ/dα,
-            // dP_i/dα = dT_λ/dα · A_i.
-            let chart = link
-                .chart
-                .map(|c| charts[c])
-                .unwrap_or_else(Matrix3::identity);
-            let (local, local_rate) = link.joint.transform_velocity(
-                &chart,
-                &q.as_slice()[o..o + nd],
-                &dq.as_slice()[o..o + nd],
-            );
-            let pre_rate = match link.parent {
-                Some(p) => rate_compose(&self.pose_rate[p], &link.attach),
-                None => Pose::zeros(),
-            };
-            let rate = rate_compose(&pre_rate, &local) + rotate_rate(&pre[i], &local_rate);
-            self.pose_rate[i] = rate;
-            let spin = rate.fixed_view::<3, 3>(0, 0) * rot(&pose[i]).transpose();
-            self.omega0[i] = axial(&spin);
-            self.origin_rate0[i] = rate.column(3).into_owned();
-
             let (w, rate_t, travel) = match &link.joint {
                 JointKind::Fixed => (0.0, Vector3::zeros(), 0.0),
                 JointKind::Revolute { .. } => (dq[o].abs(), Vector3::zeros(), 0.0),
@@ -207,19 +227,88 @@ impl SegmentMotion {
                     )
                 }
             };
-            let zero = Vector3::zeros();
-            let (parent_w, parent_wt, parent_v, parent_c, parent_full, parent_lever) =
-                match link.parent {
-                    Some(p) => (
-                        self.angular[p],
-                        self.angular_tight[p],
-                        self.origin[p],
-                        self.drift[p],
-                        self.origin_full[p],
-                        self.lever[p],
-                    ),
-                    None => (0.0, 0.0, 0.0, zero, 0.0, 0.0),
-                };
+            let (parent_w, parent_c, parent_full, parent_lever, parent_upper) = match link.parent {
+                Some(p) => (
+                    self.angular[p],
+                    self.drift[p],
+                    self.origin_full[p],
+                    self.lever[p],
+                    self.origin_upper[p],
+                ),
+                None => (0.0, Vector3::zeros(), 0.0, 0.0, 0.0),
+            };
+            let attach = link.attach.column(3).norm();
+            let ell = attach + travel;
+            let tau_rate = rate_t.norm();
+            self.joint_rate[i] = w;
+            self.arm[i] = ell;
+            self.travel_rate[i] = tau_rate;
+            self.lever[i] = parent_lever + ell;
+            self.origin_full[i] = parent_full + parent_w * ell + tau_rate;
+            self.angular[i] = parent_w + w;
+            let (drift, upper) = if parent_w == 0.0 {
+                // Pre-joint frame fixed on the segment: exact drift.
+                (parent_c + rot(&pre[i]) * rate_t, parent_upper)
+            } else {
+                let parent_wu = parent_w * (1.0 + 1e-12);
+                (parent_c, parent_upper + parent_wu * ell + tau_rate)
+            };
+            self.drift[i] = drift;
+            self.origin_upper[i] = upper;
+            self.spread_upper[i] = upper + self.angular[i] * radius[i];
+        }
+    }
+
+    /// The second half of [`SegmentMotion::update`] (after
+    /// [`SegmentMotion::update_lever`] on the same segment): the exact rates
+    /// at the start and the spread `E_i`.
+    pub fn update_rates(
+        &mut self,
+        model: &Model,
+        pre: &[Pose],
+        pose: &[Pose],
+        charts: &[Matrix3<f64>],
+        q: &DVector<f64>,
+        dq: &DVector<f64>,
+    ) {
+        let n = model.links.len();
+        self.spread.resize(n, 0.0);
+        self.angular_tight.resize(n, 0.0);
+        self.origin.resize(n, 0.0);
+        self.omega0.resize(n, Vector3::zeros());
+        self.origin_rate0.resize(n, Vector3::zeros());
+        self.omega_change.resize(n, 0.0);
+        self.origin_change.resize(n, 0.0);
+        self.pose_rate.resize(n, Pose::zeros());
+        for (i, link) in model.links.iter().enumerate() {
+            let o = link.dof_offset;
+            let nd = link.ndof();
+            // Exact rates at the start: dT_i/dα = dP_i/dα · J + P_i · dJ/dα,
+            // dP_i/dα = dT_λ/dα · A_i.
+            let chart = link
+                .chart
+                .map(|c| charts[c])
+                .unwrap_or_else(Matrix3::identity);
+            let (local, local_rate) = link.joint.transform_velocity(
+                &chart,
+                &q.as_slice()[o..o + nd],
+                &dq.as_slice()[o..o + nd],
+            );
+            let pre_rate = match link.parent {
+                Some(p) => rate_compose(&self.pose_rate[p], &link.attach),
+                None => Pose::zeros(),
+            };
+            let rate = rate_compose(&pre_rate, &local) + rotate_rate(&pre[i], &local_rate);
+            self.pose_rate[i] = rate;
+            let spin = rate.fixed_view::<3, 3>(0, 0) * rot(&pose[i]).transpose();
+            self.omega0[i] = axial(&spin);
+            self.origin_rate0[i] = rate.column(3).into_owned();
+
+            let (w, ell, tau_rate) = (self.joint_rate[i], self.arm[i], self.travel_rate[i]);
+            let (parent_w, parent_wt, parent_v) = match link.parent {
+                Some(p) => (self.angular[p], self.angular_tight[p], self.origin[p]),
+                None => (0.0, 0.0, 0.0),
+            };
             let (parent_omega0, parent_dw, parent_dv) = match link.parent {
                 Some(p) => (
                     self.omega0[p].norm(),
@@ -228,13 +317,6 @@ impl SegmentMotion {
                 ),
                 None => (0.0, 0.0, 0.0),
             };
-            let attach = link.attach.column(3).norm();
-            let ell = attach + travel;
-            let tau_rate = rate_t.norm();
-            // Lever bound.
-            self.lever[i] = parent_lever + ell;
-            self.origin_full[i] = parent_full + parent_w * ell + tau_rate;
-            self.angular[i] = parent_w + w;
             // Rate bound on the angular speed.
             let rel_change = match &link.joint {
                 JointKind::Fixed | JointKind::Prismatic { .. } => 0.0,
@@ -251,19 +333,19 @@ impl SegmentMotion {
                 + parent_dw * ell
                 + parent_omega0 * (parent_wt * ell + tau_rate)
                 + parent_wt * tau_rate;
-            let (drift, origin) = if parent_w == 0.0 {
-                // Pre-joint frame fixed on the segment: exact drift.
-                (parent_c + rot(&pre[i]) * rate_t, parent_v)
+            let origin = if parent_w == 0.0 {
+                parent_v
             } else {
-                (parent_c, parent_v + parent_wt * ell + tau_rate)
+                parent_v + parent_wt * ell + tau_rate
             };
-            self.drift[i] = drift;
+            let drift = self.drift[i];
             self.origin[i] = origin;
-            let lever_bound = origin + wt * radius[i];
+            let radius = self.radius[i];
+            let lever_bound = origin + wt * radius;
             let rate_bound =
-                (self.origin_rate0[i] - drift).norm() + self.origin_change[i] + wt * radius[i];
+                (self.origin_rate0[i] - drift).norm() + self.origin_change[i] + wt * radius;
             // Round-off guard on the rate bound's exact first-order part.
-            let guard = 1e-12 * (self.origin_full[i] + self.angular[i] * radius[i]);
+            let guard = 1e-12 * (self.origin_full[i] + self.angular[i] * radius);
             self.spread[i] = lever_bound.min(rate_bound * (1.0 + 1e-12) + guard);
         }
     }
@@ -292,6 +374,12 @@ impl SegmentMotion {
     /// whole segment (m).
     pub fn reach(&self, link: usize) -> f64 {
         self.drift[link].norm() + self.spread[link]
+    }
+
+    /// `‖c_i‖ + Ē_i ≥` [`SegmentMotion::reach`] (bit for bit), available
+    /// after [`SegmentMotion::update_lever`] alone (m).
+    pub fn reach_upper(&self, link: usize) -> f64 {
+        self.drift[link].norm() + self.spread_upper[link]
     }
 }
 
@@ -324,363 +412,20 @@ fn rotate_rate(p: &Pose, j_rate: &Pose) -> Pose {
 
 /// `r_i` per link: the largest distance of a hull vertex from the link
 /// frame's origin (m; 0 for a link without hulls), written into `out`.
+/// One square root per link: `√` is correctly rounded and monotone, so
+/// `√(max ‖x‖²)` is bit for bit `max √(‖x‖²) = max ‖x‖`.
 pub fn hull_radii(model: &Model, out: &mut Vec<f64>) {
     out.clear();
     out.extend(model.links.iter().map(|l| {
         l.hulls
             .iter()
             .flat_map(|h| h.x_local.iter())
-            .map(|x| x.norm())
+            .map(|x| x.norm_squared())
             .fold(0.0, f64::max)
+            .sqrt()
     }));
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kinematics::{KinOrder, Kinematics};
-    use crate::math::{pose_from, rpy_to_matrix, transform_point};
-    use crate::model::{Hull, Link, MassModel};
-    use nalgebra::Matrix3;
-    use rand::{RngExt, SeedableRng};
-
-    fn link(name: &str, parent: Option<usize>, joint: JointKind, attach: Pose) -> Link {
-        Link {
-            name: name.into(),
-            robot: 0,
-            parent,
-            joint_name: name.into(),
-            joint,
-            limit: None,
-            attach,
-            hulls: vec![
-                Hull::new(
-                    Hull::cuboid(Vector3::new(0.3, 0.1, 0.2), Vector3::new(0.2, 0.05, 0.0)),
-                    0.1,
-                )
-                .unwrap(),
-            ],
-            mass_model: MassModel::Vertices,
-            solid_triangles: Vec::new(),
-            surface: Vec::new(),
-            dof_offset: 0,
-            chart: None,
-            collides: true,
-        }
-    }
-
-    /// The bounds of the segment `q → q + dq` and the link poses at
-    /// `steps + 1` evenly spaced points of it.
-    fn bound_and_path(
-        model: &Model,
-        q: &DVector<f64>,
-        dq: &DVector<f64>,
-        charts: &[Matrix3<f64>],
-        steps: usize,
-    ) -> (SegmentMotion, Vec<f64>, Vec<Vec<Pose>>) {
-        let mut kin = Kinematics::new(model);
-        kin.update(model, q, charts, KinOrder::Pose);
-        let mut radius = Vec::new();
-        hull_radii(model, &mut radius);
-        let mut m = SegmentMotion::default();
-        m.update(model, &kin.pre, &kin.pose, charts, &radius, q, dq);
-        let poses = (0..=steps)
-            .map(|k| {
-                crate::kinematics::link_poses(model, &(q + dq * (k as f64 / steps as f64)), charts)
-            })
-            .collect();
-        (m, radius, poses)
-    }
-
-    /// A tree with every joint kind: free root → revolute → prismatic →
-    /// spherical → ball, plus a fixed branch off the root and a prismatic
-    /// root.
-    fn every_joint_model(rng: &mut impl rand::Rng) -> Model {
-        let mut at = |v: f64| {
-            pose_from(
-                &rpy_to_matrix(&[
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                ]),
-                &Vector3::new(v, 0.1, -0.2),
-            )
-        };
-        let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
-        let links = vec![
-            link("base", None, JointKind::Free, at(0.5)),
-            link("rev", Some(0), JointKind::Revolute { axis }, at(0.4)),
-            link("pri", Some(1), JointKind::Prismatic { axis }, at(0.3)),
-            link("sph", Some(2), JointKind::Spherical, at(0.2)),
-            link(
-                "ball",
-                Some(3),
-                JointKind::Ball {
-                    axes: [Vector3::x(), Vector3::y()],
-                },
-                at(0.3),
-            ),
-            link("fix", Some(0), JointKind::Fixed, at(0.6)),
-            link("slider", None, JointKind::Prismatic { axis }, at(-0.5)),
-        ];
-        let n = links.len();
-        Model::new(
-            links,
-            vec![crate::model::RobotInfo {
-                name: "r".into(),
-                links: 0..n,
-            }],
-        )
-    }
-
-    /// Every hull vertex, sampled densely along random segments, stays within
-    /// the bound, both in norm and along fixed directions, from every
-    /// sampled start `α₀` (the bound holds on sub-segments).
-    #[test]
-    fn sampled_paths_stay_within_the_lever_bound_for_every_joint_kind() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let mut worst: f64 = 0.0;
-        for case in 0..60 {
-            let model = every_joint_model(&mut rng);
-            let n = model.ndof();
-            let charts: Vec<Matrix3<f64>> =
-                (0..model.links.iter().filter(|l| l.chart.is_some()).count())
-                    .map(|_| {
-                        rpy_to_matrix(&[
-                            rng.random_range(-3.0..3.0),
-                            rng.random_range(-1.0..1.0),
-                            rng.random_range(-3.0..3.0),
-                        ])
-                    })
-                    .collect();
-            // Large rotation steps (up to ‖Δφ‖ ≈ 5 rad) probe the chart far
-            // from its centre.
-            let scale = [0.05, 0.5, 2.0][case % 3];
-            let q = DVector::from_fn(n, |_, _| rng.random_range(-1.5..1.5));
-            let dq = DVector::from_fn(n, |_, _| scale * rng.random_range(-1.0..1.0));
-            let steps = 200;
-            let (m, _, poses) = bound_and_path(&model, &q, &dq, &charts, steps);
-            let dirs: Vec<Vector3<f64>> = (0..4)
-                .map(|_| Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize())
-                .collect();
-            for (i, l) in model.links.iter().enumerate() {
-                for x in &l.hulls[0].x_local {
-                    let pts: Vec<Vector3<f64>> =
-                        poses.iter().map(|p| transform_point(&p[i], x)).collect();
-                    for k0 in [0, steps / 3] {
-                        for k in k0 + 1..=steps {
-                            let da = (k - k0) as f64 / steps as f64;
-                            let moved = pts[k] - pts[k0];
-                            let bound = da * m.reach(i);
-                            assert!(
-                                moved.norm() <= bound * (1.0 + 1e-9) + 1e-12,
-                                "case {case} link {i}: moved {} > bound {bound}",
-                                moved.norm()
-                            );
-                            worst = worst.max(moved.norm() / bound.max(1e-300));
-                            // Relative to every ancestor's frame.
-                            let mut c = Some(i);
-                            while let Some(a) = c {
-                                let rel = |k: usize| {
-                                    let pa = &poses[k][a];
-                                    rot(pa).transpose() * (pts[k] - pa.column(3))
-                                };
-                                let moved_rel = (rel(k) - rel(k0)).norm();
-                                let b = da * m.relative_spread(i, a);
-                                assert!(
-                                    moved_rel <= b * (1.0 + 1e-9) + 1e-12,
-                                    "case {case} link {i} relative to {a}: {moved_rel} > {b}"
-                                );
-                                c = model.links[a].parent;
-                            }
-                            for d in &dirs {
-                                let along = d.dot(&(moved - m.drift[i] * da));
-                                assert!(
-                                    along.abs() <= da * m.spread[i] * (1.0 + 1e-9) + 1e-12,
-                                    "case {case} link {i}: directional"
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        // The bound is not vacuous: some sampled motion uses a good part of it.
-        assert!(worst > 0.3, "bound never approached: {worst}");
-    }
-
-    /// `‖J_r(φ) Δφ‖ ≤ ‖Δφ‖` for the chart the code uses
-    /// (`R = R_c exp([φ]×)`), far beyond `‖φ‖ = π`: the angular speed of
-    /// `exp` along a straight line, by central differences.
-    #[test]
-    fn rotation_vector_angular_speed_never_exceeds_the_coordinate_speed() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let mut max_ratio: f64 = 0.0;
-        for _ in 0..2000 {
-            let phi = Vector3::from_fn(|_, _| rng.random_range(-6.0..6.0));
-            let d = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
-            let h = 1e-6;
-            let rp = crate::math::so3::exp(&(phi + d * h));
-            let rm = crate::math::so3::exp(&(phi - d * h));
-            let r = crate::math::so3::exp(&phi);
-            // Body angular velocity: vee(Rᵀ Ṙ).
-            let w = r.transpose() * (rp - rm) / (2.0 * h);
-            let omega = axial(&w);
-            let ratio = omega.norm() / d.norm();
-            assert!(ratio <= 1.0 + 1e-6, "ratio {ratio} at φ = {phi:?}");
-            max_ratio = max_ratio.max(ratio);
-        }
-        assert!(max_ratio > 0.999);
-    }
-
-    /// The exact start rates `ω_i(0)`, `ȯ_i(0)` of the rate bound match
-    /// central differences of the forward kinematics for every joint kind.
-    #[test]
-    fn start_rates_match_finite_differences_for_every_joint_kind() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        for _ in 0..40 {
-            let model = every_joint_model(&mut rng);
-            let n = model.ndof();
-            let charts = vec![
-                rpy_to_matrix(&[
-                    rng.random_range(-3.0..3.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-3.0..3.0),
-                ]);
-                model.links.iter().filter(|l| l.chart.is_some()).count()
-            ];
-            let q = DVector::from_fn(n, |_, _| rng.random_range(-2.0..2.0));
-            let dq = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
-            let mut kin = Kinematics::new(&model);
-            kin.update(&model, &q, &charts, KinOrder::Pose);
-            let mut radius = Vec::new();
-            hull_radii(&model, &mut radius);
-            let mut m = SegmentMotion::default();
-            m.update(&model, &kin.pre, &kin.pose, &charts, &radius, &q, &dq);
-            let h = 1e-6;
-            let plus = crate::kinematics::link_poses(&model, &(&q + &dq * h), &charts);
-            let minus = crate::kinematics::link_poses(&model, &(&q - &dq * h), &charts);
-            for i in 0..model.links.len() {
-                let dr = (rot(&plus[i]) - rot(&minus[i])) / (2.0 * h);
-                let spin = dr * rot(&kin.pose[i]).transpose();
-                let w = axial(&spin);
-                let v = (plus[i].column(3) - minus[i].column(3)) / (2.0 * h);
-                assert!(
-                    (w - m.omega0[i]).norm() <= 1e-6 * (1.0 + w.norm()),
-                    "ω link {i}"
-                );
-                assert!(
-                    (v - m.origin_rate0[i]).norm() <= 1e-6 * (1.0 + v.norm()),
-                    "ȯ link {i}"
-                );
-            }
-        }
-    }
-
-    /// `‖d/dα (J_l(φ + αΔφ) Δφ)‖ ≤ C ‖Δφ‖²` with the constant the rate
-    /// bound uses, by central differences of the space angular velocity of
-    /// `exp`, far beyond `‖φ‖ = π` and near `φ = 0`.
-    #[test]
-    fn the_chart_angular_velocity_turns_no_faster_than_assumed() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let omega = |phi: &Vector3<f64>, d: &Vector3<f64>| {
-            let h = 1e-6;
-            let r = crate::math::so3::exp(phi);
-            let s = (crate::math::so3::exp(&(phi + d * h)) - crate::math::so3::exp(&(phi - d * h)))
-                / (2.0 * h)
-                * r.transpose();
-            axial(&s)
-        };
-        let mut worst: f64 = 0.0;
-        for k in 0..4000 {
-            let scale = [1e-3, 0.5, 3.0, 10.0][k % 4];
-            let phi = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)) * scale;
-            let d = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)).normalize();
-            let h = 1e-4;
-            let turn = (omega(&(phi + d * h), &d) - omega(&(phi - d * h), &d)).norm() / (2.0 * h);
-            assert!(turn <= CHART_TURN, "turn {turn} at φ = {phi:?}");
-            worst = worst.max(turn);
-        }
-        // The constant is not vacuous either (sampled maximum ≈ 1/π).
-        assert!(worst > 0.25, "{worst}");
-    }
-
-    /// A hanging 32-link ball-joint chain whose joints turn against each
-    /// other (each link nearly still: the motion of a long chain in its
-    /// first Newton step): the bound holds along the sampled path and stays
-    /// within a small factor of the actual motion, where the lever bound
-    /// alone is far above it.
-    #[test]
-    fn alternating_joint_steps_of_a_long_chain_get_a_tight_bound() {
-        let n_links = 32;
-        let mut links = Vec::new();
-        for k in 0..n_links {
-            let mut l = link(
-                &format!("l{k}"),
-                if k == 0 { None } else { Some(k - 1) },
-                JointKind::Ball {
-                    axes: [Vector3::x(), Vector3::y()],
-                },
-                pose_from(
-                    &Matrix3::identity(),
-                    &Vector3::new(0.0, 0.0, if k == 0 { 7.0 } else { -0.2 }),
-                ),
-            );
-            l.hulls = vec![
-                Hull::new(
-                    Hull::cuboid(Vector3::new(0.05, 0.05, 0.2), Vector3::new(0.0, 0.0, -0.1)),
-                    0.1,
-                )
-                .unwrap(),
-            ];
-            links.push(l);
-        }
-        let model = Model::new(
-            links,
-            vec![crate::model::RobotInfo {
-                name: "chain".into(),
-                links: 0..n_links,
-            }],
-        );
-        let n = model.ndof();
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
-        let q = DVector::from_fn(n, |_, _| rng.random_range(-0.3..0.3));
-        // Joint k turns by ±0.03 rad, its neighbour back: links barely move.
-        let dq = DVector::from_fn(n, |i, _| {
-            let sign = if (i / 2) % 2 == 0 { 1.0 } else { -1.0 };
-            sign * 0.03 + rng.random_range(-1e-3..1e-3)
-        });
-        let charts: Vec<Matrix3<f64>> = Vec::new();
-        let steps = 400;
-        let (m, radius, poses) = bound_and_path(&model, &q, &dq, &charts, steps);
-        let tip = n_links - 1;
-        let mut moved_max: f64 = 0.0;
-        for i in 0..n_links {
-            for x in &model.links[i].hulls[0].x_local {
-                let x0 = transform_point(&poses[0][i], x);
-                for (k, p) in poses.iter().enumerate().skip(1) {
-                    let moved = (transform_point(&p[i], x) - x0).norm();
-                    let bound = m.reach(i) * k as f64 / steps as f64;
-                    assert!(
-                        moved <= bound * (1.0 + 1e-9) + 1e-12,
-                        "link {i}: {moved} > {bound}"
-                    );
-                    if i == tip {
-                        moved_max = moved_max.max(moved);
-                    }
-                }
-            }
-        }
-        let lever = m.origin_full[tip] + m.angular[tip] * radius[tip];
-        assert!(
-            m.reach(tip) <= 5.0 * moved_max,
-            "rate bound {} vs moved {moved_max}",
-            m.reach(tip)
-        );
-        // Measured: moved 0.103 m, rate bound 0.43 m (4.1×), lever 4.5 m (43×).
-        assert!(
-            lever >= 20.0 * moved_max,
-            "lever {lever} vs moved {moved_max}"
-        );
-    }
-}
+#[path = "motion_bound_tests.rs"]
+mod tests;

@@ -72,6 +72,13 @@ pub struct Simulator {
 /// Per-step scratch, apart from persistent state.
 struct StepScratch {
     kin: Kinematics,
+    /// Kinematics at `θ^t` (poses only), from [`Simulator::begin_next_step`]:
+    /// the start of the step's path, reused by continuous collision
+    /// detection ([`Energy::certify_step`]).
+    kin_start: Kinematics,
+    /// The step's straight path `θ^{t+1} − θ^t` (certified after the
+    /// optimistic solve, see [`Simulator::step`]).
+    path: DVector<f64>,
     acc: EnergyAccumulator,
     assemble: AssembleScratch,
     newton: NewtonScratch,
@@ -88,6 +95,8 @@ struct StepObjective<'a> {
     charts: &'a [Matrix3<f64>],
     energies: &'a mut [Box<dyn Energy>],
     kin: &'a mut Kinematics,
+    /// Kinematics at `θ^t = ctx.q_prev` (see [`StepScratch::kin_start`]).
+    kin_start: &'a Kinematics,
     acc: &'a mut EnergyAccumulator,
     assemble: &'a mut AssembleScratch,
     /// Per-term work of the step at the last gradient evaluation, when on.
@@ -238,6 +247,8 @@ impl Objective for StepObjective<'_> {
 
     /// Every term's continuous collision detection of the accepted segment
     /// ([`Energy::certify_step`]); the smallest certified fraction wins.
+    /// A segment starting at `θ^t` (the same bits) gets the step's
+    /// kinematics there.
     fn certify(
         &mut self,
         q: &DVector<f64>,
@@ -248,9 +259,14 @@ impl Objective for StepObjective<'_> {
         if !self.certify_segments {
             return Ok(alpha);
         }
+        let at_start = q.len() == self.ctx.q_prev.len()
+            && q.iter()
+                .zip(self.ctx.q_prev.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        let start = at_start.then_some(self.kin_start);
         let mut out = alpha;
         for e in self.energies.iter_mut() {
-            out = out.min(e.certify_step(&self.ctx, q, dir, alpha, self.charts)?);
+            out = out.min(e.certify_step(&self.ctx, q, start, dir, alpha, self.charts)?);
         }
         Ok(out)
     }
@@ -287,6 +303,8 @@ impl Simulator {
         }
         let scratch = StepScratch {
             kin: Kinematics::new(&model),
+            kin_start: Kinematics::new(&model),
+            path: DVector::zeros(0),
             acc: EnergyAccumulator::new(&model),
             assemble: AssembleScratch::default(),
             newton: NewtonScratch::default(),
@@ -320,14 +338,14 @@ impl Simulator {
             &self.controller.pose_targets,
             t_next,
         );
-        self.scratch.kin.update(
+        self.scratch.kin_start.update(
             &self.model,
             &self.state.q,
             &self.state.charts,
             KinOrder::Pose,
         );
         for e in self.energies.iter_mut() {
-            e.begin_step(&ctx, &self.scratch.kin)?;
+            e.begin_step(&ctx, &self.scratch.kin_start)?;
         }
         Ok(t_next)
     }
@@ -454,9 +472,11 @@ impl Simulator {
             if let Ok(report) = solved {
                 let certified = if ccd {
                     let q_prev = obj.ctx.q_prev;
-                    let path = &q - q_prev;
+                    let path = &mut *parts.path;
+                    path.clone_from(&q);
+                    *path -= q_prev;
                     obj.certify_segments = true;
-                    obj.certify(q_prev, &path, 1.0, parts.timers)
+                    obj.certify(q_prev, path, 1.0, parts.timers)
                         .map_err(|e| fail(e.into()))?
                         >= 1.0
                 } else {
@@ -582,6 +602,8 @@ struct SolverParts<'a> {
     settings: &'a SimSettings,
     newton: &'a mut NewtonScratch,
     timers: &'a mut StageTimers,
+    /// [`StepScratch::path`].
+    path: &'a mut DVector<f64>,
 }
 
 /// The objective of the step following `sim.state` (after
@@ -604,6 +626,8 @@ fn step_objective(
     } = sim;
     let StepScratch {
         kin,
+        kin_start,
+        path,
         acc,
         assemble,
         newton,
@@ -624,6 +648,7 @@ fn step_objective(
         charts: &state.charts,
         energies,
         kin,
+        kin_start,
         acc,
         assemble,
         work: energy_balance.then_some(work),
@@ -635,6 +660,7 @@ fn step_objective(
             settings,
             newton,
             timers,
+            path,
         },
     )
 }
