@@ -326,11 +326,6 @@ fn three_finger_full_horizon_probe() {
     let mut cube = p.clone();
     cube.others.clear();
     for (q, label) in [(&cube, "cube"), (all[1], "cylinder")] {
-        fd_check_problem(
-            q,
-            &format!("three_finger_hand/{label} (H = 200)"),
-            1e-7,
-            12,
-        );
+        fd_check_problem(q, &format!("three_finger_hand/{label} (H = 200)"), 1e-7, 12);
     }
 }

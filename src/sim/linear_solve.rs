@@ -380,6 +380,7 @@ impl BlockSolver {
     }
 
     /// The parallel path of [`BlockSolver::direction`].
+    #[allow(clippy::too_many_arguments)]
     fn direction_parallel(
         &mut self,
         h: &DMatrix<f64>,
@@ -1012,10 +1013,14 @@ mod tests {
         for i in (1..n).rev() {
             perm.swap(i, rng.random_range(0..=i));
         }
-        let mut seq = BlockSolver::default();
-        seq.parallel_min_cubes = usize::MAX;
-        let mut par = BlockSolver::default();
-        par.parallel_min_cubes = 0;
+        let mut seq = BlockSolver {
+            parallel_min_cubes: usize::MAX,
+            ..Default::default()
+        };
+        let mut par = BlockSolver {
+            parallel_min_cubes: 0,
+            ..Default::default()
+        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(3)
             .build()
