@@ -209,6 +209,51 @@ fn quick_suite_report_browser_gate_and_resume() {
     assert_ne!(s1["runs"][2]["wall_seconds"], s2["runs"][2]["wall_seconds"]);
     assert_eq!(s1["shapes_svg"], s2["shapes_svg"]);
 
+    // --report-only on a copy of the run with the spider unfinished (its
+    // coarse-cage method missing) and no chains: nothing runs, the report
+    // holds what finished and names what did not.
+    let partial = dir.join("partial");
+    std::fs::create_dir_all(partial.join("parts/codesign_spider")).unwrap();
+    for f in std::fs::read_dir(out.join("parts")).unwrap() {
+        let f = f.unwrap().path();
+        if f.is_file() {
+            std::fs::copy(&f, partial.join("parts").join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    for m in ["co_design.json", "controller_only.json", "fd_check.json"] {
+        std::fs::copy(
+            out.join("parts/codesign_spider").join(m),
+            partial.join("parts/codesign_spider").join(m),
+        )
+        .unwrap();
+    }
+    std::fs::remove_file(partial.join("parts/codesign_spider.json")).unwrap();
+    std::fs::remove_file(partial.join("parts/chains.json")).unwrap();
+    let t0 = std::time::Instant::now();
+    let o = run_compare(&["--suite", "quick", "--report-only"], &partial);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        t0.elapsed().as_secs_f64() < 10.0,
+        "--report-only ran benchmarks"
+    );
+    let rp = json(&partial.join("results.json"));
+    assert!(rp["chains"].is_null());
+    let sp = spider(&rp);
+    assert_eq!(sp["runs"].as_array().unwrap().len(), 2);
+    assert_eq!(sp["runs"][0], s2["runs"][0]);
+    assert_eq!(sp["fd"], s2["fd"]);
+    let md = std::fs::read_to_string(partial.join("report.md")).unwrap();
+    assert!(
+        md.contains("four rotating chains: not finished yet")
+            && md.contains("co-design spider: mesh baseline, coarse cage"),
+        "{md}"
+    );
+    // Without an earlier run there is nothing to report.
+    let o = run_compare(&["--suite", "quick", "--report-only"], &dir.join("none"));
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--report-only needs"));
+
     // A degraded run: the same suite with the co-design stopped after one
     // iteration (a worse design). Its other benchmarks resume from the
     // parts of the run above (same suite entries, same relative paths).

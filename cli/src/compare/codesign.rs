@@ -60,16 +60,7 @@ pub fn run(
     let metrics = sdrs::optimize::metrics::Metrics::from_problem(&p)?;
     let mut runs = Vec::new();
     let mut shapes_svg = None;
-    // (method, design on, cage resolution): SDRS with and without the
-    // design, then the mesh baseline with each cage of the suite.
-    let mut variants: Vec<(String, bool, Option<&str>)> = vec![
-        ("co-design".into(), true, None),
-        ("controller-only".into(), false, None),
-    ];
-    for c in &spec.cages {
-        variants.push((format!("mesh baseline, {c} cage"), true, Some(c.as_str())));
-    }
-    for (method, design, cage) in variants {
+    for (method, design, cage) in variants(spec) {
         let file = parts.join(format!("{}.json", slug(&method)));
         let shapes_rel = format!("plots/shapes_{}.svg", spec.name);
         if !force && let Some(run) = super::load_part::<_, CodesignRun>(&file, spec)? {
@@ -145,6 +136,62 @@ pub fn run(
         fd,
         shapes_svg,
     })
+}
+
+/// (method, design on, cage resolution) of a benchmark: SDRS with and
+/// without the design, then the mesh baseline with each cage of the suite.
+fn variants(spec: &CodesignSpec) -> Vec<(String, bool, Option<&str>)> {
+    let mut v: Vec<(String, bool, Option<&str>)> = vec![
+        ("co-design".into(), true, None),
+        ("controller-only".into(), false, None),
+    ];
+    for c in &spec.cages {
+        v.push((format!("mesh baseline, {c} cage"), true, Some(c.as_str())));
+    }
+    v
+}
+
+/// The finished methods (and gradient check) of a benchmark that has not
+/// finished as a whole, for `--report-only`: the part (`None` when nothing
+/// has finished) and the methods still missing.
+pub fn finished(
+    spec: &CodesignSpec,
+    base_dir: &Path,
+    out_dir: &Path,
+) -> Result<(Option<CodesignPart>, Vec<String>)> {
+    let parts = out_dir
+        .join("parts")
+        .join(format!("codesign_{}", spec.name));
+    let mut runs = Vec::new();
+    let mut missing = Vec::new();
+    for (method, _, _) in variants(spec) {
+        match super::load_part::<_, CodesignRun>(
+            &parts.join(format!("{}.json", slug(&method))),
+            spec,
+        )? {
+            Some(r) => runs.push(r),
+            None => missing.push(method),
+        }
+    }
+    let fd: Option<FdCheck> = super::load_part(&parts.join("fd_check.json"), spec)?;
+    if runs.is_empty() && fd.is_none() {
+        return Ok((None, missing));
+    }
+    let task = base_dir.join(&spec.task);
+    let p = Problem::load(&task, true)?;
+    let shapes = format!("plots/shapes_{}.svg", spec.name);
+    Ok((
+        Some(CodesignPart {
+            name: spec.name.clone(),
+            task: spec.task.display().to_string(),
+            horizon: spec.horizon.unwrap_or(p.horizon),
+            iters: spec.iters.unwrap_or(p.task.optimizer.iters),
+            runs,
+            fd,
+            shapes_svg: out_dir.join(&shapes).is_file().then_some(shapes),
+        }),
+        missing,
+    ))
 }
 
 /// A file name for a method ("mesh baseline, fine cage" → `mesh_baseline__fine_cage`).

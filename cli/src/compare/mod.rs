@@ -50,6 +50,12 @@ pub struct CompareArgs {
     /// No progress bars.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Run nothing: write the report from what an earlier (possibly still
+    /// running or interrupted) run into `--out` has finished — whole
+    /// benchmarks, and the finished methods of a co-design benchmark; the
+    /// rest is listed as not finished.
+    #[arg(long, conflicts_with = "force")]
+    pub report_only: bool,
 }
 
 /// A finished benchmark as stored in `parts/`.
@@ -113,6 +119,41 @@ where
     Ok(r)
 }
 
+/// `--report-only`: the finished parts of the run in `out` (nothing runs).
+fn finished_only(suite: &suite::Suite, base: &Path, out: &Path, r: &mut Results) -> Result<()> {
+    let parts = out.join("parts");
+    let unfinished = |what: &str| format!("{what}: not finished yet (`--report-only`)");
+    if let Some(s) = &suite.potential {
+        r.potential = load_part(&parts.join("potential.json"), s)?;
+        if r.potential.is_none() {
+            r.not_measured.push(unfinished("contact potential cost"));
+        }
+    }
+    if let Some(s) = &suite.chains {
+        r.chains = load_part(&parts.join("chains.json"), s)?;
+        if r.chains.is_none() {
+            r.not_measured.push(unfinished("four rotating chains"));
+        }
+    }
+    for s in &suite.codesign {
+        let whole = parts.join(format!("codesign_{}.json", s.name));
+        if let Some(c) = load_part(&whole, s)? {
+            r.codesign.push(c);
+            continue;
+        }
+        let (part, missing) = codesign::finished(s, base, out)?;
+        if !missing.is_empty() {
+            r.not_measured.push(unfinished(&format!(
+                "co-design {}: {}",
+                s.name,
+                missing.join(", ")
+            )));
+        }
+        r.codesign.extend(part);
+    }
+    Ok(())
+}
+
 pub fn run(a: CompareArgs) -> Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build; timings are meaningless (use `cargo run --release`)");
@@ -134,6 +175,12 @@ pub fn run(a: CompareArgs) -> Result<()> {
     };
     if a.out.is_file() {
         bail!("{}: the output must be a directory", a.out.display());
+    }
+    if a.report_only && !a.out.join("parts").is_dir() {
+        bail!(
+            "{}: --report-only needs the output directory of an earlier `sdrs compare` run",
+            a.out.display()
+        );
     }
     if a.out.exists()
         && !a.out.join("parts").is_dir()
@@ -159,7 +206,9 @@ pub fn run(a: CompareArgs) -> Result<()> {
         threads: rayon::current_num_threads(),
         ..Default::default()
     };
-    if let Some(s) = &suite.potential {
+    if a.report_only {
+        finished_only(&suite, &base, &a.out, &mut r)?;
+    } else if let Some(s) = &suite.potential {
         r.potential = Some(resumable(&a.out, "potential", s, a.force, a.quiet, |pb| {
             potential::run(s, &work, pb)
         })?);
@@ -167,7 +216,9 @@ pub fn run(a: CompareArgs) -> Result<()> {
         r.not_measured
             .push("contact potential cost (not in this suite)".into());
     }
-    if let Some(s) = &suite.chains {
+    if a.report_only {
+        // (filled by `finished_only` above)
+    } else if let Some(s) = &suite.chains {
         r.chains = Some(resumable(&a.out, "chains", s, a.force, a.quiet, |pb| {
             chains::run(s, &base, &work, pb)
         })?);
@@ -175,7 +226,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
         r.not_measured
             .push("four rotating chains (not in this suite)".into());
     }
-    for s in &suite.codesign {
+    for s in suite.codesign.iter().filter(|_| !a.report_only) {
         r.codesign.push(resumable(
             &a.out,
             &format!("codesign_{}", s.name),
