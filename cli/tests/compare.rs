@@ -246,7 +246,8 @@ fn quick_suite_report_browser_gate_and_resume() {
     let md = std::fs::read_to_string(partial.join("report.md")).unwrap();
     assert!(
         md.contains("four rotating chains: not finished yet")
-            && md.contains("co-design spider: mesh baseline, coarse cage"),
+            && md.contains("co-design spider: mesh baseline, coarse cage")
+            && md.contains("| mesh baseline, coarse cage | not finished |"),
         "{md}"
     );
     // Without an earlier run there is nothing to report.

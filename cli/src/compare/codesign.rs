@@ -135,6 +135,7 @@ pub fn run(
         runs,
         fd,
         shapes_svg,
+        unfinished: Vec::new(),
     })
 }
 
@@ -189,6 +190,7 @@ pub fn finished(
             runs,
             fd,
             shapes_svg: out_dir.join(&shapes).is_file().then_some(shapes),
+            unfinished: missing.clone(),
         }),
         missing,
     ))

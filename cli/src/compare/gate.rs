@@ -254,6 +254,7 @@ mod tests {
                 }],
                 fd: None,
                 shapes_svg: None,
+                unfinished: vec![],
             }],
             ..Default::default()
         }

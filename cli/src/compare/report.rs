@@ -451,7 +451,17 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
             },
         ]);
     }
-    let caged = b.runs.iter().any(|r| r.method.starts_with("mesh baseline"));
+    for m in &b.unfinished {
+        let mut row = vec![m.clone()];
+        row.extend(std::iter::repeat_n("not finished".to_string(), 12));
+        t.rows.push(row);
+    }
+    let caged = b
+        .runs
+        .iter()
+        .map(|r| &r.method)
+        .chain(&b.unfinished)
+        .any(|m| m.starts_with("mesh baseline"));
     if !caged {
         for cage in ["mesh baseline, coarse cage", "mesh baseline, fine cage"] {
             let mut row = vec![cage.to_string()];
@@ -463,6 +473,12 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
         "Horizon {} steps, {} optimizer iterations per method, from the same start.",
         b.horizon, b.iters
     )];
+    if !b.unfinished.is_empty() {
+        text.push(format!(
+            "Not finished when this report was written (`--report-only` during or after an interrupted run): {}.",
+            b.unfinished.join("; ")
+        ));
+    }
     let cd = b.runs.iter().find(|r| r.method == "co-design");
     let co = b.runs.iter().find(|r| r.method == "controller-only");
     if let (Some(cd), Some(co)) = (cd, co) {

@@ -102,6 +102,10 @@ pub struct CodesignPart {
     /// directory), when the design has hull vertices.
     #[serde(default)]
     pub shapes_svg: Option<String>,
+    /// Methods of the benchmark not finished yet (`--report-only` on an
+    /// unfinished run; empty otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unfinished: Vec<String>,
 }
 
 /// One optimization.
