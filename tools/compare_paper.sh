@@ -3,7 +3,10 @@
 # 8…1024, chains of 2…32 links with both contact models, the co-design
 # benchmarks at their full iteration counts. Hours on a 2-core machine;
 # resumable: run it again with the same output directory after an
-# interruption and finished benchmarks are kept.
+# interruption and finished benchmarks (and the finished methods of a
+# co-design benchmark) are kept. While it runs, or after it stopped,
+# `target/release/sdrs compare --suite paper --out OUT_DIR --report-only`
+# writes the report from what has finished.
 #
 # Usage: tools/compare_paper.sh OUT_DIR
 set -euo pipefail
