@@ -178,15 +178,23 @@ fn too_many_degrees_of_freedom_are_rejected_before_any_large_allocation() {
 /// minutes at this size).
 #[test]
 fn building_a_long_chain_is_linear_time() {
+    // The fastest of three builds per size: on a shared machine a single
+    // timing can be inflated several-fold by other jobs (seen: 0.71 s once
+    // for the 5000 links, 0.29–0.37 s in three quiet re-runs).
     let mut times = Vec::new();
     for n in [1250, 5000] {
         let text = format!(
             "version: 1\ndt: 0.005\nrobots:\n- name: c\n  chain: {{links: {n}, link_length: 0.2, link_width: 0.05, link_mass: 0.1}}\n"
         );
-        let t0 = std::time::Instant::now();
-        let scene = sdrs::scene::Scene::from_str(&text, std::path::Path::new("long.yaml")).unwrap();
-        times.push(t0.elapsed().as_secs_f64());
-        assert_eq!(scene.model.ndof(), 2 * n);
+        let mut best = f64::INFINITY;
+        for _ in 0..3 {
+            let t0 = std::time::Instant::now();
+            let scene =
+                sdrs::scene::Scene::from_str(&text, std::path::Path::new("long.yaml")).unwrap();
+            best = best.min(t0.elapsed().as_secs_f64());
+            assert_eq!(scene.model.ndof(), 2 * n);
+        }
+        times.push(best);
     }
     eprintln!("build times for 1250 and 5000 links: {times:?} s");
     assert!(times[1] < 10.0, "{times:?}");
