@@ -366,3 +366,74 @@ fn classified_distances_equal_brute_force_minima() {
         );
     }
 }
+
+/// Parallel (or parallel to within round-off) edges, coplanar, far apart:
+/// the distance is the true one, never the line–line distance of the
+/// coplanar lines (0). Regression: the biped's two foot soles, 0.18 m
+/// apart, after a cage reproduced their vertices to 8e-17 m, came out at
+/// distance 0 (the parallel test on `a e − b²` drowned in cancellation)
+/// and IPC refused the start ("touch or intersect"). Swept over
+/// perturbations from 0 to 1e-9 of the edge length, orientations and
+/// offsets along the edges, against brute-force sampling.
+#[test]
+fn parallel_coplanar_edges_far_apart_keep_their_distance() {
+    // The stencil as it came out of the biped run (m).
+    let x: [V3<f64>; 4] = [
+        [
+            -0.09000000000000001,
+            0.023356119108777648,
+            -0.6933115950623014,
+        ],
+        [-0.09, 0.05149253251477768, -0.6933115950623014],
+        [
+            0.08999999999999998,
+            0.023356119108777634,
+            -0.6933115950623014,
+        ],
+        [0.09, 0.05149253251477767, -0.6933115950623014],
+    ];
+    let d = edge_edge_distance(&x).sqrt();
+    assert!((d - 0.18).abs() < 1e-12, "biped soles: distance {d}");
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let lerp = |a: &V3<f64>, b: &V3<f64>, t: f64| -> V3<f64> {
+        std::array::from_fn(|k| a[k] + t * (b[k] - a[k]))
+    };
+    let d2 = |a: &V3<f64>, b: &V3<f64>| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>();
+    for k in 0..400 {
+        let len = rng.random_range(0.01..1.0);
+        let gap = rng.random_range(1e-4..0.5);
+        let shift = rng.random_range(-1.5..1.5) * len;
+        let eps = [0.0, 1e-17, 1e-15, 1e-13, 1e-11, 1e-9][k % 6] * len;
+        // Edge a along y at x = 0, edge b along y at x = gap (shifted
+        // along y), all in the plane z = c; endpoints perturbed in x and y.
+        let c = rng.random_range(-1.0..1.0);
+        let mut p = || rng.random_range(-1.0..1.0) * eps;
+        let a0 = [p(), p(), c];
+        let a1 = [p(), len + p(), c];
+        let b0 = [gap + p(), shift + p(), c];
+        let b1 = [gap + p(), shift + len + p(), c];
+        // A random rotation of the whole stencil keeps the distance.
+        let axis = rand_v(&mut rng, 1.0);
+        let r = nalgebra::Rotation3::new(nalgebra::Vector3::from(axis));
+        let rot = |v: V3<f64>| -> V3<f64> {
+            let w = r * nalgebra::Vector3::from(v);
+            [w.x, w.y, w.z]
+        };
+        let x = [rot(a0), rot(a1), rot(b0), rot(b1)];
+        let m = 400;
+        let mut best = f64::INFINITY;
+        for i in 0..=m {
+            for j in 0..=m {
+                let (s, t) = (i as f64 / m as f64, j as f64 / m as f64);
+                best = best.min(d2(&lerp(&x[0], &x[1], s), &lerp(&x[2], &x[3], t)));
+            }
+        }
+        let ee = edge_edge_distance(&x);
+        assert!(
+            // (The sampled minimum exceeds the exact one by at most the
+            // grid's along-edge mismatch, (len/m)².)
+            ee <= best + 1e-12 && ee >= best - (len / m as f64).powi(2) - 1e-12,
+            "case {k} (perturbation {eps:e}, gap {gap}, shift {shift}): {ee} vs sampled {best}"
+        );
+    }
+}

@@ -120,7 +120,14 @@ pub fn classify_edge_edge(x: &[V3<f64>; 4]) -> DistanceType {
     let d2 = sub(&x[3], &x[2]);
     let r = sub(&x[0], &x[2]);
     let (a, e, b) = (norm2(&d1), norm2(&d2), dot(&d1, &d2));
-    let denom = a * e - b * b;
+    // `a e − b² = ‖d₁ × d₂‖²` (Lagrange's identity), but the difference
+    // loses everything to cancellation for nearly parallel edges: its
+    // rounding error, ~ε·a·e, is far above the parallel threshold, so two
+    // parallel edges perturbed by 1e-17 m came out "crossing" (s, t
+    // interior) and, coplanar, at line–line distance 0 however far apart
+    // they were. The cross product has no such cancellation (ipc-toolkit
+    // tests the same quantity).
+    let denom = norm2(&cross(&d1, &d2));
     if a <= 0.0 || e <= 0.0 || denom <= PARALLEL_THRESHOLD * a * e {
         return closest_of(x, &[(0, 2, 3), (1, 2, 3), (2, 0, 1), (3, 0, 1)]);
     }
