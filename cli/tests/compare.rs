@@ -106,6 +106,9 @@ fn quick_suite_report_browser_gate_and_resume() {
         "{}",
         cd["fd"]
     );
+    // Solved tightly (the check measures the adjoint, not the solver's
+    // stopping error).
+    assert_eq!(cd["fd"]["newton_tol"].as_f64(), Some(1e-10));
     // The mesh baseline (IPC + a coarse automatic cage) on the spider: it
     // optimized 4 cages × 26 vertices × 3 coordinates, lowered the loss, kept
     // every surface apart, and its row is in the report.

@@ -504,6 +504,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
                 "adjoint",
                 "central difference",
                 "h",
+                "Newton tolerance",
                 "relative error",
             ]
             .map(String::from)
@@ -513,6 +514,8 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
                 format!("{:.6e}", fd.adjoint),
                 format!("{:.6e}", fd.central_difference),
                 format!("{:.1e}", fd.h),
+                fd.newton_tol
+                    .map_or("the task's".into(), |t| format!("{t:.0e}")),
                 format!("{:.2e}", fd.relative_error),
             ]],
         });

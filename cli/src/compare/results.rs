@@ -148,6 +148,10 @@ pub struct FdCheck {
     pub central_difference: f64,
     pub h: f64,
     pub relative_error: f64,
+    /// Newton tolerance of the check's solves (absent in results written
+    /// before it was recorded: those used the task's own tolerance).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub newton_tol: Option<f64>,
 }
 
 /// Which way a metric improves.
