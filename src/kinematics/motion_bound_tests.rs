@@ -198,6 +198,19 @@ fn rotation_vector_angular_speed_never_exceeds_the_coordinate_speed() {
     assert!(max_ratio > 0.999);
 }
 
+/// One random chart centre (roll ±3, pitch ±1, yaw ±3 rad), shared by every
+/// chart of `model` (the draws in this order: the tests' random streams).
+fn random_charts(rng: &mut rand_chacha::ChaCha8Rng, model: &Model) -> Vec<Matrix3<f64>> {
+    vec![
+        rpy_to_matrix(&[
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-3.0..3.0),
+        ]);
+        model.links.iter().filter(|l| l.chart.is_some()).count()
+    ]
+}
+
 /// The exact start rates `ω_i(0)`, `ȯ_i(0)` of the rate bound match
 /// central differences of the forward kinematics for every joint kind.
 #[test]
@@ -206,14 +219,7 @@ fn start_rates_match_finite_differences_for_every_joint_kind() {
     for _ in 0..40 {
         let model = every_joint_model(&mut rng);
         let n = model.ndof();
-        let charts = vec![
-            rpy_to_matrix(&[
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-3.0..3.0),
-            ]);
-            model.links.iter().filter(|l| l.chart.is_some()).count()
-        ];
+        let charts = random_charts(&mut rng, &model);
         let q = DVector::from_fn(n, |_, _| rng.random_range(-2.0..2.0));
         let dq = DVector::from_fn(n, |_, _| rng.random_range(-1.0..1.0));
         let mut kin = Kinematics::new(&model);
@@ -360,14 +366,7 @@ fn the_lever_half_bounds_the_spread_from_above_exactly() {
     for case in 0..300 {
         let model = every_joint_model(&mut rng);
         let n = model.ndof();
-        let charts = vec![
-            rpy_to_matrix(&[
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-3.0..3.0),
-            ]);
-            model.links.iter().filter(|l| l.chart.is_some()).count()
-        ];
+        let charts = random_charts(&mut rng, &model);
         let scale = [1e-6, 1e-3, 0.05, 0.5, 3.0][case % 5];
         let q = DVector::from_fn(n, |_, _| rng.random_range(-1.5..1.5));
         let dq = DVector::from_fn(n, |_, _| scale * rng.random_range(-1.0..1.0));
