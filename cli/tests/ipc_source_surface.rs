@@ -82,18 +82,8 @@ fn non_convex_source_surfaces_run_and_python_fcl_finds_every_mesh_pair_separated
             .arg(&csv)
             .arg(&scene),
     );
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let z = head.iter().position(|c| *c == "box/box:z").unwrap();
-    let last: Vec<f64> = text
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
-    assert!(last[z] < 0.16, "box centre z {}", last[z]);
+    let z = final_value(&csv, "box/box:z");
+    assert!(z < 0.16, "box centre z {z}");
 }
 
 #[test]
@@ -273,27 +263,14 @@ fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
             .arg(&csv)
             .arg(with_box("source")),
     );
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let col = head.iter().position(|c| *c == "peg/peg:z").unwrap();
-    let last: Vec<f64> = text
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let z = final_value(&csv, "peg/peg:z");
     eprintln!(
         "peg centre z after 0.4 s: {:.5} (ring centre {zc:.5}, hole radius 0.2551)",
-        last[col]
+        z
     );
     // Resting on the inside of the ring: the box's lower corners (±0.05 m)
     // meet the 0.255 m hole at 0.250 m below the centre.
-    assert!(
-        last[col] < zc - 0.15 && last[col] > zc - 0.255,
-        "{} vs {zc}",
-        last[col]
-    );
+    assert!(z < zc - 0.15 && z > zc - 0.255, "{} vs {zc}", z);
     // With the hull the box starts inside the torus.
     let o = sdrs()
         .args(["simulate", "-q", "--steps", "1"])
@@ -306,4 +283,19 @@ fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
         e.contains("initial state") && e.contains("peg/peg") && e.contains("torus_textured"),
         "{e}"
     );
+}
+
+/// The last row's value of column `name` in a trajectory CSV (`--out`).
+fn final_value(csv: &std::path::Path, name: &str) -> f64 {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = head.iter().position(|c| *c == name).unwrap();
+    text.lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(col)
+        .unwrap()
+        .parse()
+        .unwrap()
 }
