@@ -102,6 +102,9 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
         dm[i] -= h;
         (p.evaluate(&dp, &c).unwrap().loss - p.evaluate(&dm, &c).unwrap().loss) / (2.0 * h)
     };
+    if std::env::var("FD_NOISE").is_ok() {
+        return fd_check_noise(p, name, &d, &c, &ev, &idx, eps, need);
+    }
     // `need` of the 12 must agree to 1e-4 (the acceptance's figure), all 12
     // to 1e-3.
     let mut errors = Vec::new();
@@ -125,6 +128,58 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
         within >= need && worst <= 1e-3,
         "{name}: {within} of {} design-gradient components within 1e-4 (need {need}), worst {worst:.2e}",
         idx.len()
+    );
+}
+
+/// [`fd_check_problem`] with `FD_NOISE=1`: each component against
+/// Richardson's difference at `eps` with the loss's noise measured along it
+/// (`common::fd::check_component`); at least `need` components resolved to
+/// 1e-4 and agreeing, every component within its differences' uncertainty.
+#[allow(clippy::too_many_arguments)]
+fn fd_check_noise(
+    p: &Problem,
+    name: &str,
+    d: &DVector<f64>,
+    c: &DVector<f64>,
+    ev: &sdrs::optimize::Evaluation,
+    idx: &[usize],
+    eps: f64,
+    need: usize,
+) {
+    let mut agree = 0;
+    let mut all = true;
+    for &i in idx {
+        let loss_at = |t: f64| {
+            let mut dt = d.clone();
+            dt[i] += t;
+            p.evaluate(&dt, c).unwrap().loss
+        };
+        let k = common::fd::check_component(&loss_at, ev.loss, ev.grad_design[i], eps, 1e-4);
+        eprintln!(
+            "{name}: {} analytic {:.9e} central {:.9e} rel {:.2e} (loss noise {:.1e}, fd noise {:.1e}, {}) {}",
+            p.design.vars[i].name,
+            k.g,
+            k.fd,
+            k.rel,
+            k.loss_noise,
+            k.fd_noise,
+            if k.resolved {
+                "resolved"
+            } else {
+                "not resolved to 1e-4"
+            },
+            if k.pass { "ok" } else { "FAIL" }
+        );
+        agree += usize::from(k.resolved && k.pass);
+        all &= k.pass;
+    }
+    eprintln!(
+        "{name}: {agree} of {} resolved and within 1e-4 (h = {eps:e}), every component passes: {all}",
+        idx.len()
+    );
+    assert!(
+        agree >= need && all,
+        "{name}: {agree} resolved components agree (need {need}); all pass: {all}"
     );
 }
 

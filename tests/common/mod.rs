@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod adjoint;
+pub mod fd;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
