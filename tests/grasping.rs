@@ -158,11 +158,11 @@ fn fd_check_noise(
         eprintln!(
             "{name}: {} analytic {:.9e} central {:.9e} rel {:.2e} (loss noise {:.1e}, fd noise {:.1e}, {}) {}",
             p.design.vars[i].name,
-            k.g,
-            k.fd,
-            k.rel,
+            k.adjoint,
+            k.central,
+            k.relative_error,
             k.loss_noise,
-            k.fd_noise,
+            k.central_noise,
             if k.resolved {
                 "resolved"
             } else {

@@ -153,11 +153,11 @@ fn fd_check_full(name: &str) -> (usize, bool) {
             p.horizon,
             p.scene.settings.newton.tol,
             p.design.vars[i].name,
-            c.g,
-            c.fd,
-            c.rel,
+            c.adjoint,
+            c.central,
+            c.relative_error,
             c.loss_noise,
-            c.fd_noise,
+            c.central_noise,
             if c.resolved {
                 "resolved"
             } else {

@@ -109,6 +109,19 @@ fn quick_suite_report_browser_gate_and_resume() {
     // Solved tightly (the check measures the adjoint, not the solver's
     // stopping error).
     assert_eq!(cd["fd"]["newton_tol"].as_f64(), Some(1e-10));
+    // Richardson differences with the loss's noise measured: the chain's
+    // 1e-11-level agreement is far inside what the differences resolve.
+    assert_eq!(cd["fd"]["estimator"].as_str(), Some("richardson"));
+    let noise = cd["fd"]["difference_noise"].as_f64().unwrap();
+    assert!(
+        noise.is_finite()
+            && noise >= 0.0
+            && noise < 1e-6 * cd["fd"]["adjoint"].as_f64().unwrap().abs(),
+        "{}",
+        cd["fd"]
+    );
+    assert_eq!(cd["fd"]["resolved"].as_bool(), Some(true));
+    assert!(md.contains("resolves 1e-4"));
     // The mesh baseline (IPC + a coarse automatic cage) on the spider: it
     // optimized 4 cages × 26 vertices × 3 coordinates, lowered the loss, kept
     // every surface apart, and its row is in the report.

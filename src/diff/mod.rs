@@ -19,6 +19,7 @@
 //! is differentiated in the chart it was solved in.
 
 pub mod backward;
+pub mod central;
 pub mod loss;
 pub mod tape;
 pub mod vjp;

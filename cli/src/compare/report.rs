@@ -506,6 +506,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
                 "h",
                 "Newton tolerance",
                 "relative error",
+                "noise of the difference",
             ]
             .map(String::from)
             .to_vec(),
@@ -517,6 +518,11 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
                 fd.newton_tol
                     .map_or("the task's".into(), |t| format!("{t:.0e}")),
                 format!("{:.2e}", fd.relative_error),
+                match (fd.difference_noise, fd.resolved) {
+                    (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
+                    (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
+                    _ => "not measured (plain central difference)".into(),
+                },
             ]],
         });
     }

@@ -152,6 +152,19 @@ pub struct FdCheck {
     /// before it was recorded: those used the task's own tolerance).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub newton_tol: Option<f64>,
+    /// `richardson`: `(4 D(h) − D(2h)) / 3`. Absent in results written
+    /// before: a plain central difference `D(h)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<String>,
+    /// Standard deviation of `central_difference` due to the loss's measured
+    /// round-off noise (`sdrs::diff::central`). Absent in older results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub difference_noise: Option<f64>,
+    /// Whether the differences resolve the component to 1e-4 (twice their
+    /// noise within 1e-4 of it); when not, `relative_error` measures the
+    /// differences' noise as much as the adjoint. Absent in older results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolved: Option<bool>,
 }
 
 /// Which way a metric improves.
