@@ -13,6 +13,7 @@ pub mod mass_matrix;
 pub mod newton;
 pub mod run;
 pub mod state;
+pub mod substitution;
 
 pub use crate::counters::{StageTime, StageTimers, StepDiagnostics, StepWork};
 
