@@ -223,13 +223,6 @@ impl BlockSolver {
         let p = &mut self.parent;
         p.clear();
         p.extend(0..n);
-        fn find(c: &mut [usize], mut i: usize) -> usize {
-            while c[i] != i {
-                c[i] = c[c[i]];
-                i = c[i];
-            }
-            i
-        }
         // The lower triangle, column by column (contiguous; the transposed
         // read `h[(j, i)]` strided by `n` and dominated this scan). The
         // components do not depend on the order in which edges are joined,
@@ -237,36 +230,7 @@ impl BlockSolver {
         // grouping below is the same whatever the order.
         // (Plain slices: nalgebra's generic matrix iterator does not
         // vectorize and cost more than the scan itself.)
-        if n > 0 {
-            for (j, col) in h.as_slice().chunks_exact(n).enumerate() {
-                let mut rj = find(p, j);
-                // Entry `(i, j)` needs a union only when non-zero and `i` is
-                // not already known to be in `j`'s component (`p[i] == rj`:
-                // path compression makes this the common case inside a dense
-                // block). Chunks of 8 are tested branch-free first (the test
-                // vectorizes; most chunks need nothing).
-                for start in (j..n).step_by(8) {
-                    let end = (start + 8).min(n);
-                    let busy = col[start..end]
-                        .iter()
-                        .zip(&p[start..end])
-                        .fold(false, |b, (&v, &pi)| b | ((v != 0.0) & (pi != rj)));
-                    if !busy {
-                        continue;
-                    }
-                    for i in start..end {
-                        if col[i] != 0.0 && p[i] != rj {
-                            let a = find(p, i);
-                            if a != rj {
-                                let r = a.min(rj);
-                                p[a.max(rj)] = r;
-                                rj = r;
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        join_nonzeros(h.as_slice(), n, p);
         // Roots are the smallest index of their block; count sizes per root.
         self.cursor.clear();
         self.cursor.resize(n + 1, 0);
@@ -574,17 +538,20 @@ impl BlockScratch {
     /// traversal, so the block is bitwise the untiled one.
     fn gather(&mut self, h: &DMatrix<f64>, idx: &[usize], shift: f64) {
         let m = idx.len();
-        let mut w = self.work.as_mut().submatrix_mut(0, 0, m, m);
+        let n = h.nrows();
+        let hs = h.as_slice();
         for b0 in (0..m).step_by(GATHER_TILE) {
             let b1 = (b0 + GATHER_TILE).min(m);
             for a0 in (b0..m).step_by(GATHER_TILE) {
                 let a1 = (a0 + GATHER_TILE).min(m);
                 for b in b0..b1 {
                     let jb = idx[b];
+                    let (hcol, w) = (&hs[jb * n..(jb + 1) * n], self.work.col_as_slice_mut(b));
                     for a in a0.max(b)..a1 {
                         let ia = idx[a];
-                        let v = 0.5 * (h[(ia, jb)] + h[(jb, ia)]);
-                        w[(a, b)] = if a == b { v - shift } else { v };
+                        // h_ij: column jb, row ia; h_ji: column ia, row jb.
+                        let v = 0.5 * (hcol[ia] + hs[ia * n + jb]);
+                        w[a] = if a == b { v - shift } else { v };
                     }
                 }
             }
@@ -788,6 +755,89 @@ impl BlockScratch {
             }
         }
     }
+}
+
+/// Root of `i` in the union–find forest `c`, halving the path.
+fn find(c: &mut [usize], mut i: usize) -> usize {
+    while c[i] != i {
+        c[i] = c[c[i]];
+        i = c[i];
+    }
+    i
+}
+
+/// The scan of [`BlockSolver::partition`]: joins `i` and `j` in the
+/// union–find forest `p` for every non-zero `h_ij`, `i ≥ j`, of the
+/// column-major `n × n` matrix `h`. Runs with AVX2 where the CPU has it
+/// (only comparisons: the same unions either way).
+fn join_nonzeros(h: &[f64], n: usize, p: &mut [usize]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked above).
+        unsafe { join_nonzeros_avx2(h, n, p) };
+        return;
+    }
+    join_nonzeros_generic(h, n, p);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn join_nonzeros_avx2(h: &[f64], n: usize, p: &mut [usize]) {
+    join_nonzeros_generic(h, n, p);
+}
+
+#[inline(always)]
+fn join_nonzeros_generic(h: &[f64], n: usize, p: &mut [usize]) {
+    if n == 0 {
+        return;
+    }
+    for (j, col) in h.chunks_exact(n).enumerate() {
+        let mut rj = find(p, j);
+        // Entry `(i, j)` needs a union only when non-zero and `i` is not
+        // already known to be in `j`'s component (`p[i] == rj`: path
+        // compression makes this the common case inside a dense block).
+        // Fixed chunks of 8 are tested branch-free first: all zero (most of
+        // the matrix when robots are apart), then none needing a union (the
+        // rest); both tests vectorize.
+        let mut chunks = col[j..].chunks_exact(8);
+        let mut base = j;
+        for c in &mut chunks {
+            let c: &[f64; 8] = c.try_into().expect("chunk of 8");
+            if !c.iter().fold(false, |b, &v| b | (v != 0.0)) {
+                base += 8;
+                continue;
+            }
+            let pc: &[usize; 8] = p[base..base + 8].try_into().expect("chunk of 8");
+            let busy = c
+                .iter()
+                .zip(pc)
+                .fold(false, |b, (&v, &pi)| b | ((v != 0.0) & (pi != rj)));
+            if busy {
+                rj = join_column(p, c, base, rj);
+            }
+            base += 8;
+        }
+        rj = join_column(p, chunks.remainder(), base, rj);
+        let _ = rj;
+    }
+}
+
+/// Joins `base + k` with the component of root `rj` for every non-zero
+/// `c[k]`; returns the (possibly smaller) root.
+#[inline(always)]
+fn join_column(p: &mut [usize], c: &[f64], base: usize, mut rj: usize) -> usize {
+    for (k, &v) in c.iter().enumerate() {
+        let i = base + k;
+        if v != 0.0 && p[i] != rj {
+            let a = find(p, i);
+            if a != rj {
+                let r = a.min(rj);
+                p[a.max(rj)] = r;
+                rj = r;
+            }
+        }
+    }
+    rj
 }
 
 /// `‖g_B‖∞ < settled` for block `idx` (never for `settled ≤ 0`).
