@@ -22,6 +22,7 @@
 //!    space — lives in [`BlockSolver`] and is reused across iterations and
 //!    steps (it grows only when the problem does).
 
+use super::small_cholesky::SMALL_CHOLESKY_MAX;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor as llt;
 use faer::linalg::evd;
@@ -470,7 +471,7 @@ impl BlockSolver {
             let idx = &self.order[self.starts[k]..self.starts[k + 1]];
             let m = idx.len();
             sc.gather(h, idx, 0.0);
-            if !sc.cholesky(m) {
+            if !sc.cholesky_faer(m) {
                 return false;
             }
             for (a, &i) in idx.iter().enumerate() {
@@ -703,8 +704,19 @@ impl BlockScratch {
     }
 
     /// In-place Cholesky of the leading `m × m` block of `work` (lower
-    /// triangle); `false` when a pivot is not positive.
+    /// triangle); `false` when a pivot is not positive. Blocks of up to
+    /// [`SMALL_CHOLESKY_MAX`] coordinates use [`super::small_cholesky`],
+    /// larger ones faer's blocked factorization.
     fn cholesky(&mut self, m: usize) -> bool {
+        if m <= SMALL_CHOLESKY_MAX {
+            return super::small_cholesky::cholesky_in_place(&mut self.work, m);
+        }
+        self.cholesky_faer(m)
+    }
+
+    /// faer's in-place Cholesky of the leading `m × m` block of `work`
+    /// (the adjoint's [`BlockSolver::spd_solve`] keeps it for every size).
+    fn cholesky_faer(&mut self, m: usize) -> bool {
         let stack = MemStack::new(self.mem.as_mut().expect("reserved"));
         let a = self.work.as_mut().submatrix_mut(0, 0, m, m);
         llt::cholesky_in_place(a, Default::default(), Par::Seq, stack, Default::default()).is_ok()

@@ -12,6 +12,7 @@ pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
 pub mod run;
+pub mod small_cholesky;
 pub mod state;
 pub mod substitution;
 
