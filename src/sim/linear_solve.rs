@@ -539,8 +539,15 @@ impl BlockScratch {
     /// traversal, so the block is bitwise the untiled one.
     fn gather(&mut self, h: &DMatrix<f64>, idx: &[usize], shift: f64) {
         let m = idx.len();
+        if m == 0 {
+            return;
+        }
         let n = h.nrows();
         let hs = h.as_slice();
+        // Ascending distinct coordinates spanning `m` values: `s, s+1, …`
+        // (a chain's block). Then both reads are plain strided walks.
+        let contiguous = idx[m - 1] - idx[0] == m - 1;
+        let s = idx[0];
         for b0 in (0..m).step_by(GATHER_TILE) {
             let b1 = (b0 + GATHER_TILE).min(m);
             for a0 in (b0..m).step_by(GATHER_TILE) {
@@ -548,11 +555,25 @@ impl BlockScratch {
                 for b in b0..b1 {
                     let jb = idx[b];
                     let (hcol, w) = (&hs[jb * n..(jb + 1) * n], self.work.col_as_slice_mut(b));
-                    for a in a0.max(b)..a1 {
-                        let ia = idx[a];
-                        // h_ij: column jb, row ia; h_ji: column ia, row jb.
-                        let v = 0.5 * (hcol[ia] + hs[ia * n + jb]);
-                        w[a] = if a == b { v - shift } else { v };
+                    let a_start = a0.max(b);
+                    if a_start >= a1 {
+                        continue;
+                    }
+                    // h_ij: column jb, row ia; h_ji: column ia, row jb.
+                    if contiguous {
+                        let direct = &hcol[s + a_start..s + a1];
+                        let mirror = hs[(s + a_start) * n + jb..].iter().step_by(n);
+                        for ((wa, &d), &r) in w[a_start..a1].iter_mut().zip(direct).zip(mirror) {
+                            *wa = 0.5 * (d + r);
+                        }
+                    } else {
+                        for a in a_start..a1 {
+                            let ia = idx[a];
+                            w[a] = 0.5 * (hcol[ia] + hs[ia * n + jb]);
+                        }
+                    }
+                    if a_start == b {
+                        w[b] -= shift;
                     }
                 }
             }

@@ -184,24 +184,29 @@ fn spd_solve_solves_block_diagonal_systems() {
 
 /// The tiled gather is entry for entry `0.5 (h_ij + h_ji) − shift δ_ij`
 /// for blocks larger than a tile with scattered, unsorted-looking
-/// coordinates (a tile edge falls inside the block in both directions).
+/// coordinates and with a contiguous run of coordinates (a tile edge falls
+/// inside the block in both directions).
 #[test]
 fn tiled_gather_is_the_symmetrized_block() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let n = 70;
     // Values not symmetric (round-off-like differences), as assembled.
     let h = DMatrix::from_fn(n, n, |_, _| rng.random_range(-1.0..1.0));
-    let idx: Vec<usize> = (0..n).filter(|i| i % 3 != 1).collect();
-    let m = idx.len();
-    assert!(m > 2 * GATHER_TILE);
-    let mut sc = BlockScratch::default();
-    sc.reserve(n);
-    sc.gather(&h, &idx, 0.25);
-    for b in 0..m {
-        for a in b..m {
-            let (i, j) = (idx[a], idx[b]);
-            let v = 0.5 * (h[(i, j)] + h[(j, i)]) - if a == b { 0.25 } else { 0.0 };
-            assert_eq!(sc.work[(a, b)].to_bits(), v.to_bits(), "entry ({a}, {b})");
+    // Scattered coordinates, and a contiguous run (the fast path).
+    let scattered: Vec<usize> = (0..n).filter(|i| i % 3 != 1).collect();
+    let contiguous: Vec<usize> = (3..n - 2).collect();
+    for idx in [scattered, contiguous] {
+        let m = idx.len();
+        assert!(m > 2 * GATHER_TILE);
+        let mut sc = BlockScratch::default();
+        sc.reserve(n);
+        sc.gather(&h, &idx, 0.25);
+        for b in 0..m {
+            for a in b..m {
+                let (i, j) = (idx[a], idx[b]);
+                let v = 0.5 * (h[(i, j)] + h[(j, i)]) - if a == b { 0.25 } else { 0.0 };
+                assert_eq!(sc.work[(a, b)].to_bits(), v.to_bits(), "entry ({a}, {b})");
+            }
         }
     }
 }
