@@ -562,9 +562,10 @@ impl BlockScratch {
                     // h_ij: column jb, row ia; h_ji: column ia, row jb.
                     if contiguous {
                         let direct = &hcol[s + a_start..s + a1];
-                        let mirror = hs[(s + a_start) * n + jb..].iter().step_by(n);
-                        for ((wa, &d), &r) in w[a_start..a1].iter_mut().zip(direct).zip(mirror) {
-                            *wa = 0.5 * (d + r);
+                        let mut at = (s + a_start) * n + jb;
+                        for (wa, &d) in w[a_start..a1].iter_mut().zip(direct) {
+                            *wa = 0.5 * (d + hs[at]);
+                            at += n;
                         }
                     } else {
                         for a in a_start..a1 {
