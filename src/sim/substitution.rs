@@ -85,15 +85,19 @@ fn solve_generic(l: &Mat<f64>, inv: &[f64], m: usize, x: &mut [f64]) {
 #[inline(always)]
 fn dot_from_end(a: &[f64], b: &[f64]) -> f64 {
     let mut s = [0.0f64; 4];
-    let (ac, bc) = (a.rchunks_exact(4), b.rchunks_exact(4));
-    let (ar, br) = (ac.remainder(), bc.remainder());
-    for (p, q) in ac.zip(bc) {
+    let k = a.len().min(b.len());
+    let (a, b) = (&a[..k], &b[..k]);
+    let head = k % 4;
+    let (ah, at) = a.split_at(head);
+    let (bh, bt) = b.split_at(head);
+    for (p, q) in at.chunks_exact(4).zip(bt.chunks_exact(4)).rev() {
+        let (p, q): (&[f64; 4], &[f64; 4]) = (p.try_into().unwrap(), q.try_into().unwrap());
         for r in 0..4 {
             s[r] += p[r] * q[r];
         }
     }
     let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-    for (p, q) in ar.iter().zip(br).rev() {
+    for (p, q) in ah.iter().zip(bh).rev() {
         t += p * q;
     }
     t
