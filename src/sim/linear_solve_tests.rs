@@ -315,6 +315,13 @@ fn partition_is_the_components_of_the_nonzero_pattern() {
             h = DMatrix::identity(n, n);
         }
         solver.partition(&h);
+        // The dispatched scan (AVX-512 / AVX2 here) builds the same forest
+        // as the portable one.
+        let (mut fast, mut portable): (Vec<usize>, Vec<usize>) =
+            ((0..n).collect(), (0..n).collect());
+        join_nonzeros(h.as_slice(), n, &mut fast);
+        join_nonzeros_generic(h.as_slice(), n, &mut portable);
+        assert_eq!(fast, portable, "case {case}: scan paths differ");
         // Reference: union–find over all non-zeros, roots = smallest index.
         let mut p: Vec<usize> = (0..n).collect();
         for j in 0..n {
