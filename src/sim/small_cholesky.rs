@@ -147,7 +147,7 @@ fn factor_generic(a: &mut Mat<f64>, m: usize) -> bool {
 #[inline(always)]
 fn pivot(a: &mut [f64]) -> bool {
     let d = a[0];
-    if !(d > 0.0) {
+    if d <= 0.0 || d.is_nan() {
         return false;
     }
     let ljj = d.sqrt();
