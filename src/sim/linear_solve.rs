@@ -15,9 +15,11 @@
 //!    `Ĥ_B = H_B`, and the step is a Cholesky solve with `H_B` (two
 //!    `m³/3` factorizations instead of a `~9 m³` eigendecomposition). Only
 //!    blocks whose shifted Cholesky fails are eigen-decomposed.
-//! 3. **Blocked, SIMD kernels, no allocation.** Factorizations and the
-//!    self-adjoint eigendecomposition are `faer`'s (blocked, vectorized;
-//!    sequential, so results are bitwise reproducible); every buffer —
+//! 3. **Blocked, SIMD kernels, no allocation.** Blocks of up to 64
+//!    coordinates are factored by [`super::small_cholesky`], larger ones and
+//!    the self-adjoint eigendecomposition by `faer` (blocked, vectorized;
+//!    sequential, so results are bitwise reproducible); the refinement's
+//!    triangular solves are [`super::substitution`]'s; every buffer —
 //!    the gathered block, eigenvectors, eigenvalues, the kernels' work
 //!    space — lives in [`BlockSolver`] and is reused across iterations and
 //!    steps (it grows only when the problem does).
