@@ -12,7 +12,9 @@ pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
 pub mod run;
+pub mod small_cholesky;
 pub mod state;
+pub mod substitution;
 
 pub use crate::counters::{StageTime, StageTimers, StepDiagnostics, StepWork};
 
