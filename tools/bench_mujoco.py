@@ -200,8 +200,7 @@ def summarize(path):
         sm = med([r["ms_per_step"] for r in s])
         mm = med([r["ms_per_step"] for r in m])
         r0 = s[0]
-        total = sum(st["seconds"] for st in r0["stages"]) or 1.0
-        share = lambda name: 100.0 * sum(st["seconds"] for st in r0["stages"] if st["stage"] == name) / total
+        share = lambda name: med([_share(r, name) for r in s])
         table.append((n, sm, mm))
         print(f"| {n} | {r0['dof']} | {sm:.3f} | {mm:.4f} | {sm / mm:.2f} | "
               f"{r0['newton_iterations_per_step']:.2f} | {share('linear_solve'):.1f} | "
@@ -215,12 +214,22 @@ def summarize(path):
         worst = max(table, key=lambda t: t[1] / t[2])
         print(f"worst ratio {worst[1] / worst[2]:.2f} at N = {worst[0]}")
     if table:
+        # Stage shares: the median over rounds of each round's share (the
+        # table's columns too); the linear solve's range over rounds beside it.
         n, _, _ = table[-1]
-        r0 = by[n]["sdrs"][0]
-        total = sum(st["seconds"] for st in r0["stages"]) or 1.0
-        parts = sorted(r0["stages"], key=lambda st: -st["seconds"])
-        print(f"\nsdrs stage shares at N = {n}: " + ", ".join(
-            f"{st['stage']} {100 * st['seconds'] / total:.1f}%" for st in parts))
+        s = by[n]["sdrs"]
+        names = sorted({st["stage"] for r in s for st in r["stages"]})
+        parts = sorted(((med([_share(r, name) for r in s]), name) for name in names), reverse=True)
+        print(f"\nsdrs stage shares at N = {n} (median of {len(s)} rounds): " + ", ".join(
+            f"{name} {v:.1f}%" for v, name in parts))
+        ls = [_share(r, "linear_solve") for r in s]
+        print(f"linear_solve share at N = {n} over the rounds: {min(ls):.1f}–{max(ls):.1f}%")
+
+
+def _share(row, name):
+    """Percentage of one run's timed stages spent in stage `name`."""
+    total = sum(st["seconds"] for st in row["stages"]) or 1.0
+    return 100.0 * sum(st["seconds"] for st in row["stages"] if st["stage"] == name) / total
 
 
 def main():

@@ -4,8 +4,10 @@
 # `sdrs bench --links N`, then `tools/bench_mujoco.py --links N` (the same
 # chains: masses, inertias, PD gains, dt, friction; MuJoCo's `implicit`
 # integrator). Prints per N the ms/step of both, their ratio (median over
-# rounds), Newton iterations per step, the SDRS stage shares, and the growth
-# exponents over N = 8…32. The machine's load is printed before and after.
+# rounds), Newton iterations per step, the SDRS stage shares (medians over
+# rounds; the linear solve's range over rounds at the largest N), and the
+# growth exponents over N = 8…32. The machine's load is printed before and
+# after.
 #
 #   tools/bench_vs_mujoco.sh [--links 2,4,8,16,32] [--steps 600] [--rounds 1]
 #                            [--sdrs target/release/sdrs] [--out rows.jsonl]
