@@ -146,33 +146,17 @@ fn fd_check_noise(
     eps: f64,
     need: usize,
 ) {
-    let mut agree = 0;
-    let mut all = true;
-    for &i in idx {
-        let loss_at = |t: f64| {
-            let mut dt = d.clone();
-            dt[i] += t;
-            p.evaluate(&dt, c).unwrap().loss
-        };
-        let k = common::fd::check_component(&loss_at, ev.loss, ev.grad_design[i], eps, 1e-4);
-        eprintln!(
-            "{name}: {} analytic {:.9e} central {:.9e} rel {:.2e} (loss noise {:.1e}, fd noise {:.1e}, {}) {}",
-            p.design.vars[i].name,
-            k.adjoint,
-            k.central,
-            k.relative_error,
-            k.loss_noise,
-            k.central_noise,
-            if k.resolved {
-                "resolved"
-            } else {
-                "not resolved to 1e-4"
-            },
-            if k.pass { "ok" } else { "FAIL" }
-        );
-        agree += usize::from(k.resolved && k.pass);
-        all &= k.pass;
-    }
+    let vars: Vec<(String, f64)> = idx
+        .iter()
+        .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
+        .collect();
+    let loss_at = |k: usize, t: f64| {
+        let mut dt = d.clone();
+        dt[idx[k]] += t;
+        p.evaluate(&dt, c).unwrap().loss
+    };
+    let (agree, all) =
+        common::fd::check_sample(&format!("{name}:"), &vars, &loss_at, ev.loss, eps, 1e-4);
     eprintln!(
         "{name}: {agree} of {} resolved and within 1e-4 (h = {eps:e}), every component passes: {all}",
         idx.len()

@@ -141,37 +141,20 @@ fn fd_check_full(name: &str) -> (usize, bool) {
     // noise σ/h; at 1e-6 the measured noise resolves only 9 of the spider's
     // components (notes/loco.md).
     let h = env_or("SDRS_FD_H", 2e-6);
-    let mut agree = 0;
-    let mut all = true;
-    for &i in &picked {
-        let loss_at = |t: f64| {
-            let mut d = d0.clone();
-            d[i] += t;
-            p.evaluate(&d, &c0).unwrap().loss
-        };
-        let c = common::fd::check_component(&loss_at, ev.loss, ev.grad_design[i], h, 1e-4);
-        eprintln!(
-            "{name} H={} h={h:.0e} tol={:.0e} {}: adjoint {:.9e} fd {:.9e} rel {:.2e} \
-             (loss noise {:.1e}, fd noise {:.1e}, {}) {}",
-            p.horizon,
-            p.scene.settings.newton.tol,
-            p.design.vars[i].name,
-            c.adjoint,
-            c.central,
-            c.relative_error,
-            c.loss_noise,
-            c.central_noise,
-            if c.resolved {
-                "resolved"
-            } else {
-                "not resolved to 1e-4"
-            },
-            if c.pass { "ok" } else { "FAIL" }
-        );
-        agree += usize::from(c.resolved && c.pass);
-        all &= c.pass;
-    }
-    (agree, all)
+    let vars: Vec<(String, f64)> = picked
+        .iter()
+        .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
+        .collect();
+    let loss_at = |k: usize, t: f64| {
+        let mut d = d0.clone();
+        d[picked[k]] += t;
+        p.evaluate(&d, &c0).unwrap().loss
+    };
+    let label = format!(
+        "{name} H={} h={h:.0e} tol={:.0e}",
+        p.horizon, p.scene.settings.newton.tol
+    );
+    common::fd::check_sample(&label, &vars, &loss_at, ev.loss, h, 1e-4)
 }
 
 /// `SDRS_FD_H` / `SDRS_FD_TOL` override h and the Newton tolerance (for the

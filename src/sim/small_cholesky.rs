@@ -183,21 +183,29 @@ mod tests {
         a
     }
 
-    fn faer_factor(a: &mut Mat<f64>, m: usize) -> bool {
-        let mut mem = MemBuffer::new(llt::cholesky_in_place_scratch::<f64>(
+    fn faer_scratch(m: usize) -> MemBuffer {
+        MemBuffer::new(llt::cholesky_in_place_scratch::<f64>(
             m,
             faer::Par::Seq,
             Default::default(),
-        ));
+        ))
+    }
+
+    /// faer's Cholesky of the leading `m × m` block, with scratch `mem`.
+    fn faer_factor_with(a: &mut Mat<f64>, m: usize, mem: &mut MemBuffer) -> bool {
         let view = a.as_mut().submatrix_mut(0, 0, m, m);
         llt::cholesky_in_place(
             view,
             Default::default(),
             faer::Par::Seq,
-            MemStack::new(&mut mem),
+            MemStack::new(mem),
             Default::default(),
         )
         .is_ok()
+    }
+
+    fn faer_factor(a: &mut Mat<f64>, m: usize) -> bool {
+        faer_factor_with(a, m, &mut faer_scratch(m))
     }
 
     #[test]
@@ -279,27 +287,13 @@ mod tests {
                 assert!(cholesky_in_place(&mut w, m));
             }
             let ours = t.elapsed().as_secs_f64() / reps as f64;
-            let mut mem = MemBuffer::new(llt::cholesky_in_place_scratch::<f64>(
-                m,
-                faer::Par::Seq,
-                Default::default(),
-            ));
+            let mut mem = faer_scratch(m);
             let t = std::time::Instant::now();
             for _ in 0..reps {
                 w.as_mut()
                     .submatrix_mut(0, 0, m, m)
                     .copy_from(a.as_ref().submatrix(0, 0, m, m));
-                let view = w.as_mut().submatrix_mut(0, 0, m, m);
-                assert!(
-                    llt::cholesky_in_place(
-                        view,
-                        Default::default(),
-                        faer::Par::Seq,
-                        MemStack::new(&mut mem),
-                        Default::default(),
-                    )
-                    .is_ok()
-                );
+                assert!(faer_factor_with(&mut w, m, &mut mem));
             }
             let theirs = t.elapsed().as_secs_f64() / reps as f64;
             let t = std::time::Instant::now();

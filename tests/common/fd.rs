@@ -25,3 +25,41 @@ pub fn check_component(
         Err(e) => match e {},
     }
 }
+
+/// Checks a sample of components (`vars`: name and adjoint value of each)
+/// with [`check_component`]; `loss_at(k, t)` is the loss with the `k`-th
+/// variable moved by `t`, `l0 = L(0)`. Prints one line per component,
+/// prefixed by `label`. Returns how many are resolved and agree, and whether
+/// every component passes.
+pub fn check_sample(
+    label: &str,
+    vars: &[(String, f64)],
+    loss_at: &dyn Fn(usize, f64) -> f64,
+    l0: f64,
+    h: f64,
+    crit: f64,
+) -> (usize, bool) {
+    let mut agree = 0;
+    let mut all = true;
+    for (k, (name, g)) in vars.iter().enumerate() {
+        let c = check_component(&|t| loss_at(k, t), l0, *g, h, crit);
+        eprintln!(
+            "{label} {name}: adjoint {:.9e} central {:.9e} rel {:.2e} \
+             (loss noise {:.1e}, central noise {:.1e}, {}) {}",
+            c.adjoint,
+            c.central,
+            c.relative_error,
+            c.loss_noise,
+            c.central_noise,
+            if c.resolved {
+                "resolved"
+            } else {
+                "not resolved to the criterion"
+            },
+            if c.pass { "ok" } else { "FAIL" }
+        );
+        agree += usize::from(c.resolved && c.pass);
+        all &= c.pass;
+    }
+    (agree, all)
+}
