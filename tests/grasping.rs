@@ -75,17 +75,7 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
     let d = p.design.values(&p.model);
     let c = p.controls.values(&p.controller);
     let ev = p.evaluate(&d, &c).unwrap();
-    // The 12 block-vertex variables with the largest gradients (the ones in
-    // contact; most blocks never touch anything and have zero gradient).
-    let mut idx: Vec<usize> = (0..p.design.len())
-        .filter(|&i| p.design.vars[i].name.contains(".hull"))
-        .collect();
-    idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
-    idx.truncate(12);
-    assert!(
-        ev.grad_design[idx[11]].abs() > 0.0,
-        "{name}: fewer than 12 vertices with a gradient"
-    );
+    let idx = largest_vertex_components(p, &ev, name);
     // Central differences D(h) = (L(d + h e_i) − L(d − h e_i))/2h carry an
     // O(h²) truncation error that is measured here (D(3e-6) is off by ~3e-3,
     // D(1e-6) by ~2.5e-4 relative: the ratio ≈ 9 of an h² error), while
@@ -103,7 +93,8 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
         (p.evaluate(&dp, &c).unwrap().loss - p.evaluate(&dm, &c).unwrap().loss) / (2.0 * h)
     };
     if std::env::var("FD_NOISE").is_ok() {
-        return fd_check_noise(p, name, &d, &c, &ev, &idx, eps, need);
+        let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
+        return fd_check_noise(p, name, &d, &c, &ev, &idx, eps, stencil, need);
     }
     // `need` of the 12 must agree to 1e-4 (the acceptance's figure), all 12
     // to 1e-3.
@@ -131,6 +122,25 @@ fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
     );
 }
 
+/// The 12 block-vertex variables with the largest gradients (the ones in
+/// contact; most blocks never touch anything and have zero gradient).
+fn largest_vertex_components(
+    p: &Problem,
+    ev: &sdrs::optimize::Evaluation,
+    name: &str,
+) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..p.design.len())
+        .filter(|&i| p.design.vars[i].name.contains(".hull"))
+        .collect();
+    idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
+    idx.truncate(12);
+    assert!(
+        ev.grad_design[idx[11]].abs() > 0.0,
+        "{name}: fewer than 12 vertices with a gradient"
+    );
+    idx
+}
+
 /// [`fd_check_problem`] with `FD_NOISE=1`: each component against
 /// Richardson's difference at `eps` with the loss's noise measured along it
 /// (`common::fd::check_component`); at least `need` components resolved to
@@ -144,19 +154,29 @@ fn fd_check_noise(
     ev: &sdrs::optimize::Evaluation,
     idx: &[usize],
     eps: f64,
+    stencil: common::fd::Stencil,
     need: usize,
 ) {
     let vars: Vec<(String, f64)> = idx
         .iter()
         .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
         .collect();
+    // Forward-only losses (bitwise the evaluation's, see
+    // `collective_evaluation_is_bitwise_the_same_for_one_and_two_threads`).
     let loss_at = |k: usize, t: f64| {
         let mut dt = d.clone();
         dt[idx[k]] += t;
-        p.evaluate(&dt, c).unwrap().loss
+        p.loss_value(&dt, c).unwrap()
     };
-    let (agree, all) =
-        common::fd::check_sample(&format!("{name}:"), &vars, &loss_at, ev.loss, eps, 1e-4);
+    let (agree, all) = common::fd::check_sample(
+        &format!("{name}:"),
+        &vars,
+        &loss_at,
+        ev.loss,
+        eps,
+        stencil,
+        1e-4,
+    );
     eprintln!(
         "{name}: {agree} of {} resolved and within 1e-4 (h = {eps:e}), every component passes: {all}",
         idx.len()
@@ -179,6 +199,42 @@ fn horizon(short: usize) -> Option<usize> {
 #[test]
 fn parallel_jaw_design_gradient_matches_central_differences() {
     fd_check("parallel_jaw_gripper", horizon(60), 1e-6, 12);
+}
+
+/// The parallel jaw at its full horizon 180 (ignored: ≈ 11 min in release;
+/// `cargo test --release --test grasping -- --ignored parallel_jaw_full_horizon --nocapture`).
+/// Its full-horizon gradients are small (|g| 1.1e-5 … 8.1e-5: the objects
+/// leave the jaws at the lift) against a loss noise σ ≈ 1e-16 … 7e-16, and
+/// Richardson's differences resolve only the largest four: below h ≈ 1e-6
+/// the noise σ/h is ≈ 1e-4 of the small components, above it a truncation
+/// error remains that a second Richardson level does not remove (a loss
+/// that is C² but not C³ within a micrometre). So the 64 central
+/// differences at steps j·6e-7/64 are fitted with `g + a h²`
+/// ([`common::fd::Stencil::Fit`], noise 0.38 σ/h against Richardson's
+/// 1.90 σ/h over the same span), with the loss's noise measured along each
+/// component. All 12 must be resolved and agree to 1e-4 (the acceptance
+/// asks ≥ 10). The span (where Richardson at h = 3e-7, i.e. over 6e-7,
+/// already agreed within its noise) and the count were set from those
+/// earlier measurements before this check was first run; figures in
+/// notes/grasp.md. `FD_STEPS`, `FD_LEVELS`, `FD_EPS` override.
+#[test]
+#[ignore]
+fn parallel_jaw_full_horizon_design_gradient_matches_fitted_central_differences() {
+    let name = "parallel_jaw_gripper";
+    let p = shortened(name, None, 1e-11);
+    let d = p.design.values(&p.model);
+    let c = p.controls.values(&p.controller);
+    let ev = p.evaluate(&d, &c).unwrap();
+    let idx = largest_vertex_components(&p, &ev, name);
+    let eps: f64 = std::env::var("FD_EPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(6e-7);
+    let stencil = common::fd::stencil_from_env(common::fd::Stencil::Fit {
+        steps: 64,
+        levels: 1,
+    });
+    fd_check_noise(&p, name, &d, &c, &ev, &idx, eps, stencil, 12);
 }
 
 #[test]
@@ -215,6 +271,16 @@ fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
         parts.iter().all(|&l| l > 0.0),
         "every trajectory contributes: {parts:?}"
     );
+    // The forward-only loss (used by the difference checks) is bitwise the
+    // evaluation's, for either thread count.
+    for threads in [1, 2] {
+        let l = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| p.loss_value(&d, &c).unwrap());
+        assert_eq!(l.to_bits(), a.loss.to_bits(), "{threads} thread(s)");
+    }
 }
 
 /// Ties and bounds after each of 2 optimizer iterations of `name`

@@ -149,13 +149,14 @@ fn fd_check_full(name: &str) -> (usize, bool) {
     let loss_at = |k: usize, t: f64| {
         let mut d = d0.clone();
         d[picked[k]] += t;
-        p.evaluate(&d, &c0).unwrap().loss
+        p.loss_value(&d, &c0).unwrap()
     };
     let label = format!(
         "{name} H={} h={h:.0e} tol={:.0e}",
         p.horizon, p.scene.settings.newton.tol
     );
-    common::fd::check_sample(&label, &vars, &loss_at, ev.loss, h, 1e-4)
+    let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
+    common::fd::check_sample(&label, &vars, &loss_at, ev.loss, h, stencil, 1e-4)
 }
 
 /// `SDRS_FD_H` / `SDRS_FD_TOL` override h and the Newton tolerance (for the

@@ -207,15 +207,47 @@ impl Problem {
         })
     }
 
-    /// [`Problem::evaluate`] of this trajectory alone.
-    pub fn evaluate_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+    /// This trajectory's scene at design `d` and controller `c`.
+    fn scene_at(&self, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
         let mut model = self.model.clone();
         self.design.apply(&mut model, d);
         let mut controller = self.controller.clone();
         self.controls.apply(&mut controller, c);
         let mut scene = self.scene.clone();
-        scene.model = model.clone();
+        scene.model = model;
         scene.controller = controller;
+        scene
+    }
+
+    /// The loss alone at design `d` and controller `c`: the forward
+    /// simulation without the adjoint pass (about half of
+    /// [`Problem::evaluate`]'s cost; for finite-difference checks). Summed
+    /// over the trajectories like [`Problem::evaluate`] (same order), and
+    /// bitwise equal to its `loss`.
+    pub fn loss_value(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+        if self.others.is_empty() {
+            self.loss_value_one(d, c)
+        } else {
+            multi::loss_value(self, d, c)
+        }
+    }
+
+    /// [`Problem::loss_value`] of this trajectory alone.
+    pub fn loss_value_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+        let scene = self.scene_at(d, c);
+        let mut sim = self.simulator(&scene)?;
+        let tape = record(&mut sim, self.horizon)?;
+        Ok(crate::diff::backward::loss_of(
+            &scene.model,
+            &tape,
+            &self.loss,
+        ))
+    }
+
+    /// [`Problem::evaluate`] of this trajectory alone.
+    pub fn evaluate_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+        let scene = self.scene_at(d, c);
+        let model = scene.model.clone();
         let mut sim = self.simulator(&scene)?;
         let t0 = Instant::now();
         let tape = record(&mut sim, self.horizon)?;

@@ -122,6 +122,19 @@ pub fn all(p: &Problem) -> Vec<&Problem> {
     std::iter::once(p).chain(p.others.iter()).collect()
 }
 
+/// The summed loss alone ([`Problem::loss_value`] of every trajectory, in
+/// parallel, summed in trajectory order as [`evaluate`] does).
+pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+    let parts: Vec<anyhow::Result<f64>> =
+        all(p).par_iter().map(|q| q.loss_value_one(d, c)).collect();
+    let mut sum: Option<f64> = None;
+    for (j, r) in parts.into_iter().enumerate() {
+        let l = r.map_err(|e| e.context(format!("trajectory {j}")))?;
+        sum = Some(sum.map_or(l, |s| s + l));
+    }
+    sum.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+}
+
 /// The summed evaluation (see the module docs). `grads` and `model` are the
 /// first trajectory's; the timings are sums (CPU seconds).
 pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {

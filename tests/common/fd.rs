@@ -2,32 +2,44 @@
 //! a thin wrapper of [`sdrs::diff::central::check_component`] (see its module
 //! docs for the estimator and the noise model) for losses that cannot fail.
 
-pub use sdrs::diff::central::CentralCheck;
+pub use sdrs::diff::central::{CentralCheck, Stencil};
 
-/// Checks the adjoint `g` of one component against Richardson's central
-/// difference at step `h` and relative criterion `crit`; `loss_at(t)` is the
-/// loss at the design moved by `t` along the component, `l0 = L(0)`.
-/// `FD_LEVELS` (default 1) sets the extrapolation's depth.
+/// `default` unless the environment says otherwise: `FD_STEPS=m` selects
+/// the least-squares fit of `m` differences over `(0, h]`
+/// ([`Stencil::Fit`]), otherwise Richardson's table; `FD_LEVELS` sets the
+/// even powers removed (default: `default`'s).
+pub fn stencil_from_env(default: Stencil) -> Stencil {
+    let var = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<usize>().ok());
+    let levels = var("FD_LEVELS").unwrap_or(match default {
+        Stencil::Richardson { levels } | Stencil::Fit { levels, .. } => levels,
+    });
+    match (var("FD_STEPS"), default) {
+        (Some(steps), _) | (None, Stencil::Fit { steps, .. }) => Stencil::Fit { steps, levels },
+        (None, Stencil::Richardson { .. }) => Stencil::Richardson { levels },
+    }
+}
+
+/// Checks the adjoint `g` of one component against the central differences
+/// combined by `stencil` at step `h` and relative criterion `crit`;
+/// `loss_at(t)` is the loss at the design moved by `t` along the component,
+/// `l0 = L(0)`.
 pub fn check_component(
     loss_at: &dyn Fn(f64) -> f64,
     l0: f64,
     g: f64,
     h: f64,
+    stencil: Stencil,
     crit: f64,
 ) -> CentralCheck {
-    let levels: usize = std::env::var("FD_LEVELS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
     let mut at = |t: f64| Ok::<f64, std::convert::Infallible>(loss_at(t));
-    match sdrs::diff::central::check_component(&mut at, l0, g, h, levels, crit) {
+    match sdrs::diff::central::check_component_with(&mut at, l0, g, h, stencil, crit) {
         Ok(c) => c,
         Err(e) => match e {},
     }
 }
 
 /// Checks a sample of components (`vars`: name and adjoint value of each)
-/// with [`check_component`]; `loss_at(k, t)` is the loss with the `k`-th
+/// with [`check_component`] (`stencil`); `loss_at(k, t)` is the loss with the `k`-th
 /// variable moved by `t`, `l0 = L(0)`. Prints one line per component,
 /// prefixed by `label`. Returns how many are resolved and agree, and whether
 /// every component passes.
@@ -37,20 +49,22 @@ pub fn check_sample(
     loss_at: &dyn Fn(usize, f64) -> f64,
     l0: f64,
     h: f64,
+    stencil: Stencil,
     crit: f64,
 ) -> (usize, bool) {
     let mut agree = 0;
     let mut all = true;
     for (k, (name, g)) in vars.iter().enumerate() {
-        let c = check_component(&|t| loss_at(k, t), l0, *g, h, crit);
+        let c = check_component(&|t| loss_at(k, t), l0, *g, h, stencil, crit);
         eprintln!(
             "{label} {name}: adjoint {:.9e} central {:.9e} rel {:.2e} \
-             (loss noise {:.1e}, central noise {:.1e}, {}) {}",
+             (loss noise {:.1e}, central noise {:.1e}, {} differences, {}) {}",
             c.adjoint,
             c.central,
             c.relative_error,
             c.loss_noise,
             c.central_noise,
+            c.steps,
             if c.resolved {
                 "resolved"
             } else {
