@@ -470,7 +470,12 @@ fn three_finger_ball_sensitivity_grows_at_the_pivot_rate() {
         (0..ball.horizon)
             .map(|_| {
                 let iters = sim.step().unwrap().newton.iters;
-                let a: Vec<f64> = sim.state.poses.iter().flat_map(|p| p.iter().copied()).collect();
+                let a: Vec<f64> = sim
+                    .state
+                    .poses
+                    .iter()
+                    .flat_map(|p| p.iter().copied())
+                    .collect();
                 (DVector::from_vec(a), iters)
             })
             .collect::<Vec<_>>()
