@@ -499,11 +499,10 @@ fn three_finger_ball_sensitivity_grows_at_the_pivot_rate() {
         })
         .collect();
     let ratio = |j: usize, k: usize| (&moved[j][k].0 - &base[k].0).amax() / deltas[j];
-    for k in 0..base.len() {
+    for (k, (_, newton)) in base.iter().enumerate() {
         eprintln!(
-            "step {:3} newton {:2} | {:.3e} {:.3e} {:.3e}",
+            "step {:3} newton {newton:2} | {:.3e} {:.3e} {:.3e}",
             k + 1,
-            base[k].1,
             ratio(0, k),
             ratio(1, k),
             ratio(2, k)
