@@ -115,6 +115,17 @@ impl Problem {
         if !(o.step_design > 0.0 && o.step_controller > 0.0) {
             return Err(invalid("optimizer", "steps must be positive".into()));
         }
+        for (name, clip) in [
+            ("optimizer.clip_design", o.clip_design),
+            ("optimizer.clip_controller", o.clip_controller),
+        ] {
+            if let Some(v) = clip.filter(|v| !(*v > 0.0 && v.is_finite())) {
+                return Err(invalid(
+                    name,
+                    format!("must be positive and finite, got {v}"),
+                ));
+            }
+        }
         if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
             return Err(invalid(
                 "optimizer.init_noise",
@@ -607,8 +618,9 @@ pub fn optimize_with(
                 },
             ),
             Method::Adam => (
-                adam.0.step(&ev.grad_design),
-                adam.1.step(&ev.grad_controller),
+                adam.0.step(&method::clip_norm(&ev.grad_design, o.clip_design)),
+                adam.1
+                    .step(&method::clip_norm(&ev.grad_controller, o.clip_controller)),
             ),
         };
         let mut d_new = &d + dd;

@@ -250,6 +250,15 @@ pub struct OptimizerSpec {
     /// `summary.json`'s final loss and task metrics): `best` (default) or
     /// `last`. `history.csv` lists every iterate either way.
     pub result: ResultIterate,
+    /// Adam only: the design gradient is rescaled to at most this Euclidean
+    /// norm (the loss's units per metre) before it enters Adam's moments, so
+    /// that one spike (a contact switching on or off in a long trajectory)
+    /// cannot dominate the second moment and stall every later step for
+    /// ~1/(1 − β₂) = 1000 iterations. Default none (no clipping). `history.csv`
+    /// keeps the unclipped norm.
+    pub clip_design: Option<f64>,
+    /// Adam only: the same for the controller gradient. Default none.
+    pub clip_controller: Option<f64>,
 }
 
 impl Default for OptimizerSpec {
@@ -261,6 +270,8 @@ impl Default for OptimizerSpec {
             step_controller: 0.2,
             init_noise: 0.0,
             result: ResultIterate::Best,
+            clip_design: None,
+            clip_controller: None,
         }
     }
 }
