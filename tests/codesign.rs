@@ -108,7 +108,10 @@ fn adam_gradient_clip_is_validated_and_wired() {
     let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let mut bad = spec.clone();
     bad.optimizer.clip_design = Some(-1.0);
-    let err = Problem::from_spec(&path, bad, true).err().unwrap().to_string();
+    let err = Problem::from_spec(&path, bad, true)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(
         err.contains("optimizer.clip_design") && err.contains("-1"),
         "{err}"
@@ -118,12 +121,18 @@ fn adam_gradient_clip_is_validated_and_wired() {
         s.optimizer.clip_design = clip;
         let p = Problem::from_spec(&path, s, true).unwrap();
         let out = optimize(&p, 6, |_, _| {}).unwrap();
-        out.history.iter().map(|r| r.loss.to_bits()).collect::<Vec<_>>()
+        out.history
+            .iter()
+            .map(|r| r.loss.to_bits())
+            .collect::<Vec<_>>()
     };
     let free = run(None);
     assert_eq!(run(Some(1e300)), free);
     let p0 = Problem::load(&path, true).unwrap();
-    let (d0, c0) = (p0.design.values(&p0.model), p0.controls.values(&p0.controller));
+    let (d0, c0) = (
+        p0.design.values(&p0.model),
+        p0.controls.values(&p0.controller),
+    );
     let grad0 = p0.evaluate(&d0, &c0).unwrap().grad_design.norm();
     assert!(grad0 > 0.0);
     assert_ne!(run(Some(1e-3 * grad0)), free);

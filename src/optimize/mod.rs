@@ -618,7 +618,8 @@ pub fn optimize_with(
                 },
             ),
             Method::Adam => (
-                adam.0.step(&method::clip_norm(&ev.grad_design, o.clip_design)),
+                adam.0
+                    .step(&method::clip_norm(&ev.grad_design, o.clip_design)),
                 adam.1
                     .step(&method::clip_norm(&ev.grad_controller, o.clip_controller)),
             ),
