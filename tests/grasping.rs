@@ -157,26 +157,8 @@ fn fd_check_noise(
     stencil: common::fd::Stencil,
     need: usize,
 ) {
-    let vars: Vec<(String, f64)> = idx
-        .iter()
-        .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
-        .collect();
-    // Forward-only losses (bitwise the evaluation's, see
-    // `collective_evaluation_is_bitwise_the_same_for_one_and_two_threads`).
-    let loss_at = |k: usize, t: f64| {
-        let mut dt = d.clone();
-        dt[idx[k]] += t;
-        p.loss_value(&dt, c).unwrap()
-    };
-    let (agree, all) = common::fd::check_sample(
-        &format!("{name}:"),
-        &vars,
-        &loss_at,
-        ev.loss,
-        eps,
-        stencil,
-        1e-4,
-    );
+    let (agree, all) =
+        common::fd::check_problem_sample(&format!("{name}:"), p, d, c, ev, idx, eps, stencil);
     eprintln!(
         "{name}: {agree} of {} resolved and within 1e-4 (h = {eps:e}), every component passes: {all}",
         idx.len()
@@ -390,6 +372,26 @@ fn three_finger_design_gradient_matches_central_differences() {
     fd_check("three_finger_hand", horizon(h), 1e-6, 12);
 }
 
+/// The hand at its full horizon (Newton tolerance 1e-11), its initial
+/// design and controller, their evaluation, and the design variable with
+/// the largest |∂L/∂d|.
+fn hand_full_horizon() -> (
+    Problem,
+    DVector<f64>,
+    DVector<f64>,
+    sdrs::optimize::Evaluation,
+    usize,
+) {
+    let p = shortened("three_finger_hand", None, 1e-11);
+    let d = p.design.values(&p.model);
+    let c = p.controls.values(&p.controller);
+    let ev = p.evaluate(&d, &c).unwrap();
+    let i = (0..p.design.len())
+        .max_by(|&a, &b| ev.grad_design[a].abs().total_cmp(&ev.grad_design[b].abs()))
+        .unwrap();
+    (p, d, c, ev, i)
+}
+
 /// Probe (ignored; `cargo test --release --test grasping -- --ignored
 /// three_finger_full_horizon_probe --nocapture`): at the full horizon 200,
 /// for the variable with the largest |∂L/∂d|, each trajectory's analytic
@@ -400,13 +402,7 @@ fn three_finger_design_gradient_matches_central_differences() {
 #[test]
 #[ignore]
 fn three_finger_full_horizon_probe() {
-    let p = shortened("three_finger_hand", None, 1e-11);
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
-    let ev = p.evaluate(&d, &c).unwrap();
-    let i = (0..p.design.len())
-        .max_by(|&a, &b| ev.grad_design[a].abs().total_cmp(&ev.grad_design[b].abs()))
-        .unwrap();
+    let (p, d, c, _, i) = hand_full_horizon();
     eprintln!("variable {}", p.design.vars[i].name);
     let all = multi::all(&p);
     for (k, q) in all.iter().enumerate() {
@@ -460,21 +456,11 @@ fn three_finger_full_horizon_probe() {
 #[test]
 #[ignore]
 fn three_finger_ball_sensitivity_grows_at_the_pivot_rate() {
-    let p = shortened("three_finger_hand", None, 1e-11);
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
-    let ev = p.evaluate(&d, &c).unwrap();
-    let i = (0..p.design.len())
-        .max_by(|&a, &b| ev.grad_design[a].abs().total_cmp(&ev.grad_design[b].abs()))
-        .unwrap();
+    let (p, d, c, _, i) = hand_full_horizon();
     let ball = multi::all(&p)[2];
     // Link poses after every step (chart independent).
     let poses = |d: &DVector<f64>| {
-        let mut model = ball.model.clone();
-        ball.design.apply(&mut model, d);
-        let mut scene = ball.scene.clone();
-        scene.model = model;
-        let mut sim = ball.simulator(&scene).unwrap();
+        let mut sim = ball.simulator(&ball.scene_at(d, &c)).unwrap();
         (0..ball.horizon)
             .map(|_| {
                 let iters = sim.step().unwrap().newton.iters;

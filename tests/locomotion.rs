@@ -142,21 +142,12 @@ fn fd_check_full(name: &str) -> (usize, bool) {
     // one less truncation): the biped's noise resolves all 12 at 1e-6, the
     // spider's only 9 there and 10 at 2e-6 (notes/loco.md).
     let h = env_or("SDRS_FD_H", if name == "spider" { 2e-6 } else { 1e-6 });
-    let vars: Vec<(String, f64)> = picked
-        .iter()
-        .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
-        .collect();
-    let loss_at = |k: usize, t: f64| {
-        let mut d = d0.clone();
-        d[picked[k]] += t;
-        p.loss_value(&d, &c0).unwrap()
-    };
     let label = format!(
         "{name} H={} h={h:.0e} tol={:.0e}",
         p.horizon, p.scene.settings.newton.tol
     );
     let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
-    common::fd::check_sample(&label, &vars, &loss_at, ev.loss, h, stencil, 1e-4)
+    common::fd::check_problem_sample(&label, &p, &d0, &c0, &ev, &picked, h, stencil)
 }
 
 /// `SDRS_FD_H` / `SDRS_FD_TOL` override h and the Newton tolerance (for the

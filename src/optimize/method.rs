@@ -53,8 +53,9 @@ pub fn trust_region_step(
 /// `g` rescaled to Euclidean norm at most `max`: `g · min(1, max/‖g‖)`
 /// (`g` itself when `max` is `None`).
 pub fn clip_norm(g: &DVector<f64>, max: Option<f64>) -> std::borrow::Cow<'_, DVector<f64>> {
+    let norm = g.norm();
     match max {
-        Some(m) if g.norm() > m => std::borrow::Cow::Owned(g * (m / g.norm())),
+        Some(m) if norm > m => std::borrow::Cow::Owned(g * (m / norm)),
         _ => std::borrow::Cow::Borrowed(g),
     }
 }

@@ -218,8 +218,9 @@ impl Problem {
         })
     }
 
-    /// This trajectory's scene at design `d` and controller `c`.
-    fn scene_at(&self, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
+    /// This trajectory's scene at design `d` and controller `c` (what
+    /// [`Problem::evaluate_one`] simulates).
+    pub fn scene_at(&self, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
         let mut model = self.model.clone();
         self.design.apply(&mut model, d);
         let mut controller = self.controller.clone();

@@ -122,37 +122,44 @@ pub fn all(p: &Problem) -> Vec<&Problem> {
     std::iter::once(p).chain(p.others.iter()).collect()
 }
 
-/// The summed loss alone ([`Problem::loss_value`] of every trajectory, in
-/// parallel, summed in trajectory order as [`evaluate`] does).
-pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
-    let parts: Vec<anyhow::Result<f64>> =
-        all(p).par_iter().map(|q| q.loss_value_one(d, c)).collect();
-    let mut sum: Option<f64> = None;
+/// Runs `one` on every trajectory in parallel and folds the results with
+/// `add` in trajectory order (the same sum for any thread count); an error
+/// names its trajectory.
+fn sum_in_order<T: Send>(
+    p: &Problem,
+    one: impl Fn(&Problem) -> anyhow::Result<T> + Sync,
+    mut add: impl FnMut(&mut T, T),
+) -> anyhow::Result<T> {
+    let parts: Vec<anyhow::Result<T>> = all(p).par_iter().map(|q| one(q)).collect();
+    let mut out: Option<T> = None;
     for (j, r) in parts.into_iter().enumerate() {
-        let l = r.map_err(|e| e.context(format!("trajectory {j}")))?;
-        sum = Some(sum.map_or(l, |s| s + l));
+        let x = r.map_err(|e| e.context(format!("trajectory {j}")))?;
+        match out.as_mut() {
+            None => out = Some(x),
+            Some(o) => add(o, x),
+        }
     }
-    sum.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+    out.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+}
+
+/// The summed loss alone ([`Problem::loss_value`] of every trajectory,
+/// summed in trajectory order as [`evaluate`] does).
+pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+    sum_in_order(p, |q| q.loss_value_one(d, c), |s, l| *s += l)
 }
 
 /// The summed evaluation (see the module docs). `grads` and `model` are the
 /// first trajectory's; the timings are sums (CPU seconds).
 pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
-    let parts: Vec<anyhow::Result<Evaluation>> =
-        all(p).par_iter().map(|q| q.evaluate_one(d, c)).collect();
-    let mut out: Option<Evaluation> = None;
-    for (j, r) in parts.into_iter().enumerate() {
-        let e = r.map_err(|e| e.context(format!("trajectory {j}")))?;
-        match out.as_mut() {
-            None => out = Some(e),
-            Some(o) => {
-                o.loss += e.loss;
-                o.grad_design += &e.grad_design;
-                o.grad_controller += &e.grad_controller;
-                o.forward_seconds += e.forward_seconds;
-                o.backward_seconds += e.backward_seconds;
-            }
-        }
-    }
-    out.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+    sum_in_order(
+        p,
+        |q| q.evaluate_one(d, c),
+        |o, e| {
+            o.loss += e.loss;
+            o.grad_design += &e.grad_design;
+            o.grad_controller += &e.grad_controller;
+            o.forward_seconds += e.forward_seconds;
+            o.backward_seconds += e.backward_seconds;
+        },
+    )
 }

@@ -77,3 +77,30 @@ pub fn check_sample(
     }
     (agree, all)
 }
+
+/// [`check_sample`] of the design components `idx` of problem `p` at
+/// (`d`, `c`), whose evaluation there is `ev`: the adjoint values and names
+/// come from `ev` and the design space, the losses from the forward-only
+/// [`sdrs::optimize::Problem::loss_value`] (bitwise the evaluation's loss).
+#[allow(clippy::too_many_arguments)]
+pub fn check_problem_sample(
+    label: &str,
+    p: &sdrs::optimize::Problem,
+    d: &nalgebra::DVector<f64>,
+    c: &nalgebra::DVector<f64>,
+    ev: &sdrs::optimize::Evaluation,
+    idx: &[usize],
+    h: f64,
+    stencil: Stencil,
+) -> (usize, bool) {
+    let vars: Vec<(String, f64)> = idx
+        .iter()
+        .map(|&i| (p.design.vars[i].name.clone(), ev.grad_design[i]))
+        .collect();
+    let loss_at = |k: usize, t: f64| {
+        let mut dt = d.clone();
+        dt[idx[k]] += t;
+        p.loss_value(&dt, c).unwrap()
+    };
+    check_sample(label, &vars, &loss_at, ev.loss, h, stencil, 1e-4)
+}
