@@ -4,8 +4,8 @@
 
 mod common;
 
-use sdrs::calibrate::effects::EffectKind;
 use sdrs::calibrate::{CalibrateError, CalibrateOptions, run};
+use sdrs::energy::effects::EffectKind;
 use std::path::{Path, PathBuf};
 
 fn scene() -> PathBuf {

@@ -7,9 +7,9 @@
 mod common;
 
 use nalgebra::{DMatrix, DVector};
-use sdrs::calibrate::effects::{self, EffectKind, EffectSpec};
 use sdrs::diff::{Loss, LossTerm, When, backward, loss_of, record};
 use sdrs::energy::Need;
+use sdrs::energy::effects::{self, EffectKind, EffectSpec};
 use sdrs::scene::Scene;
 use std::path::Path;
 
@@ -187,7 +187,7 @@ fn effect_terms_gradient_and_hessian_match_finite_differences() {
 
 #[test]
 fn smoothed_abs_is_exact_near_zero_velocity() {
-    use sdrs::calibrate::effects::coulomb::smooth_abs;
+    use sdrs::energy::effects::coulomb::smooth_abs;
     for eps in [1e-8, 1e-4, 1.0] {
         let (a, da, dda) = smooth_abs(0.0, eps);
         assert_eq!((a, da), (0.0, 0.0));

@@ -10,8 +10,8 @@ use rayon::prelude::*;
 use sdrs::calibrate::adjoint::residual_gradient;
 use sdrs::calibrate::candidates::candidates;
 use sdrs::calibrate::data::Measured;
-use sdrs::calibrate::effects::EffectKind;
 use sdrs::calibrate::problem::Problem;
+use sdrs::energy::effects::EffectKind;
 use sdrs::scene::Scene;
 use std::path::Path;
 

@@ -12,8 +12,8 @@ mod common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use rayon::prelude::*;
-use sdrs::calibrate::effects::EffectKind;
 use sdrs::calibrate::{CalibrateOptions, calibrate};
+use sdrs::energy::effects::EffectKind;
 
 struct Case {
     robot: &'static str,

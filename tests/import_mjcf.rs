@@ -11,7 +11,7 @@ mod import_support;
 use import_support::*;
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
 use rand::{RngExt, SeedableRng};
-use sdrs::calibrate::effects::EffectKind;
+use sdrs::energy::effects::EffectKind;
 use sdrs::import::import;
 use sdrs::model::{JointKind, MassModel};
 use sdrs::scene::Scene;

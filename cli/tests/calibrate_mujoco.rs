@@ -11,8 +11,8 @@ mod support;
 use support as common;
 
 use rayon::prelude::*;
-use sdrs::calibrate::effects::EffectKind;
 use sdrs::calibrate::{CalibrateOptions, CalibrationResult, calibrate};
+use sdrs::energy::effects::EffectKind;
 use std::path::Path;
 
 fn mujoco_data(scene: &Path, export: &Path, out: &Path, effect: &[&str]) {

@@ -13,9 +13,9 @@
 //! vectors, not tape coordinates; for them `None` is returned and the fit
 //! falls back to `Jᵀr` from its finite-difference Jacobian.
 
-use super::effects::{self, EffectKind, Target};
 use super::problem::{Candidate, Problem};
 use crate::diff::{Loss, LossTerm, backward, record};
+use crate::energy::effects::{self, EffectKind, Target};
 use std::collections::BTreeMap;
 
 /// Training residuals and their exact gradient `Jᵀr` at `p`.

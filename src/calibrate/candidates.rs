@@ -19,9 +19,9 @@
 //! corner of its box), whose position makes the problem multi-modal; pairs
 //! start from the two single fits.
 
-use super::effects::{self, EffectKind, EffectSpec, Scope};
 use super::problem::{Candidate, Template};
 use crate::energy::Need;
+use crate::energy::effects::{self, EffectKind, EffectSpec, Scope};
 use crate::scene::Scene;
 
 /// Effective inertia of every coordinate at `θ^0` (see the module doc).
@@ -157,7 +157,7 @@ pub fn candidates(scene: &Scene, kinds: &[EffectKind]) -> Vec<Candidate> {
             }
             Scope::Contact => {
                 let Some(c) = &scene.contact else { continue };
-                let cs = effects::contact_settings(&scene.effects, c.clone());
+                let cs = crate::scene::contact_settings(&scene.effects, c.clone());
                 let v = effects::contact_params::value(&cs, kind);
                 let cand = match kind {
                     EffectKind::ContactMu => {

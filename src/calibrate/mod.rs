@@ -2,9 +2,9 @@
 //! disagree, name the missing physical effect, fit it, and show the gap
 //! shrink.
 //!
-//! - [`effects`]: the library of candidate effects (terms of the step
-//!   objective or parameters), each with its adjoint gradient; how to add
-//!   one is in its module doc.
+//! - [`crate::energy::effects`]: the library of candidate effects (terms of
+//!   the step objective or parameters), each with its adjoint gradient; how
+//!   to add one is in its module doc.
 //! - [`data`]: measured CSV files, validation, alignment by interpolation.
 //! - [`problem`]: the least-squares problem of a candidate on a window.
 //! - [`candidates`]: the candidate list with bounds and starts.
@@ -21,7 +21,6 @@ pub mod adjoint;
 pub mod analysis;
 pub mod candidates;
 pub mod data;
-pub mod effects;
 pub mod error;
 pub mod fit;
 pub mod plots;

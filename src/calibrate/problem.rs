@@ -8,7 +8,7 @@
 //! linearly at `t_i`, `b_c` the candidate's encoder offsets (0 otherwise).
 
 use super::data::{Measured, interpolate};
-use super::effects::{self, Effect, EffectKind, EffectSpec};
+use crate::energy::effects::{self, Effect, EffectKind, EffectSpec};
 use crate::scene::Scene;
 use nalgebra::DVector;
 

@@ -21,9 +21,9 @@
 //! ```
 
 use super::analysis::Analysis;
-use super::effects::{self, EffectSpec};
 use super::problem::Problem;
 use super::select::{Scored, Selection};
+use crate::energy::effects::{self, EffectSpec};
 use serde::Serialize;
 use std::collections::BTreeMap;
 

@@ -2,11 +2,11 @@
 
 use super::analysis::analyse;
 use super::data::{MIN_SAMPLES, Measured};
-use super::effects::EffectKind;
 use super::problem::Problem;
 use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
 use super::{CalibrateError, candidates, plots};
+use crate::energy::effects::EffectKind;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -55,6 +55,7 @@ mod error;
 pub mod friction;
 #[cfg(test)]
 mod friction_tests;
+pub mod params;
 mod plane;
 pub mod potential;
 #[cfg(test)]

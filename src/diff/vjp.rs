@@ -68,7 +68,7 @@ pub struct VjpAccumulator {
     pub channels: Vec<[f64; 4]>,
     pub physical: PhysicalGrad,
     /// `∂Φ/∂p_j` for the parameters of calibration effects installed as
-    /// energy terms (`crate::calibrate::effects`), indexed by each effect's
+    /// energy terms (`crate::energy::effects`), indexed by each effect's
     /// parameter slot; grown on demand by [`VjpAccumulator::effect`].
     pub effects: Vec<f64>,
     /// Quantities some term could not differentiate (a term without a `vjp`

@@ -8,9 +8,10 @@
 //! derivatives, so a term never sees the kinematic tree.
 //!
 //! Inertia, gravity and PD are here; contact, friction and calibration
-//! effects (`crate::calibrate::effects`) plug in the same way.
+//! effects ([`effects`]) plug in the same way.
 
 pub mod contact;
+pub mod effects;
 pub mod friction;
 pub mod gravity;
 pub mod inertia;

@@ -26,7 +26,7 @@
 //! Not translated (MuJoCo has its own): the SDRS barrier and friction
 //! smoothing, PD controllers, mimic ties, the other calibration effects.
 
-use crate::calibrate::effects::EffectKind;
+use crate::energy::effects::EffectKind;
 use crate::math::{Pose, rot};
 use crate::model::{Inertial, JointKind};
 use crate::scene::Scene;

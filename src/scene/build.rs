@@ -253,7 +253,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         .map(|c| environment::contact_settings(c, &model))
         .transpose()?;
     let effects =
-        crate::calibrate::effects::resolve(&spec.effects, &model, contact.is_some(), "effects")?;
+        crate::energy::effects::resolve(&spec.effects, &model, contact.is_some(), "effects")?;
     let settings = SimSettings {
         dt: spec.dt,
         gravity: Vector3::from(spec.gravity),

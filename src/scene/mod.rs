@@ -56,6 +56,29 @@ impl Invalid {
     }
 }
 
+impl From<crate::energy::effects::Invalid> for Invalid {
+    fn from(e: crate::energy::effects::Invalid) -> Self {
+        Invalid {
+            element: e.element,
+            msg: e.msg,
+        }
+    }
+}
+
+/// The scene's contact settings with the contact effects applied
+/// ([`crate::contact::params::apply`]).
+pub fn contact_settings(
+    effects: &[crate::energy::effects::Effect],
+    mut c: ContactSettings,
+) -> ContactSettings {
+    for e in effects {
+        if e.target == crate::energy::effects::Target::Contact {
+            crate::contact::params::apply(&mut c, e.kind, e.values[0]);
+        }
+    }
+    c
+}
+
 /// A loaded scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -76,7 +99,7 @@ pub struct Scene {
     /// scene's contact effects; [`Scene::simulator`] applies them).
     pub contact: Option<ContactSettings>,
     /// Extra physical effects (`effects:`), validated.
-    pub effects: Vec<crate::calibrate::effects::Effect>,
+    pub effects: Vec<crate::energy::effects::Effect>,
     /// The parsed specification (kept for writing designs back).
     pub spec: SceneSpec,
 }
@@ -151,7 +174,7 @@ impl Scene {
         if let Some(c) = &self.contact_settings() {
             push_sdrs_contact(&mut sim, &self.model, c, self.settings.dt);
         }
-        crate::calibrate::effects::install(&self.effects, &mut sim);
+        crate::sim::effects::install(&self.effects, &mut sim);
         sim
     }
 
@@ -160,7 +183,7 @@ impl Scene {
     fn contact_settings(&self) -> Option<ContactSettings> {
         self.contact
             .clone()
-            .map(|c| crate::calibrate::effects::contact_settings(&self.effects, c))
+            .map(|c| contact_settings(&self.effects, c))
     }
 
     /// A simulator at the scene's initial state whose contact terms, for a
@@ -214,7 +237,7 @@ impl Scene {
                 // and 32 links per chain 600 steps: notes/ipc4.md.)
             }
         }
-        crate::calibrate::effects::install(&self.effects, &mut sim);
+        crate::sim::effects::install(&self.effects, &mut sim);
         Ok(sim)
     }
 

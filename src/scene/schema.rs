@@ -64,7 +64,7 @@
 //! and ball coordinate, or every link with mass), a coordinate's column name
 //! as in the trajectory CSV, or a link name (`robot/link` when the scene
 //! has several robots or objects). Units and formulas: the module docs of
-//! `crate::calibrate::effects::*`.
+//! `crate::energy::effects::*`.
 
 use crate::control::Signal;
 use crate::sim::NewtonOptions;
@@ -115,9 +115,9 @@ pub struct SceneSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSpec>,
     /// Extra physical effects (written by `sdrs calibrate`; default none).
-    /// See [`crate::calibrate::effects`].
+    /// See [`crate::energy::effects`].
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub effects: Vec<crate::calibrate::effects::EffectSpec>,
+    pub effects: Vec<crate::energy::effects::EffectSpec>,
 }
 
 /// A free rigid object: one link on a 6-DOF free joint named after the

@@ -8,6 +8,7 @@
 //! 3. `accept` — rotate the state, re-centre charts, diagnostics.
 
 pub mod assemble;
+pub mod effects;
 pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;

@@ -57,7 +57,7 @@ pub fn measured_csv(scene_text: &str, s: &Sampling) -> String {
     let mut sim = sc.simulator();
     let traj = sdrs::sim::run::run(&mut sim, steps, |_| {}).unwrap();
     let mut offsets = vec![0.0; sc.model.ndof()];
-    for (dofs, b) in sdrs::calibrate::effects::offsets(&sc.effects) {
+    for (dofs, b) in sdrs::energy::effects::offsets(&sc.effects) {
         for &k in dofs {
             offsets[k] += b;
         }

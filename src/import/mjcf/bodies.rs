@@ -9,7 +9,7 @@ use super::dump::{Dump, DumpGeom, DumpJoint};
 use super::frame::*;
 use super::geoms::*;
 use super::invalid;
-use crate::calibrate::effects::{EffectKind, EffectSpec};
+use crate::energy::effects::{EffectKind, EffectSpec};
 use crate::scene::schema::JointType;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use std::collections::{BTreeMap, BTreeSet};

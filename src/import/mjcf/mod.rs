@@ -54,7 +54,7 @@ mod world;
 use super::ImportOptions;
 use super::error::ImportError;
 use super::source::SourceRobot;
-use crate::calibrate::effects::EffectSpec;
+use crate::energy::effects::EffectSpec;
 use crate::scene::schema::{GroundSpec, ObstacleSpec};
 use dump::DumpGeom;
 use std::path::Path;

@@ -4,8 +4,8 @@
 //! `friction.tex`). Already differentiable: their gradients are the
 //! `mu`, `kappa`, `s` fields of [`crate::diff::PhysicalGrad`].
 
-use super::EffectKind;
 use crate::diff::Gradients;
+use crate::energy::effects::EffectKind;
 use crate::scene::ContactSettings;
 
 /// Sets the parameter of `kind` in `c` to `v`.

@@ -10,6 +10,11 @@
 //! ([`crate::diff::VjpAccumulator::effect`], by parameter *slot*), the
 //! others map existing gradients ([`gradient`]).
 //!
+//! Layering: the terms and their data live here (`energy`); installing them
+//! into a simulator is [`crate::sim::effects::install`], applying the contact
+//! parameters to a scene's settings is [`crate::scene::contact_settings`], and
+//! the contact parameters themselves are [`crate::contact::params`].
+//!
 //! Effects appear in scene files under `effects:` (see
 //! [`crate::scene::schema`]) as `{effect: NAME, on: TARGET, values: [...]}`
 //! where `TARGET` is `all`, a joint coordinate's column name (`hinge`,
@@ -24,22 +29,17 @@
 //! the formula and units in its module doc, and a finite-difference test in
 //! `tests/calibrate_effects.rs`. Then add a variant to [`EffectKind`] (its
 //! name, parameter names, scope, neutral value and bounds below) and one arm
-//! in [`install`]. Fitting, ranking, outputs and the scene schema pick it up.
+//! in [`crate::sim::effects::install`]. Fitting, ranking, outputs and the scene schema pick it up.
 
 pub mod armature;
-pub mod contact_params;
 pub mod coulomb;
 pub mod damping;
 pub mod extra_mass;
 pub mod gain;
 pub mod offset;
 
-use crate::energy::Energy;
+pub use crate::contact::params as contact_params;
 use crate::model::Model;
-use crate::scene::{ContactSettings, Invalid};
-use crate::sim::Simulator;
-use extra_mass::{ExtraMass, ExtraMassKind};
-use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Every effect of the library, by its documented name.
@@ -328,6 +328,24 @@ pub fn massive_links(model: &Model) -> Vec<usize> {
         .collect()
 }
 
+/// An effect entry that does not fit the model: the element (`effects[2].on`)
+/// and what is wrong. The scene loader attaches the file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{element}: {msg}")]
+pub struct Invalid {
+    pub element: String,
+    pub msg: String,
+}
+
+impl Invalid {
+    pub fn new(element: impl Into<String>, msg: impl Into<String>) -> Self {
+        Invalid {
+            element: element.into(),
+            msg: msg.into(),
+        }
+    }
+}
+
 /// Validates `specs` against `model` (`element` prefixes the messages,
 /// e.g. `effects`), assigning parameter slots in order.
 pub fn resolve(
@@ -451,66 +469,6 @@ fn resolve_target(
                 ));
             }
             Ok(Target::Contact)
-        }
-    }
-}
-
-/// The scene's contact settings with the contact effects applied.
-pub fn contact_settings(effects: &[Effect], mut c: ContactSettings) -> ContactSettings {
-    for e in effects {
-        if e.target == Target::Contact {
-            contact_params::apply(&mut c, e.kind, e.values[0]);
-        }
-    }
-    c
-}
-
-/// Installs the dynamic effects into a simulator: energy terms and scaled
-/// controller gains. (Contact effects are applied to the settings before
-/// the contact terms are built, [`contact_settings`]; offsets are
-/// measurement-side.)
-pub fn install(effects: &[Effect], sim: &mut Simulator) {
-    for e in effects {
-        let v = e.values[0];
-        let term: Option<Box<dyn Energy>> = match (&e.target, e.kind) {
-            (Target::Dofs(d), EffectKind::JointDamping) => Some(Box::new(damping::JointDamping(
-                JointCoeffs::shared(d, v, e.slot),
-            ))),
-            (Target::Dofs(d), EffectKind::JointFriction) => {
-                Some(Box::new(coulomb::JointFriction {
-                    coeffs: JointCoeffs::shared(d, v, e.slot),
-                    eps: e.eps,
-                }))
-            }
-            (Target::Dofs(d), EffectKind::Armature) => Some(Box::new(armature::Armature(
-                JointCoeffs::shared(d, v, e.slot),
-            ))),
-            (Target::Dofs(d), EffectKind::ActuatorGain) => {
-                gain::apply(&mut sim.controller, d, v);
-                None
-            }
-            (Target::Links(l), EffectKind::Payload) => Some(Box::new(ExtraMass {
-                link: l[0],
-                kind: ExtraMassKind::Payload {
-                    mass: v,
-                    point: Vector3::new(e.values[1], e.values[2], e.values[3]),
-                },
-                slot: Some(e.slot),
-            })),
-            (Target::Links(l), EffectKind::LinkMassScale) => {
-                for &i in l {
-                    sim.energies.push(Box::new(ExtraMass {
-                        link: i,
-                        kind: ExtraMassKind::Scale { scale: v },
-                        slot: Some(e.slot),
-                    }));
-                }
-                None
-            }
-            _ => None,
-        };
-        if let Some(t) = term {
-            sim.energies.push(t);
         }
     }
 }
