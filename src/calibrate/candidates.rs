@@ -119,9 +119,8 @@ pub fn candidates(scene: &Scene, kinds: &[EffectKind]) -> Vec<Candidate> {
                 let total = model.total_mass().max(1e-6);
                 for &i in &links {
                     let link = &model.links[i];
-                    if link.joint.has_chart() && link.parent.is_none() {
-                        continue; // free objects: not a robot payload
-                    }
+                    // Every massive link, a floating base or a free object
+                    // included, can carry a payload (issue 33).
                     let (lo, hi) = link_box(link);
                     let c = model.first_moment[i];
                     let com = [c[0] / c[3], c[1] / c[3], c[2] / c[3]];

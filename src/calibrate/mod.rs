@@ -10,7 +10,11 @@
 //! - [`candidates`]: the candidate list with bounds and starts.
 //! - [`adjoint`]: the exact gradient `Jᵀr` of a candidate's residuals.
 //! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
-//! - [`select`]: fits in parallel, pairs, the criterion, the verdict.
+//! - [`floor`]: the model's own error on the data (noise, integrator error
+//!   by Richardson extrapolation), measured before attributing anything.
+//! - [`select`]: fits in parallel, pairs, the criterion.
+//! - [`verdict`]: the smallest set of effects explaining the gap down to
+//!   the floor; `effect`, `none` or `unexplained`; plausibility checks.
 //! - [`analysis`]: residuals per channel, regime and time window.
 //! - [`report`], [`plots`]: `calibration.json`, `report.md`, SVG plots.
 //! - [`run`]: options, command-line arguments, [`run()`].
@@ -23,11 +27,13 @@ pub mod candidates;
 pub mod data;
 pub mod error;
 pub mod fit;
+pub mod floor;
 pub mod plots;
 pub mod problem;
 pub mod report;
 pub mod run;
 pub mod select;
+pub mod verdict;
 
 pub use error::CalibrateError;
 pub use report::CalibrationResult;

@@ -130,8 +130,14 @@ impl Problem<'_> {
     /// `None` when a step fails (the parameters are then rejected).
     pub fn simulate(&self, extra: &[EffectSpec], end: usize) -> Option<Simulated> {
         let sc = self.scene_with(extra)?;
+        self.simulate_scene(&sc, self.steps_to(end))
+    }
+
+    /// Simulates `sc` (this problem's scene, possibly changed) for `steps`
+    /// steps; `None` when a step fails.
+    pub fn simulate_scene(&self, sc: &Scene, steps: usize) -> Option<Simulated> {
         let mut sim = sc.simulator();
-        let traj = crate::sim::run::run(&mut sim, self.steps_to(end), |_| {}).ok()?;
+        let traj = crate::sim::run::run(&mut sim, steps, |_| {}).ok()?;
         let n = sc.model.ndof();
         let mut offset = vec![0.0; n];
         for (dofs, b) in effects::offsets(&sc.effects) {

@@ -1,7 +1,12 @@
 //! `calibration.json` (schema below; also in the README) and `report.md`.
 //!
 //! ```text
-//! verdict        "effect" | "none"
+//! verdict        "effect" | "none" | "unexplained"  (rule: calibrate::verdict)
+//! reason         why, in words (the floor, the share explained, where the gap sits)
+//! error_floor    {dt, noise, integrator, integrator_in_gap, order, gap, gap_half_dt,
+//!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, floor, suggested_dt}
+//!                the model's own error on the held-out window (calibrate::floor)
+//! implausible    [{candidate, reason}] fits outside physically plausible ranges (never chosen)
 //! effect         documented name of the chosen effect (pairs: "a+b"), null for none
 //! candidate      chosen candidate label ("joint_damping/all"), null for none
 //! parameters     {"<effect>/<joint|link|all>[:<param>]": value (SI)}
@@ -21,6 +26,7 @@
 //! ```
 
 use super::analysis::Analysis;
+use super::floor::ErrorFloor;
 use super::problem::Problem;
 use super::select::{Scored, Selection};
 use crate::energy::effects::{self, EffectSpec};
@@ -64,6 +70,13 @@ pub struct Baseline {
     pub criterion: f64,
 }
 
+/// A fit outside physically plausible ranges.
+#[derive(Clone, Debug, Serialize)]
+pub struct Implausible {
+    pub candidate: String,
+    pub reason: String,
+}
+
 /// Sample counts.
 #[derive(Clone, Debug, Serialize)]
 pub struct Samples {
@@ -76,6 +89,9 @@ pub struct Samples {
 #[derive(Clone, Debug, Serialize)]
 pub struct CalibrationResult {
     pub verdict: String,
+    pub reason: String,
+    pub error_floor: ErrorFloor,
+    pub implausible: Vec<Implausible>,
     pub effect: Option<String>,
     pub candidate: Option<String>,
     pub parameters: BTreeMap<String, f64>,
@@ -131,6 +147,54 @@ fn gap(a: &Analysis, pb: &Problem, s: &Scored) -> Gap {
             .collect(),
         overall: s.rms_holdout().max(0.0) * f64::from(pb.split < pb.measured.times.len()),
     }
+}
+
+/// The decision's reason; for `unexplained`, with where the gap sits (the
+/// channel with the largest held-out error, its regimes, the worst
+/// windows).
+fn where_it_sits(d: &super::verdict::Decision, before: &Analysis) -> String {
+    if d.verdict != super::verdict::Verdict::Unexplained {
+        return d.reason.clone();
+    }
+    let mut s = d.reason.clone();
+    if let Some(c) = before
+        .channels
+        .iter()
+        .max_by(|a, b| a.holdout.rms.total_cmp(&b.holdout.rms))
+    {
+        let regimes = [
+            ("free", &c.free),
+            ("contact", &c.contact),
+            ("moving", &c.moving),
+            ("at rest", &c.at_rest),
+            ("accelerating", &c.accelerating),
+            ("braking", &c.braking),
+        ];
+        let worst = regimes
+            .iter()
+            .filter(|(_, r)| r.samples > 0)
+            .max_by(|a, b| a.1.rms.total_cmp(&b.1.rms));
+        s.push_str(&format!(
+            "; it sits on channel `{}` (held-out RMS {:.3e}",
+            c.channel, c.holdout.rms
+        ));
+        if let Some((name, r)) = worst {
+            s.push_str(&format!(", largest while {name}: {:.3e}", r.rms));
+        }
+        s.push_str(&format!(
+            "; correlation with sign θ̇ {:+.2}, θ̇ {:+.2}, θ̈ {:+.2})",
+            c.corr_velocity_sign, c.corr_velocity, c.corr_acceleration
+        ));
+    }
+    let w: Vec<String> = before
+        .worst_windows
+        .iter()
+        .map(|w| format!("[{:.3}, {:.3}] s", w.t_start, w.t_end))
+        .collect();
+    if !w.is_empty() {
+        s.push_str(&format!(", windows {}", w.join(", ")));
+    }
+    s
 }
 
 /// Assembles the result.
@@ -189,7 +253,18 @@ pub fn result(
     let gap_before = gap(&before, pb, base);
     let gap_after = gap(&after, pb, after_scored);
     CalibrationResult {
-        verdict: if chosen.is_some() { "effect" } else { "none" }.into(),
+        verdict: sel.decision.verdict.name().into(),
+        reason: where_it_sits(&sel.decision, &before),
+        error_floor: sel.floor.clone(),
+        implausible: sel
+            .decision
+            .implausible
+            .iter()
+            .map(|(c, r)| Implausible {
+                candidate: c.clone(),
+                reason: r.clone(),
+            })
+            .collect(),
         effect: chosen.map(|s| {
             s.candidate
                 .kinds()
@@ -211,7 +286,9 @@ pub fn result(
                 .filter(|s| {
                     s.candidate.label != c.candidate.label
                         && s.candidate.templates.len() == 1
-                        && (s.criterion - c.criterion).abs() < 2.0
+                        && ((s.criterion - c.criterion).abs() < 2.0
+                            || (s.rms_holdout() - c.rms_holdout()).abs()
+                                <= super::verdict::INDISTINGUISHABLE_RMS * c.rms_holdout())
                 })
                 .map(|s| s.candidate.label.clone())
                 .collect(),
@@ -238,6 +315,38 @@ pub fn result(
     }
 }
 
+/// The "model's own error" lines of `report.md`.
+fn floor_section(s: &mut String, f: &ErrorFloor) {
+    s.push_str(&format!(
+        "## The model's own error\n\n| quantity (held-out window) | value |\n|---|---:|\n\
+         | gap of the scene as given (Δt = {} s) | {:.3e} |\n\
+         | gap at Δt/2, Δt/4 | {:.3e}, {:.3e} |\n\
+         | gap extrapolated to Δt → 0 (Richardson, order {:.2}) | {:.3e} |\n\
+         | noise σ (third differences of the residual) | {:.3e} |\n\
+         | integrator error at Δt (estimated / in the gap) | {:.3e} / {:.3e} |\n\
+         | error floor F = {}·√(σ² + E_gap²) | {:.3e} |\n\n",
+        f.dt,
+        f.gap,
+        f.gap_half_dt,
+        f.gap_quarter_dt,
+        f.order,
+        f.gap_extrapolated,
+        f.noise,
+        f.integrator,
+        f.integrator_in_gap,
+        super::floor::FLOOR_MARGIN,
+        f.floor
+    ));
+    if let Some(dt) = f.suggested_dt {
+        s.push_str(&format!(
+            "The integrator error at Δt = {} s is {:.1}× the noise: effects of the size of the noise become resolvable at Δt ≤ {:.2e} s.\n\n",
+            f.dt,
+            f.integrator / f.noise.max(1e-300),
+            dt
+        ));
+    }
+}
+
 /// `report.md`.
 pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
     let mut s = String::new();
@@ -253,8 +362,8 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
             r.samples.times, r.split_time, r.samples.train, r.samples.holdout, r.holdout
         ),
     );
-    match &r.candidate {
-        Some(c) => w(
+    match (&r.candidate, r.verdict.as_str()) {
+        (Some(c), _) => w(
             &mut s,
             format!(
                 "**Verdict: missing effect `{}`** (candidate `{c}`); the held-out RMS error shrinks from {:.4e} to {:.4e} ({:.1} %).\n",
@@ -264,13 +373,32 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
                 100.0 * r.gap_reduction
             ),
         ),
-        None => w(
+        (None, "unexplained") => w(
             &mut s,
             format!(
-                "**Verdict: no missing effect found**: no candidate improves the held-out error beyond the noise (held-out RMS {:.4e}).\n",
+                "**Verdict: unexplained**: a discrepancy beyond the model's error floor that no candidate explains (held-out RMS {:.4e}).\n",
                 r.gap_before.overall
             ),
         ),
+        (None, _) => w(
+            &mut s,
+            format!(
+                "**Verdict: no missing effect found** (held-out RMS {:.4e}).\n",
+                r.gap_before.overall
+            ),
+        ),
+    }
+    w(&mut s, format!("Why: {}.\n", r.reason));
+    floor_section(&mut s, &r.error_floor);
+    if !r.implausible.is_empty() {
+        w(
+            &mut s,
+            "Fits outside physically plausible ranges (never chosen):\n".into(),
+        );
+        for i in &r.implausible {
+            w(&mut s, format!("- `{}`: {}", i.candidate, i.reason));
+        }
+        w(&mut s, String::new());
     }
     if !r.indistinguishable.is_empty() {
         w(

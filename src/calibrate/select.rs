@@ -11,10 +11,11 @@
 //!
 //! so a flexible effect pays for its parameters (BIC) and must also predict
 //! data it was not fitted to. The model without any effect has `k = 0`.
-//! Verdict "effect" when the best candidate beats that model by
+//! The verdict (`effect`, `none`, `unexplained`) is decided by
+//! [`super::verdict`] against the model's own error floor
+//! ([`super::floor`]); a candidate must still beat that model by
 //! `ΔC > min_delta` (default 10: "very strong" evidence on the BIC scale)
-//! and lowers the held-out RMS by at least `min_gain` (default 5 %);
-//! otherwise "none". Candidates are fitted in parallel (rayon) and collected
+//! and lower the held-out RMS by at least `min_gain` (default 5 %). Candidates are fitted in parallel (rayon) and collected
 //! in list order, so results do not depend on the thread count.
 
 use super::candidates;
@@ -125,6 +126,10 @@ pub struct Selection {
     pub chosen: Option<usize>,
     /// Simulations run in total.
     pub simulations: usize,
+    /// The model's own error on the data ([`super::floor`]).
+    pub floor: super::floor::ErrorFloor,
+    /// The verdict and its reason ([`super::verdict`]).
+    pub decision: super::verdict::Decision,
 }
 
 /// Fits `cands` in parallel (order-preserving).
@@ -201,20 +206,28 @@ pub fn select(
         on_done();
     }
     sort(&mut ranking);
-    let chosen = ranking.first().and_then(|best| {
-        let better = base.criterion - best.criterion > opts.min_delta;
-        let gain = best.rms_holdout() <= (1.0 - opts.min_gain) * base.rms_holdout();
-        (better && gain).then_some(0)
-    });
+    let floor = super::floor::estimate(pb, &base.sim)?;
+    let inertia = candidates::effective_inertia(pb.scene);
+    let bad: Vec<(String, String)> = ranking
+        .iter()
+        .filter_map(|s| {
+            super::verdict::implausible(pb, s, &inertia).map(|w| (s.candidate.label.clone(), w))
+        })
+        .collect();
+    let decision = super::verdict::decide(&base, &ranking, &floor, bad, opts);
+    let chosen = decision.chosen;
     if let Some(i) = chosen {
         let s = &mut ranking[i];
         confidence(pb, &s.candidate, &mut s.fit, &opts.fit);
     }
-    let simulations = 1 + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
+    // + 2 refined baseline runs (Δt/2, Δt/4) for the floor.
+    let simulations = 3 + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
     Some(Selection {
         baseline: base,
         ranking,
         chosen,
         simulations,
+        floor,
+        decision,
     })
 }

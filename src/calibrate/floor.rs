@@ -1,0 +1,220 @@
+//! The model's own error, measured before anything is attributed to a
+//! missing effect (issue 33, item 1).
+//!
+//! Two things make a simulation differ from measured data even when no
+//! physical effect is missing: the measurement noise and the time
+//! discretization (our Δt step against the data's own engine or reality).
+//! Both are estimated from what can be measured here:
+//!
+//! - **Noise `σ`** (SI units of the channels): from the baseline residual
+//!   `r_i = θ̂(t_i) − y_i`, whose model-error part is smooth. The third
+//!   divided difference over four consecutive samples, `Σ_j c_j r_j` with
+//!   `c_j = 1/Π_{l≠j}(t_j − t_l)`, annihilates quadratics in time (so the
+//!   smooth part leaves `O(r''' h³)`) and has variance `σ² Σ_j c_j²` for
+//!   white noise; `σ̂² = mean_windows (Σ c_j r_j)² / Σ c_j²`. Windows that
+//!   span a gap in the data (a spacing above 1.5× the median) are skipped.
+//! - **Integrator error `E`**: the baseline re-simulated at `Δt/2` and
+//!   `Δt/4` (Richardson on the trajectory). With `d₁ = θ_Δt − θ_{Δt/2}`,
+//!   `d₂ = θ_{Δt/2} − θ_{Δt/4}` at the sample times, the observed order is
+//!   `p = log₂(‖d₁‖/‖d₂‖)` (clamped to `[0.5, 4]`), the error of the `Δt`
+//!   solution `e = d₁/(1 − 2^{−p})` and the extrapolated trajectory
+//!   `θ* = θ_Δt − e`. `E = RMS(e)` on the held-out window. The refined
+//!   runs keep the continuous-time controller: the stable-PD damping force
+//!   is `(2k_d/Δt)(θ̇* − θ̇)`, so `k_d` scales with the step.
+//!
+//! The reference's own discretization is unknown, and whether our `E`
+//! shows in the gap depends on where the data come from: data from the
+//! continuous system (or a finer engine) carry none of our `e`, so the gap
+//! `G = RMS(θ_Δt − y)` exceeds `G* = RMS(θ* − y)`; data from our own `Δt`
+//! carry all of it, so `G*` exceeds `G`. The part of the integrator error
+//! that is in the gap is therefore measured, not assumed:
+//! `E_gap² = clamp(G² − G*², 0, E²)`. The model's error floor is
+//!
+//! ```text
+//! F = ρ √(σ² + E_gap²),  ρ = 1.25 (FLOOR_MARGIN)
+//! ```
+//!
+//! where `ρ` allows for the reference engine's own discretization and the
+//! estimates' own error (both a fraction of ours at the data's usual
+//! resolution; chosen before the acceptance runs, see [`super::verdict`]).
+//!
+//! The report also gives the gap at `Δt/2` (`shrink = G/G_{Δt/2}`: a gap
+//! that is the integrator's shrinks about `2^p`×) and the largest `Δt` at
+//! which our integrator error falls below the noise,
+//! `Δt_s = Δt (σ/E)^{1/p}` (when `E > σ`): the step at which effects of the
+//! size of the noise become resolvable.
+
+use super::problem::{Problem, Simulated};
+use serde::Serialize;
+
+/// Allowance on the floor for the reference engine's own discretization
+/// and the estimates' error (see the module doc). Fixed before the
+/// acceptance runs of issue 33.
+pub const FLOOR_MARGIN: f64 = 1.25;
+
+/// The model's own error on the data (all RMS values over the held-out
+/// window, SI units of the channels).
+#[derive(Clone, Debug, Serialize)]
+pub struct ErrorFloor {
+    /// Scene step Δt (s).
+    pub dt: f64,
+    /// Noise standard deviation estimated from the data.
+    pub noise: f64,
+    /// RMS Richardson estimate `E` of the integrator error at Δt.
+    pub integrator: f64,
+    /// The part of `E` that is in the gap, `E_gap`.
+    pub integrator_in_gap: f64,
+    /// Observed order `p` of the integrator.
+    pub order: f64,
+    /// Held-out gap `G` of the scene as given, at Δt, Δt/2, Δt/4 and
+    /// extrapolated to Δt → 0.
+    pub gap: f64,
+    pub gap_half_dt: f64,
+    pub gap_quarter_dt: f64,
+    pub gap_extrapolated: f64,
+    /// `G / G_{Δt/2}`.
+    pub shrink_half_dt: f64,
+    /// The floor `F = ρ √(σ² + E_gap²)`.
+    pub floor: f64,
+    /// Δt at which the integrator error falls below the noise (`null` when
+    /// it already does).
+    pub suggested_dt: Option<f64>,
+}
+
+/// The baseline simulated with the scene's Δt divided by `factor`, the
+/// same continuous-time controller: the stable-PD damping force is
+/// `(2k_d/Δt)(θ̇* − θ̇)` ([`crate::energy::pd`]), so `k_d` is divided by
+/// `factor` too (every other term's force is independent of Δt).
+fn refined(pb: &Problem, factor: usize) -> Option<Simulated> {
+    let mut sc = pb.scene.clone();
+    sc.settings.dt /= factor as f64;
+    for ch in sc.controller.channels.iter_mut() {
+        ch.kd /= factor as f64;
+    }
+    let end = pb.measured.times.len();
+    let steps = (pb.measured.times[end - 1] / sc.settings.dt).ceil() as usize + 1;
+    pb.simulate_scene(&sc, steps)
+}
+
+/// `σ̂` from third divided differences of the residual `r` (rows: samples
+/// of one channel, `None` where unmeasured).
+pub fn noise(times: &[f64], channels: &[Vec<Option<f64>>]) -> f64 {
+    let mut gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_by(f64::total_cmp);
+    let median = gaps.get(gaps.len() / 2).copied().unwrap_or(0.0);
+    let (mut sum, mut count) = (0.0, 0usize);
+    for r in channels {
+        for i in 0..times.len().saturating_sub(3) {
+            let t = &times[i..i + 4];
+            if t.windows(2).any(|w| w[1] - w[0] > 1.5 * median) {
+                continue;
+            }
+            let Some(v) = (0..4).map(|j| r[i + j]).collect::<Option<Vec<f64>>>() else {
+                continue;
+            };
+            let c: Vec<f64> = (0..4)
+                .map(|j| {
+                    1.0 / (0..4)
+                        .filter(|&l| l != j)
+                        .map(|l| t[j] - t[l])
+                        .product::<f64>()
+                })
+                .collect();
+            let dd: f64 = c.iter().zip(&v).map(|(c, v)| c * v).sum();
+            let norm: f64 = c.iter().map(|c| c * c).sum();
+            if norm > 0.0 && norm.is_finite() {
+                sum += dd * dd / norm;
+                count += 1;
+            }
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    }
+}
+
+/// Per channel, the baseline residual at every sample (`None` where
+/// unmeasured).
+fn residual_rows(pb: &Problem, sim: &Simulated) -> Vec<Vec<Option<f64>>> {
+    pb.measured
+        .channels
+        .iter()
+        .map(|ch| {
+            pb.measured
+                .times
+                .iter()
+                .zip(&ch.values)
+                .map(|(t, y)| y.map(|y| sim.at(ch.dof, *t) - y))
+                .collect()
+        })
+        .collect()
+}
+
+/// Measures the floor for the scene as given (`base`: its simulation at Δt
+/// over the whole data). `None` when a refined simulation fails.
+pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
+    let half = refined(pb, 2)?;
+    let quarter = refined(pb, 4)?;
+    let m = pb.measured;
+    let (mut d1, mut d2, mut n) = (0.0, 0.0, 0usize);
+    for i in pb.split..m.times.len() {
+        let t = m.times[i];
+        for ch in m.channels.iter().filter(|c| c.values[i].is_some()) {
+            let (a, b, c) = (
+                base.at(ch.dof, t),
+                half.at(ch.dof, t),
+                quarter.at(ch.dof, t),
+            );
+            d1 += (a - b).powi(2);
+            d2 += (b - c).powi(2);
+            n += 1;
+        }
+    }
+    let order = if d2 > 0.0 && d1 > 0.0 {
+        (0.5 * (d1 / d2).log2()).clamp(0.5, 4.0)
+    } else {
+        1.0
+    };
+    let scale = 1.0 / (1.0 - 2f64.powf(-order));
+    let (mut g, mut gh, mut gq, mut gx, mut e) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in pb.split..m.times.len() {
+        let t = m.times[i];
+        for ch in &m.channels {
+            let Some(y) = ch.values[i] else { continue };
+            let (a, b, c) = (
+                base.at(ch.dof, t),
+                half.at(ch.dof, t),
+                quarter.at(ch.dof, t),
+            );
+            let err = scale * (a - b);
+            g += (a - y).powi(2);
+            gh += (b - y).powi(2);
+            gq += (c - y).powi(2);
+            gx += (a - err - y).powi(2);
+            e += err * err;
+        }
+    }
+    let rms = |x: f64| (x / n.max(1) as f64).sqrt();
+    let (g, gh, gq, gx, e) = (rms(g), rms(gh), rms(gq), rms(gx), rms(e));
+    let sigma = noise(&m.times, &residual_rows(pb, base));
+    let e_gap = (g * g - gx * gx).clamp(0.0, e * e).sqrt();
+    let floor = FLOOR_MARGIN * (sigma * sigma + e_gap * e_gap).sqrt();
+    let dt = pb.scene.settings.dt;
+    let suggested_dt = (e > sigma && sigma > 0.0).then(|| dt * (sigma / e).powf(1.0 / order));
+    Some(ErrorFloor {
+        dt,
+        noise: sigma,
+        integrator: e,
+        integrator_in_gap: e_gap,
+        order,
+        gap: g,
+        gap_half_dt: gh,
+        gap_quarter_dt: gq,
+        gap_extrapolated: gx,
+        shrink_half_dt: g / gh.max(1e-300),
+        floor,
+        suggested_dt,
+    })
+}

@@ -1,0 +1,251 @@
+//! The verdict: the smallest set of effects that explains the gap down to
+//! the model's own error floor (issue 33, item 2).
+//!
+//! Inputs: the scene as given (baseline), every fitted candidate (singles,
+//! then pairs of the best singles), and the floor `F` of [`super::floor`].
+//! All RMS values are over the held-out window. The *excess* of a model is
+//! the part of its held-out gap beyond the floor,
+//! `X = √max(0, RMS_ho² − F²)`.
+//!
+//! # Rule (thresholds fixed before the acceptance runs of issue 33)
+//!
+//! 1. **Within the floor**: `G ≤ F` (baseline gap) → `none`, with the reason
+//!    (noise, or the integrator: "the gap shrinks ×k at Δt/2").
+//! 2. **A single effect** is *eligible* when its fitted values are
+//!    plausible (below), its criterion beats the baseline by
+//!    `ΔC > min_delta` (10), its held-out RMS is at least `min_gain` (5 %)
+//!    below the baseline's, and it explains at least [`SHARE_SINGLE`] (half)
+//!    of the baseline's excess: `X_c ≤ (1 − SHARE_SINGLE) X_base`. The
+//!    eligible single with the lowest criterion is chosen.
+//! 3. **A second effect** is added (a pair replaces the chosen single) only
+//!    when the single leaves a held-out gap above the floor, and the pair is
+//!    plausible, explains at least [`SHARE_PAIR`] (half) of what the single
+//!    leaves beyond the floor (`X_pair ≤ (1 − SHARE_PAIR) X_single`), has a
+//!    lower held-out RMS *and* a lower criterion than the single: held-out
+//!    improvement, not the training fit.
+//! 4. **Unexplained**: no eligible candidate and `G > UNEXPLAINED_FACTOR · F`
+//!    (2): a discrepancy clearly beyond the floor that nothing in the
+//!    library explains; the report says where it sits (channels, regimes,
+//!    windows). Between `F` and `2F` with no eligible candidate: `none`
+//!    ("slightly above the floor; no candidate explains it").
+//!
+//! **Plausibility** (relative to the robot's own masses, inertias and
+//! gains; `I_k` is the effective inertia of coordinate `k` at `θ^0`, the
+//! mean over the coordinates for `all`): a payload heavier than
+//! [`MAX_PAYLOAD_SHARE`] (½) of the moving mass; a mass scale or actuator
+//! gain outside `[1/4, 4]`; a joint damping with a time constant `I/c`
+//! under 10 ms (`c > 100 I`); an armature above `10 I`; a contact friction
+//! coefficient above 2; any value at a non-zero bound of its fit box.
+//! Implausible candidates are listed with the reason and never chosen.
+//!
+//! **Indistinguishable**: other single candidates whose held-out RMS is
+//! within 2 % of the chosen one's, or whose criterion is within 2, are
+//! listed: the data do not tell them apart.
+
+use super::floor::ErrorFloor;
+use super::problem::Problem;
+use super::select::{Scored, SelectOptions};
+use crate::energy::effects::{EffectKind, Target};
+use serde::Serialize;
+
+/// Share of the baseline's excess a single effect must explain.
+pub const SHARE_SINGLE: f64 = 0.5;
+/// Share of the single's remaining excess a second effect must explain.
+pub const SHARE_PAIR: f64 = 0.5;
+/// A gap above this multiple of the floor that no candidate explains is
+/// `unexplained`.
+pub const UNEXPLAINED_FACTOR: f64 = 2.0;
+/// Largest plausible payload, as a share of the moving mass.
+pub const MAX_PAYLOAD_SHARE: f64 = 0.5;
+/// Range of plausible mass scales and actuator gains.
+pub const SCALE_RANGE: (f64, f64) = (0.25, 4.0);
+/// Held-out RMS within this relative distance: indistinguishable.
+pub const INDISTINGUISHABLE_RMS: f64 = 0.02;
+
+/// The three verdicts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    Effect,
+    None,
+    Unexplained,
+}
+
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Effect => "effect",
+            Verdict::None => "none",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
+/// The decision and why.
+#[derive(Clone, Debug)]
+pub struct Decision {
+    pub verdict: Verdict,
+    /// Index into the ranking of the chosen model (`Effect` only).
+    pub chosen: Option<usize>,
+    pub reason: String,
+    /// `(candidate label, why)` of every implausible fit.
+    pub implausible: Vec<(String, String)>,
+}
+
+/// Part of a held-out gap beyond the floor.
+pub fn excess(rms: f64, floor: f64) -> f64 {
+    (rms * rms - floor * floor).max(0.0).sqrt()
+}
+
+/// Why the fitted values of `s` are implausible (`None`: plausible).
+pub fn implausible(pb: &Problem, s: &Scored, inertia: &[f64]) -> Option<String> {
+    let c = &s.candidate;
+    for (k, p) in s.fit.params.iter().enumerate() {
+        let (lo, hi) = (c.lower[k], c.upper[k]);
+        let tol = 1e-3 * (hi - lo);
+        let at = |b: f64| b != 0.0 && (p - b).abs() <= tol;
+        if at(lo) || at(hi) {
+            return Some(format!("a value at the bound of its fit box ({p:.4e})"));
+        }
+    }
+    let specs = c.specs(&s.fit.params);
+    let sc = pb.scene_with(&specs)?;
+    let model = &pb.scene.model;
+    let moving: f64 = crate::energy::effects::massive_links(model)
+        .iter()
+        .map(|&i| model.links[i].mass())
+        .sum();
+    let first = sc.effects.len() - specs.len();
+    for e in &sc.effects[first..] {
+        let v = e.values[0];
+        let inert = match &e.target {
+            Target::Dofs(d) if !d.is_empty() => {
+                d.iter().map(|&k| inertia[k]).sum::<f64>() / d.len() as f64
+            }
+            _ => f64::NAN,
+        };
+        let why = match e.kind {
+            EffectKind::Payload if v > MAX_PAYLOAD_SHARE * moving => Some(format!(
+                "payload {v:.3e} kg is more than {MAX_PAYLOAD_SHARE} of the moving mass {moving:.3e} kg"
+            )),
+            EffectKind::LinkMassScale | EffectKind::ActuatorGain
+                if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&v) =>
+            {
+                Some(format!(
+                    "{} {v:.3} outside [{}, {}]",
+                    e.kind.name(),
+                    SCALE_RANGE.0,
+                    SCALE_RANGE.1
+                ))
+            }
+            EffectKind::JointDamping if v > 100.0 * inert => Some(format!(
+                "damping {v:.3e} N·m·s/rad gives a time constant under 10 ms (inertia {inert:.3e} kg·m²)"
+            )),
+            EffectKind::Armature if v > 10.0 * inert => Some(format!(
+                "armature {v:.3e} kg·m² is more than 10× the joint's inertia {inert:.3e}"
+            )),
+            EffectKind::ContactMu if v > 2.0 => Some(format!("friction coefficient {v:.3} > 2")),
+            _ => None,
+        };
+        if let Some(w) = why {
+            return Some(format!("{} on {}: {w}", e.kind.name(), e.on));
+        }
+    }
+    None
+}
+
+/// Applies the rule of the module doc to a ranking sorted by criterion.
+pub fn decide(
+    base: &Scored,
+    ranking: &[Scored],
+    floor: &ErrorFloor,
+    bad: Vec<(String, String)>,
+    opts: &SelectOptions,
+) -> Decision {
+    let f = floor.floor;
+    let g = base.rms_holdout();
+    let is_bad = |s: &Scored| bad.iter().any(|(l, _)| *l == s.candidate.label);
+    let mk = |verdict, chosen, reason: String| Decision {
+        verdict,
+        chosen,
+        reason,
+        implausible: bad.clone(),
+    };
+    if g <= f {
+        return mk(Verdict::None, None, within_floor_reason(floor));
+    }
+    let x_base = excess(g, f);
+    let single = ranking.iter().position(|s| {
+        s.candidate.templates.len() == 1
+            && !is_bad(s)
+            && base.criterion - s.criterion > opts.min_delta
+            && s.rms_holdout() <= (1.0 - opts.min_gain) * g
+            && excess(s.rms_holdout(), f) <= (1.0 - SHARE_SINGLE) * x_base
+    });
+    let Some(i) = single else {
+        return if g > UNEXPLAINED_FACTOR * f {
+            mk(
+                Verdict::Unexplained,
+                None,
+                format!(
+                    "the held-out gap {g:.3e} is {:.1}× the model's error floor {f:.3e} and no candidate (alone or paired) explains half of what lies beyond it",
+                    g / f
+                ),
+            )
+        } else {
+            mk(
+                Verdict::None,
+                None,
+                format!(
+                    "the held-out gap {g:.3e} is slightly above the model's error floor {f:.3e} (less than {UNEXPLAINED_FACTOR}×) and no candidate explains half of the excess"
+                ),
+            )
+        };
+    };
+    let s = &ranking[i];
+    let x_s = excess(s.rms_holdout(), f);
+    let pair = (x_s > 0.0)
+        .then(|| {
+            ranking.iter().position(|p| {
+                p.candidate.templates.len() > 1
+                    && !is_bad(p)
+                    && excess(p.rms_holdout(), f) <= (1.0 - SHARE_PAIR) * x_s
+                    && p.rms_holdout() < s.rms_holdout()
+                    && p.criterion < s.criterion
+            })
+        })
+        .flatten();
+    let k = pair.unwrap_or(i);
+    let c = &ranking[k];
+    let share = 1.0 - excess(c.rms_holdout(), f) / x_base;
+    let reason = format!(
+        "`{}` explains {:.0} % of the held-out gap beyond the model's error floor {f:.3e} (gap {g:.3e} → {:.3e}){}",
+        c.candidate.label,
+        100.0 * share,
+        c.rms_holdout(),
+        match pair {
+            Some(_) => format!(
+                "; the second effect explains {:.0} % of what `{}` alone leaves beyond the floor",
+                100.0 * (1.0 - excess(c.rms_holdout(), f) / x_s),
+                s.candidate.label
+            ),
+            None => String::new(),
+        }
+    );
+    mk(Verdict::Effect, Some(k), reason)
+}
+
+fn within_floor_reason(fl: &ErrorFloor) -> String {
+    let base = format!(
+        "the held-out gap {:.3e} is within the model's error floor {:.3e} (noise {:.2e}, integrator error in the gap {:.2e} of {:.2e} estimated at Δt = {} s)",
+        fl.gap, fl.floor, fl.noise, fl.integrator_in_gap, fl.integrator, fl.dt
+    );
+    if fl.integrator_in_gap > fl.noise {
+        format!(
+            "{base}: the remaining gap is the integrator's: it shrinks ×{:.2} at Δt/2 ({:.3e}) and extrapolates to {:.3e} at Δt → 0",
+            fl.shrink_half_dt, fl.gap_half_dt, fl.gap_extrapolated
+        )
+    } else {
+        format!("{base}: the remaining gap is the measurement noise")
+    }
+}
