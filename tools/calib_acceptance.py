@@ -45,28 +45,41 @@ ASSETS = os.path.join(os.path.dirname(mujoco.__file__), "..", "gymnasium", "envs
 # Robot: joints to excite (sine amplitude rad or m, frequency Hz), the SDRS
 # step, and hidden effects per case: (sdrs key, true value, mujoco setter).
 ROBOTS = {
+    # Planar arm; the MJCF's own damping 1 and armature 1 per joint come in
+    # through the import. Hidden values are fractions of those (a damping
+    # and an armature scaled by the same factor would be one actuator gain).
     "reacher": {
         "file": "reacher.xml",
         "excite": {"joint0": (0.8, 0.7), "joint1": (0.7, 1.1)},
         "dt": 1e-3,
+        "gain_scale": 1.0,
+        "hidden": {"damping": 0.5, "friction": 0.3, "armature": 0.3},
     },
+    # Cart and two poles upright. The imported PD gains (from the motors'
+    # gear) make a damping of 0.5 invisible (the PD's own damping is
+    # 2k_d/Δt ≈ 290 N·m·s/rad): the gains are scaled by 0.05 (still
+    # holding the poles up) and the hidden values sized to them.
     "inverted_double_pendulum": {
         "file": "inverted_double_pendulum.xml",
         "excite": {"slider": (0.2, 0.6), "hinge": (0.3, 0.9), "hinge2": (0.3, 1.3)},
         "dt": 1e-3,
+        "gain_scale": 0.05,
+        "hidden": {"damping": 5.0, "friction": 5.0, "armature": 0.5},
     },
 }
 
 
-def cases_for(robot, joints):
-    j0 = joints[0]
+def cases_for(spec):
+    j0 = list(spec["excite"])[0]
+    h = spec["hidden"]
+    damping = ("joint_damping/all", h["damping"], ("damping", None))
+    armature = ("armature/all", h["armature"], ("armature", None))
     return [
         ("clean", []),
-        ("damping_all", [("joint_damping/all", 0.5, ("damping", None))]),
-        ("friction_" + j0, [("joint_friction/" + j0, 0.3, ("frictionloss", j0))]),
-        ("armature_all", [("armature/all", 0.02, ("armature", None))]),
-        ("damping_all+armature_all", [("joint_damping/all", 0.5, ("damping", None)),
-                                      ("armature/all", 0.02, ("armature", None))]),
+        ("damping_all", [damping]),
+        ("friction_" + j0, [("joint_friction/" + j0, h["friction"], ("frictionloss", j0))]),
+        ("armature_all", [armature]),
+        ("damping_all+armature_all", [damping, armature]),
     ]
 
 
@@ -78,12 +91,16 @@ def fail(msg):
 def make_scene(args, robot, spec, case_dir):
     src = os.path.join(ASSETS, spec["file"])
     raw = os.path.join(case_dir, "imported.yaml")
-    r = subprocess.run([args.sdrs, "import", src, "--out", raw, "--decomposer", "hull"],
+    r = subprocess.run([args.sdrs, "import", src, "--out", raw, "--decomposer", "hull", "--force"],
                        capture_output=True, text=True)
     if r.returncode != 0:
         fail(f"sdrs import {src}: {r.stderr.strip()}")
     with open(raw) as f:
         sc = yaml.safe_load(f)
+    # PyYAML reads the key `on:` as the boolean true (YAML 1.1).
+    for e in sc.get("effects", []):
+        if True in e:
+            e["on"] = e.pop(True)
     sc["dt"] = spec["dt"]
     sc["steps"] = int(round(args.duration / spec["dt"]))
     for key in ("contact", "ground", "obstacles"):
@@ -94,6 +111,11 @@ def make_scene(args, robot, spec, case_dir):
     for j, (amp, freq) in spec["excite"].items():
         targets[j] = {"type": "sine", "terms": [{"amplitude": amp, "frequency": freq}]}
     ctrl["targets"] = targets
+    for g in ctrl.get("gains", {}).values():
+        g["kp"] *= spec["gain_scale"]
+        g["kd"] *= spec["gain_scale"]
+    ctrl["kp"] = ctrl.get("kp", 0.0) * spec["gain_scale"]
+    ctrl["kd"] = ctrl.get("kd", 0.0) * spec["gain_scale"]
     path = os.path.join(case_dir, "scene.yaml")
     with open(path, "w") as f:
         yaml.safe_dump(sc, f, sort_keys=False)
@@ -181,6 +203,8 @@ def main():
     ap.add_argument("--period", type=float, default=0.01)
     ap.add_argument("--noise", type=float, default=1e-3)
     ap.add_argument("--timestep", type=float, default=1e-4)
+    ap.add_argument("--dt", type=float, help="override the SDRS step of every robot (s)")
+    ap.add_argument("--only", help="run only the case with this name (e.g. friction_joint0)")
     ap.add_argument("--integrator", default="RK4", choices=["RK4", "implicitfast", "implicit", "Euler"])
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -191,11 +215,15 @@ def main():
     for robot in robots:
         if robot not in ROBOTS:
             fail(f"unknown robot {robot!r} (robots: {', '.join(ROBOTS)})")
-        spec = ROBOTS[robot]
-        cases = cases_for(robot, list(spec["excite"]))
+        spec = dict(ROBOTS[robot])
+        if args.dt:
+            spec["dt"] = args.dt
+        cases = cases_for(spec)
         if args.cases == "quick":
             cases = cases[:2]
         for i, (name, hidden) in enumerate(cases):
+            if args.only and name != args.only:
+                continue
             case_dir = os.path.join(args.out, f"{robot}_{name}")
             os.makedirs(case_dir, exist_ok=True)
             scene_path, sc = make_scene(args, robot, spec, case_dir)

@@ -29,6 +29,9 @@ pub struct SelectOptions {
     pub fit: FitOptions,
     /// Pairs are formed from this many best single candidates. Default 3.
     pub pair_from: usize,
+    /// The best single is also paired with this many further singles (those
+    /// beating the baseline, by criterion). Default 8.
+    pub pair_with_best: usize,
     /// Minimum criterion improvement for a verdict "effect". Default 10.
     pub min_delta: f64,
     /// Minimum relative held-out RMS reduction. Default 0.05.
@@ -40,6 +43,7 @@ impl Default for SelectOptions {
         SelectOptions {
             fit: FitOptions::default(),
             pair_from: 3,
+            pair_with_best: 8,
             min_delta: 10.0,
             min_gain: 0.05,
         }
@@ -170,7 +174,7 @@ pub fn select(
     on_done: &(dyn Fn() + Sync),
 ) -> Option<Selection> {
     let base = baseline(pb)?;
-    let npairs = opts.pair_from * opts.pair_from.saturating_sub(1) / 2;
+    let npairs = opts.pair_from * opts.pair_from.saturating_sub(1) / 2 + opts.pair_with_best;
     on_total(cands.len() + npairs);
     let mut singles = fit_all(pb, cands, opts, on_done);
     sort(&mut singles);
@@ -181,22 +185,37 @@ pub fn select(
         .take(opts.pair_from)
         .collect();
     let mut pairs = Vec::new();
+    let mut push = |a: &Scored, b: &Scored| {
+        let shared_kind = a
+            .candidate
+            .kinds()
+            .iter()
+            .any(|k| b.candidate.kinds().contains(k));
+        if !shared_kind {
+            pairs.push(candidates::pair(
+                &a.candidate,
+                &a.fit.params,
+                &b.candidate,
+                &b.fit.params,
+            ));
+        }
+    };
     for i in 0..top.len() {
         for j in i + 1..top.len() {
-            let (a, b) = (top[i], top[j]);
-            let shared_kind = a
-                .candidate
-                .kinds()
-                .iter()
-                .any(|k| b.candidate.kinds().contains(k));
-            if !shared_kind {
-                pairs.push(candidates::pair(
-                    &a.candidate,
-                    &a.fit.params,
-                    &b.candidate,
-                    &b.fit.params,
-                ));
-            }
+            push(top[i], top[j]);
+        }
+    }
+    // The best single with the next `pair_with_best` singles beyond the top
+    // that beat the baseline: a second effect that alone explains little
+    // (masked by the first) still gets paired with it.
+    if let Some(best) = top.first() {
+        for b in singles
+            .iter()
+            .filter(|s| s.criterion < base.criterion)
+            .skip(opts.pair_from)
+            .take(opts.pair_with_best)
+        {
+            push(best, b);
         }
     }
     let npaired = pairs.len();
@@ -207,7 +226,7 @@ pub fn select(
     }
     sort(&mut ranking);
     let floor = super::floor::estimate(pb, &base.sim)?;
-    let inertia = candidates::effective_inertia(pb.scene);
+    let inertia = super::verdict::joint_inertia(pb.scene);
     let bad: Vec<(String, String)> = ranking
         .iter()
         .filter_map(|s| {
