@@ -272,6 +272,14 @@ pub fn decide(
             None => String::new(),
         }
     );
+    let left = c.rms_holdout() / f;
+    let reason = if left > UNEXPLAINED_FACTOR {
+        format!(
+            "{reason}; a held-out gap of {left:.1}× the floor remains that no candidate set explains"
+        )
+    } else {
+        reason
+    };
     mk(Verdict::Effect, Some(k), reason)
 }
 
