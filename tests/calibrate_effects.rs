@@ -247,7 +247,7 @@ fn check_trajectory(text: &str, steps: usize, tol: f64) {
     let tape = record(&mut sim, steps).unwrap();
     let grads = backward(&mut sim, &tape, &l).unwrap();
     assert!(grads.unavailable.is_empty(), "{:?}", grads.unavailable);
-    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let adj = sdrs::diff::effects::gradient(&sc.effects, &sim.controller, &grads);
     let mut worst: f64 = 0.0;
     for (i, e) in sc.effects.iter().enumerate() {
         for k in 0..e.values.len() {
@@ -294,7 +294,7 @@ fn joint_friction_gradient_through_stiction_and_zero_velocity() {
     let mut sim = sc.simulator();
     let tape = record(&mut sim, 20).unwrap();
     let grads = backward(&mut sim, &tape, &l).unwrap();
-    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let adj = sdrs::diff::effects::gradient(&sc.effects, &sim.controller, &grads);
     assert!(adj.iter().all(|g| g.is_finite()));
 }
 
@@ -322,7 +322,7 @@ fn contact_parameter_effects_map_the_physical_gradients() {
     let mut sim = sc.simulator();
     let tape = record(&mut sim, steps).unwrap();
     let grads = backward(&mut sim, &tape, &l).unwrap();
-    let adj = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let adj = sdrs::diff::effects::gradient(&sc.effects, &sim.controller, &grads);
     for (i, e) in sc.effects.iter().enumerate() {
         let h = 1e-6 * e.values[0];
         let f = |d: f64| {

@@ -7,7 +7,7 @@
 //! functional `L = Σ_i r_i [(1 − w_i) θ_c^{k_i} + w_i θ_c^{k_i+1}]` with the
 //! coefficients frozen at the forward solution, which the backward pass
 //! differentiates ([`crate::diff::LossTerm::JointLinear`]); effect
-//! parameters map through [`effects::gradient`], and an encoder offset `b_c`
+//! parameters map through [`crate::diff::effects::gradient`], and an encoder offset `b_c`
 //! (measurement side) gets `Σ_i r_i` over its channels. Charted rotation
 //! channels (free and spherical joints) are reported as absolute rotation
 //! vectors, not tape coordinates; for them `None` is returned and the fit
@@ -80,7 +80,7 @@ pub fn residual_gradient(
     if !grads.unavailable.is_empty() {
         return None;
     }
-    let all = effects::gradient(&sc.effects, &sim.controller, &grads);
+    let all = crate::diff::effects::gradient(&sc.effects, &sim.controller, &grads);
     let first = sc.effects.len() - specs.len();
     let mut g = Vec::with_capacity(p.len());
     for e in &sc.effects[first..] {

@@ -157,7 +157,7 @@ pub fn candidates(scene: &Scene, kinds: &[EffectKind]) -> Vec<Candidate> {
             Scope::Contact => {
                 let Some(c) = &scene.contact else { continue };
                 let cs = crate::scene::contact_settings(&scene.effects, c.clone());
-                let v = effects::contact_params::value(&cs, kind);
+                let v = kind.contact_param().map_or(f64::NAN, |p| p.value(&cs));
                 let cand = match kind {
                     EffectKind::ContactMu => {
                         single(kind, "all".into(), 0.0, 5.0, v.max(0.1), &[v.max(0.05)])

@@ -1,39 +1,36 @@
-//! Contact parameters as calibration effects: the friction coefficient `μ`
-//! (dimensionless), the barrier stiffness `κ` (J·m) and the barrier support
-//! `s` (m) of [`crate::scene::ContactSettings`] (paper, `contact.tex`,
-//! `friction.tex`). Already differentiable: their gradients are the
-//! `mu`, `kappa`, `s` fields of [`crate::diff::PhysicalGrad`].
+//! Contact parameters that calibration can fit: the friction coefficient
+//! `μ` (dimensionless), the barrier stiffness `κ` (J·m) and the barrier
+//! support `s` (m) of [`ContactSettings`] (paper, `contact.tex`,
+//! `friction.tex`). Already differentiable: their gradients are the `mu`,
+//! `kappa`, `s` fields of the adjoint pass's physical gradients
+//! (`crate::diff::effects::contact_gradient`).
 
-use crate::diff::Gradients;
-use crate::energy::effects::EffectKind;
-use crate::scene::ContactSettings;
+use super::settings::ContactSettings;
 
-/// Sets the parameter of `kind` in `c` to `v`.
-pub fn apply(c: &mut ContactSettings, kind: EffectKind, v: f64) {
-    match kind {
-        EffectKind::ContactMu => c.mu = v,
-        EffectKind::ContactKappa => c.kappa = v,
-        EffectKind::ContactS => c.s = v,
-        _ => {}
-    }
+/// One of the fitted contact parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactParam {
+    Mu,
+    Kappa,
+    S,
 }
 
-/// The current value of `kind`'s parameter in `c`.
-pub fn value(c: &ContactSettings, kind: EffectKind) -> f64 {
-    match kind {
-        EffectKind::ContactMu => c.mu,
-        EffectKind::ContactKappa => c.kappa,
-        EffectKind::ContactS => c.s,
-        _ => f64::NAN,
+impl ContactParam {
+    /// Sets the parameter in `c` to `v`.
+    pub fn apply(self, c: &mut ContactSettings, v: f64) {
+        match self {
+            ContactParam::Mu => c.mu = v,
+            ContactParam::Kappa => c.kappa = v,
+            ContactParam::S => c.s = v,
+        }
     }
-}
 
-/// `dL/d(parameter)` from the adjoint pass.
-pub fn gradient(kind: EffectKind, grads: &Gradients) -> f64 {
-    match kind {
-        EffectKind::ContactMu => grads.physical.mu,
-        EffectKind::ContactKappa => grads.physical.kappa,
-        EffectKind::ContactS => grads.physical.s,
-        _ => 0.0,
+    /// The parameter's value in `c`.
+    pub fn value(self, c: &ContactSettings) -> f64 {
+        match self {
+            ContactParam::Mu => c.mu,
+            ContactParam::Kappa => c.kappa,
+            ContactParam::S => c.s,
+        }
     }
 }

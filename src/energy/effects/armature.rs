@@ -16,7 +16,7 @@
 //! `∂Φ/∂a_k = λ_k s_k/Δt²`.
 
 use super::JointCoeffs;
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;

@@ -18,7 +18,7 @@
 //! `∂Φ/∂θ_k^t = −λ_k f_k A_ε''(v_k)/Δt`, `∂Φ/∂f_k = λ_k A_ε'(v_k)`.
 
 use super::JointCoeffs;
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;

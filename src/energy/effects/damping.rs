@@ -14,7 +14,7 @@
 //! `∂Φ/∂c_k = λ_k (θ_k − θ_k^t)/Δt`.
 
 use super::JointCoeffs;
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;

@@ -19,7 +19,7 @@
 //! `∂Φ/∂p = m[(W + Wᵀ)p̃ − δA_iᵀg]_{xyz}`, `∂Φ/∂σ = ⟨W, M_i⟩ − gᵀδA_i c_i`;
 //! pose parts as the inertia term with `ΔM`.
 
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::kinematics::Kinematics;
 use nalgebra::{DVector, Matrix4, Vector3, Vector4};

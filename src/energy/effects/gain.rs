@@ -3,12 +3,12 @@
 //! The stable-PD term (paper `pbad.tex`, [`crate::energy::pd`]) becomes
 //! `g·U_pd`, i.e. `k_p → g k_p` and `k_d → g k_d` on the affected
 //! coordinates (`g` dimensionless, 1 = nominal). No new energy term: the
-//! gradient comes from the controller channels of the adjoint pass,
+//! gradient comes from the controller channels of the adjoint pass
+//! ([`crate::diff::effects::gain_gradient`]),
 //! `dL/dg = Σ_ch (k_p,ch dL/dk_p,ch + k_d,ch dL/dk_d,ch)/g` (the scaled
 //! gains divided by `g` are the nominal ones).
 
 use crate::control::Controller;
-use crate::diff::Gradients;
 
 /// Scales the gains of every channel acting on one of `dofs` by `g`.
 pub fn apply(controller: &mut Controller, dofs: &[usize], g: f64) {
@@ -18,16 +18,4 @@ pub fn apply(controller: &mut Controller, dofs: &[usize], g: f64) {
             ch.kd *= g;
         }
     }
-}
-
-/// `dL/dg` from the channel gradients of a trajectory simulated with the
-/// scaled `controller`.
-pub fn gradient(controller: &Controller, dofs: &[usize], g: f64, grads: &Gradients) -> f64 {
-    controller
-        .channels
-        .iter()
-        .zip(&grads.channels)
-        .filter(|(ch, _)| dofs.contains(&ch.dof))
-        .map(|(ch, cg)| (ch.kp * cg.kp + ch.kd * cg.kd) / g)
-        .sum()
 }

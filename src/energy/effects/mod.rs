@@ -3,12 +3,12 @@
 //! Each effect is either a term of the step objective (paper, eq. `SDRS`)
 //! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`armature`],
 //! [`extra_mass`] (payload, link mass scale) — or a parameter of an existing
-//! part of the model — [`gain`] (controller gains), [`contact_params`]
+//! part of the model — [`gain`] (controller gains), [`crate::contact::params`]
 //! (`μ`, `κ`, `s`) — or of the measurement — [`offset`] (encoder bias).
 //! Every parameter has an adjoint gradient: energy terms write
 //! `∂Φ/∂p` into the generic effect channel of the adjoint pass
 //! ([`crate::diff::VjpAccumulator::effect`], by parameter *slot*), the
-//! others map existing gradients ([`gradient`]).
+//! others map existing gradients ([`crate::diff::effects::gradient`]).
 //!
 //! Layering: the terms and their data live here (`energy`); installing them
 //! into a simulator is [`crate::sim::effects::install`], applying the contact
@@ -38,7 +38,6 @@ pub mod extra_mass;
 pub mod gain;
 pub mod offset;
 
-pub use crate::contact::params as contact_params;
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
 
@@ -72,11 +71,11 @@ pub enum EffectKind {
     Payload,
     /// Scale `σ` of a link's mass: [`extra_mass`].
     LinkMassScale,
-    /// Contact friction coefficient `μ`: [`contact_params`].
+    /// Contact friction coefficient `μ`: [`crate::contact::params`].
     ContactMu,
-    /// Barrier stiffness `κ` (J·m): [`contact_params`].
+    /// Barrier stiffness `κ` (J·m): [`crate::contact::params`].
     ContactKappa,
-    /// Barrier support `s` (m): [`contact_params`].
+    /// Barrier support `s` (m): [`crate::contact::params`].
     ContactS,
 }
 
@@ -92,6 +91,17 @@ pub enum Scope {
 }
 
 impl EffectKind {
+    /// The contact parameter this effect sets, if it is one.
+    pub fn contact_param(self) -> Option<crate::contact::params::ContactParam> {
+        use crate::contact::params::ContactParam;
+        match self {
+            EffectKind::ContactMu => Some(ContactParam::Mu),
+            EffectKind::ContactKappa => Some(ContactParam::Kappa),
+            EffectKind::ContactS => Some(ContactParam::S),
+            _ => None,
+        }
+    }
+
     pub const ALL: [EffectKind; 10] = [
         EffectKind::JointDamping,
         EffectKind::JointFriction,
@@ -471,32 +481,6 @@ fn resolve_target(
             Ok(Target::Contact)
         }
     }
-}
-
-/// `dL/d(values)` of every effect, flattened in slot order, from the
-/// adjoint gradients of a trajectory simulated with `effects` installed
-/// (`controller`: the simulator's controller, gains already scaled).
-pub fn gradient(
-    effects: &[Effect],
-    controller: &crate::control::Controller,
-    grads: &crate::diff::Gradients,
-) -> Vec<f64> {
-    let n: usize = effects.iter().map(|e| e.values.len()).sum();
-    let mut out = vec![0.0; n];
-    for e in effects {
-        for k in 0..e.values.len() {
-            let s = e.slot + k;
-            out[s] = match (e.kind, &e.target) {
-                (EffectKind::ActuatorGain, Target::Dofs(d)) => {
-                    gain::gradient(controller, d, e.values[0], grads)
-                }
-                (_, Target::Contact) => contact_params::gradient(e.kind, grads),
-                (EffectKind::JointOffset, _) => 0.0,
-                _ => grads.effects.get(s).copied().unwrap_or(0.0),
-            };
-        }
-    }
-    out
 }
 
 /// The offsets `(dofs, b)` of measurement-side effects.
