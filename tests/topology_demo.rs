@@ -59,7 +59,10 @@ fn check(p: &Problem, d: &DVector<f64>, extra: &[usize], label: &str) -> Vec<(us
             idx.push(e);
         }
     }
-    let eps = 1e-7;
+    let eps: f64 = std::env::var("FD_EPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1e-7);
     let central = |i: usize, h: f64| {
         let mut dp = d.clone();
         dp[i] += h;

@@ -13,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-out/topology}
 PY=${PY:-.venv/bin/python}
-cargo build --release -q -p sdrs-cli
+[ -n "${SKIP_BUILD:-}" ] || cargo build --release -q -p sdrs-cli  # SKIP_BUILD=1: use the built binary
 BIN=target/release/sdrs
 mkdir -p "$OUT"
 for t in task task_corners; do
