@@ -178,9 +178,15 @@ fn horizon(short: usize) -> Option<usize> {
     }
 }
 
+/// h = 1e-7 since the paper's connectivity (issue 30; 2026-11-26): on the
+/// shared-vertex design space the 11th and 12th largest components are
+/// small (|g| = 4.9e-7, a block corner no longer summed over four blocks)
+/// and h = 1e-6 left a truncation error of 1.6e-4 on them (10 of 12 within
+/// 1e-4); measured at h = 3e-7 and 1e-7: all 12 within 1.3e-5. All 12 are
+/// still asserted.
 #[test]
 fn parallel_jaw_design_gradient_matches_central_differences() {
-    fd_check("parallel_jaw_gripper", horizon(60), 1e-6, 12);
+    fd_check("parallel_jaw_gripper", horizon(60), 1e-7, 12);
 }
 
 /// The parallel jaw at its full horizon 180 (ignored: ≈ 11 min in release;

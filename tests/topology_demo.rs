@@ -19,19 +19,6 @@ fn problem(task: &str, tol: f64) -> Problem {
     p
 }
 
-/// The block whose corner is at the plate centre on the (−x, −y) side: one
-/// of the four the peg's point rests on.
-fn central_block(p: &Problem) -> usize {
-    let hulls = &p.model.links[0].hulls;
-    (0..hulls.len())
-        .find(|&h| {
-            let c = hulls[h].x_local.iter().sum::<nalgebra::Vector3<f64>>()
-                / hulls[h].x_local.len() as f64;
-            c.x < 0.0 && c.x > -0.02 && c.y < 0.0 && c.y > -0.02
-        })
-        .unwrap()
-}
-
 /// Variables with a target on hull `h` of the plate.
 fn vars_of_block(p: &Problem, h: usize) -> Vec<usize> {
     (0..p.design.len())
@@ -44,25 +31,54 @@ fn vars_of_block(p: &Problem, h: usize) -> Vec<usize> {
         .collect()
 }
 
+fn env<T: std::str::FromStr>(key: &str, default: T) -> T {
+    std::env::var(key)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The optimizer's iterate after `k` iterations of the committed task.
+fn iterate(p: &Problem, k: usize) -> DVector<f64> {
+    let mut last = p.design.values(&p.model);
+    optimize(p, k, |_, d: &DVector<f64>| last = d.clone()).unwrap();
+    last
+}
+
+/// The hull vertex `(hull, vertex)` a design variable moves first.
+fn vertex_of(p: &Problem, i: usize) -> (usize, usize) {
+    match p.design.vars[i].targets[0] {
+        Target::Vertex { hull, vertex, .. } => (hull, vertex),
+        t => panic!("not a vertex variable: {t:?}"),
+    }
+}
+
 /// Richardson-extrapolated central differences `(4D(h) − D(2h))/3` at
-/// `h = 1e-7` (Newton tolerance 1e-11) against the adjoint, for the 12
-/// design variables with the largest |∂L/∂d| plus `extra`. Returns
+/// `h = 1e-7` (`FD_EPS` overrides; Newton tolerance 1e-11) against the
+/// adjoint at design `d`: for each of the 12 hull vertices with the largest
+/// gradients, its largest component, plus the variables `extra`. Returns
 /// `(variable, relative error)` for each.
 fn check(p: &Problem, d: &DVector<f64>, extra: &[usize], label: &str) -> Vec<(usize, f64)> {
     let c = p.controls.values(&p.controller);
     let ev = p.evaluate(d, &c).unwrap();
-    let mut idx: Vec<usize> = (0..p.design.len()).collect();
-    idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
+    let g = &ev.grad_design;
+    let mut best: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+    for i in 0..p.design.len() {
+        let e = best.entry(vertex_of(p, i)).or_insert(i);
+        if g[i].abs() > g[*e].abs() {
+            *e = i;
+        }
+    }
+    let mut idx: Vec<usize> = best.into_values().filter(|&i| g[i] != 0.0).collect();
+    idx.sort_by(|&a, &b| g[b].abs().total_cmp(&g[a].abs()));
+    eprintln!("{label}: {} vertices with a gradient", idx.len());
     idx.truncate(12);
     for &e in extra {
         if !idx.contains(&e) {
             idx.push(e);
         }
     }
-    let eps: f64 = std::env::var("FD_EPS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1e-7);
+    let eps = env("FD_EPS", 1e-7);
     let central = |i: usize, h: f64| {
         let mut dp = d.clone();
         dp[i] += h;
@@ -73,46 +89,58 @@ fn check(p: &Problem, d: &DVector<f64>, extra: &[usize], label: &str) -> Vec<(us
     idx.iter()
         .map(|&i| {
             let fd = (4.0 * central(i, eps) - central(i, 2.0 * eps)) / 3.0;
-            let g = ev.grad_design[i];
-            let rel = (fd - g).abs() / g.abs().max(fd.abs()).max(1e-300);
+            let rel = (fd - g[i]).abs() / g[i].abs().max(fd.abs()).max(1e-300);
             eprintln!(
-                "{label}: {} analytic {g:.9e} central {fd:.9e} rel {rel:.2e}",
-                p.design.vars[i].name
+                "{label}: {} analytic {:.9e} central {fd:.9e} rel {rel:.2e}",
+                p.design.vars[i].name, g[i]
             );
             (i, rel)
         })
         .collect()
 }
 
-/// The acceptance (issue 30): ≥ 10 block vertices within 1e-4 relative.
-/// At the initial design the peg's point rests on the four corners that
-/// meet at the plate centre.
+/// Iteration of the committed task at which the gradients are checked
+/// (`FD_ITER` overrides). Not the initial design: there the peg's point
+/// sits exactly on the corner four blocks share, a vertex-on-vertex
+/// contact whose loss is smooth but curved on a ≈ 1e-7 m scale in the
+/// horizontal directions (measured: the differences of a corner's x
+/// component are 2.7e1, 3.1, 1.3, 0.94, 1.005 × the adjoint at h = 1e-5,
+/// 1e-6, 3e-7, 1e-7, 3e-8, converging onto it; the z components agree to
+/// 6e-7 at h = 1e-7). After a few iterations the corners have moved apart
+/// and the peg touches blocks along faces and edges.
+const CHECK_ITER: usize = 5;
+
+/// The acceptance (issue 30): ≥ 10 block vertices within 1e-4 relative,
+/// at the optimizer's iterate `CHECK_ITER`.
 #[test]
 fn design_gradient_of_the_shared_vertex_space_matches_central_differences() {
     let p = problem("task.yaml", 1e-11);
-    let d = p.design.values(&p.model);
-    let r = check(&p, &d, &[], "initial");
+    let d = iterate(&p, env("FD_ITER", CHECK_ITER));
+    let r = check(&p, &d, &[], "iterate");
     let within = r.iter().filter(|x| x.1 <= 1e-4).count();
-    assert!(within >= 10, "{within} of {} within 1e-4", r.len());
+    assert!(within >= 10, "{within} of {} vertices within 1e-4", r.len());
 }
 
-/// One of the four central blocks flattened towards its top face to a
-/// 1 µm sliver (every vertex of it, its shared face-centre vertices
-/// included: `z ← top − 1e-4 (top − z)`, volume 1e-4 of the block's): the
-/// 12 largest components and every component of the sliver's vertices with
-/// a gradient above 1e-6 of the largest; ≥ 10 within 1e-4 overall, and
-/// every sliver component among them within 1e-4.
+/// At the same iterate, the block holding the vertex with the largest
+/// gradient is flattened towards its top to a sliver (every vertex of it,
+/// its shared face-centre vertices included: `z ← top − 1e-4 (top − z)`,
+/// thickness 1e-4 of its own): ≥ 10 vertices within 1e-4 overall, and
+/// every component of the sliver's vertices with |g| ≥ 1e-3 max|g| (at
+/// least two) within 1e-4.
 #[test]
 fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences() {
     let p = problem("task.yaml", 1e-11);
-    let mut d = p.design.values(&p.model);
-    let h = central_block(&p);
+    let mut d = iterate(&p, env("FD_ITER", CHECK_ITER));
+    let c = p.controls.values(&p.controller);
+    let g0 = p.evaluate(&d, &c).unwrap().grad_design;
+    let h = vertex_of(&p, g0.iamax()).0;
     let zs: Vec<usize> = vars_of_block(&p, h)
         .into_iter()
-        .filter(|&i| p.design.vars[i].name.ends_with(".z") || p.design.vars[i].name.ends_with(" z"))
+        .filter(|&i| p.design.vars[i].name.ends_with(".z"))
         .collect();
     assert!(zs.len() >= 9, "{} z variables on block {h}", zs.len());
     let top = zs.iter().map(|&i| d[i]).fold(f64::MIN, f64::max);
+    let bottom = zs.iter().map(|&i| d[i]).fold(f64::MAX, f64::min);
     for &i in &zs {
         d[i] = top - 1e-4 * (top - d[i]);
     }
@@ -121,13 +149,13 @@ fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences()
     p.design.check(&model).unwrap();
     let x = &model.links[0].hulls[h].x_local;
     let (lo, hi) = x.iter().fold((f64::MAX, f64::MIN), |a, v| (a.0.min(v.z), a.1.max(v.z)));
-    assert!(hi - lo <= 1.01e-6, "sliver thickness {}", hi - lo);
-    let c = p.controls.values(&p.controller);
+    eprintln!("block {h}: thickness {:.3e} m (was {:.3e})", hi - lo, top - bottom);
+    assert!(hi - lo <= 1.01e-4 * (top - bottom), "sliver thickness {}", hi - lo);
     let g = p.evaluate(&d, &c).unwrap().grad_design;
     let gmax = g.amax();
     let sliver: Vec<usize> = vars_of_block(&p, h)
         .into_iter()
-        .filter(|&i| g[i].abs() > 1e-6 * gmax)
+        .filter(|&i| g[i].abs() >= 1e-3 * gmax)
         .collect();
     assert!(sliver.len() >= 2, "sliver components with a gradient: {}", sliver.len());
     let r = check(&p, &d, &sliver, "sliver");
@@ -140,10 +168,11 @@ fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences()
     }
 }
 
-/// Ties and bounds at every iterate of 2 optimizer iterations, for both
-/// connectivities; the shared-vertex space has one auxiliary point per
-/// face-neighbour pair (24 in a 4 × 4 plate) tied between exactly two
-/// blocks, the corner space points shared by up to 4 blocks.
+/// Ties and bounds at every iterate of the committed task's 40 iterations
+/// (≈ 1 s), for both connectivities; the shared-vertex space has one
+/// auxiliary point per face-neighbour pair (24 in a 4 × 4 plate) tied
+/// between exactly two blocks, the corner space points shared by up to 4
+/// blocks; in both, some tied point moves (so the tie is exercised).
 #[test]
 fn ties_and_bounds_hold_at_every_iterate_for_both_connectivities() {
     for (task, most_shared) in [("task.yaml", 2), ("task_corners.yaml", 4)] {
@@ -155,14 +184,20 @@ fn ties_and_bounds_hold_at_every_iterate_for_both_connectivities() {
             "task.yaml" => assert_eq!(points, 16 * 8 + 24, "{task}: corners + face points"),
             _ => assert_eq!(points, 5 * 5 * 2, "{task}: lattice points"),
         }
-        let mut checked = 0;
-        optimize(&p, 2, |_, d: &DVector<f64>| {
+        let d0 = p.design.values(&p.model);
+        let tied: Vec<usize> = (0..p.design.len())
+            .filter(|&i| p.design.vars[i].targets.len() >= 2)
+            .collect();
+        let (mut checked, mut moved) = (0, false);
+        optimize(&p, 40, |_, d: &DVector<f64>| {
             let mut model = p.model.clone();
             p.design.apply(&mut model, d);
             p.design.check(&model).unwrap();
             checked += 1;
+            moved |= tied.iter().any(|&i| d[i] != d0[i]);
         })
         .unwrap();
-        assert_eq!(checked, 3, "{task}");
+        assert_eq!(checked, 41, "{task}");
+        assert!(moved, "{task}: no tied point moved");
     }
 }
