@@ -63,13 +63,25 @@ fn run(mass: &str, lambda: f64) -> (Vec<f64>, Matrix4<f64>) {
     let mut sc = scene(mass);
     flatten(&mut sc, lambda);
     let m = sc.model.links[0].moments().0;
-    assert!(m.iter().all(|x| x.is_finite()), "{mass} λ={lambda}: moments {m}");
+    assert!(
+        m.iter().all(|x| x.is_finite()),
+        "{mass} λ={lambda}: moments {m}"
+    );
     let mut sim = sc.simulator();
     for k in 0..60 {
         let r = sim.step();
         assert!(r.is_ok(), "{mass} λ={lambda}: step {} failed: {r:?}", k + 1);
-        let pose: Vec<f64> = sim.state.poses.iter().flat_map(|p| p.iter().copied()).collect();
-        assert!(pose.iter().all(|x| x.is_finite()), "{mass} λ={lambda}: step {}", k + 1);
+        let pose: Vec<f64> = sim
+            .state
+            .poses
+            .iter()
+            .flat_map(|p| p.iter().copied())
+            .collect();
+        assert!(
+            pose.iter().all(|x| x.is_finite()),
+            "{mass} λ={lambda}: step {}",
+            k + 1
+        );
     }
     let pose = sim.state.poses[0].iter().copied().collect();
     (pose, m)
@@ -98,7 +110,10 @@ fn a_block_flattened_to_zero_volume_keeps_mass_contact_and_newton_well_defined()
             // volume is λ·V_B), so |M(λ) − M(0)| ≤ |M(1) − M(0)|·λ to
             // round-off; a given inertial does not depend on the design.
             let d1 = (runs[0].1 - m0).norm() / scale;
-            assert!(dm <= d1 * l * (1.0 + 1e-9) + 1e-15, "{mass}: λ={l}: {dm} vs {d1}·λ");
+            assert!(
+                dm <= d1 * l * (1.0 + 1e-9) + 1e-15,
+                "{mass}: λ={l}: {dm} vs {d1}·λ"
+            );
         }
         // The settled pose converges as the sliver vanishes (the body rests
         // on block A and on B's bottom edge, which stays in contact).
@@ -119,11 +134,18 @@ fn a_block_flattened_to_zero_volume_keeps_mass_contact_and_newton_well_defined()
 fn the_topology_metric_counts_a_flat_block_as_empty() {
     let mut sc = scene("mass: 0.2");
     let hulls = |sc: &Scene| -> Vec<Vec<Vector3<f64>>> {
-        sc.model.links[0].hulls.iter().map(|h| h.x_local.clone()).collect()
+        sc.model.links[0]
+            .hulls
+            .iter()
+            .map(|h| h.x_local.clone())
+            .collect()
     };
     let t = topology::measure(&hulls(&sc), 40).unwrap();
     assert_eq!((t.components, t.holes, t.flat_hulls), (1, 0, 0));
     flatten(&mut sc, 0.0);
     let t = topology::measure(&hulls(&sc), 40).unwrap();
-    assert_eq!((t.components, t.holes, t.cavities, t.flat_hulls), (1, 0, 0, 1));
+    assert_eq!(
+        (t.components, t.holes, t.cavities, t.flat_hulls),
+        (1, 0, 0, 1)
+    );
 }

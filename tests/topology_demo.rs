@@ -148,22 +148,40 @@ fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences()
     p.design.apply(&mut model, &d);
     p.design.check(&model).unwrap();
     let x = &model.links[0].hulls[h].x_local;
-    let (lo, hi) = x.iter().fold((f64::MAX, f64::MIN), |a, v| (a.0.min(v.z), a.1.max(v.z)));
-    eprintln!("block {h}: thickness {:.3e} m (was {:.3e})", hi - lo, top - bottom);
-    assert!(hi - lo <= 1.01e-4 * (top - bottom), "sliver thickness {}", hi - lo);
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::MAX, f64::MIN), |a, v| (a.0.min(v.z), a.1.max(v.z)));
+    eprintln!(
+        "block {h}: thickness {:.3e} m (was {:.3e})",
+        hi - lo,
+        top - bottom
+    );
+    assert!(
+        hi - lo <= 1.01e-4 * (top - bottom),
+        "sliver thickness {}",
+        hi - lo
+    );
     let g = p.evaluate(&d, &c).unwrap().grad_design;
     let gmax = g.amax();
     let sliver: Vec<usize> = vars_of_block(&p, h)
         .into_iter()
         .filter(|&i| g[i].abs() >= 1e-3 * gmax)
         .collect();
-    assert!(sliver.len() >= 2, "sliver components with a gradient: {}", sliver.len());
+    assert!(
+        sliver.len() >= 2,
+        "sliver components with a gradient: {}",
+        sliver.len()
+    );
     let r = check(&p, &d, &sliver, "sliver");
     let within = r.iter().filter(|x| x.1 <= 1e-4).count();
     assert!(within >= 10, "{within} of {} within 1e-4", r.len());
     for (i, e) in &r {
         if sliver.contains(i) {
-            assert!(*e <= 1e-4, "sliver component {}: {e:.2e}", p.design.vars[*i].name);
+            assert!(
+                *e <= 1e-4,
+                "sliver component {}: {e:.2e}",
+                p.design.vars[*i].name
+            );
         }
     }
 }

@@ -240,9 +240,15 @@ mod tests {
             v.z = 0.15;
         }
         let t = measure(&plate, 30).unwrap();
-        assert_eq!((t.components, t.holes, t.cavities, t.flat_hulls), (1, 1, 0, 1));
+        assert_eq!(
+            (t.components, t.holes, t.cavities, t.flat_hulls),
+            (1, 1, 0, 1)
+        );
         plate[4][0].x = f64::NAN;
-        assert!(matches!(measure(&plate, 30), Err(TopologyError::Hull { hull: 4, .. })));
+        assert!(matches!(
+            measure(&plate, 30),
+            Err(TopologyError::Hull { hull: 4, .. })
+        ));
     }
 
     #[test]

@@ -83,7 +83,9 @@ impl DesignHull {
 ///   blocks' coincident corners are one variable ([`super::grid::corner_ties`]),
 ///   so the blocks form a deformable hexahedral lattice in which no block can
 ///   move away from its neighbours.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Ties {
     #[default]

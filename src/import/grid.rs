@@ -358,7 +358,11 @@ mod tests {
             cube([-1.0, -1.0, -1.0]),
         ];
         let c = face_ties(&mut hs);
-        assert_eq!(c.shared.len(), 2, "0–1 and 1–2 share faces; 0–2 an edge, 0–3 a corner");
+        assert_eq!(
+            c.shared.len(),
+            2,
+            "0–1 and 1–2 share faces; 0–2 an edge, 0–3 a corner"
+        );
         assert_eq!(hs[0].vertices[8], Vector3::new(1.0, 0.5, 0.5));
         assert_eq!(hs[2].vertices[8], Vector3::new(1.5, 1.0, 0.5));
         assert_eq!(c.components, 2);

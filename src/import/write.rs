@@ -152,7 +152,8 @@ fn stage(
         imported.report.ties,
         match imported.report.ties {
             "corners" => "coincident grid-block corners are one variable",
-            _ => "one auxiliary vertex per pair of touching or overlapping hulls; other vertices free",
+            _ =>
+                "one auxiliary vertex per pair of touching or overlapping hulls; other vertices free",
         }
     );
     let yaml = header + &super::write::to_yaml(&with_surface_meshes(imported, paths));
