@@ -17,7 +17,7 @@
 //! may close. A hull that encloses no volume (a design block shrunk to a
 //! flat sliver) occupies no voxel and is counted in `flat_hulls`. A topology change is a change of `(b₀, b₁, b₂)`.
 
-use crate::import::polytope::convex_hull;
+use crate::math::polytope::convex_hull;
 use nalgebra::Vector3;
 use serde::Serialize;
 
