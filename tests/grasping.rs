@@ -178,9 +178,15 @@ fn horizon(short: usize) -> Option<usize> {
     }
 }
 
+/// h = 1e-7 since the paper's connectivity (issue 30; 2026-11-26): on the
+/// shared-vertex design space the 11th and 12th largest components are
+/// small (|g| = 4.9e-7, a block corner no longer summed over four blocks)
+/// and h = 1e-6 left a truncation error of 1.6e-4 on them (10 of 12 within
+/// 1e-4); measured at h = 3e-7 and 1e-7: all 12 within 1.3e-5. All 12 are
+/// still asserted.
 #[test]
 fn parallel_jaw_design_gradient_matches_central_differences() {
-    fd_check("parallel_jaw_gripper", horizon(60), 1e-6, 12);
+    fd_check("parallel_jaw_gripper", horizon(60), 1e-7, 12);
 }
 
 /// The parallel jaw at its full horizon 180 (ignored: ≈ 11 min in release;
@@ -267,10 +273,11 @@ fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
 
 /// Ties and bounds after each of 2 optimizer iterations of `name`
 /// (horizon `h`): fewer variables than hull-vertex coordinates (shared
-/// points are one variable), a point shared by ≥ `shared` hull vertices (4
-/// for block corners, 2 for V-HACD hulls' coincident vertices), and after
-/// every iteration each tie group one point and every variable within its
-/// box.
+/// points are one variable), a point shared by exactly `shared` hull
+/// vertices at most (2 for the paper's connectivity: one auxiliary vertex
+/// per pair of touching blocks or V-HACD hulls, issue 30; 4 or more for
+/// corner-tied blocks), and after every iteration each tie group one point
+/// and every variable within its box.
 fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
     let p = shortened(name, Some(h), 1e-6);
     let verts: usize = links
@@ -284,8 +291,8 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
                 .sum::<usize>()
         })
         .sum();
-    // Block corners are shared by up to 8 blocks: under half the coordinates
-    // remain; V-HACD hulls share only a few vertices.
+    // Corner-tied block corners are shared by up to 8 blocks: under half
+    // the coordinates remain; shared auxiliary vertices join two hulls each.
     let most = if shared >= 4 {
         verts * 3 / 2
     } else {
@@ -296,9 +303,11 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
         "{name}: {} variables for {verts} vertices",
         p.design.len()
     );
-    assert!(
-        p.design.vars.iter().any(|v| v.targets.len() >= shared),
-        "{name}: a point shared by ≥ {shared} hull vertices"
+    let largest = p.design.vars.iter().map(|v| v.targets.len()).max();
+    assert_eq!(
+        largest,
+        Some(shared),
+        "{name}: the largest tie joins {shared} hull vertices"
     );
     let mut checked = 0;
     let lo = p.design.lower();
@@ -319,13 +328,13 @@ fn block_ties_and_bounds_hold_after_optimizer_iterations() {
         "parallel_jaw_gripper",
         &["gripper/jaw_left", "gripper/jaw_right"],
         30,
-        4,
+        2,
     );
 }
 
 #[test]
 fn single_jaw_ties_and_bounds_hold_after_optimizer_iterations() {
-    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120, 4);
+    ties_and_bounds_hold("single_jaw_gripper", &["gripper/jaw"], 120, 2);
 }
 
 /// The full horizon, 480 steps (all four stages), h = 1e-7, Newton

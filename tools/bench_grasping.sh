@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 OUT=${OUT:-out/grasping}
 TASKS=${TASKS:-"parallel_jaw_gripper single_jaw_gripper three_finger_hand"}
 PY=${PY:-.venv/bin/python}
-cargo build --release -q
+[ -n "${SKIP_BUILD:-}" ] || cargo build --release -q  # SKIP_BUILD=1: use the built binary
 BIN=target/release/sdrs
 mkdir -p "$OUT"
 for t in $TASKS; do

@@ -91,8 +91,11 @@ fn check_bounds(task: &str, summary: &serde_json::Value) {
 }
 
 /// In every optimized scene, tied hull vertices (more than `groups` tie
-/// groups) are still one point; returns whether the design moved some tied
-/// point away from the initial scene.
+/// groups) are still one point; returns whether the design moved some hull
+/// vertex of a tied link away from the initial scene. (Under the paper's
+/// connectivity, issue 30, the tied points are face-centre vertices that the
+/// first two steps need not move; that tied points move and stay one point
+/// is asserted on the topology demonstration, `tests/topology_demo.rs`.)
 fn check_ties(initial: &str, scenes: &[std::path::PathBuf], groups: usize) -> bool {
     let initial: SceneSpec =
         serde_yaml::from_str(&std::fs::read_to_string(robots(initial)).unwrap()).unwrap();
@@ -111,7 +114,11 @@ fn check_ties(initial: &str, scenes: &[std::path::PathBuf], groups: usize) -> bo
                     f.display()
                 );
             }
-            moved |= x != vertex(&initial, &group[0].link, group[0].hull, group[0].vertex);
+        }
+        for (l0, l1) in initial.robots[0].links.iter().zip(&spec.robots[0].links) {
+            if ties.iter().flatten().any(|t| t.link == l0.name) {
+                moved |= l0.hulls != l1.hulls;
+            }
         }
     }
     moved
@@ -154,7 +161,7 @@ fn single_jaw_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
             &[dir.join("on/scenes/scene.yaml")],
             100
         ),
-        "two optimizer steps moved no tied corner"
+        "two optimizer steps moved no block vertex"
     );
 }
 

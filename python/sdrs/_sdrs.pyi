@@ -169,6 +169,7 @@ def import_robot(
     report: _Path | None = None,
     force: bool = False,
     bridge: bool = True,
+    ties: str = "shared_vertex",
     base: str = "auto",
     ground: bool = False,
     contact: bool = True,

@@ -42,8 +42,8 @@ pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
 #[pyfunction]
 #[pyo3(signature = (input, out, *, decomposer="vhacd", max_hulls=16, resolution=64,
     threshold=None, designable=None, mass="urdf", density=1000.0, report=None,
-    force=false, bridge=true, base="auto", ground=false, contact=true, hold=true,
-    pose=None))]
+    force=false, bridge=true, ties="shared_vertex", base="auto", ground=false, contact=true,
+    hold=true, pose=None))]
 #[allow(clippy::too_many_arguments)]
 fn import_robot(
     py: Python<'_>,
@@ -59,6 +59,7 @@ fn import_robot(
     report: Option<PathBuf>,
     force: bool,
     bridge: bool,
+    ties: &str,
     base: &str,
     ground: bool,
     contact: bool,
@@ -83,6 +84,8 @@ fn import_robot(
         report,
         force,
         no_bridge: !bridge,
+        ties: ValueEnum::from_str(&ties.replace('_', "-"), true)
+            .map_err(|_| pick("ties", ties))?,
         quiet: true,
         base: ValueEnum::from_str(base, true).map_err(|_| pick("base", base))?,
         ground,

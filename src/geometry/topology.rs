@@ -14,7 +14,8 @@
 //!   closed component without cavities), by Euler–Poincaré.
 //!
 //! Features thinner than a voxel may be missed; holes narrower than a voxel
-//! may close. A topology change is a change of `(b₀, b₁, b₂)`.
+//! may close. A hull that encloses no volume (a design block shrunk to a
+//! flat sliver) occupies no voxel and is counted in `flat_hulls`. A topology change is a change of `(b₀, b₁, b₂)`.
 
 use crate::math::polytope::convex_hull;
 use nalgebra::Vector3;
@@ -29,6 +30,9 @@ pub struct Topology {
     pub euler: i64,
     /// Occupied voxels.
     pub voxels: usize,
+    /// Hulls whose vertices enclose no volume (coplanar, collinear or
+    /// coincident; below `convex_hull`'s `1e-12·diag³`): they occupy no voxel.
+    pub flat_hulls: usize,
 }
 
 /// Errors of the topology measure.
@@ -47,15 +51,22 @@ pub fn measure(hulls: &[Vec<Vector3<f64>>], resolution: usize) -> Result<Topolog
     if all.is_empty() {
         return Err(TopologyError::Empty);
     }
-    let planes: Vec<Vec<(Vector3<f64>, f64)>> = hulls
-        .iter()
-        .enumerate()
-        .map(|(i, h)| {
-            convex_hull(h)
-                .map(|p| p.planes)
-                .map_err(|msg| TopologyError::Hull { hull: i, msg })
-        })
-        .collect::<Result<_, _>>()?;
+    let mut flat = 0;
+    let mut planes: Vec<Vec<(Vector3<f64>, f64)>> = Vec::with_capacity(hulls.len());
+    for (i, h) in hulls.iter().enumerate() {
+        if h.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
+            return Err(TopologyError::Hull {
+                hull: i,
+                msg: "non-finite coordinates".into(),
+            });
+        }
+        match convex_hull(h) {
+            Ok(p) => planes.push(p.planes),
+            // Finite points enclosing no volume (a block shrunk to a sliver,
+            // a plane, a segment or a point): no voxel centre is inside.
+            Err(_) => flat += 1,
+        }
+    }
     let (mut lo, mut hi) = (*all[0], *all[0]);
     for v in &all {
         lo = lo.inf(v);
@@ -121,6 +132,7 @@ pub fn measure(hulls: &[Vec<Vector3<f64>>], resolution: usize) -> Result<Topolog
         cavities,
         euler,
         voxels,
+        flat_hulls: flat,
     })
 }
 
@@ -210,6 +222,33 @@ mod tests {
         filled.push(block([1.0, 1.0, 0.0], [2.0, 2.0, 1.0]));
         let f = measure(&filled, 30).unwrap();
         assert_eq!((f.components, f.holes), (1, 0));
+    }
+
+    #[test]
+    fn a_flat_hull_occupies_nothing_and_a_sliver_opens_the_ring() {
+        // A 3×3 plate whose centre block is squashed flat: one through-hole.
+        let mut plate = Vec::new();
+        for i in 0..3 {
+            for j in 0..3 {
+                let (x, y) = (i as f64, j as f64);
+                plate.push(block([x, y, 0.0], [x + 1.0, y + 1.0, 0.3]));
+            }
+        }
+        let solid = measure(&plate, 30).unwrap();
+        assert_eq!((solid.components, solid.holes, solid.flat_hulls), (1, 0, 0));
+        for v in &mut plate[4] {
+            v.z = 0.15;
+        }
+        let t = measure(&plate, 30).unwrap();
+        assert_eq!(
+            (t.components, t.holes, t.cavities, t.flat_hulls),
+            (1, 1, 0, 1)
+        );
+        plate[4][0].x = f64::NAN;
+        assert!(matches!(
+            measure(&plate, 30),
+            Err(TopologyError::Hull { hull: 4, .. })
+        ));
     }
 
     #[test]

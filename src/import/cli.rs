@@ -46,6 +46,11 @@ pub struct ImportArgs {
     /// Replace existing outputs.
     #[arg(long)]
     pub force: bool,
+    /// Connectivity: `shared-vertex` ties each pair of touching or overlapping hulls
+    /// through one auxiliary vertex (the paper's; grid blocks: face neighbours, at the
+    /// centre of the common face); `corners` (grid only) ties every coincident block corner.
+    #[arg(long, value_enum, default_value_t = super::connectivity::Ties::SharedVertex)]
+    pub ties: super::connectivity::Ties,
     /// Do not grow hulls to connect a link's separate hull groups.
     #[arg(long)]
     pub no_bridge: bool,
@@ -99,6 +104,7 @@ impl ImportArgs {
             mass: self.mass,
             density: self.density,
             bridge_gaps: !self.no_bridge,
+            ties: self.ties,
             progress: !self.quiet,
             ..d
         }

@@ -70,6 +70,38 @@ impl DesignHull {
     }
 }
 
+/// Which vertices of a link's hulls are tied (one design variable).
+///
+/// - `shared_vertex` (default; paper, `shape.tex`, "Design Space
+///   Parameterization"): each pair of touching or overlapping hulls shares
+///   **one** auxiliary vertex `x_ijk`, appended to both vertex lists; every
+///   other vertex is free. For `vhacd`/`coacd`/`hull` parts the pairs and
+///   points are those of [`connect_link`]; for `grid` blocks they are the
+///   face neighbours of [`super::grid::face_ties`] (the centre of the shared
+///   face).
+/// - `corners` (`grid` only; the design space before issue 30): every two
+///   blocks' coincident corners are one variable ([`super::grid::corner_ties`]),
+///   so the blocks form a deformable hexahedral lattice in which no block can
+///   move away from its neighbours.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Ties {
+    #[default]
+    SharedVertex,
+    Corners,
+}
+
+impl Ties {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Ties::SharedVertex => "shared_vertex",
+            Ties::Corners => "corners",
+        }
+    }
+}
+
 /// How a shared vertex was found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

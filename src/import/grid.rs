@@ -8,9 +8,17 @@
 //! common target edge `h`, which is searched so that the number of kept
 //! cells is as close as possible to the requested count (`--max-hulls`).
 //!
-//! Neighbouring blocks share corners exactly; [`corner_ties`] pairs every
-//! two blocks' coincident vertices so that they are one design variable and
-//! the blocks stay one connected solid whatever the design.
+//! Neighbouring blocks share corners exactly. Two connectivities:
+//! - [`face_ties`] (default, the paper's): each pair of **face neighbours**
+//!   (blocks whose boxes touch along a face of positive area; blocks that
+//!   meet only along an edge or at a corner are not a pair) shares one
+//!   auxiliary vertex at the centre of their common face, appended to both
+//!   blocks; the 8 corners of every block are free. A block can then shrink
+//!   away from any edge or corner of the lattice (down to the hull of its
+//!   auxiliary vertices), so a hole can open where four blocks meet.
+//! - [`corner_ties`] (`--ties corners`): every two blocks' coincident
+//!   corners are one design variable; the blocks stay one hexahedral
+//!   lattice whatever the design, and no hole can open.
 
 use super::connectivity::{DesignHull, LinkConnectivity, SharedVertex, TieKind};
 use super::mesh::TriMesh;
@@ -115,6 +123,76 @@ pub fn grid_blocks(mesh: &TriMesh, count: usize) -> Result<Vec<Polytope>, String
         .collect()
 }
 
+/// The paper's connectivity for grid blocks (see the module docs): one
+/// auxiliary vertex per face-neighbour pair, at the centre of the common
+/// face, appended to both blocks (a point of both boundaries, so no shape or
+/// volume changes). Face neighbours are found from the blocks' bounding boxes:
+/// `hi_a[k] = lo_b[k]` (to `1e-12·L`, `L` the link's extent) on one axis `k`
+/// and overlaps longer than `1e-9·L` on the two others.
+pub fn face_ties(hulls: &mut [DesignHull]) -> LinkConnectivity {
+    let boxes: Vec<_> = hulls.iter().map(|h| bounds(&h.poly.vertices)).collect();
+    let (mut lo, mut hi) = boxes.first().copied().unwrap_or_default();
+    for (l, h) in &boxes {
+        lo = lo.inf(l);
+        hi = hi.sup(h);
+    }
+    let scale = (hi - lo).norm().max(1e-12);
+    let mut parent: Vec<usize> = (0..hulls.len()).collect();
+    let mut shared = Vec::new();
+    for a in 0..hulls.len() {
+        for b in a + 1..hulls.len() {
+            let Some(p) = common_face_centre(&boxes[a], &boxes[b], scale) else {
+                continue;
+            };
+            let va = hulls[a].add_point(p);
+            let vb = hulls[b].add_point(p);
+            shared.push(SharedVertex {
+                hulls: [a, b],
+                vertices: [va, vb],
+                kind: TieKind::Touch,
+                depth: 0.0,
+            });
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            parent[ra] = rb;
+        }
+    }
+    let components = (0..hulls.len())
+        .filter(|&i| find(&mut parent, i) == i)
+        .count();
+    LinkConnectivity { shared, components }
+}
+
+type Aabb = (Vector3<f64>, Vector3<f64>);
+
+/// Centre of the face shared by two touching boxes, if they are face
+/// neighbours (see [`face_ties`]).
+fn common_face_centre(a: &Aabb, b: &Aabb, scale: f64) -> Option<Vector3<f64>> {
+    let (touch, overlap) = (1e-12 * scale, 1e-9 * scale);
+    let mut p = Vector3::zeros();
+    let mut touching_axis = None;
+    for k in 0..3 {
+        let (l, h) = (a.0[k].max(b.0[k]), a.1[k].min(b.1[k]));
+        if h - l > overlap {
+            p[k] = 0.5 * (l + h);
+        } else if (h - l).abs() <= touch && touching_axis.is_none() {
+            p[k] = 0.5 * (l + h);
+            touching_axis = Some(k);
+        } else {
+            return None;
+        }
+    }
+    touching_axis.map(|_| p)
+}
+
+fn find(p: &mut [usize], i: usize) -> usize {
+    let mut r = i;
+    while p[r] != r {
+        r = p[r];
+    }
+    p[i] = r;
+    r
+}
+
 /// Ties every pair of coincident vertices of different blocks (exactly
 /// equal coordinates: neighbouring grid cells compute shared corners from
 /// the same integer indices). Returns the link's connectivity.
@@ -128,14 +206,6 @@ pub fn corner_ties(hulls: &[DesignHull]) -> LinkConnectivity {
     }
     let mut shared = Vec::new();
     let mut parent: Vec<usize> = (0..hulls.len()).collect();
-    fn find(p: &mut [usize], i: usize) -> usize {
-        let mut r = i;
-        while p[r] != r {
-            r = p[r];
-        }
-        p[i] = r;
-        r
-    }
     for group in at.values() {
         for w in group.windows(2) {
             let ((ha, va), (hb, vb)) = (w[0], w[1]);
@@ -222,6 +292,80 @@ mod tests {
                 hulls[s.hulls[1]].vertices[s.vertices[1]]
             );
         }
+    }
+
+    #[test]
+    fn face_ties_share_one_point_per_face_neighbour_pair() {
+        let mesh = l_shape();
+        let blocks = grid_blocks(&mesh, 156).unwrap();
+        let vols: Vec<f64> = blocks.iter().map(|b| b.volume()).collect();
+        let mut hulls: Vec<DesignHull> = blocks.into_iter().map(DesignHull::new).collect();
+        let corners = corner_ties(&hulls);
+        let c = face_ties(&mut hulls);
+        assert_eq!(c.components, 1);
+        // Count face neighbours independently: two blocks whose 8 corners
+        // have exactly 4 coincident positions share a face.
+        let key = |v: &Vector3<f64>| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let mut faces = 0;
+        for a in 0..hulls.len() {
+            for b in a + 1..hulls.len() {
+                let common = hulls[a].vertices[..8]
+                    .iter()
+                    .filter(|v| hulls[b].vertices[..8].iter().any(|w| key(w) == key(v)))
+                    .count();
+                faces += usize::from(common == 4);
+            }
+        }
+        assert_eq!(c.shared.len(), faces);
+        assert!(c.shared.len() < corners.shared.len() / 2);
+        for s in &c.shared {
+            let (ha, hb) = (&hulls[s.hulls[0]], &hulls[s.hulls[1]]);
+            let p = ha.vertices[s.vertices[0]];
+            assert_eq!(p, hb.vertices[s.vertices[1]]);
+            // One new point per pair, on the boundary of both blocks.
+            assert!(s.vertices[0] >= 8 && s.vertices[1] >= 8);
+            assert!(ha.poly.violation(&p).abs() < 1e-15 && hb.poly.violation(&p).abs() < 1e-15);
+        }
+        for (h, v) in hulls.iter().zip(&vols) {
+            assert!((super::super::connectivity::hull_volume(&h.vertices) - v).abs() < 1e-15);
+            assert!(h.vertices.len() <= 8 + 6);
+        }
+    }
+
+    #[test]
+    fn edge_and_corner_neighbours_are_not_face_neighbours() {
+        let cube = |o: [f64; 3]| {
+            DesignHull::new(
+                convex_hull(
+                    &(0..8)
+                        .map(|c| {
+                            Vector3::new(
+                                o[0] + (c & 1) as f64,
+                                o[1] + ((c >> 1) & 1) as f64,
+                                o[2] + (c >> 2) as f64,
+                            )
+                        })
+                        .collect::<Vec<_>>(),
+                )
+                .unwrap(),
+            )
+        };
+        // Face, edge and corner neighbours of the unit cube.
+        let mut hs = vec![
+            cube([0.0; 3]),
+            cube([1.0, 0.0, 0.0]),
+            cube([1.0, 1.0, 0.0]),
+            cube([-1.0, -1.0, -1.0]),
+        ];
+        let c = face_ties(&mut hs);
+        assert_eq!(
+            c.shared.len(),
+            2,
+            "0–1 and 1–2 share faces; 0–2 an edge, 0–3 a corner"
+        );
+        assert_eq!(hs[0].vertices[8], Vector3::new(1.0, 0.5, 0.5));
+        assert_eq!(hs[2].vertices[8], Vector3::new(1.5, 1.0, 0.5));
+        assert_eq!(c.components, 2);
     }
 
     #[test]

@@ -83,6 +83,10 @@ pub struct ImportOptions {
     /// Connect a link's separate hull groups by growing the closest pair
     /// (reported). Default true.
     pub bridge_gaps: bool,
+    /// Which vertices are tied ([`connectivity::Ties`]). Default
+    /// `shared_vertex` (the paper's one auxiliary vertex per touching or
+    /// overlapping pair); `corners` only with `grid`.
+    pub ties: connectivity::Ties,
     /// Time step written to the scene (s). Default 0.001.
     pub dt: f64,
     /// Steps written to the scene. Default 1000.
@@ -109,6 +113,7 @@ impl Default for ImportOptions {
             density: 1000.0,
             tiny_hull_size: 0.01,
             bridge_gaps: true,
+            ties: connectivity::Ties::SharedVertex,
             dt: 0.001,
             steps: 1000,
             coverage_samples: 2000,
@@ -377,6 +382,15 @@ fn link_geometry(
 }
 
 fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported, ImportError> {
+    if opts.ties == connectivity::Ties::Corners && opts.decomposer != decompose::Decomposer::Grid {
+        return Err(ImportError::Invalid {
+            path: src.file.clone(),
+            msg: format!(
+                "--ties corners ties the coincident corners of grid blocks and needs --decomposer grid (got {})",
+                opts.decomposer.name()
+            ),
+        });
+    }
     if let Some(d) = &opts.designable {
         for name in d {
             if !src.links.iter().any(|l| &l.name == name) {
@@ -412,10 +426,11 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     // 2. Shared vertices inside each link.
     let mut conn = Vec::with_capacity(n);
     for g in geoms.iter_mut() {
-        conn.push(if opts.decomposer == decompose::Decomposer::Grid {
-            grid::corner_ties(&g.hulls)
-        } else {
-            connect_link(&mut g.hulls, opts.bridge_gaps)
+        let grid = opts.decomposer == decompose::Decomposer::Grid;
+        conn.push(match opts.ties {
+            connectivity::Ties::Corners if grid => grid::corner_ties(&g.hulls),
+            connectivity::Ties::SharedVertex if grid => grid::face_ties(&mut g.hulls),
+            _ => connect_link(&mut g.hulls, opts.bridge_gaps),
         });
     }
     // 3. Attachment points.
@@ -654,6 +669,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         input: src.file.display().to_string(),
         robot: src.name.clone(),
         decomposer: opts.decomposer.name().into(),
+        ties: opts.ties.name(),
         links: link_reports,
         attachments,
         joints,

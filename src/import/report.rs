@@ -71,6 +71,11 @@ pub struct ImportReport {
     pub input: String,
     pub robot: String,
     pub decomposer: String,
+    /// Connectivity of each link's hulls: `shared_vertex` (one auxiliary
+    /// vertex per touching or overlapping pair, the paper's) or `corners`
+    /// (grid blocks' coincident corners tied); see
+    /// [`super::connectivity::Ties`].
+    pub ties: &'static str,
     pub links: Vec<LinkReport>,
     pub attachments: Vec<AttachmentReport>,
     /// Scene joint → the input joints behind its coordinates, in order.

@@ -141,13 +141,20 @@ fn stage(
         remove_any(tmp);
     }
     let header = format!(
-        "# SDRS design space imported by `sdrs import` from {}\n# Scene schema version 1 (see src/scene/schema.rs); hull OBJs in {}/\n",
+        "# SDRS design space imported by `sdrs import` from {}\n# Scene schema version 1 (see src/scene/schema.rs); hull OBJs in {}/\n# Decomposer: {}; ties: {} ({})\n",
         imported.report.input,
         paths
             .meshes
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default()
+            .unwrap_or_default(),
+        imported.report.decomposer,
+        imported.report.ties,
+        match imported.report.ties {
+            "corners" => "coincident grid-block corners are one variable",
+            _ =>
+                "one auxiliary vertex per pair of touching or overlapping hulls; other vertices free",
+        }
     );
     let yaml = header + &super::write::to_yaml(&with_surface_meshes(imported, paths));
     std::fs::write(design_tmp, yaml).map_err(io(&paths.design))?;
