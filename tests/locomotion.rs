@@ -270,3 +270,65 @@ fn amplitude_indices(p: &Problem) -> Vec<usize> {
         })
         .collect()
 }
+
+/// Diagnostic of the controller-only run's stall (issue 30, item 2; run by
+/// hand, notes/loco2.md): at the iterate of a controller-only checkpoint
+/// (`SDRS_PROBE_DIR`, written by `sdrs optimize TASK --design off`; the
+/// task's initial gait without it), the loss along the trust-region
+/// controller step `Δc = −r g/‖g‖` for r = 3e-1 … 1e-7, against its linear
+/// model `L + r gᵀΔc/r = L − r‖g‖`, at the scene's Newton tolerance or
+/// `SDRS_FD_TOL`. Prints the gradient's norm per parameter kind
+/// (offset / amplitude / frequency / phase). Asserts nothing beyond
+/// finiteness: it measures.
+#[test]
+#[ignore]
+fn controller_step_probe() {
+    use sdrs::optimize::checkpoint;
+    use sdrs::optimize::controls::ControlTarget;
+    let name = std::env::var("SDRS_PROBE_TASK").unwrap_or_else(|_| "spider".into());
+    let mut p = Problem::load(&task(&name), false).unwrap();
+    p.scene.settings.newton.tol = env_or("SDRS_FD_TOL", p.scene.settings.newton.tol);
+    let mut c = p.controls.values(&p.controller);
+    if let Ok(dir) = std::env::var("SDRS_PROBE_DIR") {
+        let scene = task(&name).parent().unwrap().join(&p.task.scene);
+        let key = checkpoint::RunKey::new(&task(&name), &scene, false, 0).unwrap();
+        let st = checkpoint::load(std::path::Path::new(&dir), &key).unwrap();
+        eprintln!(
+            "checkpoint iter {} radius_controller {:.3e}",
+            st.iter, st.radius_controller
+        );
+        c = st.controller;
+    }
+    let d = DVector::zeros(0);
+    let ev = p.evaluate(&d, &c).unwrap();
+    let g = &ev.grad_controller;
+    let mut kinds = [0.0f64; 4];
+    for (i, e) in p.controls.entries.iter().enumerate() {
+        if let ControlTarget::Signal { param, .. } = e {
+            let k = if *param == 0 { 0 } else { 1 + (param - 1) % 3 };
+            kinds[k] += g[i] * g[i];
+        }
+    }
+    eprintln!(
+        "tol {:.0e} loss {:.12e} |g| {:.6e}; |g| by kind offset {:.3e} amplitude {:.3e} frequency {:.3e} phase {:.3e}",
+        p.scene.settings.newton.tol,
+        ev.loss,
+        g.norm(),
+        kinds[0].sqrt(),
+        kinds[1].sqrt(),
+        kinds[2].sqrt(),
+        kinds[3].sqrt()
+    );
+    let dir = -g / g.norm();
+    for r in [3e-1, 1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7] {
+        let l = p.loss_value(&d, &(&c + r * &dir)).unwrap();
+        let pred = -r * g.norm();
+        eprintln!(
+            "r {r:.0e}: ΔL {:+.6e} linear {:+.6e} ratio {:+.4}",
+            l - ev.loss,
+            pred,
+            (l - ev.loss) / pred
+        );
+        assert!(l.is_finite());
+    }
+}

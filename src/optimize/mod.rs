@@ -105,7 +105,16 @@ impl Problem {
             ));
         }
         let scene_path = path.parent().unwrap_or(Path::new(".")).join(&task.scene);
-        let scene = Scene::load(&scene_path)?;
+        let mut scene = Scene::load(&scene_path)?;
+        if let Some(t) = task.optimizer.newton_tol {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(invalid(
+                    "optimizer.newton_tol",
+                    format!("must be positive and finite, got {t}"),
+                ));
+            }
+            scene.settings.newton.tol = t;
+        }
         let mut model = scene.model.clone();
         let horizon = task.horizon.unwrap_or(scene.steps);
         if horizon == 0 {

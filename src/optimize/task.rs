@@ -259,6 +259,15 @@ pub struct OptimizerSpec {
     pub clip_design: Option<f64>,
     /// Adam only: the same for the controller gradient. Default none.
     pub clip_controller: Option<f64>,
+    /// Newton tolerance (`‖∇O‖∞`, the scene's `solver.tol`) of every
+    /// forward pass of this task, replacing the scene's. The adjoint
+    /// gradient is the derivative of the loss at an exact step minimiser; a
+    /// loose tolerance leaves each step's minimiser off by up to
+    /// `tol / λ_min(∇²O)`, an error that changes discontinuously with the
+    /// parameters (the Newton iteration count jumps), so the computed loss
+    /// is not the function the gradient describes at small scales.
+    /// Default none (the scene's).
+    pub newton_tol: Option<f64>,
 }
 
 impl Default for OptimizerSpec {
@@ -272,6 +281,7 @@ impl Default for OptimizerSpec {
             result: ResultIterate::Best,
             clip_design: None,
             clip_controller: None,
+            newton_tol: None,
         }
     }
 }
