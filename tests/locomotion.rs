@@ -319,16 +319,33 @@ fn controller_step_probe() {
         kinds[2].sqrt(),
         kinds[3].sqrt()
     );
-    let dir = -g / g.norm();
-    for r in [3e-1, 1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7] {
-        let l = p.loss_value(&d, &(&c + r * &dir)).unwrap();
-        let pred = -r * g.norm();
-        eprintln!(
-            "r {r:.0e}: ΔL {:+.6e} linear {:+.6e} ratio {:+.4}",
-            l - ev.loss,
-            pred,
-            (l - ev.loss) / pred
-        );
-        assert!(l.is_finite());
+    // Directions: the full gradient, the gradient without its frequency
+    // components, the frequency components alone.
+    let kind_of = |i: usize| match p.controls.entries[i] {
+        ControlTarget::Signal { param, .. } if param >= 1 => 1 + (param - 1) % 3,
+        _ => 0,
+    };
+    let only = |keep: &dyn Fn(usize) -> bool| {
+        let v = DVector::from_fn(g.len(), |i, _| if keep(kind_of(i)) { g[i] } else { 0.0 });
+        v
+    };
+    for (label, gk) in [
+        ("full", g.clone()),
+        ("no-frequency", only(&|k| k != 2)),
+        ("frequency-only", only(&|k| k == 2)),
+    ] {
+        let dir = -&gk / gk.norm();
+        let slope = g.dot(&dir);
+        for r in [3e-1, 1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7] {
+            let l = p.loss_value(&d, &(&c + r * &dir)).unwrap();
+            let pred = r * slope;
+            eprintln!(
+                "{label} r {r:.0e}: ΔL {:+.6e} linear {:+.6e} ratio {:+.4}",
+                l - ev.loss,
+                pred,
+                (l - ev.loss) / pred
+            );
+            assert!(l.is_finite());
+        }
     }
 }
