@@ -96,37 +96,6 @@ fn fd_setup(
     (p, d0, c0, ev, picked)
 }
 
-/// Central differences of the whole-trajectory loss w.r.t. foot-vertex
-/// design variables vs the adjoint gradient, at the initial design (the CI
-/// horizon): plain central differences at h = 1e-6 m (`SDRS_FD_H`
-/// overrides). Returns the worst relative error, relative to the component
-/// and floored at 1e-3 of the sample's largest.
-fn fd_check(name: &str, horizon: Option<usize>, tol: f64, vars: usize) -> f64 {
-    let (p, d0, c0, ev, picked) = fd_setup(name, horizon, tol, vars);
-    let h = env_or("SDRS_FD_H", 1e-6);
-    let gmax = picked
-        .iter()
-        .map(|&i| ev.grad_design[i].abs())
-        .fold(0.0, f64::max);
-    let mut worst = 0.0f64;
-    for &i in &picked {
-        let mut dp = d0.clone();
-        dp[i] += h;
-        let mut dm = d0.clone();
-        dm[i] -= h;
-        let fd =
-            (p.evaluate(&dp, &c0).unwrap().loss - p.evaluate(&dm, &c0).unwrap().loss) / (2.0 * h);
-        let g = ev.grad_design[i];
-        let rel = (fd - g).abs() / g.abs().max(fd.abs()).max(1e-3 * gmax);
-        eprintln!(
-            "{name} H={} h={h:.0e} tol={:.0e} {}: adjoint {g:.9e} fd {fd:.9e} rel {rel:.2e}",
-            p.horizon, p.scene.settings.newton.tol, p.design.vars[i].name
-        );
-        worst = worst.max(rel);
-    }
-    worst
-}
-
 /// The full-horizon check of one task: the 12 foot vertices with the
 /// largest |∂L/∂d|, each against Richardson's central difference at h
 /// (spider 2e-6 m, biped 1e-6 m; `SDRS_FD_H` overrides) with the loss's noise measured along it
@@ -159,16 +128,42 @@ fn env_or(var: &str, default: f64) -> f64 {
         .unwrap_or(default)
 }
 
+/// The short-horizon (H = 60, Newton tolerance 1e-10) check of one task
+/// with the full-horizon check's harness: Richardson's central difference
+/// at h = 1e-6 m with the loss's noise measured along each of the 12
+/// components (`common::fd::check_problem_sample`). At least 10 distinct
+/// foot vertices must be resolved and agree to 1e-4, and every component
+/// must pass (resolved: 1e-4; not resolved: within its differences' noise).
+/// (Plain central differences at one h, used until the 3-hull feet, failed
+/// on the spider's shared tie vertices — |g| ≈ 0.017 against 19.6 — at
+/// 1.5e-4 while agreeing to 2e-6 at h = 1e-5: noise, notes/loco2.md.)
+fn fd_check_short(name: &str) -> (usize, bool) {
+    let (p, d0, c0, ev, picked) = fd_setup(name, Some(60), 1e-10, 12);
+    let h = env_or("SDRS_FD_H", 1e-6);
+    let label = format!(
+        "{name} H={} h={h:.0e} tol={:.0e}",
+        p.horizon, p.scene.settings.newton.tol
+    );
+    let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
+    common::fd::check_problem_sample(&label, &p, &d0, &c0, &ev, &picked, h, stencil)
+}
+
 #[test]
 fn spider_design_gradient_matches_central_differences_short_horizon() {
-    let worst = fd_check("spider", Some(60), 1e-10, 12);
-    assert!(worst <= 1e-4, "worst relative error {worst:.2e}");
+    let (agree, all) = fd_check_short("spider");
+    assert!(
+        agree >= 10 && all,
+        "resolved and agreeing {agree}, all pass {all}"
+    );
 }
 
 #[test]
 fn biped_design_gradient_matches_central_differences_short_horizon() {
-    let worst = fd_check("biped", Some(60), 1e-10, 12);
-    assert!(worst <= 1e-4, "worst relative error {worst:.2e}");
+    let (agree, all) = fd_check_short("biped");
+    assert!(
+        agree >= 10 && all,
+        "resolved and agreeing {agree}, all pass {all}"
+    );
 }
 
 /// The full-horizon check (H = 550 / 400, Newton tolerance 1e-12):
