@@ -96,37 +96,6 @@ fn fd_setup(
     (p, d0, c0, ev, picked)
 }
 
-/// Central differences of the whole-trajectory loss w.r.t. foot-vertex
-/// design variables vs the adjoint gradient, at the initial design (the CI
-/// horizon): plain central differences at h = 1e-6 m (`SDRS_FD_H`
-/// overrides). Returns the worst relative error, relative to the component
-/// and floored at 1e-3 of the sample's largest.
-fn fd_check(name: &str, horizon: Option<usize>, tol: f64, vars: usize) -> f64 {
-    let (p, d0, c0, ev, picked) = fd_setup(name, horizon, tol, vars);
-    let h = env_or("SDRS_FD_H", 1e-6);
-    let gmax = picked
-        .iter()
-        .map(|&i| ev.grad_design[i].abs())
-        .fold(0.0, f64::max);
-    let mut worst = 0.0f64;
-    for &i in &picked {
-        let mut dp = d0.clone();
-        dp[i] += h;
-        let mut dm = d0.clone();
-        dm[i] -= h;
-        let fd =
-            (p.evaluate(&dp, &c0).unwrap().loss - p.evaluate(&dm, &c0).unwrap().loss) / (2.0 * h);
-        let g = ev.grad_design[i];
-        let rel = (fd - g).abs() / g.abs().max(fd.abs()).max(1e-3 * gmax);
-        eprintln!(
-            "{name} H={} h={h:.0e} tol={:.0e} {}: adjoint {g:.9e} fd {fd:.9e} rel {rel:.2e}",
-            p.horizon, p.scene.settings.newton.tol, p.design.vars[i].name
-        );
-        worst = worst.max(rel);
-    }
-    worst
-}
-
 /// The full-horizon check of one task: the 12 foot vertices with the
 /// largest |∂L/∂d|, each against Richardson's central difference at h
 /// (spider 2e-6 m, biped 1e-6 m; `SDRS_FD_H` overrides) with the loss's noise measured along it
@@ -159,16 +128,46 @@ fn env_or(var: &str, default: f64) -> f64 {
         .unwrap_or(default)
 }
 
+/// The short-horizon (H = 60, Newton tolerance 1e-10) check of one task
+/// with the full-horizon check's harness: Richardson's central difference
+/// at h (spider 4e-6 m, biped 1e-6 m; `SDRS_FD_H` overrides) with the
+/// loss's noise measured along each of the 12
+/// components (`common::fd::check_problem_sample`). At least 10 distinct
+/// foot vertices must be resolved and agree to 1e-4, and every component
+/// must pass (resolved: 1e-4; not resolved: within its differences' noise).
+/// (Plain central differences at one h, used until the 3-hull feet, failed
+/// on the spider's shared tie vertices — |g| ≈ 0.017 against 19.6 — at
+/// 1.5e-4 while agreeing to 2e-6 at h = 1e-5: noise, notes/loco2.md.)
+/// The spider's h was chosen after a run: at 1e-6 only 5 of its 12
+/// components were resolved (all within their noise), at 4e-6 11 (worst
+/// 5.6e-5).
+fn fd_check_short(name: &str) -> (usize, bool) {
+    let (p, d0, c0, ev, picked) = fd_setup(name, Some(60), 1e-10, 12);
+    let h = env_or("SDRS_FD_H", if name == "spider" { 4e-6 } else { 1e-6 });
+    let label = format!(
+        "{name} H={} h={h:.0e} tol={:.0e}",
+        p.horizon, p.scene.settings.newton.tol
+    );
+    let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
+    common::fd::check_problem_sample(&label, &p, &d0, &c0, &ev, &picked, h, stencil)
+}
+
 #[test]
 fn spider_design_gradient_matches_central_differences_short_horizon() {
-    let worst = fd_check("spider", Some(60), 1e-10, 12);
-    assert!(worst <= 1e-4, "worst relative error {worst:.2e}");
+    let (agree, all) = fd_check_short("spider");
+    assert!(
+        agree >= 10 && all,
+        "resolved and agreeing {agree}, all pass {all}"
+    );
 }
 
 #[test]
 fn biped_design_gradient_matches_central_differences_short_horizon() {
-    let worst = fd_check("biped", Some(60), 1e-10, 12);
-    assert!(worst <= 1e-4, "worst relative error {worst:.2e}");
+    let (agree, all) = fd_check_short("biped");
+    assert!(
+        agree >= 10 && all,
+        "resolved and agreeing {agree}, all pass {all}"
+    );
 }
 
 /// The full-horizon check (H = 550 / 400, Newton tolerance 1e-12):
@@ -269,4 +268,83 @@ fn amplitude_indices(p: &Problem) -> Vec<usize> {
             _ => None,
         })
         .collect()
+}
+
+/// Diagnostic of the controller-only run's stall (issue 30, item 2; run by
+/// hand, notes/loco2.md): at the iterate of a controller-only checkpoint
+/// (`SDRS_PROBE_DIR`, written by `sdrs optimize TASK --design off`; the
+/// task's initial gait without it), the loss along the trust-region
+/// controller step `Δc = −r g/‖g‖` for r = 3e-1 … 1e-7, against its linear
+/// model `L + r gᵀΔc/r = L − r‖g‖`, at the scene's Newton tolerance or
+/// `SDRS_FD_TOL`. Prints the gradient's norm per parameter kind
+/// (offset / amplitude / frequency / phase). Asserts nothing beyond
+/// finiteness: it measures.
+#[test]
+#[ignore]
+fn controller_step_probe() {
+    use sdrs::optimize::checkpoint;
+    use sdrs::optimize::controls::ControlTarget;
+    let name = std::env::var("SDRS_PROBE_TASK").unwrap_or_else(|_| "spider".into());
+    let mut p = Problem::load(&task(&name), false).unwrap();
+    p.scene.settings.newton.tol = env_or("SDRS_FD_TOL", p.scene.settings.newton.tol);
+    let mut c = p.controls.values(&p.controller);
+    if let Ok(dir) = std::env::var("SDRS_PROBE_DIR") {
+        let scene = task(&name).parent().unwrap().join(&p.task.scene);
+        let key = checkpoint::RunKey::new(&task(&name), &scene, false, 0).unwrap();
+        let st = checkpoint::load(std::path::Path::new(&dir), &key).unwrap();
+        eprintln!(
+            "checkpoint iter {} radius_controller {:.3e}",
+            st.iter, st.radius_controller
+        );
+        c = st.controller;
+    }
+    let d = DVector::zeros(0);
+    let ev = p.evaluate(&d, &c).unwrap();
+    let g = &ev.grad_controller;
+    let mut kinds = [0.0f64; 4];
+    for (i, e) in p.controls.entries.iter().enumerate() {
+        if let ControlTarget::Signal { param, .. } = e {
+            let k = if *param == 0 { 0 } else { 1 + (param - 1) % 3 };
+            kinds[k] += g[i] * g[i];
+        }
+    }
+    eprintln!(
+        "tol {:.0e} loss {:.12e} |g| {:.6e}; |g| by kind offset {:.3e} amplitude {:.3e} frequency {:.3e} phase {:.3e}",
+        p.scene.settings.newton.tol,
+        ev.loss,
+        g.norm(),
+        kinds[0].sqrt(),
+        kinds[1].sqrt(),
+        kinds[2].sqrt(),
+        kinds[3].sqrt()
+    );
+    // Directions: the full gradient, the gradient without its frequency
+    // components, the frequency components alone.
+    let kind_of = |i: usize| match p.controls.entries[i] {
+        ControlTarget::Signal { param, .. } if param >= 1 => 1 + (param - 1) % 3,
+        _ => 0,
+    };
+    let only = |keep: &dyn Fn(usize) -> bool| {
+        let v = DVector::from_fn(g.len(), |i, _| if keep(kind_of(i)) { g[i] } else { 0.0 });
+        v
+    };
+    for (label, gk) in [
+        ("full", g.clone()),
+        ("no-frequency", only(&|k| k != 2)),
+        ("frequency-only", only(&|k| k == 2)),
+    ] {
+        let dir = -&gk / gk.norm();
+        let slope = g.dot(&dir);
+        for r in [3e-1, 1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7] {
+            let l = p.loss_value(&d, &(&c + r * &dir)).unwrap();
+            let pred = r * slope;
+            eprintln!(
+                "{label} r {r:.0e}: ΔL {:+.6e} linear {:+.6e} ratio {:+.4}",
+                l - ev.loss,
+                pred,
+                (l - ev.loss) / pred
+            );
+            assert!(l.is_finite());
+        }
+    }
 }

@@ -15,6 +15,9 @@ cd "$(dirname "$0")/.."
 OUT=${1:-out/bench_locomotion}
 SI=${2:-300}
 BI=${3:-300}
+# SDRS_WRAP: a command prefix for each run (e.g. a machine-wide job
+# semaphore); default none.
+WRAP=${SDRS_WRAP:-}
 # SDRS_BIN: a fixed copy of the binary (so that rebuilding during a long run
 # does not change the second half of a stream).
 BIN=${SDRS_BIN:-target/release/sdrs}
@@ -23,9 +26,9 @@ mkdir -p "$OUT"
 run() { # robot design iters
   local dir="$OUT/$1_$2"
   if [ -f "$dir/checkpoint.json" ] && [ ! -f "$dir/summary.json" ]; then
-    nice -n 5 "$BIN" optimize "robots/$1/task.yaml" --design "$2" --iters "$3" --resume "$dir" -q
+    $WRAP nice -n 5 "$BIN" optimize "robots/$1/task.yaml" --design "$2" --iters "$3" --resume "$dir" -q
   else
-    nice -n 5 "$BIN" optimize "robots/$1/task.yaml" --design "$2" --iters "$3" --out "$dir" --force -q
+    $WRAP nice -n 5 "$BIN" optimize "robots/$1/task.yaml" --design "$2" --iters "$3" --out "$dir" --force -q
   fi
 }
 ( run spider on "$SI"; run biped on "$BI" ) > "$OUT/stream_on.log" 2>&1 &

@@ -78,6 +78,7 @@ fn import_robot(
         max_hulls,
         resolution,
         threshold,
+        hull_points: Default::default(),
         designable,
         mass: ValueEnum::from_str(mass, true).map_err(|_| pick("mass", mass))?,
         density,

@@ -1,6 +1,6 @@
 //! `sdrs import INPUT --out DESIGN.yaml [...]`.
 
-use super::decompose::Decomposer;
+use super::decompose::{Decomposer, HullPoints};
 use super::mass::MassMode;
 use super::ready::{BaseMode, ReadyOptions, make_ready};
 use super::write::{OutputPaths, check_outputs, write_outputs};
@@ -29,6 +29,10 @@ pub struct ImportArgs {
     /// Concavity threshold [default: 0.01 for vhacd, 0.05 for coacd].
     #[arg(long)]
     pub threshold: Option<f64>,
+    /// Points spanning each V-HACD/CoACD part's hull: `voxels` (the decomposer's) or `mesh`
+    /// (the source mesh's vertices, partitioned by the parts; a convex mesh stays one hull).
+    #[arg(long, value_enum, default_value_t = HullPoints::Voxels)]
+    pub hull_points: HullPoints,
     /// Designable links, comma-separated [default: all].
     #[arg(long, value_delimiter = ',')]
     pub designable: Option<Vec<String>>,
@@ -100,6 +104,7 @@ impl ImportArgs {
                 Decomposer::Coacd => 0.05,
                 _ => d.threshold,
             }),
+            hull_points: self.hull_points,
             designable: self.designable.clone(),
             mass: self.mass,
             density: self.density,

@@ -11,6 +11,19 @@
 //!   package), `threshold` is its concavity threshold, `max_hulls` its
 //!   `max_convex_hull`, `resolution` its `resolution`.
 //! - `hull`: one convex hull of the whole mesh.
+//! - With [`HullPoints::Mesh`] (`--hull-points mesh`, V-HACD and CoACD) the
+//!   parts only *partition the mesh's vertices*: a closed convex mesh (volume
+//!   equal to its hull's to 1e-6) stays one hull; otherwise each vertex `v`
+//!   goes to the part `p` minimising `violation_p(v) = max_i (n_i·v − b_i)`
+//!   (deepest inside, lowest index on a tie), and part `p`'s hull is the convex
+//!   hull of its vertices plus, for every mesh edge `(u, v)` with
+//!   `part(u) = p < part(v)`, the vertex `v`. So neighbouring hulls share the
+//!   vertices of the edges that cross between them (they touch or overlap,
+//!   and the connectivity step ties each such pair through one shared
+//!   vertex), every mesh triangle lies in one hull, and a hull has the mesh's
+//!   own vertices (a 96-vertex foot in 3 parts gives about 96 + the shared
+//!   boundary vertices) instead of one per voxel corner. Deterministic: the
+//!   same mesh and parameters give the same hulls.
 //! - `grid`: about `max_hulls` equal boxes on a grid over the mesh (the
 //!   paper's block design space; see [`super::grid`]); neighbouring blocks'
 //!   coincident corners are tied instead of the usual shared vertices.
@@ -50,6 +63,17 @@ impl Decomposer {
     }
 }
 
+/// Which points span a decomposed part's hull.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum HullPoints {
+    /// The decomposer's own points (V-HACD: every surface voxel corner).
+    #[default]
+    Voxels,
+    /// The source mesh's vertices, partitioned by the parts (module docs).
+    Mesh,
+}
+
 /// Decomposes `mesh` into at most `opts.max_hulls` convex hulls.
 pub fn decompose(
     mesh: &TriMesh,
@@ -81,6 +105,11 @@ pub fn decompose(
                 )),
             }
         }
+        Decomposer::Vhacd | Decomposer::Coacd
+            if opts.hull_points == HullPoints::Mesh && is_convex(mesh)? =>
+        {
+            Ok(vec![whole()?])
+        }
         Decomposer::Vhacd => {
             let points: Vec<PVec> = mesh
                 .vertices
@@ -108,13 +137,89 @@ pub fn decompose(
             if hulls.is_empty() {
                 return Err(fail("V-HACD returned no part (is the mesh closed?)".into()));
             }
-            merge_down(hulls, max_hulls).map_err(fail)
+            let parts = merge_down(hulls, max_hulls).map_err(fail)?;
+            finish(mesh, parts, opts.hull_points).map_err(fail)
         }
         Decomposer::Coacd => {
             let hulls = coacd(mesh, opts, max_hulls, ctx)?;
-            merge_down(hulls, max_hulls).map_err(fail)
+            let parts = merge_down(hulls, max_hulls).map_err(fail)?;
+            finish(mesh, parts, opts.hull_points).map_err(fail)
         }
     }
+}
+
+/// Whether `mesh` is closed and convex: its volume equals its hull's to
+/// 1e-6 relative.
+fn is_convex(mesh: &TriMesh) -> Result<bool, ImportError> {
+    let Some(v) = mesh.volume() else {
+        return Ok(false);
+    };
+    let h = convex_hull(&mesh.vertices)
+        .map(|h| h.volume())
+        .unwrap_or(0.0);
+    Ok(h > 0.0 && (h - v).abs() <= 1e-6 * h)
+}
+
+/// The parts' hulls as `points` selects (module docs).
+fn finish(
+    mesh: &TriMesh,
+    parts: Vec<Polytope>,
+    points: HullPoints,
+) -> Result<Vec<Polytope>, String> {
+    match points {
+        HullPoints::Voxels => Ok(parts),
+        HullPoints::Mesh => mesh_vertex_hulls(mesh, &parts),
+    }
+}
+
+/// Partitions the mesh vertices over `parts` and hulls each share with the
+/// vertices across its crossing edges (module docs, [`HullPoints::Mesh`]).
+/// Parts that receive too few vertices to span a volume are dropped.
+pub fn mesh_vertex_hulls(mesh: &TriMesh, parts: &[Polytope]) -> Result<Vec<Polytope>, String> {
+    let owner: Vec<usize> = mesh
+        .vertices
+        .iter()
+        .map(|v| {
+            let mut best = (f64::INFINITY, 0);
+            for (p, part) in parts.iter().enumerate() {
+                let d = part.violation(v);
+                if d < best.0 {
+                    best = (d, p);
+                }
+            }
+            best.1
+        })
+        .collect();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); parts.len()];
+    for (i, &p) in owner.iter().enumerate() {
+        members[p].push(i);
+    }
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let (pu, pv) = (owner[u], owner[v]);
+            if pu < pv {
+                members[pu].push(v);
+            } else if pv < pu {
+                members[pv].push(u);
+            }
+        }
+    }
+    let mut hulls = Vec::new();
+    for mut m in members {
+        m.sort_unstable();
+        m.dedup();
+        let pts: Vec<Vector3<f64>> = m.iter().map(|&i| mesh.vertices[i]).collect();
+        if pts.len() >= 4
+            && let Ok(h) = convex_hull(&pts)
+        {
+            hulls.push(h);
+        }
+    }
+    if hulls.is_empty() {
+        return Err("no part kept enough mesh vertices to span a hull".into());
+    }
+    Ok(hulls)
 }
 
 /// Greedily merges hull pairs (smallest added volume first) until at most

@@ -41,7 +41,7 @@ pub mod urdf;
 pub mod write;
 
 pub use cli::{ImportArgs, run_import};
-pub use decompose::Decomposer;
+pub use decompose::{Decomposer, HullPoints};
 pub use error::ImportError;
 pub use mass::MassMode;
 pub use report::ImportReport;
@@ -71,6 +71,10 @@ pub struct ImportOptions {
     /// Concavity threshold (V-HACD `concavity`, CoACD `threshold`).
     /// Default 0.01 for V-HACD; CoACD's own default is 0.05.
     pub threshold: f64,
+    /// Points spanning each V-HACD/CoACD part's hull: the decomposer's
+    /// (default `voxels`) or the source mesh's vertices (`mesh`; see
+    /// [`decompose`]'s module docs).
+    pub hull_points: decompose::HullPoints,
     /// Links whose hulls are design variables; `None` = all (default).
     pub designable: Option<Vec<String>>,
     /// Mass assignment. Default `urdf` (with density fallback).
@@ -108,6 +112,7 @@ impl Default for ImportOptions {
             max_hulls: 16,
             resolution: 64,
             threshold: 0.01,
+            hull_points: decompose::HullPoints::Voxels,
             designable: None,
             mass: MassMode::Urdf,
             density: 1000.0,

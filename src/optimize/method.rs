@@ -130,6 +130,42 @@ mod tests {
         assert!(clipped > 0.2 * 1e-2, "clipped step {clipped}");
     }
 
+    /// The two radius rules on a rippled bowl `f(x) = ‖x‖² + a Σ cos(xᵢ/λ)`
+    /// (a = 0.1, λ = 0.01; exact gradient), from (3, 2) with step 0.3, 200
+    /// trials of the trust-region iteration (accept iff f decreases): the
+    /// adaptive radius shrinks to the ripple's scale and collapses in a
+    /// ripple's local minimum well up the bowl (measured f ≈ 1.89, radius
+    /// < 1e-40); resetting the radius to the step after every accepted
+    /// trial crosses the ripples along the trend and ends near the bottom
+    /// (f ≈ −0.12; the lowest value is −0.2). The spider's controller-only
+    /// run stalled the first way (notes/loco2.md).
+    #[test]
+    fn reset_radius_crosses_a_ripple_where_the_adaptive_radius_collapses() {
+        use crate::optimize::task::RadiusRule;
+        let (a, lam) = (0.1, 0.01);
+        let f = |x: &DVector<f64>| x.iter().map(|v| v * v + a * (v / lam).cos()).sum::<f64>();
+        let grad = |x: &DVector<f64>| x.map(|v| 2.0 * v - a / lam * (v / lam).sin());
+        let run = |rule: RadiusRule| {
+            let (lo, hi) = (DVector::repeat(2, -1e9), DVector::repeat(2, 1e9));
+            let mut x = DVector::from_vec(vec![3.0, 2.0]);
+            let mut r = 0.3;
+            for _ in 0..200 {
+                let t = &x + trust_region_step(&grad(&x), &x, &lo, &hi, r);
+                let ok = f(&t) < f(&x);
+                if ok {
+                    x = t;
+                }
+                r = rule.next(r, 0.3, ok);
+            }
+            (f(&x), r)
+        };
+        let (fa, ra) = run(RadiusRule::Adaptive);
+        let (fr, _) = run(RadiusRule::Reset);
+        eprintln!("adaptive: f {fa} radius {ra:e}; reset: f {fr}");
+        assert!(fa > 1.5 && ra < 1e-30, "adaptive f {fa} r {ra}");
+        assert!(fr < 0.0, "reset f {fr}");
+    }
+
     #[test]
     fn trust_region_step_is_optimal_on_ball_and_box() {
         // Ball binding: step is −r g/‖g‖ when the box is far.

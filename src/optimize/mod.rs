@@ -105,7 +105,16 @@ impl Problem {
             ));
         }
         let scene_path = path.parent().unwrap_or(Path::new(".")).join(&task.scene);
-        let scene = Scene::load(&scene_path)?;
+        let mut scene = Scene::load(&scene_path)?;
+        if let Some(t) = task.optimizer.newton_tol {
+            if !(t > 0.0 && t.is_finite()) {
+                return Err(invalid(
+                    "optimizer.newton_tol",
+                    format!("must be positive and finite, got {t}"),
+                ));
+            }
+            scene.settings.newton.tol = t;
+        }
         let mut model = scene.model.clone();
         let horizon = task.horizon.unwrap_or(scene.steps);
         if horizon == 0 {
@@ -642,22 +651,22 @@ pub fn optimize_with(
                 d = d_new;
                 c = c_new;
                 ev = e;
-                rd = (rd * 1.25).min(4.0 * o.step_design);
-                rc = (rc * 1.25).min(4.0 * o.step_controller);
+                rd = o.radius.next(rd, o.step_design, true);
+                rc = o.radius.next(rc, o.step_controller, true);
                 keep(&mut best, it, ev.loss, &d, &c);
                 push(&mut history, it, &ev, &d, ev.loss, rd, rc, true);
             }
             (Method::TrustRegion, Ok(e)) => {
                 // Rejected: the row shows the trial's loss; the iterate stays.
-                rd *= 0.5;
-                rc *= 0.5;
+                rd = o.radius.next(rd, o.step_design, false);
+                rc = o.radius.next(rc, o.step_controller, false);
                 push(&mut history, it, &e, &d_new, ev.loss, rd, rc, false);
             }
             (Method::Adam, Err(e)) => return Err(e.context(format!("iteration {it}"))),
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
-                rd *= 0.5;
-                rc *= 0.5;
+                rd = o.radius.next(rd, o.step_design, false);
+                rc = o.radius.next(rc, o.step_controller, false);
                 push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
             }
         }

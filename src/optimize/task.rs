@@ -230,6 +230,42 @@ pub enum ResultIterate {
     Last,
 }
 
+/// How the trust-region radii change after a trial step (both blocks, design
+/// and controller, together: a trial moves both).
+#[derive(
+    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum RadiusRule {
+    /// An accepted step grows each radius ×1.25 (at most 4× its step), a
+    /// rejected one halves it: the radius remembers the scale at which the
+    /// last steps were accepted.
+    #[default]
+    Adaptive,
+    /// An accepted step resets each radius to its step (the paper's fixed
+    /// `ᾱ_d`, `ᾱ_c`); a rejected one halves it. Every iteration therefore
+    /// starts at the paper's step and backtracks along the same gradient
+    /// (the iterate, hence its gradient, is unchanged by a rejection) until
+    /// the loss decreases. On a loss that is smooth only below a small
+    /// scale ε but decreases along the gradient at a larger one (a ripple
+    /// on a trend: `notes/loco2.md` measures ε ≈ 3e-4 on the spider's gait
+    /// parameters), `adaptive` settles at radius ≈ ε and gains ≈ ε‖g‖ per
+    /// step, whereas `reset` tries the large scale first every iteration.
+    Reset,
+}
+
+impl RadiusRule {
+    /// Radius after a trial of radius `r`, for a block whose task step is
+    /// `step` (formulas on the variants).
+    pub fn next(self, r: f64, step: f64, accepted: bool) -> f64 {
+        match (self, accepted) {
+            (_, false) => 0.5 * r,
+            (RadiusRule::Adaptive, true) => (r * 1.25).min(4.0 * step),
+            (RadiusRule::Reset, true) => step,
+        }
+    }
+}
+
 /// Optimizer settings (defaults documented on each field).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
@@ -259,6 +295,18 @@ pub struct OptimizerSpec {
     pub clip_design: Option<f64>,
     /// Adam only: the same for the controller gradient. Default none.
     pub clip_controller: Option<f64>,
+    /// Trust region only: how the radii change after a trial. Default
+    /// `adaptive` (see [`RadiusRule`]).
+    pub radius: RadiusRule,
+    /// Newton tolerance (`‖∇O‖∞`, the scene's `solver.tol`) of every
+    /// forward pass of this task, replacing the scene's. The adjoint
+    /// gradient is the derivative of the loss at an exact step minimiser; a
+    /// loose tolerance leaves each step's minimiser off by up to
+    /// `tol / λ_min(∇²O)`, an error that changes discontinuously with the
+    /// parameters (the Newton iteration count jumps), so the computed loss
+    /// is not the function the gradient describes at small scales.
+    /// Default none (the scene's).
+    pub newton_tol: Option<f64>,
 }
 
 impl Default for OptimizerSpec {
@@ -272,6 +320,8 @@ impl Default for OptimizerSpec {
             result: ResultIterate::Best,
             clip_design: None,
             clip_controller: None,
+            radius: RadiusRule::Adaptive,
+            newton_tol: None,
         }
     }
 }
