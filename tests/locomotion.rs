@@ -137,7 +137,7 @@ fn env_or(var: &str, default: f64) -> f64 {
 /// must pass (resolved: 1e-4; not resolved: within its differences' noise).
 /// (Plain central differences at one h, used until the 3-hull feet, failed
 /// on the spider's shared tie vertices — |g| ≈ 0.017 against 19.6 — at
-/// 1.5e-4 while agreeing to 2e-6 at h = 1e-5: noise, notes/loco2.md.)
+/// 1.5e-4 while agreeing to 2e-6 at h = 1e-5: noise, notes/locomotion-feet-and-radius.md.)
 /// The spider's h was chosen after a run: at 1e-6 only 5 of its 12
 /// components were resolved (all within their noise), at 4e-6 11 (worst
 /// 5.6e-5).
@@ -271,7 +271,7 @@ fn amplitude_indices(p: &Problem) -> Vec<usize> {
 }
 
 /// Diagnostic of the controller-only run's stall (issue 30, item 2; run by
-/// hand, notes/loco2.md): at the iterate of a controller-only checkpoint
+/// hand, notes/locomotion-feet-and-radius.md): at the iterate of a controller-only checkpoint
 /// (`SDRS_PROBE_DIR`, written by `sdrs optimize TASK --design off`; the
 /// task's initial gait without it), the loss along the trust-region
 /// controller step `Δc = −r g/‖g‖` for r = 3e-1 … 1e-7, against its linear

@@ -6,7 +6,7 @@ Usage: tools/feet_figure.py LINK OUT.svg LABEL=SCENE.yaml [LABEL=SCENE.yaml ...]
 For each file: the hulls of LINK (link frame) in two orthographic views,
 side (x–z) and below (x–y), each hull's edges in its own colour (edges of
 scipy's convex hull of the hull's vertices, coplanar facets' diagonals
-dropped). Used for the feet pictures in notes/loco2.md.
+dropped). Used for the feet pictures in notes/locomotion-feet-and-radius.md.
 """
 import sys
 

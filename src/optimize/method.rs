@@ -138,7 +138,7 @@ mod tests {
     /// < 1e-40); resetting the radius to the step after every accepted
     /// trial crosses the ripples along the trend and ends near the bottom
     /// (f ≈ −0.12; the lowest value is −0.2). The spider's controller-only
-    /// run stalled the first way (notes/loco2.md).
+    /// run stalled the first way (notes/locomotion-feet-and-radius.md).
     #[test]
     fn reset_radius_crosses_a_ripple_where_the_adaptive_radius_collapses() {
         use crate::optimize::task::RadiusRule;

@@ -248,7 +248,7 @@ pub enum RadiusRule {
     /// (the iterate, hence its gradient, is unchanged by a rejection) until
     /// the loss decreases. On a loss that is smooth only below a small
     /// scale ε but decreases along the gradient at a larger one (a ripple
-    /// on a trend: `notes/loco2.md` measures ε ≈ 3e-4 on the spider's gait
+    /// on a trend: `notes/locomotion-feet-and-radius.md` measures ε ≈ 3e-4 on the spider's gait
     /// parameters), `adaptive` settles at radius ≈ ε and gains ≈ ε‖g‖ per
     /// step, whereas `reset` tries the large scale first every iteration.
     Reset,
