@@ -337,6 +337,7 @@ fn link_geometry(
                 .as_slice(),
         )
         .map_err(geom_err)?;
+        notes.extend(units_hint(&m, &g.element, path));
         volume = match (volume, m.volume()) {
             (Some(a), Some(b)) => Some(a + b),
             _ => None,
@@ -373,6 +374,25 @@ fn link_geometry(
         sources,
         source_volume: volume,
         seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Bounding-box diagonal (m) above which a placed mesh is reported as
+/// probably in millimetres: no robot part spans 10 m, while a 10 mm part
+/// written in millimetres reads as 10 m.
+pub const MILLIMETRE_HINT_DIAGONAL: f64 = 10.0;
+
+/// A report line when a mesh, as placed (after its `scale`), is too large
+/// to be a robot part in metres: the likely unit and the fix. The import
+/// goes on with the coordinates as metres (the mass lines say what that
+/// gives).
+fn units_hint(m: &TriMesh, element: &str, path: &Path) -> Option<String> {
+    let d = m.diagonal();
+    (d > MILLIMETRE_HINT_DIAGONAL).then(|| {
+        format!(
+            "units: {element}: mesh {} spans {d:.4} m (bounding-box diagonal, its coordinates read as metres), larger than any robot part: if the file is in millimetres, scale it by 0.001 (URDF <mesh scale=\"0.001 0.001 0.001\">); imported as metres",
+            path.display()
+        )
     })
 }
 
