@@ -180,8 +180,8 @@ fn hull_volume_equals_qhull_on_reproducer_meshes_rotated_and_stress_sets() {
 /// Both reproducer meshes import as bare meshes with the `hull` decomposer
 /// (they failed with "open surface", and the waist mesh's hull failed the
 /// importer's own validator). `none` (the mesh itself as one convex part)
-/// now gives the right reason for the non-convex ankle mesh, with both
-/// volumes, instead of "open surface".
+/// now gives the right reason instead of "open surface": the ankle mesh is
+/// not convex (both volumes given), the waist mesh has open edges.
 #[test]
 fn reproducer_meshes_import_with_hull_and_none_says_why_not() {
     for m in MESHES {
@@ -199,7 +199,7 @@ fn reproducer_meshes_import_with_hull_and_none_says_why_not() {
             Err(e) => {
                 let msg = e.to_string();
                 assert!(
-                    msg.contains("needs a convex mesh") && !msg.contains("open surface"),
+                    msg.contains("convex mesh") && !msg.contains("open surface"),
                     "{m} none: {msg}"
                 );
             }

@@ -137,6 +137,8 @@ pub struct Imported {
     pub report: ImportReport,
     /// The input marks its root link as static (see [`ready::root_is_static`]).
     pub root_static: bool,
+    /// The input's contact friction coefficient (MJCF geoms), if it has one.
+    pub friction: Option<f64>,
 }
 
 /// Input kinds by extension.
@@ -178,6 +180,7 @@ fn add_mjcf_scene(
 ) -> Result<(), ImportError> {
     // MJCF says which bodies are welded to the world: keep it.
     imp.root_static = true;
+    imp.friction = extra.friction;
     let scene = &mut imp.scene;
     let robot = scene.robots[0].name.clone();
     let env = crate::scene::environment::ENVIRONMENT;
@@ -690,6 +693,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         links: imported_links,
         report,
         root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
+        friction: None,
     })
 }
 

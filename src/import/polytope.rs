@@ -359,10 +359,18 @@ impl Polytope {
     }
 }
 
-/// Signed volume of a closed, consistently oriented triangle mesh.
+/// Signed volume of a closed, consistently oriented triangle mesh:
+/// `V = Σ (a − o)·((b − o) × (c − o))/6` over its triangles `abc`, with
+/// `o` the first triangle's first corner. Any `o` gives the same volume in
+/// exact arithmetic; one on the mesh keeps the terms of the size of the
+/// mesh, not of its distance from the origin (about the origin, a unit
+/// sphere 1e6 m away summed terms of 1e18 to a volume off by 1e3).
 pub fn mesh_volume(v: &[Vector3<f64>], tris: &[[usize; 3]]) -> f64 {
+    let Some(o) = tris.first().map(|t| v[t[0]]) else {
+        return 0.0;
+    };
     tris.iter()
-        .map(|t| v[t[0]].dot(&v[t[1]].cross(&v[t[2]])))
+        .map(|t| (v[t[0]] - o).dot(&(v[t[1]] - o).cross(&(v[t[2]] - o))))
         .sum::<f64>()
         / 6.0
 }

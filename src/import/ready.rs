@@ -70,6 +70,9 @@ pub struct ReadyOptions {
     pub hold: bool,
     /// Initial coordinates by joint name.
     pub pose: BTreeMap<String, f64>,
+    /// Friction coefficient of the contact it turns on. Default `None`:
+    /// 0.5; an MJCF import passes its geoms' ([`super::mjcf::contact_friction`]).
+    pub mu: Option<f64>,
 }
 
 impl Default for ReadyOptions {
@@ -80,6 +83,7 @@ impl Default for ReadyOptions {
             contact: true,
             hold: true,
             pose: BTreeMap::new(),
+            mu: None,
         }
     }
 }
@@ -206,7 +210,7 @@ pub fn make_ready(
         gains: BTreeMap::new(),
     };
     let contact = ContactSpec {
-        mu: 0.5,
+        mu: opts.mu.unwrap_or(0.5),
         ..ContactSpec::default()
     };
     let range = ContactParams::with_width(contact.s).support_distance();
