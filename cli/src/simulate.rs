@@ -156,6 +156,42 @@ fn stream_run(
     Ok(out)
 }
 
+/// The outputs that need every recorded pose: `--export` (hulls, poses,
+/// surfaces, `--planes` contacts) and `--view`.
+fn write_recorded(a: &SimulateArgs, scene: &Scene, traj: &Trajectory) -> Result<()> {
+    if let Some(dir) = &a.export {
+        let excluded = scene
+            .contact
+            .as_ref()
+            .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
+            .unwrap_or_default();
+        sdrs::output::export_run(dir, &scene.model, excluded, traj)?;
+        crate::contact_model::export_surfaces(dir, scene)?;
+    }
+    // Contact planes are recomputed from the recorded poses: the run above
+    // is the same with or without them.
+    let playback = if a.planes || a.view.is_some() {
+        Some(crate::view::playback_of_run(scene, traj)?)
+    } else {
+        None
+    };
+    if let (Some(dir), true, Some(p)) = (&a.export, a.planes, &playback) {
+        write_atomic(
+            &dir.join("contacts.csv"),
+            sdrs::output::contacts::contacts_csv(&p.contacts).as_bytes(),
+        )?;
+    }
+    if let (Some(v), Some(p)) = (&a.view, &playback) {
+        let title = a
+            .scene
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        crate::view::write_run_viewer(v, &title, p)?;
+        eprintln!("{}: viewer, open it in a browser", v.display());
+    }
+    Ok(())
+}
+
 pub fn run(a: SimulateArgs) -> Result<()> {
     let mut scene = Scene::load(&a.scene)?;
     a.contact.apply(&mut scene)?;
@@ -211,37 +247,7 @@ pub fn run(a: SimulateArgs) -> Result<()> {
             summary.steps
         )));
     }
-    let traj = run.traj.unwrap_or_default();
-    if let Some(dir) = &a.export {
-        let excluded = scene
-            .contact
-            .as_ref()
-            .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
-            .unwrap_or_default();
-        sdrs::output::export_run(dir, &scene.model, excluded, &traj)?;
-        crate::contact_model::export_surfaces(dir, &scene)?;
-    }
-    // Contact planes are recomputed from the recorded poses: the run above
-    // is the same with or without them.
-    let playback = if a.planes || a.view.is_some() {
-        Some(crate::view::playback_of_run(&scene, &traj)?)
-    } else {
-        None
-    };
-    if let (Some(dir), true, Some(p)) = (&a.export, a.planes, &playback) {
-        write_atomic(
-            &dir.join("contacts.csv"),
-            sdrs::output::contacts::contacts_csv(&p.contacts).as_bytes(),
-        )?;
-    }
-    if let (Some(v), Some(p)) = (&a.view, &playback) {
-        let title = a
-            .scene
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-        crate::view::write_run_viewer(v, &title, p)?;
-        eprintln!("{}: viewer, open it in a browser", v.display());
-    }
+    write_recorded(&a, &scene, &run.traj.unwrap_or_default())?;
     eprintln!(
         "{}: {} steps of {} s in {:.3} s ({:.3} ms/step), Newton iterations mean {:.2} max {}{}",
         a.scene.display(),

@@ -114,26 +114,26 @@ fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, Str
         edge: HashMap::new(),
     };
     let [i0, i1, i2, i3] = init;
-    // Orient the tetrahedron: the fourth corner lies strictly inside each face.
-    let (j1, j2) = if orient(&pts[i0], &pts[i1], &pts[i2], &pts[i3]) > 0.0 {
-        (i2, i1)
-    } else {
-        (i1, i2)
-    };
-    for v in [[i0, j1, j2], [i0, i3, j1], [j1, i3, j2], [j2, i3, i0]] {
-        hull.push(v);
+    // The tetrahedron, each face oriented so that the opposite corner lies
+    // strictly inside (the same faces, in the same order, as the earlier
+    // floating-point version: inputs it handled get the same triangles).
+    for (v, opposite) in [
+        ([i0, i1, i2], i3),
+        ([i0, i1, i3], i2),
+        ([i0, i2, i3], i1),
+        ([i1, i2, i3], i0),
+    ] {
+        let [a, b, c] = v;
+        if orient(&pts[a], &pts[b], &pts[c], &pts[opposite]) > 0.0 {
+            hull.push([a, c, b]);
+        } else {
+            hull.push(v);
+        }
     }
-    // Farthest points first (from the tetrahedron's centre): the early hull
-    // is large, so most later points fall inside and are skipped.
-    let centre = (pts[i0] + pts[i1] + pts[i2] + pts[i3]) / 4.0;
-    let mut order: Vec<usize> = (0..pts.len()).filter(|k| !init.contains(k)).collect();
-    order.sort_by(|&a, &b| {
-        (pts[b] - centre)
-            .norm_squared()
-            .total_cmp(&(pts[a] - centre).norm_squared())
-            .then(a.cmp(&b))
-    });
-    for p in order {
+    // Points in input order: coplanar facets (boxes, voxel hulls) are
+    // triangulated as before, which downstream meshes (the IPC baseline's
+    // contact surfaces) depend on.
+    for p in (0..pts.len()).filter(|k| !init.contains(k)) {
         hull.insert(p, eps)?;
     }
     Ok(hull.faces.iter().filter(|f| f.alive).map(|f| f.v).collect())
@@ -144,12 +144,16 @@ fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, Str
 /// and the point farthest from their plane. Fails with a plain reason on
 /// (nearly, within `eps`) collinear or coplanar input.
 fn initial_simplex(pts: &[Vector3<f64>], eps: f64) -> Result<[usize; 4], String> {
+    // Ties: the first point of least `x`, the last of the farthest (the
+    // earlier version's choices, kept so that its triangles are kept).
     let argmax = |f: &dyn Fn(usize) -> f64| {
         (0..pts.len())
-            .max_by(|&a, &b| f(a).total_cmp(&f(b)).then(b.cmp(&a)))
+            .max_by(|&a, &b| f(a).total_cmp(&f(b)))
             .unwrap_or(0)
     };
-    let i0 = argmax(&|k| -pts[k].x);
+    let i0 = (0..pts.len())
+        .min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x))
+        .unwrap_or(0);
     let i1 = argmax(&|k| (pts[k] - pts[i0]).norm());
     let d01 = (pts[i1] - pts[i0]).normalize();
     let line = |k: usize| {
