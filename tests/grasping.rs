@@ -198,7 +198,7 @@ fn parallel_jaw_design_gradient_matches_central_differences() {
 /// asks ≥ 10). The span (where Richardson at h = 3e-7, i.e. over 6e-7,
 /// already agreed within its noise) and the count were set from those
 /// earlier measurements before this check was first run; figures in
-/// notes/grasp.md. `FD_STEPS`, `FD_LEVELS`, `FD_EPS` override.
+/// notes/grasping-parallel-jaw.md. `FD_STEPS`, `FD_LEVELS`, `FD_EPS` override.
 #[test]
 #[ignore]
 fn parallel_jaw_full_horizon_design_gradient_matches_fitted_central_differences() {
@@ -356,7 +356,7 @@ fn three_finger_ties_and_bounds_hold_after_optimizer_iterations() {
 /// Horizon 60 of 200 (`FD_H` overrides; the fingers have closed on the
 /// object, the loss is final-time): the 12 vertex coordinates with the
 /// largest |∂L/∂d| at h = 1e-6, all asserted (cut 0, fixed before
-/// measuring); figures in notes/hand.md. With `FULL=1` (horizon 200) it
+/// measuring); figures in notes/grasping-hand.md. With `FULL=1` (horizon 200) it
 /// fails: the ball rolls away from the initial hand, its trajectory's
 /// sensitivity grows ≈ 1e4-fold while it rolls (a polyhedron's pivot
 /// instability), and the differences converge onto the adjoint only at
@@ -398,7 +398,7 @@ fn hand_full_horizon() -> (
 /// derivative and its central differences at h = 1e-5 … 1e-12 (Newton tol
 /// 1e-11): the ball's converge onto the adjoint only below h ≈ 3e-12 (see
 /// `three_finger_ball_sensitivity_grows_at_the_pivot_rate`). Figures in
-/// notes/hand.md.
+/// notes/grasping-hand.md.
 #[test]
 #[ignore]
 fn three_finger_full_horizon_probe() {
@@ -452,7 +452,7 @@ fn three_finger_full_horizon_probe() {
 ///   instability `sqrt(g / (1.4 r))` (an inverted pendulum about a contact
 ///   edge: moment of inertia `(2/5 + 1) m r²`), r the ball's radius.
 ///
-/// Figures in notes/hand.md.
+/// Figures in notes/grasping-hand.md.
 #[test]
 #[ignore]
 fn three_finger_ball_sensitivity_grows_at_the_pivot_rate() {

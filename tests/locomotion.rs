@@ -140,7 +140,7 @@ fn fd_check_full(name: &str) -> (usize, bool) {
     // The smaller of 1e-6 and 2e-6 at which the measured noise resolves at
     // least 10 components (a larger step buys a smaller noise σ/h, a smaller
     // one less truncation): the biped's noise resolves all 12 at 1e-6, the
-    // spider's only 9 there and 10 at 2e-6 (notes/loco.md).
+    // spider's only 9 there and 10 at 2e-6 (notes/locomotion.md).
     let h = env_or("SDRS_FD_H", if name == "spider" { 2e-6 } else { 1e-6 });
     let label = format!(
         "{name} H={} h={h:.0e} tol={:.0e}",
@@ -177,7 +177,7 @@ fn biped_design_gradient_matches_central_differences_short_horizon() {
 /// distinct foot vertices resolved by the differences and agreeing to 1e-4,
 /// and every one of its 12 components passing (`fd_check_full`).
 #[test]
-#[ignore = "full horizon: 3-5 min per task in release (see notes/loco.md)"]
+#[ignore = "full horizon: 3-5 min per task in release (see notes/locomotion.md)"]
 fn full_horizon_design_gradients_match_central_differences() {
     let tasks = std::env::var("SDRS_FD_TASKS").unwrap_or_else(|_| "spider,biped".into());
     let results: Vec<(String, usize, bool)> = tasks

@@ -5,7 +5,7 @@
 #   tools/bench_locomotion.sh [OUT_DIR] [SPIDER_ITERS] [BIPED_ITERS]
 #
 # Defaults: out/bench_locomotion, 300 and 300 iterations (the paper does not
-# give its iteration counts; see notes/loco.md for what was run). Runs two
+# give its iteration counts; see notes/locomotion.md for what was run). Runs two
 # streams in parallel under `nice -n 5` (co-design / controller-only), each
 # spider then biped, with a checkpoint every iteration: an interrupted run
 # continues with `sdrs optimize robots/<r>/task.yaml --resume DIR [--design

@@ -18,6 +18,9 @@ export PYO3_PYTHON="$PWD/.venv/bin/python" PYTHON_SYS_EXECUTABLE="$PWD/.venv/bin
 export PYO3_BUILD_EXTENSION_MODULE=1
 PYO3_ENVIRONMENT_SIGNATURE="$("$PYO3_PYTHON" -c 'import platform, sys; v = sys.version_info; print(f"{sys.implementation.name}-{v[0]}.{v[1]}-{platform.architecture()[0]}")')"
 export PYO3_ENVIRONMENT_SIGNATURE
+# Every tier: a test that needs .venv or Chromium fails instead of skipping
+# (tests/common/mod.rs, `skip_without_venv`).
+export SDRS_TEST_ALL_TIERS=1
 cargo test --release --workspace --all-targets
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.

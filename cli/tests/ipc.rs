@@ -57,7 +57,7 @@ fn contact_free_scene_gives_the_same_csv_bytes_under_both_models() {
     std::fs::write(
         &scene,
         // Default solver settings (both models start Newton from the
-        // scene's predictor since notes/ipc4.md).
+        // scene's predictor since notes/ipc-baseline-source-meshes.md).
         "version: 1\ndt: 0.002\ncontact: {mu: 0.3}\nobjects:\n  - name: a\n    mass: 1.0\n    hulls: [{box: {size: [0.2, 0.2, 0.2]}}]\n    initial: {q: [0, 0, 1, 0.1, 0.2, 0.3], qdot: [0.5, 0, 2, 1, 0, 3]}\n  - name: b\n    mass: 2.0\n    hulls: [{box: {size: [0.3, 0.2, 0.1]}}]\n    initial: {q: [3, 0, 1, 0, 0, 0], qdot: [-0.5, 0, 1, 0, 2, 0]}\n",
     )
     .unwrap();

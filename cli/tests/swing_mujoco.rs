@@ -2,7 +2,7 @@
 //! default masses (its URDF inertials), swinging freely (hanging, small
 //! amplitude) for 0.3 s, against MuJoCo's RK4: the joint-angle error
 //! shrinks at first order with Δt (SDRS's implicit scheme). The full table
-//! (1 s, Δt = 1e-2 … 1e-4) is in `notes/mass.md`.
+//! (1 s, Δt = 1e-2 … 1e-4) is in `notes/mass-models.md`.
 
 mod support;
 
@@ -74,7 +74,7 @@ fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
 /// SDRS and in MuJoCo (the robot from `sdrs export-mjcf`, the same PD law,
 /// MuJoCo's implicit integrator at 1e-5 s): joint angles, base position and
 /// base orientation converge at first order. Full table (1 s, Δt = 1e-2 …
-/// 1e-4, reference at 1e-6 s) in `notes/mjcf.md`.
+/// 1e-4, reference at 1e-6 s) in `notes/mjcf-in-and-out.md`.
 #[test]
 fn spider_pd_tracking_converges_to_mujoco_at_first_order() {
     let dir = scratch_dir("pd-mujoco");

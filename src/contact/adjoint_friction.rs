@@ -272,21 +272,19 @@ struct Pair<'a> {
 }
 
 /// [`friction_vjp`] from an approximate inner solution `start = (u, ω)` (polished here).
+///
+/// Stages: the rotation centre ([`rotation_centre`]), the vertices carrying
+/// a normal force ([`active_terms`]), the polished inner solution `q*` and
+/// the inner linear solve `z = −(U*_qq)⁻¹ U*_{qX'} δX'` ([`inner_direction`]),
+/// the per-vertex products ([`vertex_products`]), and the chain rule through
+/// the lagged plane and normal forces ([`through_plane`]).
 fn vjp_from(
     pair: &Pair<'_>,
     params: &FrictionParams,
     start: Vector3<f64>,
     spin_free: bool,
 ) -> FrictionVjp {
-    let Pair {
-        lag,
-        plane,
-        s,
-        kappa,
-        next,
-        dirs,
-    } = *pair;
-    let (na, nb) = (next[0].len(), next[1].len());
+    let (na, nb) = (pair.next[0].len(), pair.next[1].len());
     let mut out = FrictionVjp {
         phi: 0.0,
         grad_a: vec![Vector3::zeros(); na],
@@ -300,16 +298,36 @@ fn vjp_from(
         s: 0.0,
         spin_free,
     };
-    let dt = params.dt;
-    let eps = params.eps_velocity;
-    let bm = lag.basis;
-    let nh = lag.normal;
+    let lag = pair.lag;
     let prev = [&lag.x_prev_a[..], &lag.x_prev_b[..]];
     let forces = [&lag.normal_force_a[..], &lag.normal_force_b[..]];
+    let Some(c) = rotation_centre(prev, forces, params) else {
+        return out; // no normal force: U_f ≡ 0 near here
+    };
+    let spin = !spin_free;
+    let start = if spin {
+        start
+    } else {
+        Vector3::new(start.x, start.y, 0.0)
+    };
+    let mut terms = active_terms(pair, params, prev, forces, c, spin);
+    // The inner solution for this centre (normally the forward solution as is).
+    let q = polish(&terms, start, params, spin_free);
+    let z = inner_direction(&mut terms, &q, params.eps_velocity, spin_free);
+    let (gf, gn) = vertex_products(&terms, pair, params, q.z, &z, &mut out);
+    through_plane(pair, prev, &gf, gn, &mut out);
+    out
+}
 
-    // Rotation centre: any fixed point will do (U_f does not depend on it); the forward
-    // solver's (u*, ω*) refer to its centre, the contact-weighted centroid of X, so the same
-    // rule gives a start that needs no polishing.
+/// Rotation centre: any fixed point will do (U_f does not depend on it); the
+/// forward solver's (u*, ω*) refer to its centre, the contact-weighted
+/// centroid of X, so the same rule gives a start that needs no polishing.
+/// `None` when no vertex carries a normal force.
+fn rotation_centre(
+    prev: [&[Vector3<f64>]; 2],
+    forces: [&[f64]; 2],
+    params: &FrictionParams,
+) -> Option<Vector3<f64>> {
     let mut wsum = 0.0;
     let mut c = Vector3::zeros();
     for h in 0..2 {
@@ -322,19 +340,28 @@ fn vjp_from(
         }
     }
     if wsum.is_nan() || wsum <= 0.0 {
-        return out; // no normal force: U_f ≡ 0 near here
+        return None;
     }
     c /= wsum;
-    let spin = !spin_free;
-    let start = if spin {
-        start
-    } else {
-        Vector3::new(start.x, start.y, 0.0)
-    };
+    Some(c)
+}
 
-    // Pass 1: the vertices carrying a normal force.
+/// Pass 1: a [`Term`] per vertex carrying a (smoothed) normal force, with
+/// its lever `e = x − c`, tangential lever `g = Bᵀ(n̂ × e)` (when spinning),
+/// displacement `d = x' − x`, sliding velocity `v = Bᵀd/Δt` and direction
+/// `Bᵀ δx'/Δt`.
+fn active_terms(
+    pair: &Pair<'_>,
+    params: &FrictionParams,
+    prev: [&[Vector3<f64>]; 2],
+    forces: [&[f64]; 2],
+    c: Vector3<f64>,
+    spin: bool,
+) -> Vec<Term> {
+    let dt = params.dt;
+    let nh = pair.lag.normal;
+    let bt = pair.lag.basis.transpose();
     let mut terms = Vec::new();
-    let bt = bm.transpose();
     for h in 0..2 {
         for (index, (x, f)) in prev[h].iter().zip(forces[h]).enumerate() {
             if *f <= 0.0 {
@@ -345,7 +372,7 @@ fn vjp_from(
                 continue;
             }
             let e = x - c;
-            let d = next[h][index] - x;
+            let d = pair.next[h][index] - x;
             terms.push(Term {
                 hull: h,
                 index,
@@ -362,17 +389,24 @@ fn vjp_from(
                 v: bt * d / dt,
                 rho: Vector2::zeros(),
                 big_phi: Matrix2::zeros(),
-                bdx: bt * dirs[h][index] / dt,
+                bdx: bt * pair.dirs[h][index] / dt,
             });
         }
     }
-    // The inner solution for this centre (normally the forward solution as is).
-    let q = polish(&terms, start, params, spin_free);
-    let omega = q.z;
-    // U*_qq and U*_{qX'} δX' at q*.
+    terms
+}
+
+/// `U*_qq` and `U*_{qX'} δX'` at `q*` (filling each term's `ρ = r/φ` and
+/// `Φ = (I − ρρᵀ)/φ`, `φ = √(‖r‖² + ε)`), then `z = (U*_qq)⁻¹ (−U*_{qX'} δX')`.
+fn inner_direction(
+    terms: &mut [Term],
+    q: &Vector3<f64>,
+    eps: f64,
+    spin_free: bool,
+) -> Vector3<f64> {
     let mut hqq = Matrix3::zeros();
     let mut rq = Vector3::zeros();
-    for t in &mut terms {
+    for t in terms.iter_mut() {
         let r = t.v - Vector2::new(q.x, q.y) - t.g * q.z;
         let ph = (r.norm_squared() + eps).sqrt();
         t.rho = r / ph;
@@ -381,19 +415,34 @@ fn vjp_from(
         hqq += j.transpose() * t.big_phi * j * t.w;
         rq -= j.transpose() * (t.big_phi * t.bdx) * t.w;
     }
-    let z = inner_solve(&hqq, &rq, spin_free);
+    inner_solve(&hqq, &rq, spin_free)
+}
+
+/// Pass 2: per-vertex products into `out` (gradients, next and previous
+/// positions, `μ`); returns the products with the normal forces (`gf`, per
+/// hull and vertex) and with the plane normal (`gn`), which
+/// [`through_plane`] carries on.
+fn vertex_products(
+    terms: &[Term],
+    pair: &Pair<'_>,
+    params: &FrictionParams,
+    omega: f64,
+    z: &Vector3<f64>,
+    out: &mut FrictionVjp,
+) -> ([Vec<f64>; 2], Vector3<f64>) {
+    let dt = params.dt;
+    let bm = pair.lag.basis;
+    let nh = pair.lag.normal;
     let zu = Vector2::new(z.x, z.y);
     let zw = z.z;
-
-    // Pass 2: per-vertex products.
-    let mut gf = [vec![0.0; na], vec![0.0; nb]];
+    let mut gf = [vec![0.0; out.grad_a.len()], vec![0.0; out.grad_b.len()]];
     let mut gn = Vector3::zeros();
-    for t in &terms {
+    for t in terms {
         let a = t.bdx + zu + t.g * zw;
         let alpha = t.rho.dot(&a);
         let bb = bm * (t.big_phi * a) * t.w; // B β
         let bg = bm * t.rho * t.w; // B γ
-        let dxn = dirs[t.hull][t.index];
+        let dxn = pair.dirs[t.hull][t.index];
         // ∂U_f/∂X'_m = B γ/Δt; Φ = Σ its product with δX'.
         if t.hull == 0 {
             out.grad_a[t.index] = bg / dt;
@@ -418,9 +467,22 @@ fn vjp_from(
             + t.e.cross(&bg) * zw;
         out.mu += alpha * dt * t.af;
     }
+    (gf, gn)
+}
 
-    // Through the lagged plane p* and forces f(p*, X, s, κ).
-    let opt = PlaneOptimum::new(prev[0], prev[1], plane, s);
+/// Through the lagged plane `p*` and forces `f(p*, X, s, κ)`: the products
+/// `gf` (forces) and `gn` (normal) pulled back to the previous positions,
+/// `s` and `κ` (`f = −κ P'(y) ‖n‖`, `y = σ (n·x + o)`).
+fn through_plane(
+    pair: &Pair<'_>,
+    prev: [&[Vector3<f64>]; 2],
+    gf: &[Vec<f64>; 2],
+    gn: Vector3<f64>,
+    out: &mut FrictionVjp,
+) {
+    let (s, kappa) = (pair.s, pair.kappa);
+    let nh = pair.lag.normal;
+    let opt = PlaneOptimum::new(prev[0], prev[1], pair.plane, s);
     let n = opt.normal();
     let nn = n.norm();
     let gt = (gn - nh * nh.dot(&gn)) / nn; // δn̂ = (I − n̂n̂ᵀ) δn*/‖n*‖
@@ -432,7 +494,6 @@ fn vjp_from(
         if g == 0.0 {
             return;
         }
-        // f = −κ P'(y) ‖n‖,  y = σ (n·x + o).
         let dfdy = -kappa * v.d2 * nn;
         let dn = -(n / nn) * (kappa * v.d1) + v.x * (dfdy * v.sigma);
         gp.x += g * dn.x;
@@ -452,7 +513,6 @@ fn vjp_from(
     ds += opt.pull_back(&zeta, prev_a, prev_b);
     out.s = ds;
     out.kappa = dk;
-    out
 }
 
 #[cfg(test)]

@@ -122,63 +122,7 @@ impl CcdOptions {
     }
 }
 
-/// CCD statistics, summed over Newton iterations (per step in
-/// [`crate::sim::StepDiagnostics`], per run in the summary).
-#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
-pub struct CcdStats {
-    /// Accepted Newton segments checked.
-    pub segments: usize,
-    /// Hull pairs whose swept boxes overlapped and whose gap was measured.
-    pub pairs_tested: usize,
-    /// Of those, pairs not cleared by the cheap test (bound on relative
-    /// motion below the gap) that needed conservative advancement.
-    pub pairs_advanced: usize,
-    /// Advancement rounds (each one kinematics evaluation and one GJK query
-    /// per pair in doubt).
-    pub rounds: usize,
-    /// Accepted line-search steps that were cut short (the search then
-    /// continued from the cut).
-    pub alpha_caps: usize,
-    /// Smallest step fraction `α` of a Newton direction after a cut (1 when
-    /// none).
-    pub min_alpha: f64,
-    /// Pairs GJK could not certify as separated at a segment's start (left
-    /// to the barrier; see the module docs).
-    pub uncertified: usize,
-    /// Steps whose straight path `θ^t → θ^{t+1}` could not be certified
-    /// and that were solved again with certified line-search segments
-    /// (see [`crate::sim::Simulator::step`]).
-    pub fallbacks: usize,
-}
-
-impl Default for CcdStats {
-    fn default() -> Self {
-        CcdStats {
-            segments: 0,
-            pairs_tested: 0,
-            pairs_advanced: 0,
-            rounds: 0,
-            alpha_caps: 0,
-            min_alpha: 1.0,
-            uncertified: 0,
-            fallbacks: 0,
-        }
-    }
-}
-
-impl CcdStats {
-    /// Adds `o` into `self`.
-    pub fn merge(&mut self, o: &CcdStats) {
-        self.segments += o.segments;
-        self.pairs_tested += o.pairs_tested;
-        self.pairs_advanced += o.pairs_advanced;
-        self.rounds += o.rounds;
-        self.alpha_caps += o.alpha_caps;
-        self.min_alpha = self.min_alpha.min(o.min_alpha);
-        self.uncertified += o.uncertified;
-        self.fallbacks += o.fallbacks;
-    }
-}
+pub use crate::counters::CcdStats;
 
 /// A pair in doubt during advancement.
 #[derive(Clone, Copy, Debug)]
@@ -456,6 +400,16 @@ impl Ccd {
             excluded,
             &mut self.candidates,
         );
+        self.collect_doubts(model);
+        self.advance_rounds(model, q, charts)
+    }
+
+    /// The candidate pairs whose relative motion may close their gap to
+    /// below `η g₀` (`η`: `keep_fraction`): pairs skipped cheaply (no
+    /// relative motion, or less than a lower bound of the distance from the
+    /// boxes or the bounding spheres) or cleared at once are dropped; the
+    /// rest become [`Doubt`]s with their first certified horizon.
+    fn collect_doubts(&mut self, model: &Model) {
         let eta = self.options.keep_fraction;
         self.doubt.clear();
         for k in 0..self.candidates.len() {
@@ -500,10 +454,14 @@ impl Ccd {
             self.stats.pairs_advanced += 1;
             self.doubt.push(d);
         }
-        // Rounds: every pair in doubt is certified up to its horizon; the
-        // segment up to the smallest horizon is certified. Pairs whose
-        // horizon is near it are measured again there (kinematics at the
-        // new α, GJK); the others keep their horizon.
+    }
+
+    /// Rounds: every pair in doubt is certified up to its horizon; the
+    /// segment up to the smallest horizon is certified. Pairs whose
+    /// horizon is near it are measured again there (kinematics at the
+    /// new α, GJK); the others keep their horizon. Returns the certified
+    /// fraction of the segment.
+    fn advance_rounds(&mut self, model: &Model, q: &DVector<f64>, charts: &[Matrix3<f64>]) -> f64 {
         let mut alpha = 0.0;
         let mut rounds = 0;
         loop {
@@ -519,52 +477,65 @@ impl Ccd {
             self.trial.clone_from(q);
             self.trial.axpy(next, &self.seg, 1.0);
             let soon = (2.0 * next - alpha).min(1.0);
-            // Kinematics and world vertices at the new α, of the pairs to be
-            // measured again only (their links and those links' ancestors).
-            self.needed_link.clear();
-            self.needed_link.resize(model.links.len(), false);
-            self.needed_hull.clear();
-            for d in self.doubt.iter().filter(|d| d.horizon < soon) {
-                for h in [d.a, d.b] {
-                    self.needed_hull.push(h);
-                    let mut link = Some(self.hulls.ids[h].link);
-                    while let Some(l) = link.filter(|&l| !self.needed_link[l]) {
-                        self.needed_link[l] = true;
-                        link = model.links[l].parent;
-                    }
-                }
-            }
-            self.kin
-                .update_poses_where(model, &self.trial, charts, &self.needed_link);
-            for &h in &self.needed_hull {
-                self.hulls.update_hull(model, &self.kin.pose, h);
-            }
-            let mut doubt = std::mem::take(&mut self.doubt);
-            let mut lost = false;
-            doubt.retain_mut(|d| {
-                if d.horizon >= soon {
-                    return true;
-                }
-                match self.gap(d.a, d.b, Some(d.dir)) {
-                    Some((gap, dir)) => {
-                        d.gap = gap;
-                        d.dir = dir;
-                        d.advance(self.rate(d), next)
-                    }
-                    None => {
-                        lost = true;
-                        true
-                    }
-                }
-            });
-            self.doubt = doubt;
-            if lost {
+            if !self.measure_again(model, charts, next, soon) {
                 // Cannot happen while the bound holds (the gap is at least
                 // η g₀ there); stay on the part certified before this round.
                 return alpha;
             }
             alpha = next;
         }
+    }
+
+    /// Measures again, at `α = next` (the trial point already in
+    /// `self.trial`), every pair in doubt whose horizon is below `soon`, and
+    /// advances its horizon. Kinematics and world vertices are updated only
+    /// for those pairs' links and their ancestors. `false` when a pair's gap
+    /// could not be measured (it stays in doubt).
+    fn measure_again(
+        &mut self,
+        model: &Model,
+        charts: &[Matrix3<f64>],
+        next: f64,
+        soon: f64,
+    ) -> bool {
+        self.needed_link.clear();
+        self.needed_link.resize(model.links.len(), false);
+        self.needed_hull.clear();
+        for d in self.doubt.iter().filter(|d| d.horizon < soon) {
+            for h in [d.a, d.b] {
+                self.needed_hull.push(h);
+                let mut link = Some(self.hulls.ids[h].link);
+                while let Some(l) = link.filter(|&l| !self.needed_link[l]) {
+                    self.needed_link[l] = true;
+                    link = model.links[l].parent;
+                }
+            }
+        }
+        self.kin
+            .update_poses_where(model, &self.trial, charts, &self.needed_link);
+        for &h in &self.needed_hull {
+            self.hulls.update_hull(model, &self.kin.pose, h);
+        }
+        let mut doubt = std::mem::take(&mut self.doubt);
+        let mut lost = false;
+        doubt.retain_mut(|d| {
+            if d.horizon >= soon {
+                return true;
+            }
+            match self.gap(d.a, d.b, Some(d.dir)) {
+                Some((gap, dir)) => {
+                    d.gap = gap;
+                    d.dir = dir;
+                    d.advance(self.rate(d), next)
+                }
+                None => {
+                    lost = true;
+                    true
+                }
+            }
+        });
+        self.doubt = doubt;
+        !lost
     }
 }
 

@@ -62,6 +62,7 @@ mod potential_tests;
 #[cfg(test)]
 mod regression_tests;
 pub mod separation;
+pub mod settings;
 #[cfg(test)]
 mod test_util;
 
@@ -77,3 +78,4 @@ pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
     VertexOutcome, contact_pair, contact_vertices,
 };
+pub use settings::{ContactModelKind, ContactSettings, SurfaceKind};

@@ -136,14 +136,7 @@ impl ContactParams {
     }
 }
 
-/// A hull placed in the world: `X = pose · [x_local; 1]`.
-#[derive(Clone, Copy, Debug)]
-pub struct HullPose<'a> {
-    /// Link pose `A = [R | t]` (3×4); any affine map is accepted.
-    pub pose: &'a Matrix3x4<f64>,
-    /// Link-local vertices (V-representation: the body is their convex hull).
-    pub x_local: &'a [Vector3<f64>],
-}
+pub use crate::geometry::HullPose;
 
 /// Which derivatives to compute.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]

@@ -49,7 +49,7 @@ pub struct StepDiagnostics {
     pub min_distance: f64,
     /// Continuous collision detection of the step's Newton iterations
     /// (zero when off or without contact).
-    pub ccd: crate::contact::ccd::CcdStats,
+    pub ccd: super::CcdStats,
     /// Work of each non-conservative or contact term over the step, when
     /// [`crate::sim::Simulator::energy_balance`] is on (see [`StepWork`]).
     pub work: Option<StepWork>,

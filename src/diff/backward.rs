@@ -9,7 +9,7 @@ use crate::math::{Pose, rot, twist_apply};
 use crate::model::Model;
 use crate::sim::Simulator;
 use crate::sim::assemble::contract_gradient;
-use nalgebra::{DVector, Matrix3, Matrix3x4, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, Vector3};
 use std::time::Instant;
 
 /// Gradient of one controller channel.
@@ -93,6 +93,13 @@ fn add_attachment(
 
 /// Runs the adjoint pass for `loss` over `tape`, using `sim`'s model,
 /// controller and energy terms (the simulator's state is overwritten).
+///
+/// Stages: the loss at every level 0 … H; then for t = H … 1 the adjoint
+/// solve `λ_t = H_t⁻¹ ā_t` ([`solve_adjoint`]), its pose-space direction
+/// ([`pose_direction`]), the terms' vector–Jacobian products and their
+/// subtraction from the design and parameter gradients ([`subtract_step`]),
+/// and the pending gradients of the two earlier levels; finally levels 0 and
+/// −1 onto the initial state ([`initial_state`]).
 pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradients, BackwardError> {
     let t0 = Instant::now();
     let model = sim.model.clone();
@@ -100,44 +107,10 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
     let nl = model.links.len();
     let h = tape.len();
     let nch = sim.controller.channels.len();
-    let zero_pose = || vec![Matrix3x4::<f64>::zeros(); nl];
-    let zero_vertex = || -> Vec<Vec<Vec<Vector3<f64>>>> {
-        model
-            .links
-            .iter()
-            .map(|l| {
-                l.hulls
-                    .iter()
-                    .map(|hh| vec![Vector3::zeros(); hh.x_local.len()])
-                    .collect()
-            })
-            .collect()
-    };
-    let mut g = Gradients {
-        q0: DVector::zeros(n),
-        qdot0: DVector::zeros(n),
-        attachments: vec![Vector3::zeros(); nl],
-        vertices: zero_vertex(),
-        surface: model
-            .links
-            .iter()
-            .map(|l| vec![Vector3::zeros(); l.surface.len()])
-            .collect(),
-        channels: sim
-            .controller
-            .channels
-            .iter()
-            .map(|c| ChannelGrad {
-                kp: 0.0,
-                kd: 0.0,
-                signal: vec![0.0; c.signal.nparams()],
-            })
-            .collect(),
-        ..Default::default()
-    };
+    let mut g = zero_gradients(&model, sim);
     // Pending pose-space and coordinate gradients per time level −1 … H
     // (index k + 1).
-    let mut pose_lvl: Vec<Vec<Pose>> = (0..h + 2).map(|_| zero_pose()).collect();
+    let mut pose_lvl: Vec<Vec<Pose>> = (0..h + 2).map(|_| vec![Matrix3x4::zeros(); nl]).collect();
     let mut q_lvl: Vec<DVector<f64>> = (0..h + 2).map(|_| DVector::zeros(n)).collect();
     let mut kin_k = Kinematics::new(&model);
 
@@ -154,7 +127,7 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
     }
 
     let mut acc = VjpAccumulator::new(&model, nch);
-    let mut dpose = zero_pose();
+    let mut dpose = vec![Matrix3x4::<f64>::zeros(); nl];
     let mut linear = crate::sim::linear_solve::BlockSolver::default();
     for t in (1..=h).rev() {
         let rec = &tape.steps[t - 1];
@@ -164,96 +137,22 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
         let kin = sim.kinematics().clone();
         let abar = contract_gradient(&model, &kin, &pose_lvl[t + 1]) + &q_lvl[t + 1];
         add_attachment(&model, &kin, &pose_lvl[t + 1], 1.0, &mut g.attachments);
-        // The forward pass never factors this matrix (Newton stops at the
-        // first iterate whose gradient is below tolerance, before
-        // factoring its Hessian), so there is no factorization to reuse:
-        // block-wise Cholesky (faer), pivoted LU when a block is not
-        // positive definite.
-        let mut lambda = DVector::zeros(n);
-        if !linear.spd_solve(&hess, &abar, &mut lambda) {
-            lambda = hess
-                .lu()
-                .solve(&abar)
-                .ok_or(BackwardError::Singular { step: t })?;
-        }
-        // δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i, accumulated down the tree.
-        let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); nl];
-        for (i, link) in model.links.iter().enumerate() {
-            let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| s_acc[p]);
-            for k in link.dof_offset..link.dof_offset + link.ndof() {
-                s += kin.twist[k] * lambda[k];
-            }
-            s_acc[i] = s;
-            dpose[i] = twist_apply(&s, &kin.pose[i]);
-        }
-        // Second-order kinematic part of the attachment gradient:
-        // −Σ_{k ∈ anc(parent(c))} λ_k R_pᵀ S_k[:, :3]ᵀ Σ_{i∈subtree(c)} G_i[:, 3].
-        {
-            let pose_grad = sim.pose_gradients();
-            let mut force: Vec<Vector3<f64>> = pose_grad
-                .iter()
-                .map(|gg| gg.column(3).into_owned())
-                .collect();
-            for i in (0..nl).rev() {
-                if let Some(par) = model.links[i].parent {
-                    let f = force[i];
-                    force[par] += f;
-                }
-            }
-            for (c, (link, f)) in model.links.iter().zip(&force).enumerate() {
-                if let Some(par) = link.parent {
-                    let r = rot(&kin.pose[par]);
-                    let sl = s_acc[par].fixed_view::<3, 3>(0, 0).into_owned();
-                    g.attachments[c] -= r.transpose() * sl.transpose() * f;
-                }
-            }
-        }
+        let lambda = solve_adjoint(&mut linear, &hess, &abar, t)?;
+        let s_acc = pose_direction(&model, &kin, &lambda, &mut dpose);
+        second_order_attachment(
+            &model,
+            &kin,
+            &s_acc,
+            sim.pose_gradients(),
+            &mut g.attachments,
+        );
         acc.reset();
         let dir = AdjointDirection {
             lambda: &lambda,
             dpose: &dpose,
         };
         sim.vjp(&rec.q_new, &dir, &mut acc).map_err(err)?;
-        for u in acc.unavailable.drain(..) {
-            if !g.unavailable.contains(&u) {
-                g.unavailable.push(u);
-            }
-        }
-        // Design and parameters: dL/dp −= ∂Φ/∂p.
-        add_attachment(&model, &kin, &acc.pose, -1.0, &mut g.attachments);
-        for (gl, al) in g
-            .vertices
-            .iter_mut()
-            .flatten()
-            .flatten()
-            .zip(acc.vertex.iter().flatten().flatten())
-        {
-            *gl -= al;
-        }
-        for (gl, al) in g
-            .surface
-            .iter_mut()
-            .flatten()
-            .zip(acc.surface.iter().flatten())
-        {
-            *gl -= al;
-        }
-        let time = t as f64 * tape.dt;
-        for (ch, (cg, a)) in g.channels.iter_mut().zip(&acc.channels).enumerate() {
-            cg.kp -= a[2];
-            cg.kd -= a[3];
-            let (dv, dd) = sim.controller.channels[ch].signal.param_grad(time);
-            for (k, sg) in cg.signal.iter_mut().enumerate() {
-                *sg -= a[0] * dv[k] + a[1] * dd[k];
-            }
-        }
-        g.physical.axpy(-1.0, &acc.physical);
-        if g.effects.len() < acc.effects.len() {
-            g.effects.resize(acc.effects.len(), 0.0);
-        }
-        for (gl, al) in g.effects.iter_mut().zip(&acc.effects) {
-            *gl -= al;
-        }
+        subtract_step(&mut g, &mut acc, &model, &kin, sim, t as f64 * tape.dt);
         // Earlier levels: ā_{t−1}, ā_{t−2} −= (∂g_t/∂θ^{t−1,t−2})ᵀ λ_t.
         for (gl, al) in pose_lvl[t].iter_mut().zip(&acc.pose_prev) {
             *gl -= al;
@@ -264,20 +163,187 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
         q_lvl[t] -= &acc.q_prev;
         q_lvl[t - 1] -= &acc.q_prev2;
     }
-    // Levels 0 and −1 map onto the initial state: θ^{−1} = θ^0 − Δt θ̇^0.
+    initial_state(&model, tape, &mut kin_k, &pose_lvl, &q_lvl, &mut g);
+    g.seconds = t0.elapsed().as_secs_f64();
+    Ok(g)
+}
+
+/// Zero gradients shaped like `model`'s design and `sim`'s controller.
+fn zero_gradients(model: &Model, sim: &Simulator) -> Gradients {
+    let n = model.ndof();
+    let nl = model.links.len();
+    Gradients {
+        q0: DVector::zeros(n),
+        qdot0: DVector::zeros(n),
+        attachments: vec![Vector3::zeros(); nl],
+        vertices: model
+            .links
+            .iter()
+            .map(|l| {
+                l.hulls
+                    .iter()
+                    .map(|hh| vec![Vector3::zeros(); hh.x_local.len()])
+                    .collect()
+            })
+            .collect(),
+        surface: model
+            .links
+            .iter()
+            .map(|l| vec![Vector3::zeros(); l.surface.len()])
+            .collect(),
+        channels: sim
+            .controller
+            .channels
+            .iter()
+            .map(|c| ChannelGrad {
+                kp: 0.0,
+                kd: 0.0,
+                signal: vec![0.0; c.signal.nparams()],
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+/// `λ_t = H_t⁻¹ ā_t`. The forward pass never factors this matrix (Newton
+/// stops at the first iterate whose gradient is below tolerance, before
+/// factoring its Hessian), so there is no factorization to reuse:
+/// block-wise Cholesky (faer), pivoted LU when a block is not positive
+/// definite.
+fn solve_adjoint(
+    linear: &mut crate::sim::linear_solve::BlockSolver,
+    hess: &DMatrix<f64>,
+    abar: &DVector<f64>,
+    t: usize,
+) -> Result<DVector<f64>, BackwardError> {
+    let mut lambda = DVector::zeros(abar.len());
+    if !linear.spd_solve(hess, abar, &mut lambda) {
+        lambda = hess
+            .clone()
+            .lu()
+            .solve(abar)
+            .ok_or(BackwardError::Singular { step: t })?;
+    }
+    Ok(lambda)
+}
+
+/// The pose-space direction of `λ`: `δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i`,
+/// accumulated down the tree into `dpose`. Returns the accumulated twists
+/// `Σ_{k ∈ anc(i)} λ_k S_k` per link.
+fn pose_direction(
+    model: &Model,
+    kin: &Kinematics,
+    lambda: &DVector<f64>,
+    dpose: &mut [Pose],
+) -> Vec<Matrix3x4<f64>> {
+    let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); model.links.len()];
+    for (i, link) in model.links.iter().enumerate() {
+        let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| s_acc[p]);
+        for k in link.dof_offset..link.dof_offset + link.ndof() {
+            s += kin.twist[k] * lambda[k];
+        }
+        s_acc[i] = s;
+        dpose[i] = twist_apply(&s, &kin.pose[i]);
+    }
+    s_acc
+}
+
+/// Second-order kinematic part of the attachment gradient:
+/// `−Σ_{k ∈ anc(parent(c))} λ_k R_pᵀ S_k[:, :3]ᵀ Σ_{i∈subtree(c)} G_i[:, 3]`
+/// (`G`: the step's pose gradients).
+fn second_order_attachment(
+    model: &Model,
+    kin: &Kinematics,
+    s_acc: &[Matrix3x4<f64>],
+    pose_grad: &[Matrix3x4<f64>],
+    attachments: &mut [Vector3<f64>],
+) {
+    let nl = model.links.len();
+    let mut force: Vec<Vector3<f64>> = pose_grad
+        .iter()
+        .map(|gg| gg.column(3).into_owned())
+        .collect();
+    for i in (0..nl).rev() {
+        if let Some(par) = model.links[i].parent {
+            let f = force[i];
+            force[par] += f;
+        }
+    }
+    for (c, (link, f)) in model.links.iter().zip(&force).enumerate() {
+        if let Some(par) = link.parent {
+            let r = rot(&kin.pose[par]);
+            let sl = s_acc[par].fixed_view::<3, 3>(0, 0).into_owned();
+            attachments[c] -= r.transpose() * sl.transpose() * f;
+        }
+    }
+}
+
+/// Design and parameters of one step: `dL/dp −= (∂Φ/∂p)ᵀ λ_t` from the
+/// terms' products in `acc` (attachments, vertices, surfaces, controller
+/// channels at time `time`, physical parameters, effects).
+fn subtract_step(
+    g: &mut Gradients,
+    acc: &mut VjpAccumulator,
+    model: &Model,
+    kin: &Kinematics,
+    sim: &Simulator,
+    time: f64,
+) {
+    for u in acc.unavailable.drain(..) {
+        if !g.unavailable.contains(&u) {
+            g.unavailable.push(u);
+        }
+    }
+    add_attachment(model, kin, &acc.pose, -1.0, &mut g.attachments);
+    let vertices = g.vertices.iter_mut().flatten().flatten();
+    for (gl, al) in vertices.zip(acc.vertex.iter().flatten().flatten()) {
+        *gl -= al;
+    }
+    for (gl, al) in g
+        .surface
+        .iter_mut()
+        .flatten()
+        .zip(acc.surface.iter().flatten())
+    {
+        *gl -= al;
+    }
+    for (ch, (cg, a)) in g.channels.iter_mut().zip(&acc.channels).enumerate() {
+        cg.kp -= a[2];
+        cg.kd -= a[3];
+        let (dv, dd) = sim.controller.channels[ch].signal.param_grad(time);
+        for (k, sg) in cg.signal.iter_mut().enumerate() {
+            *sg -= a[0] * dv[k] + a[1] * dd[k];
+        }
+    }
+    g.physical.axpy(-1.0, &acc.physical);
+    if g.effects.len() < acc.effects.len() {
+        g.effects.resize(acc.effects.len(), 0.0);
+    }
+    for (gl, al) in g.effects.iter_mut().zip(&acc.effects) {
+        *gl -= al;
+    }
+}
+
+/// Levels 0 and −1 map onto the initial state: `θ^{−1} = θ^0 − Δt θ̇^0`.
+fn initial_state(
+    model: &Model,
+    tape: &Tape,
+    kin_k: &mut Kinematics,
+    pose_lvl: &[Vec<Pose>],
+    q_lvl: &[DVector<f64>],
+    g: &mut Gradients,
+) {
     for k in [0isize, -1] {
         let (q, charts) = tape.coords(k);
-        kin_k.update(&model, q, charts, KinOrder::First);
+        kin_k.update(model, q, charts, KinOrder::First);
         let lvl = (k + 1) as usize;
-        let abar = contract_gradient(&model, &kin_k, &pose_lvl[lvl]) + &q_lvl[lvl];
-        add_attachment(&model, &kin_k, &pose_lvl[lvl], 1.0, &mut g.attachments);
+        let abar = contract_gradient(model, kin_k, &pose_lvl[lvl]) + &q_lvl[lvl];
+        add_attachment(model, kin_k, &pose_lvl[lvl], 1.0, &mut g.attachments);
         g.q0 += &abar;
         if k == -1 {
             g.qdot0 = -tape.dt * abar;
         }
     }
-    g.seconds = t0.elapsed().as_secs_f64();
-    Ok(g)
 }
 
 /// The loss of a recorded trajectory (forward only).

@@ -22,7 +22,7 @@ pub mod backward;
 pub mod central;
 pub mod loss;
 pub mod tape;
-pub mod vjp;
+pub use crate::energy::vjp;
 
 pub use backward::{BackwardError, ChannelGrad, Gradients, backward, loss_of};
 pub use loss::{Loss, LossTerm, When};

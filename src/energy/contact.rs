@@ -17,13 +17,13 @@
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::contact::ContactSettings;
 use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::counters::{StageTimers, StepDiagnostics};
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
-use crate::scene::ContactSettings;
 use nalgebra::{DVector, Vector4};
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -213,8 +213,8 @@ impl Energy for ContactEnergy {
         ctx: &StepContext,
         q: &DVector<f64>,
         kin: &Kinematics,
-        dir: &crate::diff::AdjointDirection,
-        out: &mut crate::diff::VjpAccumulator,
+        dir: &crate::energy::vjp::AdjointDirection,
+        out: &mut crate::energy::vjp::VjpAccumulator,
     ) -> Result<(), EnergyError> {
         let model = ctx.model;
         let mut tmp = EnergyAccumulator::new(model);

@@ -20,6 +20,7 @@
 
 use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_directions};
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::contact::ContactSettings;
 use crate::contact::{
     self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch,
     LaggedContact, PairOutcome,
@@ -27,7 +28,6 @@ use crate::contact::{
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
-use crate::scene::ContactSettings;
 use nalgebra::{DVector, Vector4};
 use std::collections::{BTreeMap, HashMap};
 
@@ -231,8 +231,8 @@ impl Energy for FrictionEnergy {
         ctx: &StepContext,
         _q: &DVector<f64>,
         kin: &Kinematics,
-        dir: &crate::diff::AdjointDirection,
-        out: &mut crate::diff::VjpAccumulator,
+        dir: &crate::energy::vjp::AdjointDirection,
+        out: &mut crate::energy::vjp::VjpAccumulator,
     ) -> Result<(), EnergyError> {
         let model = ctx.model;
         let s = self.contact.s;

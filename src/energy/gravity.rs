@@ -6,7 +6,7 @@
 //! `G = −Σ_i gᵀ(A_i − A_i^t)c_i`, `∂G/∂A_i = −g c_iᵀ`, no pose Hessian.
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::{DVector, Matrix4};
 

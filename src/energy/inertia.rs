@@ -9,7 +9,7 @@
 //! Hessian is the mass matrix over Δt², which keeps Newton convex for small Δt.
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::{DVector, Vector4};
 

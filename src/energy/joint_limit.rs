@@ -19,7 +19,7 @@
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::barrier::barrier_d2;
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use nalgebra::{DVector, Matrix3};

@@ -13,7 +13,7 @@
 //! in the step's linear system, and its VJP adds nothing.
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use crate::model::{MimicTie, Model};
 use nalgebra::DVector;

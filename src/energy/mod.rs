@@ -19,6 +19,7 @@ pub mod mimic;
 pub mod pairs;
 pub mod pd;
 pub mod pd_pose;
+pub mod vjp;
 
 pub use crate::control::PdTarget;
 pub use contact::ContactEnergy;
@@ -180,7 +181,7 @@ pub trait Energy: Send + Sync {
     }
 
     /// Adjoint product: adds `∂Φ/∂x` for `Φ = Σ_i ⟨δA_i, ∂E/∂A_i⟩ + λᵀ∂E/∂θ`
-    /// (see [`crate::diff::vjp`]) at `θ^t = q`, with `begin_step` already run
+    /// (see [`vjp`]) at `θ^t = q`, with `begin_step` already run
     /// for this step. Terms that cannot differentiate a quantity name it in
     /// `out.unavailable`; the default supports nothing.
     fn vjp(
@@ -188,8 +189,8 @@ pub trait Energy: Send + Sync {
         _ctx: &StepContext,
         _q: &DVector<f64>,
         _kin: &Kinematics,
-        _dir: &crate::diff::AdjointDirection,
-        out: &mut crate::diff::VjpAccumulator,
+        _dir: &crate::energy::vjp::AdjointDirection,
+        out: &mut crate::energy::vjp::VjpAccumulator,
     ) -> Result<(), EnergyError> {
         out.unavailable.push(self.name());
         Ok(())

@@ -10,7 +10,7 @@
 //! that the controller's work stays one term (`pd`).
 
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use nalgebra::DVector;
 

@@ -28,7 +28,7 @@
 use super::{EnergyAccumulator, Need, PdTarget, PoseHessian, StepContext};
 use crate::control::PoseTarget;
 use crate::control::pose_target::{rotation_and_rate, rotation_partials};
-use crate::diff::{AdjointDirection, VjpAccumulator};
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
 use crate::kinematics::Kinematics;
 use crate::math::{Pose, rot};
 use nalgebra::{Matrix3, Vector3};

@@ -2,7 +2,16 @@
 
 use crate::math::{Pose, transform_point};
 use crate::model::Model;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3x4, Vector3};
+
+/// A hull placed in the world: `X = pose · [x_local; 1]`.
+#[derive(Clone, Copy, Debug)]
+pub struct HullPose<'a> {
+    /// Link pose `A = [R | t]` (3×4); any affine map is accepted.
+    pub pose: &'a Matrix3x4<f64>,
+    /// Link-local vertices (V-representation: the body is their convex hull).
+    pub x_local: &'a [Vector3<f64>],
+}
 
 /// A hull of the model: `(link, hull index within the link)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -60,14 +69,9 @@ impl WorldHulls {
 
     /// Hull `h` as the contact functions take it: its link's pose in
     /// `poses` and its link-frame vertices.
-    pub fn hull_pose<'a>(
-        &self,
-        model: &'a Model,
-        poses: &'a [Pose],
-        h: usize,
-    ) -> crate::contact::HullPose<'a> {
+    pub fn hull_pose<'a>(&self, model: &'a Model, poses: &'a [Pose], h: usize) -> HullPose<'a> {
         let id = self.ids[h];
-        crate::contact::HullPose {
+        HullPose {
             pose: &poses[id.link],
             x_local: &model.links[id.link].hulls[id.hull].x_local,
         }

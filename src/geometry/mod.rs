@@ -8,5 +8,5 @@ pub mod sampling;
 pub mod topology;
 
 pub use broad_phase::{BroadPhase, hull_boxes};
-pub use hulls::{HullId, WorldHulls};
+pub use hulls::{HullId, HullPose, WorldHulls};
 pub use parallel::PairWork;

@@ -16,7 +16,7 @@
 //! Features thinner than a voxel may be missed; holes narrower than a voxel
 //! may close. A topology change is a change of `(b₀, b₁, b₂)`.
 
-use crate::import::polytope::convex_hull;
+use crate::math::polytope::convex_hull;
 use nalgebra::Vector3;
 use serde::Serialize;
 

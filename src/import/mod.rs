@@ -29,7 +29,7 @@ pub mod limits;
 pub mod mass;
 pub mod mesh;
 pub mod mjcf;
-pub mod polytope;
+pub use crate::math::polytope;
 pub mod primitives;
 pub mod pybullet_shapes;
 pub mod python;

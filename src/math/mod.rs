@@ -13,6 +13,7 @@
 //!   bottom row is zero): a derivative of a pose is `∂A/∂θ_k = S_k Ã`, with
 //!   `Ã` the 4×4 homogeneous form of `A`.
 
+pub mod polytope;
 pub mod so3;
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector3};

@@ -138,7 +138,7 @@ impl Inertial {
 /// Boundary triangles of a hull as indices into its vertex list
 /// (counter-clockwise seen from outside); see [`MassModel::Solid`].
 pub fn solid_triangles(x: &[Vector3<f64>]) -> Result<Vec<[usize; 3]>, String> {
-    crate::import::polytope::hull_triangles(x)
+    crate::math::polytope::hull_triangles(x)
 }
 
 /// Reference point `o` (vertex mean) of the polyhedral integrals.

@@ -81,35 +81,7 @@ pub struct Scene {
     pub spec: SceneSpec,
 }
 
-/// Validated contact parameters (see [`schema::ContactSpec`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ContactSettings {
-    /// The contact model (`contact.model`; default SDRS).
-    pub model: schema::ContactModelKind,
-    /// The IPC baseline's contact surface (`contact.surface`; default hulls).
-    pub surface: schema::SurfaceKind,
-    /// IPC activation distance `d̂` (m; unused by the SDRS model).
-    pub dhat: f64,
-    /// IPC friction smoothing speed `ε_v` (m/s; unused by the SDRS model).
-    pub eps_v: f64,
-    /// Barrier support `s`.
-    pub s: f64,
-    /// Barrier stiffness `κ`.
-    pub kappa: f64,
-    /// Whether the scene gave `κ` (otherwise the default; the IPC baseline
-    /// then chooses it adaptively).
-    pub kappa_given: bool,
-    /// Friction coefficient `μ`.
-    pub mu: f64,
-    /// Friction velocity smoothing `ε` ((m/s)²).
-    pub eps: f64,
-    /// Normal-force smoothing `ε_f` (N²).
-    pub eps_force: f64,
-    /// Link pairs `(i, j)`, `i < j`, that never interact.
-    pub excluded: std::collections::BTreeSet<(usize, usize)>,
-    /// Continuous collision detection in the line search (SDRS model).
-    pub ccd: crate::contact::ccd::CcdOptions,
-}
+pub use crate::contact::settings::ContactSettings;
 
 impl Scene {
     /// Reads and validates a scene file.
@@ -208,10 +180,10 @@ impl Scene {
                 // Newton starts from the scene's predictor, as under SDRS, so
                 // contact-free scenes give the same bytes under both models.
                 // (It was pinned to θ^t after the four chains stopped
-                // converging at step 1596 with the predictor, notes/perf.md;
+                // converging at step 1596 with the predictor, notes/performance.md;
                 // on the current code they run 2000 steps with it, python-fcl
                 // clean, in 3.4 instead of 5.0 Newton iterations per step,
-                // and 32 links per chain 600 steps: notes/ipc4.md.)
+                // and 32 links per chain 600 steps: notes/ipc-baseline-source-meshes.md.)
             }
         }
         crate::calibrate::effects::install(&self.effects, &mut sim);

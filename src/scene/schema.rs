@@ -277,58 +277,7 @@ pub struct ContactSpec {
     pub ccd: crate::contact::ccd::CcdOptions,
 }
 
-/// The contact model of a scene (`contact.model`).
-#[derive(
-    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum ContactModelKind {
-    /// The core's separating-plane potential (paper, `contact.tex`).
-    #[default]
-    Sdrs,
-    /// Mesh-based Incremental Potential Contact (Li et al. 2020), the
-    /// baseline in `baselines/ipc`.
-    Ipc,
-}
-
-/// The IPC baseline's contact surface of each link (`contact.surface`).
-#[derive(
-    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum SurfaceKind {
-    /// The triangulated boundaries of the link's convex hulls.
-    #[default]
-    Hulls,
-    /// The link's `surface_mesh` (its hulls where it has none).
-    Source,
-}
-
-impl SurfaceKind {
-    pub fn is_hulls(&self) -> bool {
-        *self == SurfaceKind::Hulls
-    }
-    /// Name as written in scene files.
-    pub fn name(&self) -> &'static str {
-        match self {
-            SurfaceKind::Hulls => "hulls",
-            SurfaceKind::Source => "source",
-        }
-    }
-}
-
-impl ContactModelKind {
-    pub fn is_sdrs(&self) -> bool {
-        *self == ContactModelKind::Sdrs
-    }
-    /// Name as written in scene files.
-    pub fn name(&self) -> &'static str {
-        match self {
-            ContactModelKind::Sdrs => "sdrs",
-            ContactModelKind::Ipc => "ipc",
-        }
-    }
-}
+pub use crate::contact::settings::{ContactModelKind, SurfaceKind};
 
 impl ContactSpec {
     fn default_s() -> f64 {

@@ -409,8 +409,8 @@ impl Simulator {
     pub fn vjp(
         &mut self,
         q: &DVector<f64>,
-        dir: &crate::diff::AdjointDirection,
-        out: &mut crate::diff::VjpAccumulator,
+        dir: &crate::energy::vjp::AdjointDirection,
+        out: &mut crate::energy::vjp::VjpAccumulator,
     ) -> Result<(), EnergyError> {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         let ctx = make_context(

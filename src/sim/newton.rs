@@ -78,7 +78,7 @@ pub struct NewtonOptions {
     /// (elsewhere the model is the Hessian itself). Default `shift`
     /// (Cholesky only; measured on the four chains: same step solutions to
     /// within the stopping test's bound, fewer iterations than `clamp`, see
-    /// `notes/perf.md`). Ignored when [`NewtonOptions::eig_abs`] is set.
+    /// `notes/performance.md`). Ignored when [`NewtonOptions::eig_abs`] is set.
     pub indefinite: Indefinite,
     /// Independent Hessian blocks (robots or chains not in contact) whose
     /// gradient already meets the stopping test (`‖g_B‖∞ < tol`) get a zero
@@ -270,6 +270,12 @@ pub fn minimize(
 /// [`minimize`], starting from `guess` when the objective is finite (and
 /// evaluates without error) there and not larger than at `q`, else from `q`
 /// (which must be feasible).
+///
+/// Each iteration reads top to bottom as its phases: convergence test
+/// ([`Solve::converged`]), direction and line search ([`Solve::search`]:
+/// linear solve, Armijo backtracking, gradient-merit fallback, CCD
+/// certification of the accepted segment), then the outcome ([`Solve::finish_failed`]
+/// when nothing was accepted) and the new point's derivatives.
 pub fn minimize_from(
     obj: &mut dyn Objective,
     q: &mut DVector<f64>,
@@ -278,229 +284,31 @@ pub fn minimize_from(
     scratch: &mut NewtonScratch,
     timers: &mut StageTimers,
 ) -> Result<NewtonReport, NewtonError> {
-    let n = q.len();
-    if scratch.grad.len() != n {
-        scratch.grad = DVector::zeros(n);
-        scratch.hess = DMatrix::zeros(n, n);
-        scratch.dir = DVector::zeros(n);
-        scratch.trial_grad = DVector::zeros(n);
-    }
-    let mut report = NewtonReport::default();
-    // The guess replaces `q` when its objective is finite and not larger
-    // than at `q` (one extra value evaluation; after an impact the extrapolated
-    // point lies deep in the barrier or past it and `q` is the better start).
-    // (The guess is evaluated with derivatives right away: it usually wins.)
-    let mut value = f64::NAN;
-    if let Some(g) = guess {
-        let at_q = obj.eval(q, Need::Value, &mut scratch.grad, &mut scratch.hess, timers)?;
-        // The jump q → guess must pass the terms' own line-search bounds
-        // (IPC's CCD filter, joint-limit approach, chart step): a guess on
-        // the far side of an obstacle has a finite objective too.
-        scratch.dir.copy_from(g);
-        scratch.dir.axpy(-1.0, q, 1.0);
-        let reachable = obj.max_step(q, &scratch.dir, timers)? >= 1.0;
-        let at_g = if reachable {
-            obj.eval(
-                g,
-                Need::Hessian,
-                &mut scratch.grad,
-                &mut scratch.hess,
-                timers,
-            )
-        } else {
-            Ok(f64::INFINITY)
-        };
-        if let Ok(v) = at_g
-            && v.is_finite()
-            && (v <= at_q || at_q.is_nan())
-        {
-            q.copy_from(g);
-            value = v;
-        }
-    }
-    if value.is_nan() {
-        value = obj.eval(
-            q,
-            Need::Hessian,
-            &mut scratch.grad,
-            &mut scratch.hess,
-            timers,
-        )?;
-    }
-    if !value.is_finite() {
-        return Err(NewtonError::InfeasibleStart {
-            value,
-            detail: "hulls intersect in the current state".into(),
-        });
-    }
+    scratch.resize(q.len());
+    let mut run = Solve {
+        obj,
+        opts,
+        scratch,
+        timers,
+        report: NewtonReport::default(),
+    };
+    let mut value = run.start(q, guess)?;
     for iter in 0..=opts.max_iters {
-        let grad_inf = scratch.grad.amax();
-        report.iters = iter;
-        report.grad_inf = grad_inf;
-        report.value = value;
-        if !grad_inf.is_finite() || scratch.hess.as_slice().iter().any(|v| !v.is_finite()) {
-            return Err(NewtonError::NonFinite { iter });
+        let grad_inf = run.scratch.grad.amax();
+        if let Some(done) = run.converged(q, iter, value, grad_inf)? {
+            return Ok(done);
         }
-        if grad_inf < opts.tol {
-            return Ok(report);
-        }
-        report.grad_floor = 64.0
-            * f64::EPSILON
-            * max_row_sum(&scratch.hess, &mut scratch.row_sums)
-            * (q.amax() + obj.length_scale());
         if iter == opts.max_iters {
             break;
         }
-        let mut mode = match (opts.eig_abs, opts.indefinite) {
-            (true, _) => Mode::Clamped { abs: true },
-            (false, Indefinite::Clamp) => Mode::Clamped { abs: false },
-            (false, Indefinite::Shift) => Mode::Shift,
-        };
-        // With `Indefinite::Shift`, an iteration whose line search fails is
-        // repeated once with the paper's clamped eigen step.
-        let (accepted, resolvable) = loop {
-            timers.time("linear_solve", || {
-                scratch.linear.direction(
-                    &scratch.hess,
-                    &scratch.grad,
-                    opts.eig_clamp,
-                    mode,
-                    if opts.settle_blocks { opts.tol } else { 0.0 },
-                    &mut scratch.dir,
-                )
-            });
-            // Predicted decrease of the quadratic model, −gᵀΔ > 0.
-            let predicted = -scratch.grad.dot(&scratch.dir);
-            // Below ~1e-9 of the objective's magnitude, or near its absolute
-            // round-off floor (from the terms' magnitudes), the value cannot
-            // rank trial points: the decrease is smaller than the noise.
-            let floor = 1e-9 * value.abs() + obj.value_noise();
-            let resolvable = predicted > 10.0 * floor;
-            // Chart and joint-limit bound on the step.
-            let alpha_max = obj.max_step(q, &scratch.dir, timers)?.clamp(0.0, 1.0);
-            let t0 = std::time::Instant::now();
-            // Time spent in the search's objective evaluations and in continuous
-            // collision detection is counted by their own stages;
-            // `line_search` gets only the remainder.
-            let mut in_evals = std::time::Duration::ZERO;
-            // The search runs from `start`; once an accepted segment has been
-            // cut by collision detection it runs again from the cut, where every
-            // shorter step is certified too (a sub-segment).
-            let mut start = alpha_max;
-            let mut cut = false;
-            let accepted = loop {
-                let mut accepted = false;
-                let mut alpha = start;
-                if resolvable {
-                    // Backtracking with Armijo sufficient decrease on a finite value.
-                    for _ in 0..=opts.max_backtracks {
-                        if alpha * predicted <= 10.0 * floor {
-                            // Shorter steps cannot be ranked by value either; an
-                            // Armijo test passed on round-off would accept a step
-                            // that changes nothing.
-                            break;
-                        }
-                        scratch.trial.clone_from(q);
-                        scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                        let te = std::time::Instant::now();
-                        let v = obj.eval(
-                            &scratch.trial,
-                            Need::Value,
-                            &mut scratch.trial_grad,
-                            &mut scratch.hess,
-                            timers,
-                        )?;
-                        in_evals += te.elapsed();
-                        if v.is_finite() && v < value - 1e-4 * alpha * predicted {
-                            accepted = true;
-                            break;
-                        }
-                        alpha *= 0.5;
-                        report.backtracks += 1;
-                    }
-                }
-                // Otherwise (or if that failed) the gradient norm is the merit
-                // function: accept a finite trial point whose value is not larger
-                // beyond noise and whose ‖∇O‖∞ is smaller.
-                if !accepted {
-                    let noise = 1e-10 * value.abs().max(1.0);
-                    alpha = start;
-                    for _ in 0..8 {
-                        scratch.trial.clone_from(q);
-                        scratch.trial.axpy(alpha, &scratch.dir, 1.0);
-                        let te = std::time::Instant::now();
-                        let v = obj.eval(
-                            &scratch.trial,
-                            Need::Gradient,
-                            &mut scratch.trial_grad,
-                            &mut scratch.hess,
-                            timers,
-                        )?;
-                        in_evals += te.elapsed();
-                        if v.is_finite()
-                            && v <= value + noise
-                            && scratch.trial_grad.amax() < grad_inf
-                        {
-                            accepted = true;
-                            report.gradient_merit_steps += 1;
-                            break;
-                        }
-                        alpha *= 0.5;
-                        report.backtracks += 1;
-                    }
-                }
-                if !accepted || cut {
-                    break accepted;
-                }
-                // Continuous collision detection of the accepted segment
-                // `q → q + α Δ` (see `Objective::certify`).
-                let tc = std::time::Instant::now();
-                let certified = obj.certify(q, &scratch.dir, alpha, timers)?;
-                in_evals += tc.elapsed();
-                if certified >= alpha {
-                    break true;
-                }
-                report.ccd_cuts += 1;
-                cut = true;
-                start = certified.max(0.0);
-            };
-            timers.add("line_search", t0.elapsed().saturating_sub(in_evals));
-            if accepted || mode != Mode::Shift {
-                break (accepted, resolvable);
-            }
-            mode = Mode::Clamped { abs: false };
-            report.shift_fallbacks += 1;
-        };
-        if !accepted && grad_inf <= report.grad_floor {
-            // No trial point can be ranked and the gradient is within its
-            // own round-off: this is the solution to working precision.
-            report.at_floor = true;
-            return Ok(report);
-        }
-        let step_len = scratch.dir.amax() * obj.length_scale().max(1.0);
-        if !accepted && !resolvable && step_len <= opts.step_floor {
-            // Neither value nor gradient can rank points, and Newton's own
-            // correction is below the length floor.
-            report.at_floor = true;
-            report.at_step_floor = true;
-            return Ok(report);
-        }
+        let (accepted, resolvable) = run.search(q, value, grad_inf)?;
         if !accepted {
-            return Err(NewtonError::LineSearch {
-                iter,
-                grad_inf,
-                tol: opts.tol,
-            });
+            return run.finish_failed(iter, grad_inf, resolvable);
         }
-        std::mem::swap(q, &mut scratch.trial);
-        value = obj.eval(
-            q,
-            Need::Hessian,
-            &mut scratch.grad,
-            &mut scratch.hess,
-            timers,
-        )?;
+        std::mem::swap(q, &mut run.scratch.trial);
+        value = run.eval(q, Need::Hessian)?;
     }
+    let mut report = run.report;
     if report.grad_inf <= report.grad_floor {
         report.at_floor = true;
         return Ok(report);
@@ -510,6 +318,321 @@ pub fn minimize_from(
         grad_inf: report.grad_inf,
         tol: opts.tol,
     })
+}
+
+impl NewtonScratch {
+    /// Sizes the buffers for `n` coordinates (kept when already `n`).
+    fn resize(&mut self, n: usize) {
+        if self.grad.len() != n {
+            self.grad = DVector::zeros(n);
+            self.hess = DMatrix::zeros(n, n);
+            self.dir = DVector::zeros(n);
+            self.trial_grad = DVector::zeros(n);
+        }
+    }
+}
+
+/// One run of [`minimize_from`]: the objective, the options, the buffers and
+/// the report being filled.
+struct Solve<'a> {
+    obj: &'a mut dyn Objective,
+    opts: &'a NewtonOptions,
+    scratch: &'a mut NewtonScratch,
+    timers: &'a mut StageTimers,
+    report: NewtonReport,
+}
+
+/// What the line search of one iteration knows about the current point.
+struct SearchPoint {
+    /// `O(q)`.
+    value: f64,
+    /// `‖∇O(q)‖∞`.
+    grad_inf: f64,
+    /// Predicted decrease of the quadratic model, `−gᵀΔ`.
+    predicted: f64,
+    /// Round-off floor of the value (below it trial points cannot be ranked).
+    floor: f64,
+    /// Whether the predicted decrease is above that floor.
+    resolvable: bool,
+}
+
+impl Solve<'_> {
+    /// `O(q)` with gradient and Hessian into the scratch buffers.
+    fn eval(&mut self, q: &DVector<f64>, need: Need) -> Result<f64, NewtonError> {
+        let s = &mut *self.scratch;
+        Ok(self
+            .obj
+            .eval(q, need, &mut s.grad, &mut s.hess, self.timers)?)
+    }
+
+    /// Phase 0: the start point. The guess replaces `q` when its objective
+    /// is finite and not larger than at `q` (one extra value evaluation;
+    /// after an impact the extrapolated point lies deep in the barrier or
+    /// past it and `q` is the better start). The guess is evaluated with
+    /// derivatives right away: it usually wins.
+    fn start(
+        &mut self,
+        q: &mut DVector<f64>,
+        guess: Option<&DVector<f64>>,
+    ) -> Result<f64, NewtonError> {
+        let mut value = f64::NAN;
+        if let Some(g) = guess {
+            let at_q = self.eval(q, Need::Value)?;
+            // The jump q → guess must pass the terms' own line-search bounds
+            // (IPC's CCD filter, joint-limit approach, chart step): a guess on
+            // the far side of an obstacle has a finite objective too.
+            self.scratch.dir.copy_from(g);
+            self.scratch.dir.axpy(-1.0, q, 1.0);
+            let reachable = self.obj.max_step(q, &self.scratch.dir, self.timers)? >= 1.0;
+            let at_g = if reachable {
+                let s = &mut *self.scratch;
+                self.obj
+                    .eval(g, Need::Hessian, &mut s.grad, &mut s.hess, self.timers)
+            } else {
+                Ok(f64::INFINITY)
+            };
+            if let Ok(v) = at_g
+                && v.is_finite()
+                && (v <= at_q || at_q.is_nan())
+            {
+                q.copy_from(g);
+                value = v;
+            }
+        }
+        if value.is_nan() {
+            value = self.eval(q, Need::Hessian)?;
+        }
+        if !value.is_finite() {
+            return Err(NewtonError::InfeasibleStart {
+                value,
+                detail: "hulls intersect in the current state".into(),
+            });
+        }
+        Ok(value)
+    }
+
+    /// Phase 1 of an iteration: records the point in the report; the
+    /// finished report when `‖∇O‖∞ < tol`; an error on non-finite
+    /// derivatives. Also sets the gradient's round-off floor
+    /// `64 ε ‖H‖∞ (‖q‖∞ + ℓ)` (`ℓ`: the objective's length scale).
+    fn converged(
+        &mut self,
+        q: &DVector<f64>,
+        iter: usize,
+        value: f64,
+        grad_inf: f64,
+    ) -> Result<Option<NewtonReport>, NewtonError> {
+        self.report.iters = iter;
+        self.report.grad_inf = grad_inf;
+        self.report.value = value;
+        let s = &mut *self.scratch;
+        if !grad_inf.is_finite() || s.hess.as_slice().iter().any(|v| !v.is_finite()) {
+            return Err(NewtonError::NonFinite { iter });
+        }
+        if grad_inf < self.opts.tol {
+            return Ok(Some(self.report));
+        }
+        self.report.grad_floor = 64.0
+            * f64::EPSILON
+            * max_row_sum(&s.hess, &mut s.row_sums)
+            * (q.amax() + self.obj.length_scale());
+        Ok(None)
+    }
+
+    /// Phase 2: the Newton direction and the line search along it. With
+    /// `Indefinite::Shift`, an iteration whose line search fails is repeated
+    /// once with the paper's clamped eigen step. Returns (accepted,
+    /// resolvable); the accepted point is in `scratch.trial`.
+    fn search(
+        &mut self,
+        q: &DVector<f64>,
+        value: f64,
+        grad_inf: f64,
+    ) -> Result<(bool, bool), NewtonError> {
+        let opts = self.opts;
+        let mut mode = match (opts.eig_abs, opts.indefinite) {
+            (true, _) => Mode::Clamped { abs: true },
+            (false, Indefinite::Clamp) => Mode::Clamped { abs: false },
+            (false, Indefinite::Shift) => Mode::Shift,
+        };
+        loop {
+            let s = &mut *self.scratch;
+            self.timers.time("linear_solve", || {
+                s.linear.direction(
+                    &s.hess,
+                    &s.grad,
+                    opts.eig_clamp,
+                    mode,
+                    if opts.settle_blocks { opts.tol } else { 0.0 },
+                    &mut s.dir,
+                )
+            });
+            // Predicted decrease of the quadratic model, −gᵀΔ > 0.
+            let predicted = -s.grad.dot(&s.dir);
+            // Below ~1e-9 of the objective's magnitude, or near its absolute
+            // round-off floor (from the terms' magnitudes), the value cannot
+            // rank trial points: the decrease is smaller than the noise.
+            let floor = 1e-9 * value.abs() + self.obj.value_noise();
+            let at = SearchPoint {
+                value,
+                grad_inf,
+                predicted,
+                floor,
+                resolvable: predicted > 10.0 * floor,
+            };
+            let accepted = self.line_search(q, &at)?;
+            if accepted || mode != Mode::Shift {
+                return Ok((accepted, at.resolvable));
+            }
+            mode = Mode::Clamped { abs: false };
+            self.report.shift_fallbacks += 1;
+        }
+    }
+
+    /// The line search along `scratch.dir`, bounded by the chart and
+    /// joint-limit step bound. It runs from `start`; once an accepted segment
+    /// has been cut by collision detection it runs again from the cut, where
+    /// every shorter step is certified too (a sub-segment). Time spent in
+    /// the objective evaluations and in continuous collision detection is
+    /// counted by their own stages; `line_search` gets only the remainder.
+    fn line_search(&mut self, q: &DVector<f64>, at: &SearchPoint) -> Result<bool, NewtonError> {
+        let alpha_max = self
+            .obj
+            .max_step(q, &self.scratch.dir, self.timers)?
+            .clamp(0.0, 1.0);
+        let t0 = std::time::Instant::now();
+        let mut in_evals = std::time::Duration::ZERO;
+        let mut start = alpha_max;
+        let mut cut = false;
+        let accepted = loop {
+            let (mut accepted, mut alpha) = (false, start);
+            if at.resolvable {
+                (accepted, alpha) = self.armijo(q, at, start, &mut in_evals)?;
+            }
+            if !accepted {
+                (accepted, alpha) = self.gradient_merit(q, at, start, &mut in_evals)?;
+            }
+            if !accepted || cut {
+                break accepted;
+            }
+            // Continuous collision detection of the accepted segment
+            // `q → q + α Δ` (see `Objective::certify`).
+            let tc = std::time::Instant::now();
+            let certified = self.obj.certify(q, &self.scratch.dir, alpha, self.timers)?;
+            in_evals += tc.elapsed();
+            if certified >= alpha {
+                break true;
+            }
+            self.report.ccd_cuts += 1;
+            cut = true;
+            start = certified.max(0.0);
+        };
+        self.timers
+            .add("line_search", t0.elapsed().saturating_sub(in_evals));
+        Ok(accepted)
+    }
+
+    /// The trial point `q + α Δ` into `scratch.trial`, evaluated with `need`
+    /// (gradient into `scratch.trial_grad`); its value.
+    fn trial(
+        &mut self,
+        q: &DVector<f64>,
+        alpha: f64,
+        need: Need,
+        in_evals: &mut std::time::Duration,
+    ) -> Result<f64, NewtonError> {
+        let s = &mut *self.scratch;
+        s.trial.clone_from(q);
+        s.trial.axpy(alpha, &s.dir, 1.0);
+        let te = std::time::Instant::now();
+        let v = self
+            .obj
+            .eval(&s.trial, need, &mut s.trial_grad, &mut s.hess, self.timers)?;
+        *in_evals += te.elapsed();
+        Ok(v)
+    }
+
+    /// Backtracking from `start` with Armijo sufficient decrease on a finite
+    /// value, `O(q + αΔ) < O(q) − 10⁻⁴ α (−gᵀΔ)`, halving `α`; it stops
+    /// when `α (−gᵀΔ)` falls to the value's noise (shorter steps cannot be
+    /// ranked by value either; an Armijo test passed on round-off would
+    /// accept a step that changes nothing). Returns (accepted, α).
+    fn armijo(
+        &mut self,
+        q: &DVector<f64>,
+        at: &SearchPoint,
+        start: f64,
+        in_evals: &mut std::time::Duration,
+    ) -> Result<(bool, f64), NewtonError> {
+        let mut alpha = start;
+        for _ in 0..=self.opts.max_backtracks {
+            if alpha * at.predicted <= 10.0 * at.floor {
+                break;
+            }
+            let v = self.trial(q, alpha, Need::Value, in_evals)?;
+            if v.is_finite() && v < at.value - 1e-4 * alpha * at.predicted {
+                return Ok((true, alpha));
+            }
+            alpha *= 0.5;
+            self.report.backtracks += 1;
+        }
+        Ok((false, alpha))
+    }
+
+    /// When the value cannot rank points (or Armijo failed), the gradient
+    /// norm is the merit function: accept a finite trial point whose value
+    /// is not larger beyond noise (`10⁻¹⁰ max(|O|, 1)`) and whose `‖∇O‖∞`
+    /// is smaller; at most 8 halvings from `start`. Returns (accepted, α).
+    fn gradient_merit(
+        &mut self,
+        q: &DVector<f64>,
+        at: &SearchPoint,
+        start: f64,
+        in_evals: &mut std::time::Duration,
+    ) -> Result<(bool, f64), NewtonError> {
+        let noise = 1e-10 * at.value.abs().max(1.0);
+        let mut alpha = start;
+        for _ in 0..8 {
+            let v = self.trial(q, alpha, Need::Gradient, in_evals)?;
+            if v.is_finite()
+                && v <= at.value + noise
+                && self.scratch.trial_grad.amax() < at.grad_inf
+            {
+                self.report.gradient_merit_steps += 1;
+                return Ok((true, alpha));
+            }
+            alpha *= 0.5;
+            self.report.backtracks += 1;
+        }
+        Ok((false, alpha))
+    }
+
+    /// Phase 3 when no trial point was accepted: the solution to working
+    /// precision when the gradient is within its own round-off, or when
+    /// neither value nor gradient can rank points and Newton's own
+    /// correction is below the length floor; otherwise a line-search error.
+    fn finish_failed(
+        mut self,
+        iter: usize,
+        grad_inf: f64,
+        resolvable: bool,
+    ) -> Result<NewtonReport, NewtonError> {
+        if grad_inf <= self.report.grad_floor {
+            self.report.at_floor = true;
+            return Ok(self.report);
+        }
+        let step_len = self.scratch.dir.amax() * self.obj.length_scale().max(1.0);
+        if !resolvable && step_len <= self.opts.step_floor {
+            self.report.at_floor = true;
+            self.report.at_step_floor = true;
+            return Ok(self.report);
+        }
+        Err(NewtonError::LineSearch {
+            iter,
+            grad_inf,
+            tol: self.opts.tol,
+        })
+    }
 }
 
 /// `‖H‖∞ = max_i Σ_j |h_ij|`, the largest absolute row sum. Accumulated

@@ -60,9 +60,60 @@ impl Drop for Scratch {
     }
 }
 
+/// Test tiers (docs/testing.md). Tier 1 is hermetic: a bare `cargo test`
+/// on a fresh clone needs only the Rust toolchain. Tier 2 needs the
+/// project's Python environment `.venv` (made by `tools/setup_python.sh`:
+/// MuJoCo, Pinocchio, python-fcl, ipctk, trimesh, CoACD, pybullet's robot
+/// files) or Chromium. A tier-2 test starts with
+/// `if skip_without_venv() { return; }`: without `.venv` it writes a visible
+/// `SKIPPED` line (straight to the terminal, past the test harness's output
+/// capture) and the test returns — unless `SDRS_TEST_ALL_TIERS=1`
+/// (`tools/test.sh` sets it, so CI never skips), where a missing environment
+/// fails the test. `SDRS_TEST_PRETEND_NO_VENV=1` makes the environment look
+/// missing (to check the tier split without deleting `.venv`).
+pub fn skip_without_venv() -> bool {
+    if venv_present() {
+        return false;
+    }
+    skip_tier2("the project's Python environment .venv (run `bash tools/setup_python.sh`)")
+}
+
+/// [`skip_without_venv`] for tests that drive headless Chromium.
+pub fn skip_without_chromium() -> bool {
+    let found = ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .any(|b| {
+            std::env::var_os("PATH")
+                .is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(b).is_file()))
+        });
+    if found && venv_present() {
+        return false;
+    }
+    skip_tier2("Chromium (run `bash tools/setup_system.sh`) and .venv")
+}
+
+fn venv_present() -> bool {
+    let pretend = std::env::var_os("SDRS_TEST_PRETEND_NO_VENV").is_some_and(|v| v == "1");
+    root().join(".venv/bin/python").exists() && !pretend
+}
+
+fn skip_tier2(what: &str) -> bool {
+    use std::io::Write;
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string();
+    assert!(
+        std::env::var_os("SDRS_TEST_ALL_TIERS").is_none_or(|v| v != "1"),
+        "{test} needs {what}; SDRS_TEST_ALL_TIERS=1 runs every tier, so it fails instead of skipping"
+    );
+    let _ = writeln!(std::io::stderr(), "SKIPPED {test}: needs {what}");
+    true
+}
+
 /// The project's Python (`.venv`, made by `tools/setup_python.sh`). Panics
-/// with the setup command when it is missing: these checks must not be
-/// skipped silently.
+/// with the setup command when it is missing: a test that needs it starts
+/// with [`skip_without_venv`], so a missing environment is never silent.
 pub fn python() -> Command {
     let py = root().join(".venv/bin/python");
     assert!(

@@ -28,7 +28,7 @@ pub struct AccdOptions {
     /// clear the step; with the former cap of 200, chains of 32 links sliding
     /// against each other (gaps ~1e-5 m, tip motions ~0.2 m per Newton step)
     /// were cut to ~1.4 % of every Newton step and the solve stalled
-    /// (`notes/ipc3.md`).
+    /// (`notes/ipc-baseline-adjoint-and-cages.md`).
     pub max_iters: usize,
 }
 

@@ -23,7 +23,7 @@ fn col(t: &Trajectory, name: &str) -> usize {
 }
 
 /// Default solver settings: both models start Newton from the same
-/// predictor (notes/ipc4.md).
+/// predictor (notes/ipc-baseline-source-meshes.md).
 const TWO_BOXES_APART: &str = "
 version: 1
 dt: 0.002

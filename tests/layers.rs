@@ -1,0 +1,248 @@
+//! The core crate's layering (docs/architecture.md): every top-level module
+//! of `src/` may use only modules of a lower layer. Edges are read from the
+//! source text as `crate::module` paths (plain and grouped `crate::{a, b}`),
+//! with comments and `#[cfg(test)]` unit-test modules left out: a test may
+//! reach anywhere, the library may not.
+//!
+//! Modules of one layer may not use each other either, so an order with no
+//! back-edge is also free of cycles.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// The declared order, lowest first; modules on one line share a layer.
+const LAYERS: &[&[&str]] = &[
+    &["math"],
+    &["counters"],
+    &["model"],
+    &["control"],
+    &["geometry"],
+    &["kinematics"],
+    &["contact"],
+    &["energy"],
+    &["sim"],
+    &["diff"],
+    &["scene"],
+    &["optimize", "calibrate"],
+    &["import"],
+    &["output"],
+];
+
+/// Back-edges that exist today and are being removed (issue 34). The test
+/// fails when one of them disappears without being deleted here, so the
+/// list can only shrink.
+const KNOWN_BACK_EDGES: &[(&str, &str)] = &[
+    ("calibrate", "output"),
+    ("optimize", "output"),
+    ("scene", "calibrate"),
+    ("sim", "output"),
+];
+
+fn layer_of(module: &str) -> Option<usize> {
+    LAYERS.iter().position(|l| l.contains(&module))
+}
+
+/// Source text without line comments and without everything from the
+/// first `#[cfg(test)]` unit-test module on (they come last by convention).
+fn library_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        let t = line.trim_start();
+        if t.starts_with("#[cfg(test)]") {
+            let next = lines.peek().map(|l| l.trim()).unwrap_or("");
+            if next.starts_with("mod ") && next.ends_with(';') {
+                lines.next(); // a test module in its own file: see `test_files`
+                continue;
+            }
+            if next.starts_with("mod ") || t.contains(" mod ") {
+                break;
+            }
+        }
+        let code = match line.find("//") {
+            Some(i) => &line[..i],
+            None => line,
+        };
+        out.push_str(code);
+        out.push('\n');
+    }
+    out
+}
+
+fn ident_at(s: &str) -> &str {
+    let end = s
+        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .unwrap_or(s.len());
+    &s[..end]
+}
+
+/// The top-level modules that `text` names through `crate::`.
+fn used_modules(text: &str) -> BTreeSet<String> {
+    let mut used = BTreeSet::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("crate::") {
+        rest = &rest[i + "crate::".len()..];
+        if let Some(group) = rest.strip_prefix('{') {
+            let end = group.find('}').unwrap_or(group.len());
+            for item in group[..end].split(',') {
+                let id = ident_at(item.trim_start());
+                if !id.is_empty() {
+                    used.insert(id.to_string());
+                }
+            }
+        } else {
+            used.insert(ident_at(rest).to_string());
+        }
+    }
+    used
+}
+
+/// Paths of the files that are `#[cfg(test)] mod name;` declarations
+/// (`dir/name.rs` next to the declaring file).
+fn test_files(files: &[(String, String)]) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    for (path, text) in files {
+        let dir = match path.rfind('/') {
+            Some(i) => &path[..=i],
+            None => "",
+        };
+        let mut lines = text.lines().map(str::trim);
+        while let Some(line) = lines.next() {
+            if line.starts_with("#[cfg(test)]") {
+                if let Some(name) = lines
+                    .next()
+                    .and_then(|l| l.strip_prefix("mod "))
+                    .and_then(|l| l.strip_suffix(';'))
+                {
+                    out.insert(format!("{dir}{name}.rs"));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Edges `module → used module` between top-level modules of the tree
+/// given as `(path relative to src/, text)` pairs.
+fn edges(files: &[(String, String)]) -> BTreeMap<(String, String), String> {
+    let tests = test_files(files);
+    let modules: BTreeSet<String> = files
+        .iter()
+        .map(|(p, _)| top_module(p))
+        .filter(|m| m != "lib")
+        .collect();
+    let mut out = BTreeMap::new();
+    for (path, text) in files {
+        let from = top_module(path);
+        if from == "lib" || tests.contains(path) {
+            continue;
+        }
+        for to in used_modules(&library_text(text)) {
+            if to != from && modules.contains(&to) {
+                out.entry((from.clone(), to))
+                    .or_insert_with(|| path.clone());
+            }
+        }
+    }
+    out
+}
+
+fn top_module(rel: &str) -> String {
+    let first = rel.split('/').next().unwrap_or(rel);
+    first.strip_suffix(".rs").unwrap_or(first).to_string()
+}
+
+/// Every edge that does not go to a strictly lower layer, with the file
+/// that makes it; modules missing from `LAYERS` are reported too.
+fn violations(files: &[(String, String)]) -> Vec<String> {
+    let mut bad = Vec::new();
+    for ((from, to), file) in edges(files) {
+        match (layer_of(&from), layer_of(&to)) {
+            (Some(a), Some(b)) if b < a => {}
+            (Some(_), Some(_)) => bad.push(format!("{from} -> {to} ({file})")),
+            _ => bad.push(format!("{from} -> {to}: module not in LAYERS ({file})")),
+        }
+    }
+    bad
+}
+
+fn read_tree(dir: &Path, base: &Path, out: &mut Vec<(String, String)>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            read_tree(&p, base, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            let rel = p
+                .strip_prefix(base)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            out.push((rel, std::fs::read_to_string(&p).unwrap()));
+        }
+    }
+}
+
+#[test]
+fn core_modules_use_only_lower_layers() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    read_tree(&src, &src, &mut files);
+    let found = violations(&files);
+    let known: BTreeSet<String> = KNOWN_BACK_EDGES
+        .iter()
+        .map(|(a, b)| format!("{a} -> {b}"))
+        .collect();
+    let new: Vec<&String> = found
+        .iter()
+        .filter(|v| !known.iter().any(|k| v.starts_with(&format!("{k} ("))))
+        .collect();
+    assert!(
+        new.is_empty(),
+        "new back-edges in the core's layering (docs/architecture.md): {new:#?}"
+    );
+    let gone: Vec<&String> = known
+        .iter()
+        .filter(|k| !found.iter().any(|v| v.starts_with(&format!("{k} ("))))
+        .collect();
+    assert!(
+        gone.is_empty(),
+        "these known back-edges are gone: delete them from KNOWN_BACK_EDGES: {gone:?}"
+    );
+}
+
+#[test]
+fn a_planted_back_edge_is_reported() {
+    let tree = |extra: &str| {
+        vec![
+            ("math/mod.rs".to_string(), "pub fn f() {}".to_string()),
+            (
+                "model/mod.rs".to_string(),
+                format!("use crate::math::f;\n{extra}"),
+            ),
+            (
+                "sim.rs".to_string(),
+                "use crate::{math::f, model};\n// crate::output in a comment\n".to_string(),
+            ),
+        ]
+    };
+    assert!(violations(&tree("")).is_empty());
+    // A use of a higher layer, plain or grouped, is reported with its file.
+    let v = violations(&tree("use crate::sim::step;"));
+    assert_eq!(v, vec!["model -> sim (model/mod.rs)".to_string()]);
+    let v = violations(&tree("use crate::{sim::step, math};"));
+    assert_eq!(v, vec!["model -> sim (model/mod.rs)".to_string()]);
+    // A unit-test module may reach anywhere, inline or in its own file.
+    assert!(violations(&tree("#[cfg(test)]\nmod tests { use crate::sim; }")).is_empty());
+    let mut t = tree("#[cfg(test)]\nmod model_tests;\npub fn g() {}");
+    t.push(("model/model_tests.rs".into(), "use crate::sim;".into()));
+    assert!(violations(&t).is_empty());
+    t[1].1.push_str("\nuse crate::sim;");
+    assert_eq!(
+        violations(&t),
+        vec!["model -> sim (model/mod.rs)".to_string()]
+    );
+}
