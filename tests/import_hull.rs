@@ -26,6 +26,8 @@ const MESHES: [&str; 2] = ["ankle-pitch.stl", "waist_yaw_link_rev_1_0.STL"];
 /// Rotations (roll, pitch, yaw) applied to the meshes: the identity, the
 /// visual `rpy` of the failing URDFs' kind (half and quarter turns) and two
 /// generic ones.
+// The literal rpy values of URDF files, not π and π/2.
+#[allow(clippy::approx_constant)]
 const RPY: [[f64; 3]; 5] = [
     [0.0, 0.0, 0.0],
     [-3.1415, 0.0, 0.0],

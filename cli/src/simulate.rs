@@ -118,11 +118,9 @@ fn stream_run(
     install_interrupt();
     let res = sdrs::sim::run::run_observed(sim, steps, |k, sim, d| {
         let q = sim.state.reported_q(&sim.model);
-        if let Some(c) = csv.as_mut() {
-            if let Err(e) = c.push(sim.state.time, &q) {
-                out.stop = Some(e.into());
-                return ControlFlow::Break(());
-            }
+        if let Some(Err(e)) = csv.as_mut().map(|c| c.push(sim.state.time, &q)) {
+            out.stop = Some(e.into());
+            return ControlFlow::Break(());
         }
         if let Some(d) = d {
             out.stats.push(d);

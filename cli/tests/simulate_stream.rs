@@ -19,6 +19,8 @@ use std::time::{Duration, Instant};
 use support::{robots, scratch_dir, sdrs};
 
 /// Runs `cmd` to completion and returns (exit code, peak RSS in kB).
+/// The child is reaped by `wait4` (which also gives its `rusage`).
+#[allow(clippy::zombie_processes)]
 fn run_with_peak_rss(mut cmd: Command) -> (i32, i64) {
     let child = cmd
         .stdout(Stdio::null())

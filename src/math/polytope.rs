@@ -3,6 +3,9 @@
 //! queries, volumes and the connectivity solver. Hulls are computed by an
 //! incremental construction with exact orientation predicates.
 
+// Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use nalgebra::Vector3;
 use std::collections::{HashMap, HashSet};
 

@@ -51,7 +51,7 @@ pub fn check_duration(dt: f64, steps: usize, steps_key: &str) -> Result<(), Inva
             format!("the time step must be positive and finite, got {dt}"),
         ));
     }
-    if !(dt <= MAX_DT) {
+    if dt > MAX_DT {
         return Err(Invalid::new(
             "dt",
             format!(
