@@ -206,4 +206,112 @@ fn vhacd_parts_spanned_by_mesh_vertices_make_three_hull_feet() {
         }
         assert!(foreign <= 8, "{robot}: {foreign} points not from the mesh");
     }
+
+/// Cosmetic material parts that `urdf-rs` refuses (an empty `<texture/>`,
+/// as in icub and romeo; a `<color>` without rgba; a `<material>` without
+/// a name) are dropped with a report line; the robot imports with the
+/// geometry and mass it would have without them
+/// (`shared/repro/urdf_texture_empty`).
+#[test]
+fn cosmetic_material_elements_are_ignored_with_a_report_line() {
+    let dir = temp_dir("texture-empty");
+    let body = r#"<link name="body">
+    <visual><geometry><box size="0.1 0.1 0.1"/></geometry>MATERIAL</visual>
+    <collision><geometry><box size="0.1 0.2 0.3"/></geometry></collision>
+    <inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>"#;
+    let cases = [
+        (
+            r#"<material name="LightGrey"><texture/><color rgba="0.9 0.9 0.9 1"/></material>"#,
+            r#"<material name="LightGrey"/>"#,
+            "<texture>",
+        ),
+        (
+            "",
+            r#"<material><color rgba="1 0 0 1"/></material>"#,
+            "<material> without a name",
+        ),
+        ("", r#"<material name="m"><color/></material>"#, "<color>"),
+        (
+            "",
+            r#"<material name="m"><texture filename=""/></material>"#,
+            "<texture>",
+        ),
+    ];
+    let clean = dir.join("clean.urdf");
+    std::fs::write(
+        &clean,
+        format!(
+            r#"<robot name="r">{}</robot>"#,
+            body.replace("MATERIAL", "")
+        ),
+    )
+    .unwrap();
+    let reference = import(&clean, &options(Decomposer::Hull)).unwrap();
+    for (k, (top, inner, note)) in cases.iter().enumerate() {
+        let path = dir.join(format!("r{k}.urdf"));
+        std::fs::write(
+            &path,
+            format!(
+                r#"<robot name="r">{top}{}</robot>"#,
+                body.replace("MATERIAL", inner)
+            ),
+        )
+        .unwrap();
+        let imp =
+            import(&path, &options(Decomposer::Hull)).unwrap_or_else(|e| panic!("case {k}: {e}"));
+        assert!(
+            imp.report
+                .notes
+                .iter()
+                .any(|n| n.contains(note) && n.contains("cosmetic")),
+            "case {k}: no report line about {note}: {:?}",
+            imp.report.notes
+        );
+        assert_eq!(imp.links[0].hulls, reference.links[0].hulls, "case {k}");
+        assert_eq!(imp.report.links[0].mass, 2.0, "case {k}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A bare mesh whose extent only makes sense in millimetres (the
+/// example-robot-data ankle mesh, ~0.2 "m" read as ~200 m) is imported as
+/// metres with a units warning, and the report gives the mass it computed:
+/// density × hull volume. A metre-sized mesh gets no warning.
+#[test]
+fn a_millimetre_mesh_gets_a_units_warning_and_its_mass_is_reported() {
+    let mm = root().join("tests/data/repro/ankle-pitch.stl");
+    let imp = import(&mm, &options(Decomposer::Hull)).unwrap_or_else(|e| panic!("{e}"));
+    let units: Vec<_> = imp
+        .report
+        .notes
+        .iter()
+        .filter(|n| n.starts_with("units:"))
+        .collect();
+    assert_eq!(units.len(), 1, "{:?}", imp.report.notes);
+    assert!(units[0].contains("millimetres") && units[0].contains("0.001"));
+    let volume: f64 = imp.links[0]
+        .hulls
+        .iter()
+        .map(|h| convex_hull(h).unwrap().volume())
+        .sum();
+    let mass = imp.report.links[0].mass;
+    assert!(
+        (mass - 1000.0 * volume).abs() <= 1e-9 * mass,
+        "{mass} vs {volume}"
+    );
+    assert!(
+        imp.report
+            .notes
+            .iter()
+            .any(|n| n.contains(&format!("({mass:.4} kg)"))),
+        "the mass is not in the report: {:?}",
+        imp.report.notes
+    );
+    let m = import(
+        &root().join("tests/data/repro/l_finger.stl"),
+        &options(Decomposer::Hull),
+    )
+    .unwrap();
+    assert!(!m.report.notes.iter().any(|n| n.starts_with("units:")));
 }

@@ -7,6 +7,7 @@ mod calibrate;
 mod compare;
 mod contact_model;
 mod export_mjcf;
+mod helpers;
 mod optimize;
 mod plot;
 mod schema;
@@ -53,6 +54,7 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    helpers::install();
     let res = match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Bench(a) => bench::run(a),

@@ -103,3 +103,72 @@ fn export_mjcf_writes_a_model_mujoco_loads_and_keeps_existing_files() {
     );
     assert_eq!(std::fs::read(&out).unwrap(), before);
 }
+
+/// gymnasium's free-joint models (`<joint type="free">` at a non-zero
+/// pose) import with the default options and simulate 200 steps. Physics
+/// check, independent of our mass bookkeeping: before any contact, only
+/// gravity acts on the whole robot, so the implicit scheme's linear
+/// momentum after k steps is exactly `−M g k Δt` in z (internal PD and
+/// joint forces cancel); `M` is MuJoCo's compiled total mass. Tolerance
+/// 1e-6 relative (Newton's stopping tolerance), chosen before the run.
+#[test]
+fn gymnasium_free_joint_models_import_and_simulate_200_steps() {
+    let assets =
+        support::root().join(".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets");
+    for model in ["ant", "humanoid", "humanoidstandup"] {
+        let dir = scratch_dir(&format!("gym-{model}"));
+        let xml = assets.join(format!("{model}.xml"));
+        let scene = dir.join(format!("{model}.yaml"));
+        support::run_ok(
+            support::sdrs()
+                .arg("import")
+                .arg(&xml)
+                .arg("--out")
+                .arg(&scene)
+                .arg("-q"),
+        );
+        let json = dir.join("summary.json");
+        support::run_ok(
+            support::sdrs()
+                .args(["simulate", "-q", "--steps", "200", "--json"])
+                .arg(&json)
+                .arg(&scene),
+        );
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(s["steps"], 200, "{model}");
+        let out = python()
+            .args([
+                "-c",
+                "import sys, mujoco; m = mujoco.MjModel.from_xml_path(sys.argv[1]); print(repr(float(m.body_mass.sum())), repr(float(-m.opt.gravity[2])))",
+            ])
+            .arg(&xml)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        let v: Vec<f64> = text
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let (mass, g) = (v[0], v[1]);
+        let in_contact = s["contact"]["steps_in_contact"].as_u64().unwrap();
+        let dt = s["dt"].as_f64().unwrap();
+        let pz = s["linear_momentum"]["last"][2].as_f64().unwrap();
+        eprintln!(
+            "{model}: MuJoCo mass {mass} kg; p_z after 200 steps {pz} (−M g t = {}), steps in contact {in_contact}",
+            -mass * g * 200.0 * dt
+        );
+        if in_contact == 0 {
+            let expect = -mass * g * 200.0 * dt;
+            assert!(
+                (pz - expect).abs() <= 1e-6 * expect.abs(),
+                "{model}: p_z {pz} vs −M g t {expect}"
+            );
+        }
+    }
+}

@@ -139,6 +139,7 @@ pub fn run_import(args: &ImportArgs) -> anyhow::Result<()> {
         contact: !args.no_contact,
         hold: !args.no_hold,
         pose: args.pose.iter().cloned().collect(),
+        mu: imported.friction,
     };
     let ready = make_ready(
         &mut imported.scene,

@@ -147,6 +147,8 @@ pub struct Imported {
     pub report: ImportReport,
     /// The input marks its root link as static (see [`ready::root_is_static`]).
     pub root_static: bool,
+    /// The input's contact friction coefficient (MJCF geoms), if it has one.
+    pub friction: Option<f64>,
 }
 
 /// Input kinds by extension.
@@ -188,6 +190,7 @@ fn add_mjcf_scene(
 ) -> Result<(), ImportError> {
     // MJCF says which bodies are welded to the world: keep it.
     imp.root_static = true;
+    imp.friction = extra.friction;
     let scene = &mut imp.scene;
     let robot = scene.robots[0].name.clone();
     let env = crate::scene::environment::ENVIRONMENT;
@@ -347,6 +350,7 @@ fn link_geometry(
                 .as_slice(),
         )
         .map_err(geom_err)?;
+        notes.extend(units_hint(&m, &g.element, path));
         volume = match (volume, m.volume()) {
             (Some(a), Some(b)) => Some(a + b),
             _ => None,
@@ -383,6 +387,25 @@ fn link_geometry(
         sources,
         source_volume: volume,
         seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Bounding-box diagonal (m) above which a placed mesh is reported as
+/// probably in millimetres: no robot part spans 10 m, while a 10 mm part
+/// written in millimetres reads as 10 m.
+pub const MILLIMETRE_HINT_DIAGONAL: f64 = 10.0;
+
+/// A report line when a mesh, as placed (after its `scale`), is too large
+/// to be a robot part in metres: the likely unit and the fix. The import
+/// goes on with the coordinates as metres (the mass lines say what that
+/// gives).
+fn units_hint(m: &TriMesh, element: &str, path: &Path) -> Option<String> {
+    let d = m.diagonal();
+    (d > MILLIMETRE_HINT_DIAGONAL).then(|| {
+        format!(
+            "units: {element}: mesh {} spans {d:.4} m (bounding-box diagonal, its coordinates read as metres), larger than any robot part: if the file is in millimetres, scale it by 0.001 (URDF <mesh scale=\"0.001 0.001 0.001\">); imported as metres",
+            path.display()
+        )
     })
 }
 
@@ -691,6 +714,7 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         links: imported_links,
         report,
         root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
+        friction: None,
     })
 }
 

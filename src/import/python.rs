@@ -1,25 +1,61 @@
 //! Finding and running the project's Python helpers (`tools/*.py`).
 //!
-//! Interpreter: `$SDRS_PYTHON` if set, else the project venv
-//! `<root>/.venv/bin/python` if it exists, else `python3` on the `PATH`.
-//! `<root>` is `$SDRS_ROOT` if set, else the source tree this binary was
-//! built from. `bash tools/setup_python.sh` creates the venv.
+//! Helper scripts, in this order:
+//! 1. a [`HelperSource`] the embedding program registered
+//!    ([`set_helper_source`]): the `sdrs` binary registers the scripts it
+//!    carries (`include_str!`, written to a per-user temporary folder), so an
+//!    installed binary (`cargo install --path cli`) needs no source tree;
+//! 2. `$SDRS_ROOT/tools/<name>` when `SDRS_ROOT` is set;
+//! 3. `tools/<name>` in the current directory or one of its parents, or
+//!    above the running program (a source checkout: the library's own
+//!    tests, `target/release/sdrs`).
+//!
+//! Interpreter: `$SDRS_PYTHON` if set, else `<root>/.venv/bin/python` when
+//! a source tree `<root>` is known (2 or 3 above) and has one, else
+//! `python3` on the `PATH`. `bash tools/setup_python.sh` creates the venv in
+//! a checkout; elsewhere `python3 -m pip install <package>` the package an
+//! error names.
 
 use super::error::ImportError;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
 
-/// The command that installs the Python helpers' packages.
+/// The command that installs the Python helpers' packages in a checkout.
 pub const SETUP_COMMAND: &str = "bash tools/setup_python.sh";
 
-/// Exit code the helpers use when a package is missing.
+/// Exit code the helpers use when a package is missing (they print
+/// `missing Python package: NAME` on stderr).
 pub const EXIT_MISSING_PACKAGE: i32 = 3;
 
-/// Project root (holds `tools/` and `.venv/`).
-pub fn project_root() -> PathBuf {
-    std::env::var_os("SDRS_ROOT")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+/// Where the embedding program keeps runnable copies of the helpers.
+pub trait HelperSource: Send + Sync {
+    /// A path of a runnable copy of `tools/<name>`, or why there is none.
+    fn script(&self, name: &str) -> Result<PathBuf, String>;
+}
+
+static SOURCE: OnceLock<Box<dyn HelperSource>> = OnceLock::new();
+
+/// Registers the program's helper source (first call wins; returns whether
+/// this one was taken).
+pub fn set_helper_source(source: Box<dyn HelperSource>) -> bool {
+    SOURCE.set(source).is_ok()
+}
+
+/// The source tree, if one is known: `$SDRS_ROOT`, else the first of the
+/// current directory's and then the running program's ancestors that holds
+/// `tools/mjcf_dump.py` (a checkout, or `target/release/` inside one).
+pub fn source_root() -> Option<PathBuf> {
+    if let Some(r) = std::env::var_os("SDRS_ROOT") {
+        return Some(PathBuf::from(r));
+    }
+    let starts = [std::env::current_dir().ok(), std::env::current_exe().ok()];
+    starts.into_iter().flatten().find_map(|start| {
+        start
+            .ancestors()
+            .find(|d| d.join("tools/mjcf_dump.py").is_file())
+            .map(Path::to_path_buf)
+    })
 }
 
 /// The Python interpreter to use.
@@ -27,17 +63,26 @@ pub fn interpreter() -> PathBuf {
     if let Some(p) = std::env::var_os("SDRS_PYTHON") {
         return PathBuf::from(p);
     }
-    let venv = project_root().join(".venv/bin/python");
-    if venv.exists() {
-        venv
-    } else {
-        PathBuf::from("python3")
+    match source_root().map(|r| r.join(".venv/bin/python")) {
+        Some(venv) if venv.exists() => venv,
+        _ => PathBuf::from("python3"),
     }
 }
 
-/// Path of a helper script in `tools/`.
-pub fn tool(name: &str) -> PathBuf {
-    project_root().join("tools").join(name)
+/// Path of a runnable helper script (see the module doc for the order).
+pub fn tool(name: &str) -> Result<PathBuf, ImportError> {
+    if let Some(s) = SOURCE.get() {
+        return s.script(name).map_err(|msg| ImportError::Python { msg });
+    }
+    let found = source_root().map(|r| r.join("tools").join(name));
+    match found {
+        Some(p) if p.is_file() => Ok(p),
+        _ => Err(ImportError::Python {
+            msg: format!(
+                "helper tools/{name} not found: this program carries no helpers and no sdrs source tree is known (set SDRS_ROOT to one, or use the `sdrs` binary, which carries them)"
+            ),
+        }),
+    }
 }
 
 /// Output of a helper run.
@@ -48,23 +93,15 @@ pub struct ToolOutput {
 }
 
 /// Runs `tools/<script> args…` with the project interpreter. Fails with the
-/// setup command when the interpreter or a package is missing.
+/// install command when the interpreter or a package is missing.
 pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput, ImportError> {
     let py = interpreter();
-    let path = tool(script);
-    if !path.is_file() {
-        return Err(ImportError::Python {
-            msg: format!(
-                "helper {} not found (set SDRS_ROOT to the sdrs source tree)",
-                path.display()
-            ),
-        });
-    }
+    let path = tool(script)?;
     let mut cmd = Command::new(&py);
     cmd.arg(&path).args(args);
     let out = super::child::spawn_output(cmd).map_err(|e| ImportError::Python {
         msg: format!(
-            "cannot run Python ({}): {e}; install the helpers' environment with `{SETUP_COMMAND}` (from the sdrs source tree)",
+            "cannot run Python ({}): {e}; set SDRS_PYTHON to a Python 3 interpreter (in a source tree: `{SETUP_COMMAND}`)",
             py.display()
         ),
     })?;
@@ -74,9 +111,16 @@ pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput,
         code: out.status.code(),
     };
     if res.code == Some(EXIT_MISSING_PACKAGE) {
+        let package = res
+            .stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("missing Python package: "))
+            .and_then(|s| s.split_whitespace().next())
+            .unwrap_or("<package>")
+            .to_string();
         return Err(ImportError::Python {
             msg: format!(
-                "{} (interpreter {}); install the packages with `{SETUP_COMMAND}` (or `{} -m pip install -r tools/requirements.txt`)",
+                "{} (interpreter {}); install it with `{} -m pip install {package}` (in a source tree: `{SETUP_COMMAND}`, which installs the pinned versions of tools/requirements.txt)",
                 res.stderr.trim(),
                 py.display(),
                 py.display()

@@ -40,7 +40,7 @@ use crate::energy::Need;
 use crate::geometry::WorldHulls;
 use crate::scene::Scene;
 use crate::scene::schema::{
-    ContactSpec, Gains, GroundSpec, InitialSpec, JointType, SceneSpec, SignalList,
+    ContactSpec, Gains, GroundSpec, InitialSpec, JointType, RobotSpec, SceneSpec, SignalList,
 };
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -70,6 +70,9 @@ pub struct ReadyOptions {
     pub hold: bool,
     /// Initial coordinates by joint name.
     pub pose: BTreeMap<String, f64>,
+    /// Friction coefficient of the contact it turns on. Default `None`:
+    /// 0.5; an MJCF import passes its geoms' ([`super::mjcf::contact_friction`]).
+    pub mu: Option<f64>,
 }
 
 impl Default for ReadyOptions {
@@ -80,6 +83,7 @@ impl Default for ReadyOptions {
             contact: true,
             hold: true,
             pose: BTreeMap::new(),
+            mu: None,
         }
     }
 }
@@ -152,7 +156,7 @@ pub fn make_ready(
     if floating && root_fixed {
         robot.links[root].joint.kind = JointType::Free;
     } else if !floating && root_free {
-        robot.links[root].joint.kind = JointType::Fixed;
+        fix_free_root(robot, root);
     }
     // Pose.
     for (joint, value) in &opts.pose {
@@ -206,7 +210,7 @@ pub fn make_ready(
         gains: BTreeMap::new(),
     };
     let contact = ContactSpec {
-        mu: 0.5,
+        mu: opts.mu.unwrap_or(0.5),
         ..ContactSpec::default()
     };
     let range = ContactParams::with_width(contact.s).support_distance();
@@ -302,6 +306,30 @@ pub fn make_ready(
     Ok(report)
 }
 
+/// Welds a free root where it stands: its initial pose `θ = [p, φ]`
+/// (position, rotation vector; MJCF free joints carry the body's pose
+/// there) moves into the joint origin, `T_origin ← T_origin · (exp(φ̂), p)`,
+/// and the now meaningless six-value `initial` entry is removed.
+fn fix_free_root(robot: &mut RobotSpec, root: usize) {
+    let link = &mut robot.links[root];
+    link.joint.kind = JointType::Fixed;
+    let name = link.joint.name.clone().unwrap_or_else(|| link.name.clone());
+    let Some(init) = robot.initial.remove(&name) else {
+        return;
+    };
+    if init.q.len() != 6 {
+        return;
+    }
+    let o = &mut link.joint.origin;
+    let r_o = nalgebra::Rotation3::from_euler_angles(o.rpy[0], o.rpy[1], o.rpy[2]);
+    let r_q = nalgebra::Rotation3::new(nalgebra::Vector3::new(init.q[3], init.q[4], init.q[5]));
+    let t = nalgebra::Vector3::from(o.xyz)
+        + r_o * nalgebra::Vector3::new(init.q[0], init.q[1], init.q[2]);
+    let (roll, pitch, yaw) = (r_o * r_q).euler_angles();
+    o.xyz = t.into();
+    o.rpy = [roll, pitch, yaw];
+}
+
 /// Gains of every revolute/prismatic joint (see the module doc).
 fn hold_gains(
     scene: &SceneSpec,
@@ -319,7 +347,7 @@ fn hold_gains(
         .position(|l| l.parent.is_none())
         .expect("root");
     if fixed.robots[0].links[root].joint.kind == JointType::Free {
-        fixed.robots[0].links[root].joint.kind = JointType::Fixed;
+        fix_free_root(&mut fixed.robots[0], root);
     }
     let s = load(&fixed)?;
     let mut sim = s.simulator();

@@ -18,6 +18,10 @@
 //!   and recorded ([`super::pybullet_shapes`]), to be substituted after
 //!   parsing.
 //!
+//! - cosmetic material parts `urdf-rs` would refuse (a `<texture/>` without
+//!   a filename, a `<color>` without rgba, a `<material>` without a name)
+//!   are dropped: materials are not imported.
+//!
 //! Anything else is left for the strict checks (`urdf::prescan`) to reject
 //! with the line and element.
 
@@ -166,6 +170,13 @@ fn rewrite(text: &str) -> Result<Normalized, quick_xml::Error> {
                 let is_start = matches!(ev, Event::Start(_));
                 let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
                 let parent = stack.last().map(|(p, _)| p.clone());
+                if let Some(note) = cosmetic_problem(e, &name, parent.as_deref()) {
+                    notes.insert(note);
+                    if is_start {
+                        skip_depth = 1;
+                    }
+                    continue;
+                }
                 let drop = match parent.as_deref() {
                     Some("robot") if stack.len() == 1 => {
                         let keep = matches!(name.as_str(), "link" | "joint" | "material");
@@ -266,6 +277,40 @@ fn rewrite(text: &str) -> Result<Normalized, quick_xml::Error> {
         notes: notes.into_iter().collect(),
         special,
     })
+}
+
+/// An attribute's unescaped value, if present.
+fn attribute(e: &BytesStart<'_>, key: &str) -> Option<String> {
+    e.try_get_attribute(key)
+        .ok()
+        .flatten()
+        .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+}
+
+/// Why a cosmetic element is dropped (`None`: kept). Materials only colour
+/// the visuals, which the import does not use; ROS and Pinocchio load files
+/// whose materials `urdf-rs` would refuse: a `<texture/>` without a
+/// filename (icub, romeo), a `<color>` without four numbers, a
+/// `<material>` without a name.
+fn cosmetic_problem(e: &BytesStart<'_>, name: &str, parent: Option<&str>) -> Option<String> {
+    let blank = |key: &str| attribute(e, key).is_none_or(|v| v.trim().is_empty());
+    match (parent, name) {
+        (_, "material") if blank("name") => {
+            Some("ignored a <material> without a name (cosmetic: materials are not imported)".into())
+        }
+        (Some("material"), "texture") if blank("filename") => Some(
+            "ignored a <texture> without a filename in a <material> (cosmetic: materials are not imported)"
+                .into(),
+        ),
+        (Some("material"), "color")
+            if attribute(e, "rgba")
+                .and_then(|v| normalize_value(&v, 4))
+                .is_none() =>
+        {
+            Some("ignored a <color> without four rgba numbers in a <material> (cosmetic: materials are not imported)".into())
+        }
+        _ => None,
+    }
 }
 
 fn repair_attributes<'a>(

@@ -1,9 +1,13 @@
 //! Convex polytopes in both representations: the vertices (V) that the design
 //! space uses, and triangles plus outward unit face planes (H) for point
-//! queries, volumes and the connectivity solver. Hulls are computed with
-//! parry3d's quickhull.
+//! queries, volumes and the connectivity solver. Hulls are computed by an
+//! incremental construction with exact orientation predicates.
+
+// Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use nalgebra::Vector3;
+use std::collections::{HashMap, HashSet};
 
 /// A convex polytope.
 #[derive(Clone, Debug)]
@@ -63,112 +67,179 @@ pub fn convex_hull(points: &[Vector3<f64>]) -> Result<Polytope, String> {
     Ok(poly)
 }
 
-/// Incremental 3-D convex hull. Points within `eps` of the current hull
-/// (coplanar with a face, or inside) are not added, so every returned
-/// triangle is a supporting plane to within `eps` and the surface is closed
-/// and consistently oriented even for the many coplanar points of voxel
-/// hulls (parry's quickhull can return overlapping triangles there).
-fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, String> {
-    struct Face {
-        v: [usize; 3],
-        n: Vector3<f64>,
-        b: f64,
-        alive: bool,
-    }
-    let make = |v: [usize; 3]| -> Face {
-        let n = (pts[v[1]] - pts[v[0]]).cross(&(pts[v[2]] - pts[v[0]]));
-        let n = n / n.norm().max(f64::MIN_POSITIVE);
-        Face {
-            v,
-            n,
-            b: n.dot(&pts[v[0]]),
-            alive: true,
-        }
+/// Exact orientation of `x` against the plane of the triangle `a b c`
+/// (counter-clockwise seen from outside): `> 0` strictly outside, `0` on the
+/// plane, `< 0` inside. The sign is exact for every finite input (Shewchuk's
+/// adaptive predicate); the magnitude is `((b − a) × (c − a))·(x − a)` to
+/// within round-off, i.e. twice the triangle's area times the signed
+/// distance of `x` from its plane.
+fn orient(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>, x: &Vector3<f64>) -> f64 {
+    let p = |v: &Vector3<f64>| robust::Coord3D {
+        x: v.x,
+        y: v.y,
+        z: v.z,
     };
-    // Initial tetrahedron from extreme points.
+    // Shewchuk's orient3d is positive when `x` lies below the plane seen
+    // with `a b c` counter-clockwise from above: the opposite sign.
+    -robust::orient3d(p(a), p(b), p(c), p(x))
+}
+
+/// One triangle of the hull under construction.
+struct Face {
+    v: [usize; 3],
+    /// `|(b − a) × (c − a)|`: turns [`orient`] into a distance.
+    area2: f64,
+    alive: bool,
+}
+
+/// Incremental (beneath–beyond) 3-D convex hull with exact predicates.
+///
+/// A point is added when it lies strictly outside some face by the exact
+/// [`orient`] test *and* its distance from that face's plane exceeds `eps`;
+/// points within `eps` of the current hull are left out (so the many
+/// coplanar points of voxel hulls make no slivers). Because visibility is
+/// decided exactly, the triangles always bound the exact convex hull of the
+/// points added so far: the faces a new point sees form one connected region
+/// with a single horizon loop, and the surface stays closed and consistently
+/// oriented whatever the round-off in the coordinates.
+///
+/// Why exact: the earlier version decided visibility with floating planes
+/// `n·x − b > eps` whose unit normals come from nearly degenerate triangles;
+/// on dense CAD meshes those tests disagree between neighbouring faces, the
+/// hull drifts slightly non-convex, a later point then sees a region whose
+/// horizon touches itself, the directed-edge map loses a twin and the
+/// construction stopped with "open surface" on watertight meshes.
+fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, String> {
+    let init = initial_simplex(pts, eps)?;
+    let mut hull = Incremental {
+        pts,
+        faces: Vec::new(),
+        edge: HashMap::new(),
+    };
+    let [i0, i1, i2, i3] = init;
+    // The tetrahedron, each face oriented so that the opposite corner lies
+    // strictly inside (the same faces, in the same order, as the earlier
+    // floating-point version: inputs it handled get the same triangles).
+    for (v, opposite) in [
+        ([i0, i1, i2], i3),
+        ([i0, i1, i3], i2),
+        ([i0, i2, i3], i1),
+        ([i1, i2, i3], i0),
+    ] {
+        let [a, b, c] = v;
+        if orient(&pts[a], &pts[b], &pts[c], &pts[opposite]) > 0.0 {
+            hull.push([a, c, b]);
+        } else {
+            hull.push(v);
+        }
+    }
+    // Points in input order: coplanar facets (boxes, voxel hulls) are
+    // triangulated as before, which downstream meshes (the IPC baseline's
+    // contact surfaces) depend on.
+    for p in (0..pts.len()).filter(|k| !init.contains(k)) {
+        hull.insert(p, eps)?;
+    }
+    Ok(hull.faces.iter().filter(|f| f.alive).map(|f| f.v).collect())
+}
+
+/// Four points spanning the largest tetrahedron found greedily: the point of
+/// least `x`, the point farthest from it, the point farthest from their line
+/// and the point farthest from their plane. Fails with a plain reason on
+/// (nearly, within `eps`) collinear or coplanar input.
+fn initial_simplex(pts: &[Vector3<f64>], eps: f64) -> Result<[usize; 4], String> {
+    // Ties: the first point of least `x`, the last of the farthest (the
+    // earlier version's choices, kept so that its triangles are kept).
+    let argmax = |f: &dyn Fn(usize) -> f64| {
+        (0..pts.len())
+            .max_by(|&a, &b| f(a).total_cmp(&f(b)))
+            .unwrap_or(0)
+    };
     let i0 = (0..pts.len())
         .min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x))
-        .unwrap();
-    let i1 = (0..pts.len())
-        .max_by(|&a, &b| {
-            (pts[a] - pts[i0])
-                .norm()
-                .total_cmp(&(pts[b] - pts[i0]).norm())
-        })
-        .unwrap();
+        .unwrap_or(0);
+    let i1 = argmax(&|k| (pts[k] - pts[i0]).norm());
     let d01 = (pts[i1] - pts[i0]).normalize();
     let line = |k: usize| {
         let w = pts[k] - pts[i0];
         (w - d01 * d01.dot(&w)).norm()
     };
-    let i2 = (0..pts.len())
-        .max_by(|&a, &b| line(a).total_cmp(&line(b)))
-        .unwrap();
-    if line(i2) <= eps {
+    let i2 = argmax(&line);
+    if !(line(i2) > eps) {
         return Err("the points are collinear".into());
     }
     let nrm = (pts[i1] - pts[i0]).cross(&(pts[i2] - pts[i0])).normalize();
-    let off = |k: usize| nrm.dot(&(pts[k] - pts[i0]));
-    let i3 = (0..pts.len())
-        .max_by(|&a, &b| off(a).abs().total_cmp(&off(b).abs()))
-        .unwrap();
-    if off(i3).abs() <= eps {
+    let off = |k: usize| nrm.dot(&(pts[k] - pts[i0])).abs();
+    let i3 = argmax(&off);
+    if !(off(i3) > eps) || orient(&pts[i0], &pts[i1], &pts[i2], &pts[i3]) == 0.0 {
         return Err("the points are coplanar: the hull encloses no volume".into());
     }
-    let centre = (pts[i0] + pts[i1] + pts[i2] + pts[i3]) / 4.0;
-    let mut faces: Vec<Face> = Vec::new();
-    let mut edge: std::collections::HashMap<(usize, usize), usize> =
-        std::collections::HashMap::new();
-    let add = |faces: &mut Vec<Face>,
-               edge: &mut std::collections::HashMap<(usize, usize), usize>,
-               mut v: [usize; 3]| {
-        let mut f = make(v);
-        if f.n.dot(&centre) > f.b {
-            v.swap(1, 2);
-            f = make(v);
-        }
+    Ok([i0, i1, i2, i3])
+}
+
+/// The hull under construction: triangles and the directed-edge map
+/// `(a, b) → face` (each edge is stored once per direction; the twin
+/// `(b, a)` belongs to the neighbouring face).
+struct Incremental<'a> {
+    pts: &'a [Vector3<f64>],
+    faces: Vec<Face>,
+    edge: HashMap<(usize, usize), usize>,
+}
+
+impl Incremental<'_> {
+    fn push(&mut self, v: [usize; 3]) {
+        let p = self.pts;
+        let area2 = (p[v[1]] - p[v[0]]).cross(&(p[v[2]] - p[v[0]])).norm();
         for k in 0..3 {
-            edge.insert((v[k], v[(k + 1) % 3]), faces.len());
+            self.edge.insert((v[k], v[(k + 1) % 3]), self.faces.len());
         }
-        faces.push(f);
-    };
-    for v in [[i0, i1, i2], [i0, i1, i3], [i0, i2, i3], [i1, i2, i3]] {
-        add(&mut faces, &mut edge, v);
+        self.faces.push(Face {
+            v,
+            area2,
+            alive: true,
+        });
     }
-    let initial = [i0, i1, i2, i3];
-    for (p, &x) in pts.iter().enumerate() {
-        if initial.contains(&p) {
-            continue;
+
+    /// Exact orientation of point `x` against face `f`.
+    fn side(&self, f: usize, x: usize) -> f64 {
+        let [a, b, c] = self.faces[f].v;
+        let p = self.pts;
+        orient(&p[a], &p[b], &p[c], &p[x])
+    }
+
+    /// Adds point `x` if it lies farther than `eps` outside the hull.
+    fn insert(&mut self, x: usize, eps: f64) -> Result<(), String> {
+        // The face that sees `x` farthest (exactly visible ones only).
+        let mut seed = None;
+        let mut best = eps;
+        for f in 0..self.faces.len() {
+            if !self.faces[f].alive {
+                continue;
+            }
+            let s = self.side(f, x);
+            if s > 0.0 {
+                let d = s / self.faces[f].area2.max(f64::MIN_POSITIVE);
+                if d > best {
+                    best = d;
+                    seed = Some(f);
+                }
+            }
         }
-        // The visible region is grown from the face that sees `x` best,
-        // through shared edges only: a connected region has a single
-        // horizon loop even when round-off makes a far face's visibility
-        // test disagree with its neighbours' (which would otherwise open
-        // the surface).
-        let Some(seed) = (0..faces.len())
-            .filter(|&f| faces[f].alive)
-            .map(|f| (f, faces[f].n.dot(&x) - faces[f].b))
-            .filter(|&(_, d)| d > eps)
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(f, _)| f)
-        else {
-            continue;
-        };
-        let mut in_region = std::collections::HashSet::from([seed]);
+        let Some(seed) = seed else { return Ok(()) };
+        // Visible region: exactly visible faces connected to the seed.
+        let mut in_region = HashSet::from([seed]);
         let mut visible = vec![seed];
         let mut k_next = 0;
         while k_next < visible.len() {
-            let v = faces[visible[k_next]].v;
+            let v = self.faces[visible[k_next]].v;
             k_next += 1;
             for k in 0..3 {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
-                let Some(&o) = edge.get(&(b, a)) else {
-                    return Err("convex hull failed: open surface".into());
+                let Some(&o) = self.edge.get(&(b, a)) else {
+                    return Err(format!(
+                        "convex hull: internal error, edge ({a}, {b}) has no twin"
+                    ));
                 };
-                if faces[o].alive
-                    && !in_region.contains(&o)
-                    && faces[o].n.dot(&x) - faces[o].b > eps
-                {
+                if !in_region.contains(&o) && self.side(o, x) > 0.0 {
                     in_region.insert(o);
                     visible.push(o);
                 }
@@ -176,30 +247,31 @@ fn hull3d_indexed(pts: &[Vector3<f64>], eps: f64) -> Result<Vec<[usize; 3]>, Str
         }
         let mut horizon = Vec::new();
         for &f in &visible {
-            let v = faces[f].v;
+            let v = self.faces[f].v;
             for k in 0..3 {
                 let (a, b) = (v[k], v[(k + 1) % 3]);
-                if !in_region.contains(&edge[&(b, a)]) {
+                if !in_region.contains(&self.edge[&(b, a)]) {
                     horizon.push((a, b));
                 }
             }
         }
+        let mut starts: Vec<usize> = horizon.iter().map(|e| e.0).collect();
+        starts.sort_unstable();
+        if starts.windows(2).any(|w| w[0] == w[1]) {
+            return Err("convex hull: internal error, the horizon is not a simple loop".into());
+        }
         for &f in &visible {
-            faces[f].alive = false;
-            let v = faces[f].v;
+            self.faces[f].alive = false;
+            let v = self.faces[f].v;
             for k in 0..3 {
-                edge.remove(&(v[k], v[(k + 1) % 3]));
+                self.edge.remove(&(v[k], v[(k + 1) % 3]));
             }
         }
         for (a, b) in horizon {
-            let f = make([a, b, p]);
-            for (u, w) in [(a, b), (b, p), (p, a)] {
-                edge.insert((u, w), faces.len());
-            }
-            faces.push(f);
+            self.push([a, b, x]);
         }
+        Ok(())
     }
-    Ok(faces.iter().filter(|f| f.alive).map(|f| f.v).collect())
 }
 
 /// [`hull3d_indexed`] with the used points gathered into a vertex list.
@@ -294,10 +366,18 @@ impl Polytope {
     }
 }
 
-/// Signed volume of a closed, consistently oriented triangle mesh.
+/// Signed volume of a closed, consistently oriented triangle mesh:
+/// `V = Σ (a − o)·((b − o) × (c − o))/6` over its triangles `abc`, with
+/// `o` the first triangle's first corner. Any `o` gives the same volume in
+/// exact arithmetic; one on the mesh keeps the terms of the size of the
+/// mesh, not of its distance from the origin (about the origin, a unit
+/// sphere 1e6 m away summed terms of 1e18 to a volume off by 1e3).
 pub fn mesh_volume(v: &[Vector3<f64>], tris: &[[usize; 3]]) -> f64 {
+    let Some(o) = tris.first().map(|t| v[t[0]]) else {
+        return 0.0;
+    };
     tris.iter()
-        .map(|t| v[t[0]].dot(&v[t[1]].cross(&v[t[2]])))
+        .map(|t| (v[t[0]] - o).dot(&(v[t[1]] - o).cross(&(v[t[2]] - o))))
         .sum::<f64>()
         / 6.0
 }

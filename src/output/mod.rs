@@ -92,35 +92,153 @@ impl Trajectory {
     }
 
     fn csv(&self, velocities: Option<(f64, &DVector<f64>)>) -> String {
+        let mut fmt = CsvRows::new(velocities);
+        let mut s = fmt.header(&self.names);
+        for (t, q) in self.times.iter().zip(&self.states) {
+            fmt.row(*t, q, &mut s);
+        }
+        s
+    }
+}
+
+/// The trajectory CSV's text, row by row: what [`Trajectory::to_csv`]
+/// writes and what [`CsvStream`] streams (one formatter, so both are
+/// byte-identical).
+#[derive(Clone, Debug)]
+pub struct CsvRows {
+    /// `Δt` and the initial velocity, when velocity columns are written.
+    velocities: Option<(f64, DVector<f64>)>,
+    /// The previous row's coordinates (velocity differences).
+    prev: Option<DVector<f64>>,
+}
+
+impl CsvRows {
+    /// `velocities`: `Some((Δt, q̇₀))` adds the `<name>:v` columns.
+    pub fn new(velocities: Option<(f64, &DVector<f64>)>) -> Self {
+        CsvRows {
+            velocities: velocities.map(|(dt, v)| (dt, v.clone())),
+            prev: None,
+        }
+    }
+
+    /// The header line (with its newline).
+    pub fn header(&self, names: &[String]) -> String {
         let mut s = String::from("t");
-        for n in &self.names {
+        for n in names {
             s.push(',');
             s.push_str(n);
         }
-        if velocities.is_some() {
-            for n in &self.names {
+        if self.velocities.is_some() {
+            for n in names {
                 s.push_str(&format!(",{n}:v"));
             }
         }
         s.push('\n');
-        for (k, (t, q)) in self.times.iter().zip(&self.states).enumerate() {
-            s.push_str(&format!("{t}"));
-            for v in q.iter() {
+        s
+    }
+
+    /// Appends the row of time `t` and coordinates `q` (with its newline).
+    pub fn row(&mut self, t: f64, q: &DVector<f64>, s: &mut String) {
+        s.push_str(&format!("{t}"));
+        for v in q.iter() {
+            s.push_str(&format!(",{v}"));
+        }
+        if let Some((dt, qdot0)) = &self.velocities {
+            for i in 0..q.len() {
+                let v = match &self.prev {
+                    None => qdot0[i],
+                    Some(p) => (q[i] - p[i]) / dt,
+                };
                 s.push_str(&format!(",{v}"));
             }
-            if let Some((dt, qdot0)) = velocities {
-                for i in 0..q.len() {
-                    let v = if k == 0 {
-                        qdot0[i]
-                    } else {
-                        (q[i] - self.states[k - 1][i]) / dt
-                    };
-                    s.push_str(&format!(",{v}"));
-                }
-            }
-            s.push('\n');
+            self.prev = Some(q.clone());
         }
-        s
+        s.push('\n');
+    }
+}
+
+/// A trajectory CSV written while the run goes on: memory stays bounded
+/// whatever the number of steps, and the file holds whole rows only at any
+/// moment (each row reaches the buffer in one piece and the buffer is
+/// written out at row boundaries), so an interrupted or failed run leaves a
+/// valid prefix. Rows are flushed at least every [`CsvStream::FLUSH_EVERY`].
+pub struct CsvStream {
+    path: PathBuf,
+    file: std::io::BufWriter<std::fs::File>,
+    rows: CsvRows,
+    line: String,
+    written: usize,
+    last_flush: std::time::Instant,
+}
+
+impl CsvStream {
+    /// Longest time rows wait in memory before they reach the file.
+    pub const FLUSH_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+    /// Creates (truncates) `path` and writes the header.
+    pub fn create(
+        path: &Path,
+        names: &[String],
+        velocities: Option<(f64, &DVector<f64>)>,
+    ) -> Result<Self, OutputError> {
+        let io = |source| OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(io)?;
+        }
+        let f = std::fs::File::create(path).map_err(io)?;
+        let mut file = std::io::BufWriter::with_capacity(1 << 20, f);
+        let rows = CsvRows::new(velocities);
+        file.write_all(rows.header(names).as_bytes()).map_err(io)?;
+        file.flush().map_err(io)?;
+        Ok(CsvStream {
+            path: path.to_path_buf(),
+            file,
+            rows,
+            line: String::new(),
+            written: 0,
+            last_flush: std::time::Instant::now(),
+        })
+    }
+
+    fn io(&self, source: std::io::Error) -> OutputError {
+        OutputError::Io {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// Appends one row.
+    pub fn push(&mut self, t: f64, q: &DVector<f64>) -> Result<(), OutputError> {
+        self.line.clear();
+        self.rows.row(t, q, &mut self.line);
+        if let Err(e) = self.file.write_all(self.line.as_bytes()) {
+            return Err(self.io(e));
+        }
+        self.written += 1;
+        if self.last_flush.elapsed() >= Self::FLUSH_EVERY {
+            self.last_flush = std::time::Instant::now();
+            if let Err(e) = self.file.flush() {
+                return Err(self.io(e));
+            }
+        }
+        Ok(())
+    }
+
+    /// Rows written so far (without the header).
+    pub fn rows(&self) -> usize {
+        self.written
+    }
+
+    /// Writes out what is buffered and syncs the file.
+    pub fn finish(mut self) -> Result<(), OutputError> {
+        if let Err(e) = self.file.flush() {
+            return Err(self.io(e));
+        }
+        let r = self.file.get_ref().sync_all();
+        r.map_err(|e| self.io(e))
     }
 }
 
@@ -245,6 +363,7 @@ impl Summary {
         ])
     }
 
+    /// The summary of a recorded run (folded through [`RunStats`]).
     pub fn new(
         scene: &str,
         dt: f64,
@@ -252,38 +371,141 @@ impl Summary {
         wall_seconds: f64,
         stages: Vec<StageTime>,
     ) -> Self {
-        let d = &traj.diagnostics;
-        let steps = d.len();
-        let total: usize = d.iter().map(|x| x.newton.iters).sum();
+        let mut stats = RunStats::new();
+        for d in &traj.diagnostics {
+            stats.push(d);
+        }
+        stats.summary(
+            scene,
+            dt,
+            &traj.names,
+            traj.states.last(),
+            wall_seconds,
+            stages,
+        )
+    }
+}
+
+/// The statistics of a [`Summary`], folded one step at a time, so that a
+/// streamed run of any length keeps constant memory; every sum and extreme
+/// is taken in step order, as over a recorded trajectory.
+#[derive(Clone, Debug)]
+pub struct RunStats {
+    steps: usize,
+    total_iterations: usize,
+    max_iterations: usize,
+    max_final_gradient: f64,
+    at_floor: usize,
+    at_step_floor: usize,
+    first: Option<StepDiagnostics>,
+    last: Option<StepDiagnostics>,
+    max_abs_drift: f64,
+    max_momentum_change: f64,
+    /// Work sums (controller, friction, contact, other) of steps 2…H;
+    /// `None` once a step has no work record.
+    work: Option<[f64; 4]>,
+    min_distance: f64,
+    steps_in_contact: usize,
+    max_active_pairs: usize,
+    ccd: crate::contact::ccd::CcdStats,
+}
+
+impl Default for RunStats {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RunStats {
+    pub fn new() -> Self {
+        let zero: f64 = std::iter::empty::<f64>().sum();
+        RunStats {
+            steps: 0,
+            total_iterations: 0,
+            max_iterations: 0,
+            max_final_gradient: 0.0,
+            at_floor: 0,
+            at_step_floor: 0,
+            first: None,
+            last: None,
+            max_abs_drift: 0.0,
+            max_momentum_change: 0.0,
+            work: Some([zero; 4]),
+            min_distance: f64::INFINITY,
+            steps_in_contact: 0,
+            max_active_pairs: 0,
+            ccd: Default::default(),
+        }
+    }
+
+    /// Steps folded so far.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Folds one completed step.
+    pub fn push(&mut self, d: &StepDiagnostics) {
+        self.steps += 1;
+        self.total_iterations += d.newton.iters;
+        self.max_iterations = self.max_iterations.max(d.newton.iters);
+        self.max_final_gradient = f64::max(self.max_final_gradient, d.newton.grad_inf);
+        self.at_floor += usize::from(d.newton.at_floor);
+        self.at_step_floor += usize::from(d.newton.at_step_floor);
+        let a = *self.first.get_or_insert(*d);
+        if self.steps > 1 {
+            self.work = match (self.work, d.work) {
+                (Some(s), Some(w)) => Some([
+                    s[0] + w.controller,
+                    s[1] + w.friction,
+                    s[2] + w.contact,
+                    s[3] + w.other,
+                ]),
+                _ => None,
+            };
+        }
+        let e0 = a.kinetic + a.potential;
+        self.max_abs_drift = f64::max(self.max_abs_drift, (d.kinetic + d.potential - e0).abs());
+        let dp = (0..3)
+            .map(|k| (d.momentum[k] - a.momentum[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        self.max_momentum_change = f64::max(self.max_momentum_change, dp);
+        self.min_distance = f64::min(self.min_distance, d.min_distance);
+        self.steps_in_contact += usize::from(d.contact_pairs > 0);
+        self.max_active_pairs = self.max_active_pairs.max(d.contact_pairs);
+        self.ccd.merge(&d.ccd);
+        self.last = Some(*d);
+    }
+
+    /// The summary: `names` and `final_q` give the final state.
+    pub fn summary(
+        &self,
+        scene: &str,
+        dt: f64,
+        names: &[String],
+        final_q: Option<&DVector<f64>>,
+        wall_seconds: f64,
+        stages: Vec<StageTime>,
+    ) -> Summary {
+        let steps = self.steps;
         let newton = NewtonStats {
             mean_iterations: if steps > 0 {
-                total as f64 / steps as f64
+                self.total_iterations as f64 / steps as f64
             } else {
                 0.0
             },
-            max_iterations: d.iter().map(|x| x.newton.iters).max().unwrap_or(0),
-            total_iterations: total,
-            max_final_gradient: d.iter().map(|x| x.newton.grad_inf).fold(0.0, f64::max),
-            steps_at_roundoff_floor: d.iter().filter(|x| x.newton.at_floor).count(),
-            steps_at_step_floor: d.iter().filter(|x| x.newton.at_step_floor).count(),
+            max_iterations: self.max_iterations,
+            total_iterations: self.total_iterations,
+            max_final_gradient: self.max_final_gradient,
+            steps_at_roundoff_floor: self.at_floor,
+            steps_at_step_floor: self.at_step_floor,
         };
-        let final_state = traj
-            .states
-            .last()
-            .map(|q| traj.names.iter().cloned().zip(q.iter().copied()).collect())
+        let final_state = final_q
+            .map(|q| names.iter().cloned().zip(q.iter().copied()).collect())
             .unwrap_or_default();
-        let energy = d.first().zip(d.last()).map(|(a, b)| {
+        let energy = self.first.zip(self.last).map(|(a, b)| {
             let e0 = a.kinetic + a.potential;
-            // Work of steps 2…H: the energy of step 1 is the first reported.
-            let works: Option<Vec<crate::sim::StepWork>> = d[1..].iter().map(|x| x.work).collect();
-            let balance = works.filter(|_| d.len() > 1).map(|w| {
-                let sum = |f: fn(&crate::sim::StepWork) -> f64| w.iter().map(f).sum::<f64>();
-                let (c, f, k, o) = (
-                    sum(|x| x.controller),
-                    sum(|x| x.friction),
-                    sum(|x| x.contact),
-                    sum(|x| x.other),
-                );
+            let balance = self.work.filter(|_| steps > 1).map(|[c, f, k, o]| {
                 let change = b.kinetic + b.potential - e0;
                 EnergyBalance {
                     change,
@@ -301,48 +523,28 @@ impl Summary {
                 kinetic_final: b.kinetic,
                 potential_final: b.potential,
                 total_final: b.kinetic + b.potential,
-                max_abs_drift: d
-                    .iter()
-                    .map(|x| (x.kinetic + x.potential - e0).abs())
-                    .fold(0.0, f64::max),
+                max_abs_drift: self.max_abs_drift,
                 balance,
             }
         });
-        let linear_momentum = d.first().zip(d.last()).map(|(a, b)| MomentumStats {
+        let linear_momentum = self.first.zip(self.last).map(|(a, b)| MomentumStats {
             first: a.momentum,
             last: b.momentum,
-            max_change: d
-                .iter()
-                .map(|x| {
-                    (0..3)
-                        .map(|k| (x.momentum[k] - a.momentum[k]).powi(2))
-                        .sum::<f64>()
-                        .sqrt()
-                })
-                .fold(0.0, f64::max),
+            max_change: self.max_momentum_change,
         });
-        let min_d = d
-            .iter()
-            .map(|x| x.min_distance)
-            .fold(f64::INFINITY, f64::min);
+        let min_d = self.min_distance;
         let contact = ContactStats {
-            steps_in_contact: d.iter().filter(|x| x.contact_pairs > 0).count(),
-            max_active_pairs: d.iter().map(|x| x.contact_pairs).max().unwrap_or(0),
+            steps_in_contact: self.steps_in_contact,
+            max_active_pairs: self.max_active_pairs,
             min_distance: min_d.is_finite().then_some(min_d),
-            ccd: d.iter().fold(
-                Default::default(),
-                |mut s: crate::contact::ccd::CcdStats, x| {
-                    s.merge(&x.ccd);
-                    s
-                },
-            ),
+            ccd: self.ccd,
         };
         Summary {
-            units: Self::units(),
+            units: Summary::units(),
             scene: scene.to_string(),
             steps,
             dt,
-            dof: traj.names.len(),
+            dof: names.len(),
             wall_seconds,
             seconds_per_step: if steps > 0 {
                 wall_seconds / steps as f64

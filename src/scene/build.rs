@@ -35,6 +35,42 @@ pub const MAX_DOF: usize = 10_000;
 /// Most links one robot (or generated chain) may have.
 pub const MAX_LINKS: usize = 10_000;
 
+/// Longest time step a scene may have (s). Every step adds `Δt²·g` and
+/// `Δt·q̇` terms to the incremental potential: beyond minutes they carry
+/// no meaning for a robot (and at `Δt ≳ 1e154 s`, `Δt²` overflows).
+pub const MAX_DT: f64 = 1.0e3;
+
+/// Checks a time step and a step count together: `0 < Δt ≤` [`MAX_DT`],
+/// the end time `t_H = H·Δt` finite and still advancing by `Δt` at its end
+/// (`t_H + Δt > t_H`, else the `t` column would stall). `steps_key` names
+/// where `H` came from (`steps`, or `--steps` on the command line).
+pub fn check_duration(dt: f64, steps: usize, steps_key: &str) -> Result<(), Invalid> {
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(Invalid::new(
+            "dt",
+            format!("the time step must be positive and finite, got {dt}"),
+        ));
+    }
+    if dt > MAX_DT {
+        return Err(Invalid::new(
+            "dt",
+            format!(
+                "a time step of {dt:e} s is physically meaningless for a robot simulation (at most {MAX_DT:e} s)"
+            ),
+        ));
+    }
+    let end = dt * steps as f64;
+    if !(end.is_finite() && end + dt > end) {
+        return Err(Invalid::new(
+            steps_key,
+            format!(
+                "{steps} steps of dt = {dt:e} s end at t = {end:e} s, where time no longer advances by dt in double precision"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
     if spec.version != 1 {
         return Err(Invalid::new(
@@ -45,12 +81,7 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
             ),
         ));
     }
-    if !(spec.dt > 0.0 && spec.dt.is_finite()) {
-        return Err(Invalid::new(
-            "dt",
-            format!("the time step must be positive and finite, got {}", spec.dt),
-        ));
-    }
+    check_duration(spec.dt, spec.steps, "steps")?;
     check_finite("gravity", "gravity", &spec.gravity)?;
     let s = &spec.solver;
     if !(s.tol > 0.0 && s.tol.is_finite()) {

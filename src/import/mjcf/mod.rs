@@ -42,7 +42,10 @@
 //! - joint ranges → limits, `damping`/`armature`/`frictionloss` → the
 //!   scene's `joint_damping`/`armature`/`joint_friction` effects, gravity →
 //!   the scene's gravity. Tendons, equality constraints, actuators, joint
-//!   springs and height fields are reported in the notes and left out.
+//!   springs and height fields are reported in the notes and left out;
+//! - geom sliding friction → the scene's one contact `μ` (MuJoCo's pair
+//!   value `max(μ₁, μ₂)`, largest over the pairs with the floor; other pair
+//!   values are listed in the notes: [`contact_friction`]).
 
 mod bodies;
 pub mod dump;
@@ -76,6 +79,55 @@ pub struct MjcfScene {
     /// Links that never collide with each obstacle: (obstacle, link).
     pub exclude_obstacle: Vec<[String; 2]>,
     pub effects: Vec<EffectSpec>,
+    /// The one friction coefficient the scene's contact takes (see
+    /// [`contact_friction`]); `None` when no two geoms may collide.
+    pub friction: Option<f64>,
+}
+
+/// The scene has one friction coefficient; MuJoCo gives each contact pair
+/// `max(μ₁, μ₂)` of its two geoms' sliding friction (equal priorities, the
+/// default). Taken: the largest pair value over the pairs that involve a
+/// world geom (the floor) when there are any, else over all pairs; a report
+/// line says which, and lists the other pair values when they differ
+/// (torsional and rolling friction are not modelled).
+pub fn contact_friction(d: &dump::Dump, notes: &mut Vec<String>) -> Option<f64> {
+    let g: Vec<&DumpGeom> = d.geoms.iter().filter(|g| g.collides()).collect();
+    let mut world_pairs = Vec::new();
+    let mut all_pairs = Vec::new();
+    for (i, a) in g.iter().enumerate() {
+        for b in &g[i + 1..] {
+            if a.body == b.body || !a.may_collide_with(b) {
+                continue;
+            }
+            let mu = a.friction.max(b.friction);
+            all_pairs.push(mu);
+            if a.body < 0 || b.body < 0 {
+                world_pairs.push(mu);
+            }
+        }
+    }
+    let (pairs, which) = if world_pairs.is_empty() {
+        (&all_pairs, "geom pairs")
+    } else {
+        (&world_pairs, "pairs with a world geom")
+    };
+    let mu = pairs.iter().copied().fold(f64::NAN, f64::max);
+    if mu.is_nan() {
+        return None;
+    }
+    let mut distinct: Vec<f64> = all_pairs.clone();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    let mut line = format!(
+        "contact friction μ = {mu} (MuJoCo's pair value max(μ₁, μ₂), largest over the {which})"
+    );
+    if distinct.len() > 1 {
+        line.push_str(&format!(
+            "; the scene has one μ, so the other pair values {distinct:?} are not represented"
+        ));
+    }
+    notes.push(line);
+    Some(mu)
 }
 
 /// Whether `path` is an MJCF file (its root element is `<mujoco>`).
@@ -126,6 +178,7 @@ pub fn read_mjcf(
             _ => world_geoms.push(g),
         }
     }
+    let friction = contact_friction(&d, &mut notes);
     let weld = filter::weld_groups(path, &d)?;
     let bodies = bodies::body_links(path, &d, &geoms_of, opts, &mut notes)?;
     let exclude = filter::body_pairs(&d, &weld, &geoms_of, &bodies);
@@ -162,6 +215,7 @@ pub fn read_mjcf(
             exclude_ground,
             exclude_obstacle,
             effects,
+            friction,
         },
     ))
 }
