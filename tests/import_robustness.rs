@@ -206,6 +206,7 @@ fn vhacd_parts_spanned_by_mesh_vertices_make_three_hull_feet() {
         }
         assert!(foreign <= 8, "{robot}: {foreign} points not from the mesh");
     }
+}
 
 /// Cosmetic material parts that `urdf-rs` refuses (an empty `<texture/>`,
 /// as in icub and romeo; a `<color>` without rgba; a `<material>` without
