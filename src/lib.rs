@@ -17,6 +17,7 @@ pub mod control;
 pub mod counters;
 pub mod diff;
 pub mod energy;
+pub mod files;
 pub mod geometry;
 pub mod import;
 pub mod kinematics;

@@ -85,8 +85,7 @@ fn import_robot(
         report,
         force,
         no_bridge: !bridge,
-        ties: ValueEnum::from_str(&ties.replace('_', "-"), true)
-            .map_err(|_| pick("ties", ties))?,
+        ties: ValueEnum::from_str(&ties.replace('_', "-"), true).map_err(|_| pick("ties", ties))?,
         quiet: true,
         base: ValueEnum::from_str(base, true).map_err(|_| pick("base", base))?,
         ground,

@@ -226,7 +226,7 @@ pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), Calibr
     };
     if dir.exists() {
         for (name, bytes) in files {
-            crate::output::write_atomic(&dir.join(name), bytes).map_err(|e| {
+            crate::files::write_atomic(&dir.join(name), bytes).map_err(|e| {
                 CalibrateError::Output {
                     path: dir.join(name),
                     msg: e.to_string(),

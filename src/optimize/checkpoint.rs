@@ -114,7 +114,7 @@ pub fn save(dir: &Path, key: &RunKey, state: &State) -> anyhow::Result<()> {
         key: key.clone(),
         state: state.clone(),
     };
-    crate::output::write_atomic(&dir.join(FILE), serde_json::to_string(&c)?.as_bytes())?;
+    crate::files::write_atomic(&dir.join(FILE), serde_json::to_string(&c)?.as_bytes())?;
     Ok(())
 }
 

@@ -4,8 +4,8 @@
 //! and the optimized design; and a runnable optimized scene per trajectory.
 
 use super::{Outcome, Problem, grasp, multi, names, output};
+use crate::files::write_atomic;
 use crate::geometry::topology;
-use crate::output::write_atomic;
 use nalgebra::DVector;
 use std::path::Path;
 

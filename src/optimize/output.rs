@@ -2,9 +2,9 @@
 
 use super::{IterRecord, Outcome, Problem};
 use crate::control::Controller;
+use crate::files::write_atomic;
 use crate::math::{compose, rigid_inverse, rot};
 use crate::model::{JointKind, MassModel, Model};
-use crate::output::write_atomic;
 use crate::scene::schema::{
     Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
     Origin, SceneSpec, SignalList,

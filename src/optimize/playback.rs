@@ -14,10 +14,10 @@
 //! do not touch the optimization.
 
 use super::Problem;
+use crate::files::write_atomic;
 use crate::output::contacts::{active_contacts, contacts_csv};
 use crate::output::picture::{Panel, PictureOptions, render_hulls_svg};
 use crate::output::playback::Playback;
-use crate::output::write_atomic;
 use crate::scene::environment::ENVIRONMENT;
 use nalgebra::DVector;
 use std::path::Path;

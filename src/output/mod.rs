@@ -16,67 +16,11 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A problem writing outputs.
-#[derive(Debug, thiserror::Error)]
-pub enum OutputError {
-    #[error("{}: cannot write: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{}: refusing to overwrite an input file", path.display())]
-    WouldOverwriteInput { path: PathBuf },
-}
+pub use crate::files::{OutputError, write_atomic};
+pub use crate::sim::trajectory::Trajectory;
 
-/// Writes `bytes` to `path` atomically.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io)?;
-    }
-    let file_name = path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
-    let res = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if res.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    res.map_err(io)
-}
-
-/// Trajectory and per-step diagnostics of a run.
-#[derive(Clone, Debug, Default)]
-pub struct Trajectory {
-    pub names: Vec<String>,
-    pub times: Vec<f64>,
-    /// Reported coordinates per recorded time (charted rotations as absolute
-    /// rotation vectors).
-    pub states: Vec<DVector<f64>>,
-    /// Diagnostics per completed step (one fewer than `states`).
-    pub diagnostics: Vec<StepDiagnostics>,
-    /// Link poses per recorded time, when recording was asked for.
-    pub poses: Vec<Vec<crate::math::Pose>>,
-}
-
+/// Writing a trajectory as CSV (the type lives in `sim`, which records it).
 impl Trajectory {
-    pub fn new(model: &Model) -> Self {
-        Trajectory {
-            names: model.dofs.iter().map(|d| d.name.clone()).collect(),
-            ..Default::default()
-        }
-    }
-
     /// CSV text: a `t` column, then one column per coordinate. Numbers use
     /// Rust's shortest round-trip formatting (bit-exact and deterministic).
     pub fn to_csv(&self) -> String {

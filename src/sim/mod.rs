@@ -16,6 +16,7 @@ pub mod run;
 pub mod small_cholesky;
 pub mod state;
 pub mod substitution;
+pub mod trajectory;
 
 pub use crate::counters::{StageTime, StageTimers, StepDiagnostics, StepWork};
 

@@ -1,9 +1,9 @@
 //! Running a scene for a number of steps, recording the trajectory or
 //! handing each state to an observer (streamed outputs).
 
+use super::trajectory::Trajectory;
 use super::{Simulator, StepError};
 use crate::counters::StepDiagnostics;
-use crate::output::Trajectory;
 use std::ops::ControlFlow;
 
 /// Runs `steps` steps, recording `θ` at every step (including `t = 0`).
