@@ -103,14 +103,13 @@ fn test_files(files: &[(String, String)]) -> BTreeSet<String> {
         };
         let mut lines = text.lines().map(str::trim);
         while let Some(line) = lines.next() {
-            if line.starts_with("#[cfg(test)]") {
-                if let Some(name) = lines
+            if line.starts_with("#[cfg(test)]")
+                && let Some(name) = lines
                     .next()
                     .and_then(|l| l.strip_prefix("mod "))
                     .and_then(|l| l.strip_suffix(';'))
-                {
-                    out.insert(format!("{dir}{name}.rs"));
-                }
+            {
+                out.insert(format!("{dir}{name}.rs"));
             }
         }
     }

@@ -325,8 +325,7 @@ fn controller_step_probe() {
         _ => 0,
     };
     let only = |keep: &dyn Fn(usize) -> bool| {
-        let v = DVector::from_fn(g.len(), |i, _| if keep(kind_of(i)) { g[i] } else { 0.0 });
-        v
+        DVector::from_fn(g.len(), |i, _| if keep(kind_of(i)) { g[i] } else { 0.0 })
     };
     for (label, gk) in [
         ("full", g.clone()),
