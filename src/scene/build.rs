@@ -72,39 +72,7 @@ pub fn check_duration(dt: f64, steps: usize, steps_key: &str) -> Result<(), Inva
 }
 
 pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
-    if spec.version != 1 {
-        return Err(Invalid::new(
-            "version",
-            format!(
-                "unsupported schema version {} (this build reads version 1)",
-                spec.version
-            ),
-        ));
-    }
-    check_duration(spec.dt, spec.steps, "steps")?;
-    check_finite("gravity", "gravity", &spec.gravity)?;
-    let s = &spec.solver;
-    if !(s.tol > 0.0 && s.tol.is_finite()) {
-        return Err(Invalid::new(
-            "solver.tol",
-            format!("must be positive, got {}", s.tol),
-        ));
-    }
-    if !(s.eig_clamp > 0.0 && s.eig_clamp.is_finite()) {
-        return Err(Invalid::new(
-            "solver.eig_clamp",
-            format!("must be positive, got {}", s.eig_clamp),
-        ));
-    }
-    if s.max_iters == 0 {
-        return Err(Invalid::new("solver.max_iters", "must be at least 1"));
-    }
-    if spec.robots.is_empty() && spec.objects.is_empty() {
-        return Err(Invalid::new(
-            "robots",
-            "the scene has no robots and no objects",
-        ));
-    }
+    check_settings(&spec)?;
     let all_robots = environment::expand_bodies(&spec)?;
     let mut seen = HashMap::new();
     for (i, r) in all_robots.iter().enumerate() {
@@ -145,139 +113,12 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
     let mut charts = vec![Matrix3::identity(); model.nchart];
     let mut controller = Controller::default();
     for (ri, r) in all_robots.iter().enumerate() {
-        let info = &model.robots[ri];
-        let joints: BTreeMap<&str, usize> = info
-            .links
-            .clone()
-            .map(|l| (model.links[l].joint_name.as_str(), l))
-            .collect();
-        let el = |what: &str, joint: &str| format!("robot \"{}\": {what}.{joint}", r.name);
-        let find = |what: &str, joint: &str| -> Result<usize, Invalid> {
-            joints.get(joint).copied().ok_or_else(|| {
-                let known: Vec<&str> = joints.keys().copied().collect();
-                Invalid::new(
-                    el(what, joint),
-                    format!("no joint named \"{joint}\" (joints: {})", known.join(", ")),
-                )
-            })
-        };
-        let c = &r.controller;
-        check_finite(
-            &format!("robot \"{}\": controller", r.name),
-            "kp/kd",
-            &[c.kp, c.kd],
-        )?;
-        for joint in c.gains.keys() {
-            find("controller.gains", joint)?;
-        }
-        for (joint, signals) in &c.targets {
-            let l = find("controller.targets", joint)?;
-            let link = &model.links[l];
-            // A free root's six signals are one pose target (chart-free,
-            // `control::pose_target`); other charted joints have none.
-            let pose = matches!(link.joint, JointKind::Free) && link.parent.is_none();
-            if link.joint.has_chart() && !pose {
-                return Err(Invalid::new(
-                    el("controller.targets", joint),
-                    format!(
-                        "PD targets are supported on free joints of a robot's root link only, not on {} joints{}",
-                        link.joint.type_name(),
-                        if matches!(link.joint, JointKind::Free) {
-                            " below a parent link"
-                        } else {
-                            ""
-                        }
-                    ),
-                ));
-            }
-            let sigs = signals.as_slice();
-            if sigs.len() != link.ndof() {
-                return Err(Invalid::new(
-                    el("controller.targets", joint),
-                    format!(
-                        "joint has {} coordinate(s) but {} signal(s) were given",
-                        link.ndof(),
-                        sigs.len()
-                    ),
-                ));
-            }
-            let g = c.gains.get(joint).cloned().unwrap_or_default();
-            let (kp, kd) = (g.kp.unwrap_or(c.kp), g.kd.unwrap_or(c.kd));
-            if !(kp >= 0.0 && kd >= 0.0 && kp.is_finite() && kd.is_finite()) {
-                return Err(Invalid::new(
-                    el("controller.gains", joint),
-                    format!("gains must be finite and ≥ 0, got kp={kp}, kd={kd}"),
-                ));
-            }
-            if pose {
-                controller.pose_targets.push(PoseTarget {
-                    link: l,
-                    first: controller.channels.len(),
-                    frame: link.attach,
-                });
-            }
-            for (k, s) in sigs.iter().enumerate() {
-                s.validate().map_err(|e| {
-                    Invalid::new(
-                        format!("{}[{k}]", el("controller.targets", joint)),
-                        e.to_string(),
-                    )
-                })?;
-                controller.channels.push(ControlChannel {
-                    dof: link.dof_offset + k,
-                    kp,
-                    kd,
-                    signal: s.clone(),
-                });
-            }
-        }
-        for (joint, init) in &r.initial {
-            let l = find("initial", joint)?;
-            let link = &model.links[l];
-            let nd = link.ndof();
-            for (what, v) in [("q", &init.q), ("qdot", &init.qdot)] {
-                if !v.is_empty() && v.len() != nd {
-                    return Err(Invalid::new(
-                        format!("{}.{what}", el("initial", joint)),
-                        format!("joint has {nd} coordinate(s), got {} value(s)", v.len()),
-                    ));
-                }
-                check_finite(&el("initial", joint), what, v)?;
-            }
-            let o = link.dof_offset;
-            for (k, v) in init.q.iter().enumerate() {
-                q0[o + k] = *v;
-            }
-            for (k, v) in init.qdot.iter().enumerate() {
-                qdot0[o + k] = *v;
-            }
-            // Charted joints: the initial rotation goes into the chart, φ⁰ = 0.
-            if let (Some(c), false) = (link.chart, init.q.is_empty()) {
-                let co = o + link.joint.chart_offset();
-                let phi = Vector3::new(q0[co], q0[co + 1], q0[co + 2]);
-                charts[c] = so3::exp(&phi);
-                q0.rows_mut(co, 3).fill(0.0);
-            }
-        }
+        let rj = RobotJoints::new(&r.name, &model, ri);
+        add_targets(r, &rj, &model, &mut controller)?;
+        set_initial(r, &rj, &model, &mut q0, &mut qdot0, &mut charts)?;
     }
     model.mimics = mimic_ties(&all_robots, &model, &mut q0, &mut qdot0)?;
-    for link in &model.links {
-        if let Some(lim) = &link.limit {
-            let x = q0[link.dof_offset];
-            if !(x > lim.lower && x < lim.upper) {
-                return Err(Invalid::new(
-                    format!(
-                        "robot \"{}\" joint \"{}\"",
-                        model.robots[link.robot].name, link.joint_name
-                    ),
-                    format!(
-                        "the initial coordinate {x} must lie strictly inside the joint limit [{}, {}] (set `initial`)",
-                        lim.lower, lim.upper
-                    ),
-                ));
-            }
-        }
-    }
+    check_initial_limits(&model, &q0)?;
     let contact = spec
         .contact
         .as_ref()
@@ -303,6 +144,224 @@ pub fn build_scene(spec: SceneSpec, path: &Path) -> Result<Scene, Invalid> {
         effects,
         spec,
     })
+}
+
+/// The scene-wide settings: schema version, `dt` and `steps` together,
+/// gravity, the solver's tolerances and iteration cap, and a non-empty scene.
+fn check_settings(spec: &SceneSpec) -> Result<(), Invalid> {
+    if spec.version != 1 {
+        return Err(Invalid::new(
+            "version",
+            format!(
+                "unsupported schema version {} (this build reads version 1)",
+                spec.version
+            ),
+        ));
+    }
+    check_duration(spec.dt, spec.steps, "steps")?;
+    check_finite("gravity", "gravity", &spec.gravity)?;
+    let s = &spec.solver;
+    if !(s.tol > 0.0 && s.tol.is_finite()) {
+        return Err(Invalid::new(
+            "solver.tol",
+            format!("must be positive, got {}", s.tol),
+        ));
+    }
+    if !(s.eig_clamp > 0.0 && s.eig_clamp.is_finite()) {
+        return Err(Invalid::new(
+            "solver.eig_clamp",
+            format!("must be positive, got {}", s.eig_clamp),
+        ));
+    }
+    if s.max_iters == 0 {
+        return Err(Invalid::new("solver.max_iters", "must be at least 1"));
+    }
+    if spec.robots.is_empty() && spec.objects.is_empty() {
+        return Err(Invalid::new(
+            "robots",
+            "the scene has no robots and no objects",
+        ));
+    }
+    Ok(())
+}
+
+/// Every limited joint's initial coordinate lies strictly inside its limit
+/// (the limit's barrier is infinite on the boundary).
+fn check_initial_limits(model: &Model, q0: &DVector<f64>) -> Result<(), Invalid> {
+    for link in &model.links {
+        if let Some(lim) = &link.limit {
+            let x = q0[link.dof_offset];
+            if !(x > lim.lower && x < lim.upper) {
+                return Err(Invalid::new(
+                    format!(
+                        "robot \"{}\" joint \"{}\"",
+                        model.robots[link.robot].name, link.joint_name
+                    ),
+                    format!(
+                        "the initial coordinate {x} must lie strictly inside the joint limit [{}, {}] (set `initial`)",
+                        lim.lower, lim.upper
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A robot's joints by name, for look-ups and messages while building.
+struct RobotJoints<'a> {
+    robot: &'a str,
+    joints: BTreeMap<&'a str, usize>,
+}
+
+impl<'a> RobotJoints<'a> {
+    fn new(robot: &'a str, model: &'a Model, ri: usize) -> Self {
+        let joints = model.robots[ri]
+            .links
+            .clone()
+            .map(|l| (model.links[l].joint_name.as_str(), l))
+            .collect();
+        RobotJoints { robot, joints }
+    }
+
+    /// The element path `robot "<name>": <what>.<joint>`.
+    fn el(&self, what: &str, joint: &str) -> String {
+        format!("robot \"{}\": {what}.{joint}", self.robot)
+    }
+
+    /// The link of joint `joint`, or an error listing the robot's joints.
+    fn find(&self, what: &str, joint: &str) -> Result<usize, Invalid> {
+        self.joints.get(joint).copied().ok_or_else(|| {
+            let known: Vec<&str> = self.joints.keys().copied().collect();
+            Invalid::new(
+                self.el(what, joint),
+                format!("no joint named \"{joint}\" (joints: {})", known.join(", ")),
+            )
+        })
+    }
+}
+
+/// The controller channels of robot `r`'s `controller:` section: gains
+/// checked, one channel per coordinate of each target joint, a pose target
+/// for a free root's six signals.
+fn add_targets(
+    r: &RobotSpec,
+    rj: &RobotJoints,
+    model: &Model,
+    controller: &mut Controller,
+) -> Result<(), Invalid> {
+    let c = &r.controller;
+    check_finite(
+        &format!("robot \"{}\": controller", r.name),
+        "kp/kd",
+        &[c.kp, c.kd],
+    )?;
+    for joint in c.gains.keys() {
+        rj.find("controller.gains", joint)?;
+    }
+    for (joint, signals) in &c.targets {
+        let l = rj.find("controller.targets", joint)?;
+        let link = &model.links[l];
+        // A free root's six signals are one pose target (chart-free,
+        // `control::pose_target`); other charted joints have none.
+        let pose = matches!(link.joint, JointKind::Free) && link.parent.is_none();
+        if link.joint.has_chart() && !pose {
+            return Err(Invalid::new(
+                rj.el("controller.targets", joint),
+                format!(
+                    "PD targets are supported on free joints of a robot's root link only, not on {} joints{}",
+                    link.joint.type_name(),
+                    if matches!(link.joint, JointKind::Free) {
+                        " below a parent link"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        let sigs = signals.as_slice();
+        if sigs.len() != link.ndof() {
+            return Err(Invalid::new(
+                rj.el("controller.targets", joint),
+                format!(
+                    "joint has {} coordinate(s) but {} signal(s) were given",
+                    link.ndof(),
+                    sigs.len()
+                ),
+            ));
+        }
+        let g = c.gains.get(joint).cloned().unwrap_or_default();
+        let (kp, kd) = (g.kp.unwrap_or(c.kp), g.kd.unwrap_or(c.kd));
+        if !(kp >= 0.0 && kd >= 0.0 && kp.is_finite() && kd.is_finite()) {
+            return Err(Invalid::new(
+                rj.el("controller.gains", joint),
+                format!("gains must be finite and ≥ 0, got kp={kp}, kd={kd}"),
+            ));
+        }
+        if pose {
+            controller.pose_targets.push(PoseTarget {
+                link: l,
+                first: controller.channels.len(),
+                frame: link.attach,
+            });
+        }
+        for (k, s) in sigs.iter().enumerate() {
+            s.validate().map_err(|e| {
+                Invalid::new(
+                    format!("{}[{k}]", rj.el("controller.targets", joint)),
+                    e.to_string(),
+                )
+            })?;
+            controller.channels.push(ControlChannel {
+                dof: link.dof_offset + k,
+                kp,
+                kd,
+                signal: s.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Robot `r`'s `initial:` section into `q0`, `qdot0` and the charts
+/// (charted joints: the initial rotation goes into the chart, `φ⁰ = 0`).
+fn set_initial(
+    r: &RobotSpec,
+    rj: &RobotJoints,
+    model: &Model,
+    q0: &mut DVector<f64>,
+    qdot0: &mut DVector<f64>,
+    charts: &mut [Matrix3<f64>],
+) -> Result<(), Invalid> {
+    for (joint, init) in &r.initial {
+        let l = rj.find("initial", joint)?;
+        let link = &model.links[l];
+        let nd = link.ndof();
+        for (what, v) in [("q", &init.q), ("qdot", &init.qdot)] {
+            if !v.is_empty() && v.len() != nd {
+                return Err(Invalid::new(
+                    format!("{}.{what}", rj.el("initial", joint)),
+                    format!("joint has {nd} coordinate(s), got {} value(s)", v.len()),
+                ));
+            }
+            check_finite(&rj.el("initial", joint), what, v)?;
+        }
+        let o = link.dof_offset;
+        for (k, v) in init.q.iter().enumerate() {
+            q0[o + k] = *v;
+        }
+        for (k, v) in init.qdot.iter().enumerate() {
+            qdot0[o + k] = *v;
+        }
+        // Charted joints: the initial rotation goes into the chart, φ⁰ = 0.
+        if let (Some(c), false) = (link.chart, init.q.is_empty()) {
+            let co = o + link.joint.chart_offset();
+            let phi = Vector3::new(q0[co], q0[co + 1], q0[co + 2]);
+            charts[c] = so3::exp(&phi);
+            q0.rows_mut(co, 3).fill(0.0);
+        }
+    }
+    Ok(())
 }
 
 pub(super) fn unit(element: &str, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Invalid> {
