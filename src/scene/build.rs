@@ -9,6 +9,7 @@ use crate::model::{
 };
 use crate::sim::SimSettings;
 use nalgebra::{DVector, Matrix3, Vector3};
+use std::borrow::Cow;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -507,45 +508,8 @@ fn topo_order(robot: &str, links: &[LinkSpec]) -> Result<Vec<usize>, Invalid> {
 
 fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Invalid> {
     let el = format!("robot \"{}\"", r.name);
-    let generated;
-    let specs: &[LinkSpec] = match (&r.chain, r.links.is_empty()) {
-        (Some(_), false) => {
-            return Err(Invalid::new(el, "give either `links` or `chain`, not both"));
-        }
-        (Some(c), true) => {
-            if c.links > MAX_LINKS {
-                return Err(Invalid::new(
-                    format!("{el}: chain.links"),
-                    format!("{} links: the maximum is {MAX_LINKS} per robot", c.links),
-                ));
-            }
-            if c.links == 0 || !(c.link_length > 0.0 && c.link_width > 0.0 && c.link_mass > 0.0) {
-                return Err(Invalid::new(
-                    format!("{el}: chain"),
-                    "links must be ≥ 1 and length, width, mass positive",
-                ));
-            }
-            if !matches!(c.joint, JointType::Ball | JointType::Revolute) {
-                return Err(Invalid::new(
-                    format!("{el}: chain.joint"),
-                    "chain joints must be `ball` or `revolute`",
-                ));
-            }
-            generated = chain::expand(c);
-            &generated
-        }
-        (None, true) => return Err(Invalid::new(el, "the robot has no links")),
-        (None, false) if r.links.len() > MAX_LINKS => {
-            return Err(Invalid::new(
-                format!("{el}: links"),
-                format!(
-                    "{} links: the maximum is {MAX_LINKS} per robot",
-                    r.links.len()
-                ),
-            ));
-        }
-        (None, false) => &r.links,
-    };
+    let specs = link_specs(&el, r)?;
+    let specs: &[LinkSpec] = &specs;
     check_finite(
         &format!("{el}: base"),
         "xyz/rpy",
@@ -593,101 +557,10 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             ));
         }
         let spec_model = l.mass_model.clone().unwrap_or(MassModelSpec::Vertices);
-        let lumped = matches!(spec_model, MassModelSpec::Vertices);
-        if !lumped {
-            if l.vertex_mass.is_some() {
-                return Err(Invalid::new(
-                    format!("{lel}.vertex_mass"),
-                    "only the `vertices` mass model takes `vertex_mass`",
-                ));
-            }
-            if let Some(hi) = l.hulls.iter().position(|h| h.vertex_masses.is_some()) {
-                return Err(Invalid::new(
-                    format!("{lel}.hulls[{hi}].vertex_masses"),
-                    "only the `vertices` mass model takes `vertex_masses`",
-                ));
-            }
-        }
-        let explicit = lumped && l.hulls.iter().all(|h| h.vertex_masses.is_some());
-        let vertex_mass = match (l.mass, l.vertex_mass) {
-            _ if !lumped => 0.0,
-            (Some(_), Some(_)) => {
-                return Err(Invalid::new(
-                    lel,
-                    "give either `mass` or `vertex_mass`, not both",
-                ));
-            }
-            (None, None) if explicit => 0.0,
-            (None, None) => {
-                return Err(Invalid::new(
-                    lel,
-                    "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)",
-                ));
-            }
-            (Some(m), None) => {
-                if !(m > 0.0 && m.is_finite()) {
-                    return Err(Invalid::new(
-                        format!("{lel}.mass"),
-                        format!("must be positive and finite, got {m}"),
-                    ));
-                }
-                let nimplicit: usize = l
-                    .hulls
-                    .iter()
-                    .filter(|h| h.vertex_masses.is_none())
-                    .map(|h| h.vertices.as_ref().map_or(8, Vec::len))
-                    .sum();
-                m / nimplicit.max(1) as f64
-            }
-            (None, Some(m)) => {
-                if !(m > 0.0 && m.is_finite()) {
-                    return Err(Invalid::new(
-                        format!("{lel}.vertex_mass"),
-                        format!("must be positive and finite, got {m}"),
-                    ));
-                }
-                m
-            }
-        };
+        let vertex_mass = vertex_mass(&lel, l, &spec_model)?;
         let mut hulls = Vec::with_capacity(l.hulls.len());
         for (hi, h) in l.hulls.iter().enumerate() {
-            let hel = format!("{lel}.hulls[{hi}]");
-            let verts = match (&h.vertices, &h.cuboid) {
-                (Some(_), Some(_)) => {
-                    return Err(Invalid::new(
-                        hel,
-                        "give either `vertices` or `box`, not both",
-                    ));
-                }
-                (None, None) => return Err(Invalid::new(hel, "a hull needs `vertices` or `box`")),
-                (Some(v), None) => v.iter().map(|p| Vector3::from(*p)).collect(),
-                (None, Some(BoxSpec { size, center })) => {
-                    check_finite(&hel, "box", &[*size, *center].concat())?;
-                    if size.iter().any(|s| *s <= 0.0) {
-                        return Err(Invalid::new(
-                            hel,
-                            format!("box size must be positive, got {size:?}"),
-                        ));
-                    }
-                    Hull::cuboid(Vector3::from(*size), Vector3::from(*center))
-                }
-            };
-            let mut hull =
-                Hull::new(verts, vertex_mass).map_err(|e| Invalid::new(&hel, e.to_string()))?;
-            if let Some(ms) = &h.vertex_masses {
-                if ms.len() != hull.x_local.len() {
-                    let msg = format!(
-                        "{} vertex_masses for {} vertices",
-                        ms.len(),
-                        hull.x_local.len()
-                    );
-                    return Err(Invalid::new(hel, msg));
-                }
-                hull.vertex_mass = ms.clone();
-                hull.validate()
-                    .map_err(|e| Invalid::new(&hel, e.to_string()))?;
-            }
-            hulls.push(hull);
+            hulls.push(build_hull(&format!("{lel}.hulls[{hi}]"), h, vertex_mass)?);
         }
         let mass_model = mass_model(&lel, &spec_model, l.mass, &hulls)?;
         new_index[si] = out.len();
@@ -714,6 +587,161 @@ fn build_robot(ri: usize, r: &RobotSpec, out: &mut Vec<Link>) -> Result<(), Inva
             .all(|l| l.parent.is_none_or(|p| p >= first))
     );
     Ok(())
+}
+
+/// The robot's link specifications: its `links`, or its generated `chain`
+/// (checked: not both, at most [`MAX_LINKS`], positive sizes, ball or
+/// revolute chain joints).
+fn link_specs<'a>(el: &str, r: &'a RobotSpec) -> Result<Cow<'a, [LinkSpec]>, Invalid> {
+    let specs = match (&r.chain, r.links.is_empty()) {
+        (Some(_), false) => {
+            return Err(Invalid::new(
+                el.to_string(),
+                "give either `links` or `chain`, not both",
+            ));
+        }
+        (Some(c), true) => {
+            if c.links > MAX_LINKS {
+                return Err(Invalid::new(
+                    format!("{el}: chain.links"),
+                    format!("{} links: the maximum is {MAX_LINKS} per robot", c.links),
+                ));
+            }
+            if c.links == 0 || !(c.link_length > 0.0 && c.link_width > 0.0 && c.link_mass > 0.0) {
+                return Err(Invalid::new(
+                    format!("{el}: chain"),
+                    "links must be ≥ 1 and length, width, mass positive",
+                ));
+            }
+            if !matches!(c.joint, JointType::Ball | JointType::Revolute) {
+                return Err(Invalid::new(
+                    format!("{el}: chain.joint"),
+                    "chain joints must be `ball` or `revolute`",
+                ));
+            }
+            Cow::Owned(chain::expand(c))
+        }
+        (None, true) => return Err(Invalid::new(el.to_string(), "the robot has no links")),
+        (None, false) if r.links.len() > MAX_LINKS => {
+            return Err(Invalid::new(
+                format!("{el}: links"),
+                format!(
+                    "{} links: the maximum is {MAX_LINKS} per robot",
+                    r.links.len()
+                ),
+            ));
+        }
+        (None, false) => Cow::Borrowed(&r.links[..]),
+    };
+    Ok(specs)
+}
+
+/// The mass of each implicitly weighted vertex of a `vertices`-model link
+/// (`mass` spread over the vertices without their own `vertex_masses`, or
+/// `vertex_mass`); 0 for the other mass models, which take neither key.
+fn vertex_mass(lel: &str, l: &LinkSpec, spec_model: &MassModelSpec) -> Result<f64, Invalid> {
+    let lumped = matches!(spec_model, MassModelSpec::Vertices);
+    if !lumped {
+        if l.vertex_mass.is_some() {
+            return Err(Invalid::new(
+                format!("{lel}.vertex_mass"),
+                "only the `vertices` mass model takes `vertex_mass`",
+            ));
+        }
+        if let Some(hi) = l.hulls.iter().position(|h| h.vertex_masses.is_some()) {
+            return Err(Invalid::new(
+                format!("{lel}.hulls[{hi}].vertex_masses"),
+                "only the `vertices` mass model takes `vertex_masses`",
+            ));
+        }
+    }
+    let explicit = lumped && l.hulls.iter().all(|h| h.vertex_masses.is_some());
+    let vertex_mass = match (l.mass, l.vertex_mass) {
+        _ if !lumped => 0.0,
+        (Some(_), Some(_)) => {
+            return Err(Invalid::new(
+                lel,
+                "give either `mass` or `vertex_mass`, not both",
+            ));
+        }
+        (None, None) if explicit => 0.0,
+        (None, None) => {
+            return Err(Invalid::new(
+                lel,
+                "the link needs a `mass` (kg) or a `vertex_mass` (kg per vertex)",
+            ));
+        }
+        (Some(m), None) => {
+            if !(m > 0.0 && m.is_finite()) {
+                return Err(Invalid::new(
+                    format!("{lel}.mass"),
+                    format!("must be positive and finite, got {m}"),
+                ));
+            }
+            let nimplicit: usize = l
+                .hulls
+                .iter()
+                .filter(|h| h.vertex_masses.is_none())
+                .map(|h| h.vertices.as_ref().map_or(8, Vec::len))
+                .sum();
+            m / nimplicit.max(1) as f64
+        }
+        (None, Some(m)) => {
+            if !(m > 0.0 && m.is_finite()) {
+                return Err(Invalid::new(
+                    format!("{lel}.vertex_mass"),
+                    format!("must be positive and finite, got {m}"),
+                ));
+            }
+            m
+        }
+    };
+    Ok(vertex_mass)
+}
+
+/// One hull of a link (`hel`: its element path) from its `vertices` or
+/// `box`, with its vertex masses.
+fn build_hull(hel: &str, h: &HullSpec, vertex_mass: f64) -> Result<Hull, Invalid> {
+    let verts = match (&h.vertices, &h.cuboid) {
+        (Some(_), Some(_)) => {
+            return Err(Invalid::new(
+                hel.to_string(),
+                "give either `vertices` or `box`, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(Invalid::new(
+                hel.to_string(),
+                "a hull needs `vertices` or `box`",
+            ));
+        }
+        (Some(v), None) => v.iter().map(|p| Vector3::from(*p)).collect(),
+        (None, Some(BoxSpec { size, center })) => {
+            check_finite(hel, "box", &[*size, *center].concat())?;
+            if size.iter().any(|s| *s <= 0.0) {
+                return Err(Invalid::new(
+                    hel,
+                    format!("box size must be positive, got {size:?}"),
+                ));
+            }
+            Hull::cuboid(Vector3::from(*size), Vector3::from(*center))
+        }
+    };
+    let mut hull = Hull::new(verts, vertex_mass).map_err(|e| Invalid::new(hel, e.to_string()))?;
+    if let Some(ms) = &h.vertex_masses {
+        if ms.len() != hull.x_local.len() {
+            let msg = format!(
+                "{} vertex_masses for {} vertices",
+                ms.len(),
+                hull.x_local.len()
+            );
+            return Err(Invalid::new(hel.to_string(), msg));
+        }
+        hull.vertex_mass = ms.clone();
+        hull.validate()
+            .map_err(|e| Invalid::new(hel, e.to_string()))?;
+    }
+    Ok(hull)
 }
 
 /// The link's [`MassModel`] from its spec (`mass`: the link's `mass` key).
