@@ -106,6 +106,13 @@ fn adam_gradient_clip_is_validated_and_wired() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples/python/chain_reach_adam.yaml");
     let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let mut nan = spec.clone();
+    nan.optimizer.clip_trajectory = Some(f64::NAN);
+    let err = Problem::from_spec(&path, nan, true)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("optimizer.clip_trajectory"), "{err}");
     let mut bad = spec.clone();
     bad.optimizer.clip_design = Some(-1.0);
     let err = Problem::from_spec(&path, bad, true)

@@ -127,6 +127,7 @@ impl Problem {
         for (name, clip) in [
             ("optimizer.clip_design", o.clip_design),
             ("optimizer.clip_controller", o.clip_controller),
+            ("optimizer.clip_trajectory", o.clip_trajectory),
         ] {
             if let Some(v) = clip.filter(|v| !(*v > 0.0 && v.is_finite())) {
                 return Err(invalid(
@@ -289,6 +290,7 @@ impl Problem {
             loss: grads.loss,
             grad_design: gd,
             grad_controller: gc,
+            parts_design: Vec::new(),
             forward_seconds: forward,
             backward_seconds: grads.seconds,
             grads,
@@ -424,6 +426,9 @@ pub struct Evaluation {
     pub loss: f64,
     pub grad_design: DVector<f64>,
     pub grad_controller: DVector<f64>,
+    /// Each trajectory's design gradient, in task order, for a task with
+    /// `trajectories:` (`grad_design` is their sum); empty otherwise.
+    pub parts_design: Vec<DVector<f64>>,
     pub forward_seconds: f64,
     pub backward_seconds: f64,
     pub grads: Gradients,
@@ -628,8 +633,10 @@ pub fn optimize_with(
                 },
             ),
             Method::Adam => (
-                adam.0
-                    .step(&method::clip_norm(&ev.grad_design, o.clip_design)),
+                adam.0.step(&method::clip_norm(
+                    &method::clip_parts(&ev.grad_design, &ev.parts_design, o.clip_trajectory),
+                    o.clip_design,
+                )),
                 adam.1
                     .step(&method::clip_norm(&ev.grad_controller, o.clip_controller)),
             ),

@@ -153,10 +153,15 @@ pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Re
 pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
     sum_in_order(
         p,
-        |q| q.evaluate_one(d, c),
+        |q| {
+            let mut e = q.evaluate_one(d, c)?;
+            e.parts_design = vec![e.grad_design.clone()];
+            Ok(e)
+        },
         |o, e| {
             o.loss += e.loss;
             o.grad_design += &e.grad_design;
+            o.parts_design.extend(e.parts_design);
             o.grad_controller += &e.grad_controller;
             o.forward_seconds += e.forward_seconds;
             o.backward_seconds += e.backward_seconds;

@@ -295,6 +295,16 @@ pub struct OptimizerSpec {
     pub clip_design: Option<f64>,
     /// Adam only: the same for the controller gradient. Default none.
     pub clip_controller: Option<f64>,
+    /// Adam only, tasks with `trajectories:`: each trajectory's design
+    /// gradient `∇_d L_j` is rescaled to at most this Euclidean norm before
+    /// the sum, `g = Σ_j ∇_d L_j · min(1, c/‖∇_d L_j‖)` (then `clip_design`
+    /// applies to `g`). Why: a trajectory whose object has slipped out and
+    /// rolls on the ground has a valid but huge gradient (its sensitivity
+    /// grows exponentially, ~1e6 against ~1e-3 for the others; see
+    /// notes/grasping-topology-change.md), and clipping only the sum would
+    /// scale every other trajectory's gradient down by that factor. Default
+    /// none (the plain sum). `history.csv` keeps the unclipped norm.
+    pub clip_trajectory: Option<f64>,
     /// Trust region only: how the radii change after a trial. Default
     /// `adaptive` (see [`RadiusRule`]).
     pub radius: RadiusRule,
@@ -320,6 +330,7 @@ impl Default for OptimizerSpec {
             result: ResultIterate::Best,
             clip_design: None,
             clip_controller: None,
+            clip_trajectory: None,
             radius: RadiusRule::Adaptive,
             newton_tol: None,
         }
