@@ -631,6 +631,7 @@ fn parallel_jaw_gradient_spike_probe() {
             (lp - lm) / (2.0 * h)
         );
     }
+    truncated_check(&path, &d, &c, j);
     let run = |d: &DVector<f64>| {
         let mut sim = q.simulator(&q.scene_at(d, &c)).unwrap();
         (0..q.horizon)
@@ -664,6 +665,47 @@ fn parallel_jaw_gradient_spike_probe() {
             s.ccd.alpha_caps,
             s.ccd.min_alpha,
             r.join(" ")
+        );
+    }
+}
+
+/// Part of [`parallel_jaw_gradient_spike_probe`]: the adjoint at the probed
+/// design `d` for trajectory `j` with the horizon cut to `PROBE_CUT` steps
+/// (default 88: the ball has slipped out and is falling, before it lands)
+/// and its loss window to the last 8 of them, against central differences
+/// along its unit gradient (plain and Richardson) at h = 1e-5 … 1e-9.
+fn truncated_check(path: &std::path::Path, d: &DVector<f64>, c: &DVector<f64>, j: usize) {
+    let cut = std::env::var("PROBE_CUT")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(88usize);
+    let mut task: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    task.horizon = Some(cut);
+    for t in &mut task.trajectories {
+        for l in &mut t.loss {
+            if let LossSpec::Relative { when, .. } = l {
+                *when = When::Window {
+                    from: cut - 8,
+                    to: cut,
+                };
+            }
+        }
+    }
+    let p = multi::load(path, task, true).unwrap();
+    let q = multi::all(&p)[j];
+    let e = q.evaluate_one(d, c).unwrap();
+    let gn = e.grad_design.norm();
+    let u = &e.grad_design / gn;
+    let central = |h: f64| {
+        (q.loss_value_one(&(d + h * &u), c).unwrap() - q.loss_value_one(&(d - h * &u), c).unwrap())
+            / (2.0 * h)
+    };
+    for h in [1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {
+        let (d1, d2) = (central(h), central(2.0 * h));
+        let rich = (4.0 * d1 - d2) / 3.0;
+        eprintln!(
+            "horizon {cut}, trajectory {j}: h {h:e} central {d1:.6e} Richardson {rich:.6e} adjoint {gn:.6e} rel {:.2e}",
+            (rich - gn).abs() / gn
         );
     }
 }
