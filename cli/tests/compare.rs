@@ -420,9 +420,12 @@ fn bad_suite_and_tolerance_files_get_clear_errors() {
 /// Issue 30, item 5: the paper suite's mesh-baseline rows for chain
 /// reaching and the hand (coarse and fine automatic cages) exist and run —
 /// a 2-iteration smoke of exactly those entries of
-/// `robots/compare/paper.yaml` (the hand at horizon 70: its palm starts to
-/// move at step 60, where IPC's default d̂ = 1 mm stopped the cube's
-/// trajectory). Asserted per mesh-baseline row: 26 (coarse) or 98 (fine)
+/// `robots/compare/paper.yaml` at the tasks' own horizons (≈ 90 s under
+/// load). The hand was first run here at horizon 70 (cheaper): its fine
+/// cage's second iterate then stopped IPC's Newton at step 51 of the cube
+/// (100 iterations, ‖∇O‖∞ = 3.5e-3) — the baseline's solver, not the rows,
+/// is what that horizon exercised, so the full horizon (whose iterates
+/// run) is kept. Asserted per mesh-baseline row: 26 (coarse) or 98 (fine)
 /// cage vertices × 3 coordinates per designed link, 3 history entries, a
 /// finite non-increasing best loss, a final trajectory with a positive
 /// minimum hull distance (no interpenetration), and for the hand a grasp
@@ -435,7 +438,7 @@ fn paper_suite_mesh_baseline_rows_of_chain_reach_and_hand_run_two_iterations() {
     .unwrap();
     let dir = scratch_dir("compare_mesh_rows");
     let mut entries = Vec::new();
-    for (name, horizon) in [("chain_reach", None), ("three_finger_hand", Some(70))] {
+    for (name, horizon) in [("chain_reach", None::<usize>), ("three_finger_hand", None)] {
         let e = paper["codesign"]
             .as_sequence()
             .unwrap()
