@@ -510,6 +510,7 @@ fn paper_suite_mesh_baseline_rows_of_chain_reach_and_hand_run_two_iterations() {
             }
         }
     }
+}
 
 /// The results page `docs/results/` is generated from its `results.json`
 /// (`tools/render_results.sh`), never edited by hand: rendering the stored
