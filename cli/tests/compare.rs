@@ -427,9 +427,9 @@ fn bad_suite_and_tolerance_files_get_clear_errors() {
 /// is what that horizon exercised, so the full horizon (whose iterates
 /// run) is kept. Asserted per mesh-baseline row: 26 (coarse) or 98 (fine)
 /// cage vertices × 3 coordinates per designed link, 3 history entries, a
-/// finite non-increasing best loss, a final trajectory with a positive
-/// minimum hull distance (no interpenetration), and for the hand a grasp
-/// count out of 3.
+/// finite non-increasing best loss, a positive minimum hull distance when
+/// the row reports one (IPC rows do not), and for the hand a grasp count
+/// out of 3.
 #[test]
 fn paper_suite_mesh_baseline_rows_of_chain_reach_and_hand_run_two_iterations() {
     let paper: serde_yaml::Value = serde_yaml::from_str(
@@ -502,8 +502,11 @@ fn paper_suite_mesh_baseline_rows_of_chain_reach_and_hand_run_two_iterations() {
                 hist.iter().all(|v| v.is_finite()) && hist.windows(2).all(|w| w[1] <= w[0]),
                 "{name} {method}: {hist:?}"
             );
-            let dmin = run["min_distance"].as_f64().unwrap();
-            assert!(dmin > 0.0, "{name} {method}: min distance {dmin}");
+            // The IPC runs report no GJK hull distance (`min_distance` is the
+            // SDRS simulator's); when present it must be positive.
+            if let Some(dmin) = run["min_distance"].as_f64() {
+                assert!(dmin > 0.0, "{name} {method}: min distance {dmin}");
+            }
             if name == "three_finger_hand" {
                 assert_eq!(run["grasp_trajectories"].as_u64(), Some(3), "{run}");
                 assert!(run["grasped"].as_u64().unwrap() <= 3);
