@@ -66,35 +66,38 @@ fn import_robot(
     hold: bool,
     pose: Option<std::collections::BTreeMap<String, f64>>,
 ) -> PyResult<PathBuf> {
-    use clap::ValueEnum;
-    let pick = |what: &str, s: &str| {
-        SdrsError::new_err(format!("import_robot: {what}: unknown value \"{s}\""))
-    };
-    let args = sdrs::import::cli::ImportArgs {
-        input,
-        out: out.clone(),
-        decomposer: ValueEnum::from_str(decomposer, true)
-            .map_err(|_| pick("decomposer", decomposer))?,
-        max_hulls,
+    fn pick<T: std::str::FromStr<Err = String>>(what: &str, s: &str) -> PyResult<T> {
+        s.parse()
+            .map_err(|_| SdrsError::new_err(format!("import_robot: {what}: unknown value \"{s}\"")))
+    }
+    let decomposer: sdrs::import::Decomposer = pick("decomposer", decomposer)?;
+    let options = sdrs::import::ImportOptions {
+        decomposer,
+        max_hulls: max_hulls.max(1),
         resolution,
-        threshold,
-        hull_points: Default::default(),
+        threshold: threshold.unwrap_or(sdrs::import::ImportOptions::default_threshold(decomposer)),
         designable,
-        mass: ValueEnum::from_str(mass, true).map_err(|_| pick("mass", mass))?,
+        mass: pick("mass", mass)?,
         density,
+        bridge_gaps: bridge,
+        ties: pick::<sdrs::import::connectivity::Ties>("ties", &ties.replace('_', "-")).map_err(
+            |_| SdrsError::new_err(format!("import_robot: ties: unknown value \"{ties}\"")),
+        )?,
+        progress: false,
+        ..Default::default()
+    };
+    let job = sdrs::import::ImportJob {
         report,
         force,
-        no_bridge: !bridge,
-        ties: ValueEnum::from_str(&ties.replace('_', "-"), true).map_err(|_| pick("ties", ties))?,
-        quiet: true,
-        base: ValueEnum::from_str(base, true).map_err(|_| pick("base", base))?,
+        options,
+        base: pick("base", base)?,
         ground,
-        no_contact: !contact,
-        no_hold: !hold,
+        contact,
+        hold,
         pose: pose.unwrap_or_default().into_iter().collect(),
+        ..sdrs::import::ImportJob::new(input, out.clone())
     };
-    py.detach(|| sdrs::import::cli::run_import(&args))
-        .map_err(|e| SdrsError::new_err(format!("{e:#}")))?;
+    py.detach(|| sdrs::import::run_job(&job)).map_err(err)?;
     Ok(out)
 }
 
@@ -115,17 +118,15 @@ fn calibrate<'py>(
     effects: Option<Vec<String>>,
     holdout: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let args = sdrs::calibrate::CalibrateArgs {
-        scene,
-        measured,
-        out,
-        effects,
-        holdout,
-        quiet: true,
-    };
     let json = py
         .detach(|| {
-            let opts = sdrs::calibrate::CalibrateOptions::from_args(&args)?;
+            let opts = sdrs::calibrate::CalibrateOptions::new(
+                scene,
+                measured,
+                out,
+                effects.as_deref(),
+                holdout,
+            )?;
             let r = sdrs::calibrate::run(&opts)?;
             Ok::<_, sdrs::calibrate::CalibrateError>(serde_json::to_string(&r))
         })

@@ -17,7 +17,7 @@
 //!   the floor; `effect`, `none` or `unexplained`; plausibility checks.
 //! - [`analysis`]: residuals per channel, regime and time window.
 //! - [`report`], [`plots`]: `calibration.json`, `report.md`, SVG plots.
-//! - [`run`]: options, command-line arguments, [`run()`].
+//! - [`run`]: options, [`run()`].
 //!
 //! Outputs and their schema: [`report`] and the README.
 
@@ -37,4 +37,4 @@ pub mod verdict;
 
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
-pub use run::{CalibrateArgs, CalibrateOptions, calibrate, run};
+pub use run::{CalibrateOptions, calibrate, effect_kinds, run};

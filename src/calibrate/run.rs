@@ -1,4 +1,5 @@
-//! `sdrs calibrate`: options, command-line arguments and the whole run.
+//! `sdrs calibrate`: options and the whole run (the command-line arguments
+//! are the application's, `cli/src/calibrate.rs`).
 
 use super::analysis::analyse;
 use super::data::{MIN_SAMPLES, Measured};
@@ -10,30 +11,6 @@ use crate::energy::effects::EffectKind;
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Command-line arguments of `sdrs calibrate`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct CalibrateArgs {
-    /// Scene YAML: the model to calibrate (its controller is the commanded one).
-    pub scene: PathBuf,
-    /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
-    #[arg(long)]
-    pub measured: PathBuf,
-    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Candidate effects, comma separated (default: all applicable):
-    /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
-    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
-    #[arg(long, value_delimiter = ',')]
-    pub effects: Option<Vec<String>>,
-    /// Fraction of the data (by time, at the end) held out for scoring.
-    #[arg(long, default_value_t = 0.3)]
-    pub holdout: f64,
-    /// No progress bar.
-    #[arg(long, short)]
-    pub quiet: bool,
-}
 
 /// Options of a calibration run.
 #[derive(Clone, Debug)]
@@ -54,32 +31,45 @@ pub struct CalibrateOptions {
 }
 
 impl CalibrateOptions {
-    /// Options from command-line arguments (unknown effect names are errors).
-    pub fn from_args(a: &CalibrateArgs) -> Result<Self, CalibrateError> {
-        let effects = match &a.effects {
-            None => EffectKind::ALL.to_vec(),
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
-                        msg: format!(
-                            "unknown effect \"{n}\" (effects: {})",
-                            EffectKind::ALL.map(|k| k.name()).join(", ")
-                        ),
-                    })
-                })
-                .collect::<Result<_, _>>()?,
-        };
+    /// The options of `sdrs calibrate scene --measured measured --out out`
+    /// with `effects` named (`None`: all) and the given held-out fraction;
+    /// unknown effect names are errors.
+    pub fn new(
+        scene: PathBuf,
+        measured: PathBuf,
+        out: PathBuf,
+        effects: Option<&[String]>,
+        holdout: f64,
+    ) -> Result<Self, CalibrateError> {
         Ok(CalibrateOptions {
-            scene: a.scene.clone(),
-            measured: a.measured.clone(),
-            out: a.out.clone(),
-            effects,
-            holdout: a.holdout,
-            quiet: a.quiet,
+            scene,
+            measured,
+            out,
+            effects: effect_kinds(effects)?,
+            holdout,
+            quiet: true,
             select: SelectOptions::default(),
         })
     }
+}
+
+/// The effect kinds `names` lists (`None`: all of [`EffectKind::ALL`]); an
+/// unknown name is an error listing the known ones.
+pub fn effect_kinds(names: Option<&[String]>) -> Result<Vec<EffectKind>, CalibrateError> {
+    let Some(names) = names else {
+        return Ok(EffectKind::ALL.to_vec());
+    };
+    names
+        .iter()
+        .map(|n| {
+            EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
+                msg: format!(
+                    "unknown effect \"{n}\" (effects: {})",
+                    EffectKind::ALL.map(|k| k.name()).join(", ")
+                ),
+            })
+        })
+        .collect()
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {

@@ -9,14 +9,13 @@
 //! [`mesh`] + [`decompose`]) → [`connectivity`] (shared vertices inside
 //! hull intersections, attachment points) → [`mass`] → [`report`] → a scene
 //! (`version: 1`, one robot, `design:` section with the ties). [`write`]
-//! puts the scene, an OBJ per link and the report on disk atomically; [`cli`]
-//! is the `sdrs import` command.
+//! puts the scene, an OBJ per link and the report on disk atomically; [`job`]
+//! is one whole run (`sdrs import`).
 
 // Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod child;
-pub mod cli;
 pub mod collada;
 pub mod connectivity;
 pub mod decompose;
@@ -25,6 +24,7 @@ pub mod fkcheck;
 pub mod grid;
 pub mod guard;
 pub mod interior;
+pub mod job;
 pub mod limits;
 pub mod mass;
 pub mod mesh;
@@ -40,9 +40,9 @@ pub mod tolerant;
 pub mod urdf;
 pub mod write;
 
-pub use cli::{ImportArgs, run_import};
 pub use decompose::{Decomposer, HullPoints};
 pub use error::ImportError;
+pub use job::{ImportJob, run_job};
 pub use mass::MassMode;
 pub use report::ImportReport;
 
@@ -103,6 +103,32 @@ pub struct ImportOptions {
     pub seed: u64,
     /// Show a progress bar while decomposing many links. Default true.
     pub progress: bool,
+}
+
+/// The value of `options` whose `name` is `s` (ASCII case ignored), or a
+/// message listing the names: the `FromStr` of the option enums.
+fn pick_name<T: Copy>(
+    s: &str,
+    options: &[T],
+    name: impl Fn(T) -> &'static str,
+) -> Result<T, String> {
+    let names: Vec<&str> = options.iter().map(|&o| name(o)).collect();
+    options
+        .iter()
+        .find(|&&o| name(o).eq_ignore_ascii_case(s))
+        .copied()
+        .ok_or_else(|| format!("unknown value \"{s}\" (one of: {})", names.join(", ")))
+}
+
+impl ImportOptions {
+    /// The concavity threshold used when none is given: 0.05 for CoACD
+    /// (its own default), else [`ImportOptions::default`]'s 0.01.
+    pub fn default_threshold(decomposer: Decomposer) -> f64 {
+        match decomposer {
+            Decomposer::Coacd => 0.05,
+            _ => ImportOptions::default().threshold,
+        }
+    }
 }
 
 impl Default for ImportOptions {
