@@ -29,7 +29,6 @@ fn opts(measured: &Path, out: &Path) -> CalibrateOptions {
         out: out.to_path_buf(),
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,
-        quiet: true,
         select: Default::default(),
     }
 }

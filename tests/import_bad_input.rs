@@ -274,7 +274,6 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     let inp = dir.join("arm.obj");
     let opts = sdrs::import::ImportOptions {
         decomposer: sdrs::import::Decomposer::Coacd,
-        progress: false,
         ..Default::default()
     };
     unsafe { std::env::set_var("SDRS_PYTHON", dir.join("no-such-python")) };

@@ -13,10 +13,7 @@ use std::path::Path;
 #[test]
 fn authored_robots_cover_their_source_meshes_per_trimesh() {
     let dir = temp_dir("coverage");
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let mut inputs: Vec<std::path::PathBuf> = ROBOTS.iter().map(|r| robot_urdf(r)).collect();
     inputs.extend(object_meshes());
     for (k, input) in inputs.iter().enumerate() {
@@ -53,10 +50,7 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
 fn coverage_check_fails_when_a_hull_is_missing() {
     // Drop a hull of the single-jaw gripper: trimesh must see the hole.
     let input = robot_urdf("single_jaw_gripper");
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let mut imp = import(&input, &opts).unwrap();
     let link = &mut imp.scene.robots[0].links[0];
     assert!(link.hulls.len() >= 2);

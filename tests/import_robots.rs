@@ -12,10 +12,7 @@ use sdrs::scene::Scene;
 use std::collections::BTreeSet;
 
 fn opts() -> ImportOptions {
-    ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    }
+    ImportOptions::default()
 }
 
 /// Removes the tied/attachment vertices from each hull, and checks that the

@@ -1,6 +1,7 @@
 //! `sdrs calibrate`: name the physical effect missing from a scene, given
 //! measured data (the logic is `sdrs::calibrate`).
 
+use crate::progress::Bar;
 use anyhow::Result;
 use sdrs::calibrate::CalibrateOptions;
 use std::path::PathBuf;
@@ -30,15 +31,19 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: &CalibrateArgs) -> Result<()> {
-    let mut opts = CalibrateOptions::new(
+    let opts = CalibrateOptions::new(
         a.scene.clone(),
         a.measured.clone(),
         a.out.clone(),
         a.effects.as_deref(),
         a.holdout,
     )?;
-    opts.quiet = a.quiet;
-    let r = sdrs::calibrate::run(&opts)?;
+    let bar = Bar::new(
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
+        0,
+        a.quiet,
+    );
+    let r = sdrs::calibrate::run_with(&opts, &bar)?;
     eprintln!(
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
         a.measured.display(),

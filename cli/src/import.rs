@@ -5,6 +5,7 @@
 //! The option enums are the core's; the `ValueEnum` types here mirror them
 //! for clap (same variant names and help texts) and convert with `From`.
 
+use crate::progress::Bar;
 use anyhow::Result;
 use clap::ValueEnum;
 use sdrs::import::connectivity::Ties;
@@ -207,7 +208,6 @@ impl ImportArgs {
             density: self.density,
             bridge_gaps: !self.no_bridge,
             ties: self.ties.into(),
-            progress: !self.quiet,
             ..ImportOptions::default()
         };
         ImportJob {
@@ -226,7 +226,12 @@ impl ImportArgs {
 
 /// Runs `sdrs import`.
 pub fn run(args: &ImportArgs) -> Result<()> {
-    let report = sdrs::import::run_job(&args.job())?;
+    let bar = Bar::new(
+        "decomposing {bar:30} {pos}/{len} links {msg}",
+        2,
+        args.quiet,
+    );
+    let report = sdrs::import::run_job_with(&args.job(), &bar)?;
     if !args.quiet {
         print_summary(&report, args);
     }

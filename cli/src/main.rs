@@ -11,6 +11,7 @@ mod helpers;
 mod import;
 mod optimize;
 mod plot;
+mod progress;
 mod schema;
 mod simulate;
 mod util;

@@ -83,7 +83,6 @@ fn import_robot(
         ties: pick::<sdrs::import::connectivity::Ties>("ties", &ties.replace('_', "-")).map_err(
             |_| SdrsError::new_err(format!("import_robot: ties: unknown value \"{ties}\"")),
         )?,
-        progress: false,
         ..Default::default()
     };
     let job = sdrs::import::ImportJob {

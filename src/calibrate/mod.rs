@@ -37,4 +37,4 @@ pub mod verdict;
 
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
-pub use run::{CalibrateOptions, calibrate, effect_kinds, run};
+pub use run::{CalibrateOptions, calibrate, calibrate_with, effect_kinds, run, run_with};

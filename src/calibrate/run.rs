@@ -8,6 +8,7 @@ use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
 use super::{CalibrateError, candidates, plots};
 use crate::energy::effects::EffectKind;
+use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -24,8 +25,6 @@ pub struct CalibrateOptions {
     pub effects: Vec<EffectKind>,
     /// Held-out fraction, in (0, 1). Default 0.3.
     pub holdout: f64,
-    /// Hide the progress bar. Default false.
-    pub quiet: bool,
     /// Fitting and selection options (defaults: [`SelectOptions::default`]).
     pub select: SelectOptions,
 }
@@ -47,7 +46,6 @@ impl CalibrateOptions {
             out,
             effects: effect_kinds(effects)?,
             holdout,
-            quiet: true,
             select: SelectOptions::default(),
         })
     }
@@ -85,6 +83,15 @@ pub type Files = Vec<(String, Vec<u8>)>;
 /// Computes the calibration without writing anything; returns the result
 /// and the output files.
 pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), CalibrateError> {
+    calibrate_with(opts, &Silent)
+}
+
+/// [`calibrate`], reporting the candidate fits to `progress` (one unit per
+/// fit).
+pub fn calibrate_with(
+    opts: &CalibrateOptions,
+    progress: &dyn Progress,
+) -> Result<(CalibrationResult, Files), CalibrateError> {
     let t0 = Instant::now();
     if !(opts.holdout > 0.0 && opts.holdout < 1.0) {
         return Err(CalibrateError::Holdout(opts.holdout));
@@ -118,29 +125,18 @@ pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), 
         split,
     };
     let cands = candidates::candidates(&scene, &opts.effects);
-    let pbar = if opts.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let p = indicatif::ProgressBar::new(0);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
-        ) {
-            p.set_style(style);
-        }
-        p
-    };
     let sel = select(
         &pb,
         cands,
         &opts.select,
-        &|n| pbar.set_length(n as u64),
-        &|| pbar.inc(1),
-    )
-    .ok_or_else(|| CalibrateError::Output {
+        &|n| progress.start(n as u64, "candidate fits"),
+        &|| progress.inc(),
+    );
+    progress.finish();
+    let sel = sel.ok_or_else(|| CalibrateError::Output {
         path: opts.scene.clone(),
         msg: "the scene as given could not be simulated".into(),
     })?;
-    pbar.finish_and_clear();
     let after_sim = sel
         .chosen
         .map(|i| &sel.ranking[i].sim)
@@ -251,7 +247,15 @@ pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), Calibr
 
 /// Runs a calibration and writes its outputs (nothing is written on error).
 pub fn run(opts: &CalibrateOptions) -> Result<CalibrationResult, CalibrateError> {
-    let (res, files) = calibrate(opts)?;
+    run_with(opts, &Silent)
+}
+
+/// [`run`], reporting progress as [`calibrate_with`] does.
+pub fn run_with(
+    opts: &CalibrateOptions,
+    progress: &dyn Progress,
+) -> Result<CalibrationResult, CalibrateError> {
+    let (res, files) = calibrate_with(opts, progress)?;
     write_files(&opts.out, &files)?;
     Ok(res)
 }

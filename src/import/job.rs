@@ -8,7 +8,8 @@ use super::error::ImportError;
 use super::ready::{BaseMode, ReadyOptions, make_ready};
 use super::report::ImportReport;
 use super::write::{OutputPaths, check_outputs, write_outputs};
-use super::{ImportOptions, import};
+use super::{ImportOptions, import_with};
+use crate::progress::Progress;
 use std::path::PathBuf;
 
 /// An import run: input, outputs and every option. [`ImportJob::new`] gives
@@ -77,10 +78,15 @@ impl ImportJob {
 /// Runs `job`: imports, makes the scene ready and writes every output (none
 /// when it fails). Returns the report that was written.
 pub fn run_job(job: &ImportJob) -> Result<ImportReport, ImportError> {
+    run_job_with(job, &crate::progress::Silent)
+}
+
+/// [`run_job`], reporting the decomposition's progress ([`import_with`]).
+pub fn run_job_with(job: &ImportJob, progress: &dyn Progress) -> Result<ImportReport, ImportError> {
     job.check()?;
     let paths = OutputPaths::new(&job.out, job.report.as_deref());
     check_outputs(&job.input, &paths, job.force)?;
-    let mut imported = import(&job.input, &job.options)?;
+    let mut imported = import_with(&job.input, &job.options, progress)?;
     let ready_opts = ReadyOptions {
         base: job.base,
         ground: job.ground,
