@@ -43,7 +43,11 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         0,
         a.quiet,
     );
-    let r = sdrs::calibrate::run_with(&opts, &bar)?;
+    let hooks = sdrs::calibrate::Hooks {
+        progress: &bar,
+        plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+    };
+    let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     eprintln!(
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
         a.measured.display(),

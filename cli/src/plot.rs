@@ -4,7 +4,7 @@
 //! `summary.json`), e.g. co-design against controller-only.
 
 use anyhow::{Context, Result, bail};
-use sdrs::output::plot::{Axes, Series, line_plot};
+use sdrs_cli::svg::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
 use std::path::{Path, PathBuf};
 

@@ -126,7 +126,11 @@ fn calibrate<'py>(
                 effects.as_deref(),
                 holdout,
             )?;
-            let r = sdrs::calibrate::run(&opts)?;
+            let hooks = sdrs::calibrate::Hooks {
+                plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+                ..Default::default()
+            };
+            let r = sdrs::calibrate::run_with(&opts, &hooks)?;
             Ok::<_, sdrs::calibrate::CalibrateError>(serde_json::to_string(&r))
         })
         .map_err(err)?

@@ -6,7 +6,9 @@ use super::data::{MIN_SAMPLES, Measured};
 use super::problem::Problem;
 use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
-use super::{CalibrateError, candidates, plots};
+use super::data::Measured as MeasuredData;
+use super::problem::Simulated;
+use super::{CalibrateError, candidates};
 use crate::energy::effects::EffectKind;
 use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
@@ -70,6 +72,62 @@ pub fn effect_kinds(names: Option<&[String]>) -> Result<Vec<EffectKind>, Calibra
         .collect()
 }
 
+/// Draws calibration's SVG plots: the application's (`cli/src/svg`); the
+/// core draws nothing. Errors are messages (the plot is not written).
+pub trait PlotWriter: Sync {
+    /// Channel `c` of `m`: the measured samples, the simulation `before`
+    /// (as given) and `after` (calibrated), the held-out window from
+    /// `split_t` (s) on shaded.
+    fn channel_svg(
+        &self,
+        m: &MeasuredData,
+        c: usize,
+        before: &Simulated,
+        after: &Simulated,
+        split_t: f64,
+    ) -> Result<String, String>;
+    /// The residuals (simulated − measured) of every channel, before and
+    /// after.
+    fn residuals_svg(
+        &self,
+        m: &MeasuredData,
+        before: &Simulated,
+        after: &Simulated,
+    ) -> Result<String, String>;
+}
+
+/// What a calibration run reports to and asks of its caller.
+#[derive(Clone, Copy)]
+pub struct Hooks<'a> {
+    /// Told about the candidate fits (one unit per fit). Default [`Silent`].
+    pub progress: &'a dyn Progress,
+    /// Draws `channel_<name>.svg` and `residuals.svg`; `None` (the default)
+    /// writes no plots.
+    pub plots: Option<&'a dyn PlotWriter>,
+}
+
+impl Default for Hooks<'_> {
+    fn default() -> Self {
+        Hooks {
+            progress: &Silent,
+            plots: None,
+        }
+    }
+}
+
+/// A file-name-safe version of a channel name (`arm/elbow` → `arm_elbow`).
+pub fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
 fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(x), Ok(y)) => x == y,
@@ -83,15 +141,15 @@ pub type Files = Vec<(String, Vec<u8>)>;
 /// Computes the calibration without writing anything; returns the result
 /// and the output files.
 pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), CalibrateError> {
-    calibrate_with(opts, &Silent)
+    calibrate_with(opts, &Hooks::default())
 }
 
-/// [`calibrate`], reporting the candidate fits to `progress` (one unit per
-/// fit).
+/// [`calibrate`] with progress reports and plots ([`Hooks`]).
 pub fn calibrate_with(
     opts: &CalibrateOptions,
-    progress: &dyn Progress,
+    hooks: &Hooks,
 ) -> Result<(CalibrationResult, Files), CalibrateError> {
+    let progress = hooks.progress;
     let t0 = Instant::now();
     if !(opts.holdout > 0.0 && opts.holdout < 1.0) {
         return Err(CalibrateError::Holdout(opts.holdout));
@@ -180,18 +238,19 @@ pub fn calibrate_with(
         path: opts.out.join(name),
         msg,
     };
-    for c in 0..measured.channels.len() {
-        let name = format!(
-            "channel_{}.svg",
-            plots::file_stem(&measured.channels[c].name)
-        );
-        let svg = plots::channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
-            .map_err(|m| plot_err(&name, m))?;
-        files.push((name, svg.into_bytes()));
+    if let Some(plots) = hooks.plots {
+        for c in 0..measured.channels.len() {
+            let name = format!("channel_{}.svg", file_stem(&measured.channels[c].name));
+            let svg = plots
+                .channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
+                .map_err(|m| plot_err(&name, m))?;
+            files.push((name, svg.into_bytes()));
+        }
+        let svg = plots
+            .residuals_svg(&measured, &sel.baseline.sim, after_sim)
+            .map_err(|m| plot_err("residuals.svg", m))?;
+        files.push(("residuals.svg".into(), svg.into_bytes()));
     }
-    let svg = plots::residuals_svg(&measured, &sel.baseline.sim, after_sim)
-        .map_err(|m| plot_err("residuals.svg", m))?;
-    files.push(("residuals.svg".into(), svg.into_bytes()));
     for (name, _) in &files {
         let p = opts.out.join(name);
         if same_file(&p, &opts.scene) || same_file(&p, &opts.measured) {
@@ -247,15 +306,12 @@ pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), Calibr
 
 /// Runs a calibration and writes its outputs (nothing is written on error).
 pub fn run(opts: &CalibrateOptions) -> Result<CalibrationResult, CalibrateError> {
-    run_with(opts, &Silent)
+    run_with(opts, &Hooks::default())
 }
 
-/// [`run`], reporting progress as [`calibrate_with`] does.
-pub fn run_with(
-    opts: &CalibrateOptions,
-    progress: &dyn Progress,
-) -> Result<CalibrationResult, CalibrateError> {
-    let (res, files) = calibrate_with(opts, progress)?;
+/// [`run`] with progress reports and plots ([`Hooks`]).
+pub fn run_with(opts: &CalibrateOptions, hooks: &Hooks) -> Result<CalibrationResult, CalibrateError> {
+    let (res, files) = calibrate_with(opts, hooks)?;
     write_files(&opts.out, &files)?;
     Ok(res)
 }

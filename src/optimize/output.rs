@@ -36,35 +36,6 @@ pub fn history_csv(history: &[IterRecord]) -> String {
     s
 }
 
-/// Convergence plot (best loss per iteration) as SVG, titled `title`;
-/// several labelled histories may share it (e.g. co-design vs controller
-/// only). The loss axis is logarithmic (padded to at least a decade, so it
-/// carries several labelled ticks) when every loss is positive, else linear.
-pub fn convergence_svg(title: &str, series: &[(&str, &[IterRecord])]) -> Result<String> {
-    use crate::output::plot::{Axes, Series, line_plot};
-    let positive = series
-        .iter()
-        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
-    let s: Vec<Series> = series
-        .iter()
-        .map(|(label, h)| Series {
-            label: label.to_string(),
-            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
-            dashed: false,
-        })
-        .collect();
-    line_plot(
-        &Axes {
-            title,
-            x: "iteration",
-            y: "best task loss",
-            log_x: false,
-            log_y: positive,
-        },
-        &s,
-    )
-}
-
 /// `task-folder: mode` of a run, for titles and legends (`chain_reach:
 /// co-design`).
 pub fn run_label(p: &Problem, design_on: bool) -> String {
@@ -249,7 +220,9 @@ pub fn link_obj(model: &Model, link: usize) -> String {
     s
 }
 
-/// Writes every output of an optimization into `dir`.
+/// Writes the outputs of an optimization into `dir`: `history.csv`,
+/// `design.yaml`, `meshes/`, `summary.json` (the application adds its
+/// pictures: `convergence.svg`, `report.html`, …).
 pub fn write_all(
     dir: &Path,
     p: &Problem,
@@ -263,17 +236,6 @@ pub fn write_all(
     write_atomic(
         &dir.join("history.csv"),
         history_csv(&outcome.history).as_bytes(),
-    )?;
-    write_atomic(
-        &dir.join("convergence.svg"),
-        {
-            let label = run_label(p, extra["design"].as_str() != Some("off"));
-            convergence_svg(
-                &format!("{label}, best loss per iteration"),
-                &[(&label, &outcome.history)],
-            )?
-        }
-        .as_bytes(),
     )?;
     let spec = design_scene(&p.scene.spec, &model, &controller);
     let header = format!(

@@ -5,7 +5,7 @@
 use super::gate::{Verdict, markdown as gate_markdown};
 use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
 use anyhow::Result;
-use sdrs::output::plot::{Axes, Series, line_plot};
+use sdrs_cli::svg::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
 use std::path::Path;
 
