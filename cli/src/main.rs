@@ -4,6 +4,7 @@
 
 mod bench;
 mod calibrate;
+mod child;
 mod compare;
 mod contact_model;
 mod export_mjcf;

@@ -6,7 +6,6 @@ use super::data::{MIN_SAMPLES, Measured};
 use super::problem::Problem;
 use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
-use super::data::Measured as MeasuredData;
 use super::problem::Simulated;
 use super::{CalibrateError, candidates};
 use crate::energy::effects::EffectKind;
@@ -80,7 +79,7 @@ pub trait PlotWriter: Sync {
     /// `split_t` (s) on shaded.
     fn channel_svg(
         &self,
-        m: &MeasuredData,
+        m: &Measured,
         c: usize,
         before: &Simulated,
         after: &Simulated,
@@ -90,7 +89,7 @@ pub trait PlotWriter: Sync {
     /// after.
     fn residuals_svg(
         &self,
-        m: &MeasuredData,
+        m: &Measured,
         before: &Simulated,
         after: &Simulated,
     ) -> Result<String, String>;

@@ -278,7 +278,7 @@ fn coacd(
         element: ctx.element.clone(),
         msg,
     };
-    let tmp = super::child::TempDir::create(std::env::temp_dir().join(format!(
+    let tmp = python::TempDir::create(std::env::temp_dir().join(format!(
         "sdrs-coacd-{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed)

@@ -15,7 +15,6 @@
 // Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod child;
 pub mod collada;
 pub mod connectivity;
 pub mod decompose;
