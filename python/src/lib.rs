@@ -30,7 +30,22 @@ create_exception!(
     "An error of the SDRS core: a bad scene, task or import input (the message names the file and the element), a failed simulation step or backward pass."
 );
 
-/// A Python `SdrsError` with `e`'s full cause chain.
+/// `e` and its causes, `: `-separated, each once (a cause whose text the
+/// message already contains is not repeated), as the `sdrs` CLI prints them.
+pub(crate) fn cause_chain(e: &dyn std::error::Error) -> String {
+    let mut msg = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !msg.contains(&text) {
+            msg = format!("{msg}: {text}");
+        }
+        cause = c.source();
+    }
+    msg
+}
+
+/// A Python `SdrsError` with `e`'s message.
 pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
     SdrsError::new_err(e.to_string())
 }

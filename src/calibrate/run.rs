@@ -4,9 +4,9 @@
 use super::analysis::analyse;
 use super::data::{MIN_SAMPLES, Measured};
 use super::problem::Problem;
+use super::problem::Simulated;
 use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
-use super::problem::Simulated;
 use super::{CalibrateError, candidates};
 use crate::energy::effects::EffectKind;
 use crate::progress::{Progress, Silent};
@@ -309,7 +309,10 @@ pub fn run(opts: &CalibrateOptions) -> Result<CalibrationResult, CalibrateError>
 }
 
 /// [`run`] with progress reports and plots ([`Hooks`]).
-pub fn run_with(opts: &CalibrateOptions, hooks: &Hooks) -> Result<CalibrationResult, CalibrateError> {
+pub fn run_with(
+    opts: &CalibrateOptions,
+    hooks: &Hooks,
+) -> Result<CalibrationResult, CalibrateError> {
     let (res, files) = calibrate_with(opts, hooks)?;
     write_files(&opts.out, &files)?;
     Ok(res)

@@ -1,5 +1,6 @@
 //! Files written by `sdrs optimize`.
 
+use super::OptimizeError;
 use super::{IterRecord, Outcome, Problem};
 use crate::control::Controller;
 use crate::files::write_atomic;
@@ -9,7 +10,6 @@ use crate::scene::schema::{
     Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
     Origin, SceneSpec, SignalList,
 };
-use anyhow::Result;
 use std::path::Path;
 
 /// `history.csv`.
@@ -228,7 +228,7 @@ pub fn write_all(
     p: &Problem,
     outcome: &Outcome,
     extra: serde_json::Value,
-) -> Result<()> {
+) -> Result<(), OptimizeError> {
     let mut model = p.model.clone();
     p.design.apply(&mut model, &outcome.design);
     let mut controller = p.controller.clone();
@@ -244,7 +244,10 @@ pub fn write_all(
     );
     write_atomic(
         &dir.join("design.yaml"),
-        (header + &serde_yaml::to_string(&spec)?).as_bytes(),
+        (header
+            + &serde_yaml::to_string(&spec)
+                .map_err(|e| OptimizeError::serialize("design.yaml", e))?)
+            .as_bytes(),
     )?;
     for (i, l) in model.links.iter().enumerate() {
         if model.robots[l.robot].name == crate::scene::environment::ENVIRONMENT {
@@ -289,7 +292,9 @@ pub fn write_all(
     });
     write_atomic(
         &dir.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
+        serde_json::to_string_pretty(&summary)
+            .map_err(|e| OptimizeError::serialize("summary.json", e))?
+            .as_bytes(),
     )?;
     Ok(())
 }
