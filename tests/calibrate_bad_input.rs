@@ -158,7 +158,8 @@ fn bad_options_and_missing_files_write_nothing() {
     assert!(!out.exists());
     // An unknown effect name on the command line.
     let names = ["joint_damping".to_string(), "magic".to_string()];
-    let e = CalibrateOptions::new(scene(), m.clone(), out.clone(), Some(&names), 0.3).unwrap_err();
+    let e =
+        CalibrateOptions::new(scene(), m.clone(), out.clone(), Some(&names[..]), 0.3).unwrap_err();
     assert!(e.to_string().contains("\"magic\"") && e.to_string().contains("joint_friction"));
 }
 

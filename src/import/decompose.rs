@@ -67,8 +67,14 @@ impl std::str::FromStr for Decomposer {
     type Err = String;
     /// `vhacd`, `coacd`, `hull`, `none` or `grid` (any case).
     fn from_str(s: &str) -> Result<Self, String> {
-        use Decomposer::*;
-        super::pick_name(s, &[Vhacd, Coacd, Hull, None, Grid], |d| d.name())
+        let all = [
+            Decomposer::Vhacd,
+            Decomposer::Coacd,
+            Decomposer::Hull,
+            Decomposer::None,
+            Decomposer::Grid,
+        ];
+        super::pick_name(s, &all, |d| d.name())
     }
 }
 

@@ -73,7 +73,10 @@ pub fn set_helper_runner(runner: Box<dyn HelperRunner>) -> bool {
 
 /// The registered runner, else [`Plain`].
 fn runner() -> &'static dyn HelperRunner {
-    RUNNER.get().map_or(&Plain, |r| r.as_ref())
+    match RUNNER.get() {
+        Some(r) => r.as_ref(),
+        None => &Plain,
+    }
 }
 
 /// A temporary folder for a helper's files, removed on drop (and by the
