@@ -117,7 +117,7 @@ fn non_manifold_mesh_with_decomposer_none_names_the_mesh() {
     std::fs::write(dir.join("arm.obj"), &fin).unwrap();
     let inp = dir.join("r.urdf");
     let out = dir.join("out/design.yaml");
-    let mut job = ImportJob::new(inp.clone(), out);
+    let mut job = ImportJob::new(inp.clone(), out.clone());
     job.options.decomposer = Decomposer::None;
     let e = run_job(&job)
         .expect_err("none needs a closed convex mesh")
