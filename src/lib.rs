@@ -25,5 +25,6 @@ pub mod math;
 pub mod model;
 pub mod optimize;
 pub mod output;
+pub mod progress;
 pub mod scene;
 pub mod sim;

@@ -29,7 +29,6 @@ fn opts(measured: &Path, out: &Path) -> CalibrateOptions {
         out: out.to_path_buf(),
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,
-        quiet: true,
         select: Default::default(),
     }
 }
@@ -158,15 +157,9 @@ fn bad_options_and_missing_files_write_nothing() {
     assert!(run(&o).unwrap_err().to_string().contains("nope.yaml"));
     assert!(!out.exists());
     // An unknown effect name on the command line.
-    let args = sdrs::calibrate::CalibrateArgs {
-        scene: scene(),
-        measured: m.clone(),
-        out: out.clone(),
-        effects: Some(vec!["joint_damping".into(), "magic".into()]),
-        holdout: 0.3,
-        quiet: true,
-    };
-    let e = CalibrateOptions::from_args(&args).unwrap_err();
+    let names = ["joint_damping".to_string(), "magic".to_string()];
+    let e =
+        CalibrateOptions::new(scene(), m.clone(), out.clone(), Some(&names[..]), 0.3).unwrap_err();
     assert!(e.to_string().contains("\"magic\"") && e.to_string().contains("joint_friction"));
 }
 

@@ -79,7 +79,6 @@ fn calibrate_on(name: &str, data: String) -> sdrs::calibrate::CalibrationResult 
         out: dir.join(format!("out_{name}")),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
-        quiet: true,
         select: Default::default(),
     };
     calibrate(&opts).unwrap().0

@@ -198,7 +198,6 @@ fn run_case(
         out: dir.join(format!("out_{name}")),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
-        quiet: true,
         select: Default::default(),
     };
     calibrate(&opts).unwrap().0

@@ -284,7 +284,6 @@ fn scene_reader_never_panics_or_hangs() {
 fn import_quietly(path: &Path) -> String {
     let opts = ImportOptions {
         decomposer: Decomposer::Hull,
-        progress: false,
         coverage_samples: 50,
         volume_grid: 8,
         ..ImportOptions::default()

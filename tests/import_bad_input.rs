@@ -1,19 +1,12 @@
 //! Bad input → an error naming the file and the element, and no output file
 //! left behind (one test each). Runs the command's entry point
-//! (`run_import`) exactly as `sdrs import` does.
+//! (`run_job`, what `sdrs import` runs) with the job its flags select.
 
 mod import_support;
 
-use clap::Parser;
 use import_support::*;
-use sdrs::import::{ImportArgs, run_import};
+use sdrs::import::{Decomposer, ImportJob, run_job};
 use std::path::{Path, PathBuf};
-
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: ImportArgs,
-}
 
 const TET: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 
@@ -49,17 +42,12 @@ fn fails(name: &str, files: &[(&str, &str)], input: &str) -> (String, PathBuf) {
     let inp = dir.join(input);
     let out = dir.join("out/design.yaml");
     let report = dir.join("out/report.json");
-    let cli = Cli::parse_from([
-        "import".as_ref(),
-        inp.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--report".as_ref(),
-        report.as_os_str(),
-        "--quiet".as_ref(),
-    ]);
-    let err = run_import(&cli.args).expect_err("the import must fail");
-    let text = format!("{err:#}");
+    let job = ImportJob {
+        report: Some(report),
+        ..ImportJob::new(inp.clone(), out)
+    };
+    let err = run_job(&job).expect_err("the import must fail");
+    let text = err.to_string();
     eprintln!("{name}: {text}");
     let after: Vec<String> = listing(&dir).into_iter().filter(|f| f != "out").collect();
     assert_eq!(after, before, "{name}: files were left behind ({text})");
@@ -129,19 +117,11 @@ fn non_manifold_mesh_with_decomposer_none_names_the_mesh() {
     std::fs::write(dir.join("arm.obj"), &fin).unwrap();
     let inp = dir.join("r.urdf");
     let out = dir.join("out/design.yaml");
-    let cli = Cli::parse_from([
-        "import".as_ref(),
-        inp.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--decomposer".as_ref(),
-        "none".as_ref(),
-        "--quiet".as_ref(),
-    ]);
-    let e = format!(
-        "{:#}",
-        run_import(&cli.args).expect_err("none needs a closed convex mesh")
-    );
+    let mut job = ImportJob::new(inp.clone(), out.clone());
+    job.options.decomposer = Decomposer::None;
+    let e = run_job(&job)
+        .expect_err("none needs a closed convex mesh")
+        .to_string();
     assert!(
         e.contains("link \"arm\"") && e.contains("closed convex"),
         "{e}"
@@ -261,16 +241,11 @@ fn a_failure_while_writing_leaves_nothing_behind() {
     let inp = dir.join("arm.obj");
     let out = dir.join("design.yaml");
     let report = dir.join("blocker/report.json");
-    let cli = Cli::parse_from([
-        "import".as_ref(),
-        inp.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--report".as_ref(),
-        report.as_os_str(),
-        "--quiet".as_ref(),
-    ]);
-    assert!(run_import(&cli.args).is_err());
+    let job = ImportJob {
+        report: Some(report),
+        ..ImportJob::new(inp.clone(), out)
+    };
+    assert!(run_job(&job).is_err());
     assert_eq!(listing(&dir), before);
     cleanup(&dir);
 }
@@ -280,15 +255,11 @@ fn the_input_is_never_overwritten() {
     let dir = temp_dir("input-safe");
     std::fs::write(dir.join("arm.obj"), TET).unwrap();
     let inp = dir.join("arm.obj");
-    let cli = Cli::parse_from([
-        "import".as_ref(),
-        inp.as_os_str(),
-        "--out".as_ref(),
-        inp.as_os_str(),
-        "--force".as_ref(),
-        "--quiet".as_ref(),
-    ]);
-    let e = format!("{:#}", run_import(&cli.args).unwrap_err());
+    let job = ImportJob {
+        force: true,
+        ..ImportJob::new(inp.clone(), inp.clone())
+    };
+    let e = run_job(&job).unwrap_err().to_string();
     assert!(e.contains("input"), "{e}");
     assert_eq!(std::fs::read_to_string(&inp).unwrap(), TET);
     cleanup(&dir);
@@ -303,7 +274,6 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     let inp = dir.join("arm.obj");
     let opts = sdrs::import::ImportOptions {
         decomposer: sdrs::import::Decomposer::Coacd,
-        progress: false,
         ..Default::default()
     };
     unsafe { std::env::set_var("SDRS_PYTHON", dir.join("no-such-python")) };

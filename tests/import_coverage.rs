@@ -16,10 +16,7 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
         return;
     }
     let dir = temp_dir("coverage");
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let mut inputs: Vec<std::path::PathBuf> = ROBOTS.iter().map(|r| robot_urdf(r)).collect();
     inputs.extend(object_meshes());
     for (k, input) in inputs.iter().enumerate() {
@@ -59,10 +56,7 @@ fn coverage_check_fails_when_a_hull_is_missing() {
     }
     // Drop a hull of the single-jaw gripper: trimesh must see the hole.
     let input = robot_urdf("single_jaw_gripper");
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let mut imp = import(&input, &opts).unwrap();
     let link = &mut imp.scene.robots[0].links[0];
     assert!(link.hulls.len() >= 2);

@@ -11,7 +11,6 @@ fn opts(d: Decomposer) -> ImportOptions {
     ImportOptions {
         decomposer: d,
         threshold: if d == Decomposer::Coacd { 0.05 } else { 0.01 },
-        progress: false,
         ..ImportOptions::default()
     }
 }

@@ -119,10 +119,7 @@ fn fk_with_merged_fixed_links_primitives_continuous_and_prismatic_matches_pinocc
     let dir = temp_dir("fk-mixed-src");
     let urdf = dir.join("mixed.urdf");
     std::fs::write(&urdf, text).unwrap();
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let imp = import(&urdf, &opts).unwrap();
     assert!(
         imp.report

@@ -193,7 +193,6 @@ fn reproducer_meshes_import_with_hull_and_none_says_why_not() {
         let path = root().join("tests/data/repro").join(m);
         let opts = |d| ImportOptions {
             decomposer: d,
-            progress: false,
             ..ImportOptions::default()
         };
         let imp = import(Path::new(&path), &opts(Decomposer::Hull))

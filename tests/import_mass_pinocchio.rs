@@ -107,7 +107,6 @@ fn density_mass_gives_solid_links_and_the_report_compares_inertials() {
     let urdf = third_party_urdf();
     let opts = ImportOptions {
         decomposer: Decomposer::Hull,
-        progress: false,
         mass: sdrs::import::MassMode::Density,
         density: 2000.0,
         ..ImportOptions::default()

@@ -13,7 +13,6 @@ use sdrs::math::rpy_to_matrix;
 fn opts() -> ImportOptions {
     ImportOptions {
         decomposer: Decomposer::Hull,
-        progress: false,
         ..ImportOptions::default()
     }
 }

@@ -4,25 +4,15 @@
 
 mod import_support;
 
-use clap::Parser;
 use import_support::*;
 use nalgebra::Vector3;
 use sdrs::import::polytope::convex_hull;
-use sdrs::import::{ImportArgs, ImportOptions, import, run_import};
+use sdrs::import::{ImportJob, ImportOptions, import, run_job};
 use sdrs::scene::Scene;
 use std::collections::BTreeSet;
 
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    args: ImportArgs,
-}
-
 fn opts() -> ImportOptions {
-    ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    }
+    ImportOptions::default()
 }
 
 /// Removes the tied/attachment vertices from each hull, and checks that the
@@ -185,16 +175,11 @@ fn authored_robots_and_objects_write_outputs_that_simulate() {
             .into_owned();
         let out = dir.join(format!("{robot}_{stem}.yaml"));
         let report = dir.join(format!("{robot}_{stem}.json"));
-        let cli = Cli::parse_from([
-            "import".as_ref(),
-            input.as_os_str(),
-            "--out".as_ref(),
-            out.as_os_str(),
-            "--report".as_ref(),
-            report.as_os_str(),
-            "--quiet".as_ref(),
-        ]);
-        run_import(&cli.args).unwrap_or_else(|e| panic!("{}: {e:#}", input.display()));
+        let job = ImportJob {
+            report: Some(report.clone()),
+            ..ImportJob::new(input.clone(), out.clone())
+        };
+        run_job(&job).unwrap_or_else(|e| panic!("{}: {e}", input.display()));
         assert!(report.is_file());
         let meshes = dir.join(format!("{robot}_{stem}_meshes"));
         let scene = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
@@ -211,9 +196,9 @@ fn authored_robots_and_objects_write_outputs_that_simulate() {
                 .unwrap_or_else(|e| panic!("{}: {e}", input.display()));
         }
         // A second import without --force must refuse and leave the files.
-        let again = run_import(&cli.args);
+        let again = run_job(&job);
         assert!(again.is_err(), "overwrote without --force");
-        assert!(format!("{:#}", again.unwrap_err()).contains("--force"));
+        assert!(again.unwrap_err().to_string().contains("--force"));
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

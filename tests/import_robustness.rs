@@ -10,7 +10,6 @@ use sdrs::import::{Decomposer, ImportOptions, import};
 fn options(decomposer: Decomposer) -> ImportOptions {
     ImportOptions {
         decomposer,
-        progress: false,
         ..ImportOptions::default()
     }
 }

@@ -14,10 +14,7 @@ fn third_party_kuka_iiwa_imports_and_simulates() {
         return;
     }
     let urdf = third_party_urdf();
-    let opts = ImportOptions {
-        progress: false,
-        ..ImportOptions::default()
-    };
+    let opts = ImportOptions::default();
     let t = std::time::Instant::now();
     let imp = import(&urdf, &opts).unwrap_or_else(|e| panic!("{e}"));
     let r = &imp.report;

@@ -12,7 +12,7 @@ use std::path::Path;
 
 /// The declared order, lowest first; modules on one line share a layer.
 const LAYERS: &[&[&str]] = &[
-    &["math", "files"],
+    &["math", "files", "progress"],
     &["counters"],
     &["model"],
     &["control"],

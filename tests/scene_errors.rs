@@ -212,7 +212,13 @@ fn an_empty_file_says_so() {
 #[test]
 fn a_missing_file_names_its_cause_once() {
     let err = Scene::load("/nonexistent/dir/scene.yaml").unwrap_err();
-    let chain = format!("{:#}", anyhow::Error::from(err));
+    // The message and every cause, `: `-separated (as the CLI prints them).
+    let mut chain = err.to_string();
+    let mut cause = std::error::Error::source(&err);
+    while let Some(c) = cause {
+        chain = format!("{chain}: {c}");
+        cause = c.source();
+    }
     assert_eq!(chain.matches("No such file").count(), 1, "{chain}");
 }
 

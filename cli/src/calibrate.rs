@@ -1,11 +1,53 @@
 //! `sdrs calibrate`: name the physical effect missing from a scene, given
 //! measured data (the logic is `sdrs::calibrate`).
 
+use crate::progress::Bar;
 use anyhow::Result;
+use sdrs::calibrate::CalibrateOptions;
+use std::path::PathBuf;
 
-pub fn run(a: &sdrs::calibrate::CalibrateArgs) -> Result<()> {
-    let opts = sdrs::calibrate::CalibrateOptions::from_args(a)?;
-    let r = sdrs::calibrate::run(&opts)?;
+/// Command-line arguments of `sdrs calibrate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CalibrateArgs {
+    /// Scene YAML: the model to calibrate (its controller is the commanded one).
+    pub scene: PathBuf,
+    /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
+    #[arg(long)]
+    pub measured: PathBuf,
+    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Candidate effects, comma separated (default: all applicable):
+    /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
+    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
+    #[arg(long, value_delimiter = ',')]
+    pub effects: Option<Vec<String>>,
+    /// Fraction of the data (by time, at the end) held out for scoring.
+    #[arg(long, default_value_t = 0.3)]
+    pub holdout: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+pub fn run(a: &CalibrateArgs) -> Result<()> {
+    let opts = CalibrateOptions::new(
+        a.scene.clone(),
+        a.measured.clone(),
+        a.out.clone(),
+        a.effects.as_deref(),
+        a.holdout,
+    )?;
+    let bar = Bar::new(
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
+        0,
+        a.quiet,
+    );
+    let hooks = sdrs::calibrate::Hooks {
+        progress: &bar,
+        plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+    };
+    let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     eprintln!(
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
         a.measured.display(),

@@ -5,9 +5,10 @@
 //! `<temp>/sdrs-helpers-<content hash>/<name>`; an existing file there is
 //! used only if its bytes are the carried ones (else it is rewritten, or a
 //! folder of this process is used). The interpreter is `$SDRS_PYTHON`, a
-//! source tree's `.venv`, or `python3` (see `sdrs::import::python`).
+//! source tree's `.venv`, or `python3` (see `sdrs::import::python`). The
+//! helpers run through [`crate::child::Runner`].
 
-use sdrs::import::python::{HelperSource, set_helper_source};
+use sdrs::import::python::{HelperSource, set_helper_runner, set_helper_source};
 use std::path::{Path, PathBuf};
 
 /// The carried scripts.
@@ -69,4 +70,5 @@ impl HelperSource for Embedded {
 /// Registers the carried scripts as the helpers' source.
 pub fn install() {
     set_helper_source(Box::new(Embedded));
+    set_helper_runner(Box::new(crate::child::Runner));
 }

@@ -4,12 +4,15 @@
 
 mod bench;
 mod calibrate;
+mod child;
 mod compare;
 mod contact_model;
 mod export_mjcf;
 mod helpers;
+mod import;
 mod optimize;
 mod plot;
+mod progress;
 mod schema;
 mod simulate;
 mod util;
@@ -37,11 +40,11 @@ enum Command {
     /// Co-design: optimize shape and controller of a task with adjoint gradients.
     Optimize(optimize::OptimizeArgs),
     /// Import a robot (URDF, MJCF, OBJ, STL or COLLADA) as a convex-hull design space.
-    Import(sdrs::import::ImportArgs),
+    Import(import::ImportArgs),
     /// Write a scene's robots as MJCF for MuJoCo (same kinematics, masses and inertias).
     ExportMjcf(export_mjcf::ExportMjcfArgs),
     /// Calibration: name the physical effect missing from a scene, given measured data.
-    Calibrate(sdrs::calibrate::CalibrateArgs),
+    Calibrate(calibrate::CalibrateArgs),
     /// Plot optimization runs together (e.g. co-design vs controller-only) from their output directories.
     Plot(plot::PlotArgs),
     /// SDRS vs the mesh-based IPC baseline on the paper's benchmarks: report and regression gate.
@@ -59,7 +62,7 @@ fn main() {
         Command::Simulate(a) => simulate::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Optimize(a) => optimize::run(a),
-        Command::Import(a) => sdrs::import::run_import(&a),
+        Command::Import(a) => import::run(&a),
         Command::ExportMjcf(a) => export_mjcf::run(a),
         Command::Calibrate(a) => calibrate::run(&a),
         Command::Compare(a) => compare::run(a),

@@ -169,6 +169,12 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             "metrics": metrics_json,
         }),
     )?;
+    let label = sdrs::optimize::output::run_label(&problem, a.design != "off");
+    let convergence = sdrs_cli::svg::convergence_svg(
+        &format!("{label}, best loss per iteration"),
+        &[(&label, &outcome.history)],
+    )?;
+    sdrs::output::write_atomic(&out.join("convergence.svg"), convergence.as_bytes())?;
     sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
     let shapes = sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
     if let Some(svg) = &shapes {

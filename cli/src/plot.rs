@@ -4,8 +4,8 @@
 //! `summary.json`), e.g. co-design against controller-only.
 
 use anyhow::{Context, Result, bail};
-use sdrs::output::plot::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
+use sdrs_cli::svg::{Axes, Series, line_plot};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]

@@ -37,7 +37,6 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
         out: out.to_path_buf(),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
-        quiet: true,
         select: Default::default(),
     };
     calibrate(&opts).unwrap().0

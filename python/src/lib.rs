@@ -30,7 +30,22 @@ create_exception!(
     "An error of the SDRS core: a bad scene, task or import input (the message names the file and the element), a failed simulation step or backward pass."
 );
 
-/// A Python `SdrsError` with `e`'s full cause chain.
+/// `e` and its causes, `: `-separated, each once (a cause whose text the
+/// message already contains is not repeated), as the `sdrs` CLI prints them.
+pub(crate) fn cause_chain(e: &dyn std::error::Error) -> String {
+    let mut msg = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !msg.contains(&text) {
+            msg = format!("{msg}: {text}");
+        }
+        cause = c.source();
+    }
+    msg
+}
+
+/// A Python `SdrsError` with `e`'s message.
 pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
     SdrsError::new_err(e.to_string())
 }
@@ -67,35 +82,37 @@ fn import_robot(
     hold: bool,
     pose: Option<std::collections::BTreeMap<String, f64>>,
 ) -> PyResult<PathBuf> {
-    use clap::ValueEnum;
-    let pick = |what: &str, s: &str| {
-        SdrsError::new_err(format!("import_robot: {what}: unknown value \"{s}\""))
-    };
-    let args = sdrs::import::cli::ImportArgs {
-        input,
-        out: out.clone(),
-        decomposer: ValueEnum::from_str(decomposer, true)
-            .map_err(|_| pick("decomposer", decomposer))?,
-        max_hulls,
+    fn pick<T: std::str::FromStr<Err = String>>(what: &str, s: &str) -> PyResult<T> {
+        s.parse()
+            .map_err(|_| SdrsError::new_err(format!("import_robot: {what}: unknown value \"{s}\"")))
+    }
+    let decomposer: sdrs::import::Decomposer = pick("decomposer", decomposer)?;
+    let options = sdrs::import::ImportOptions {
+        decomposer,
+        max_hulls: max_hulls.max(1),
         resolution,
-        threshold,
-        hull_points: Default::default(),
+        threshold: threshold.unwrap_or(sdrs::import::ImportOptions::default_threshold(decomposer)),
         designable,
-        mass: ValueEnum::from_str(mass, true).map_err(|_| pick("mass", mass))?,
+        mass: pick("mass", mass)?,
         density,
+        bridge_gaps: bridge,
+        ties: pick::<sdrs::import::connectivity::Ties>("ties", &ties.replace('_', "-")).map_err(
+            |_| SdrsError::new_err(format!("import_robot: ties: unknown value \"{ties}\"")),
+        )?,
+        ..Default::default()
+    };
+    let job = sdrs::import::ImportJob {
         report,
         force,
-        no_bridge: !bridge,
-        ties: ValueEnum::from_str(&ties.replace('_', "-"), true).map_err(|_| pick("ties", ties))?,
-        quiet: true,
-        base: ValueEnum::from_str(base, true).map_err(|_| pick("base", base))?,
+        options,
+        base: pick("base", base)?,
         ground,
-        no_contact: !contact,
-        no_hold: !hold,
+        contact,
+        hold,
         pose: pose.unwrap_or_default().into_iter().collect(),
+        ..sdrs::import::ImportJob::new(input, out.clone())
     };
-    py.detach(|| sdrs::import::cli::run_import(&args))
-        .map_err(|e| SdrsError::new_err(format!("{e:#}")))?;
+    py.detach(|| sdrs::import::run_job(&job)).map_err(err)?;
     Ok(out)
 }
 
@@ -116,18 +133,20 @@ fn calibrate<'py>(
     effects: Option<Vec<String>>,
     holdout: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let args = sdrs::calibrate::CalibrateArgs {
-        scene,
-        measured,
-        out,
-        effects,
-        holdout,
-        quiet: true,
-    };
     let json = py
         .detach(|| {
-            let opts = sdrs::calibrate::CalibrateOptions::from_args(&args)?;
-            let r = sdrs::calibrate::run(&opts)?;
+            let opts = sdrs::calibrate::CalibrateOptions::new(
+                scene,
+                measured,
+                out,
+                effects.as_deref(),
+                holdout,
+            )?;
+            let hooks = sdrs::calibrate::Hooks {
+                plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+                ..Default::default()
+            };
+            let r = sdrs::calibrate::run_with(&opts, &hooks)?;
             Ok::<_, sdrs::calibrate::CalibrateError>(serde_json::to_string(&r))
         })
         .map_err(err)?

@@ -284,8 +284,16 @@ impl PyTask {
         let iters = iters.unwrap_or(pr.task.optimizer.iters);
         let opts = sdrs::optimize::RunOptions { seed, resume: None };
         let o = py
-            .detach(|| sdrs::optimize::optimize_with(pr, iters, &opts, |_, _| {}, |_| Ok(())))
-            .map_err(|e| SdrsError::new_err(format!("{e:#}")))?;
+            .detach(|| {
+                sdrs::optimize::optimize_with(
+                    pr,
+                    iters,
+                    &opts,
+                    |_, _| {},
+                    |_| Ok::<(), sdrs::optimize::OptimizeError>(()),
+                )
+            })
+            .map_err(|e| SdrsError::new_err(crate::cause_chain(&e)))?;
         let out = PyDict::new(py);
         out.set_item("loss", o.loss)?;
         out.set_item("initial_loss", o.initial_loss)?;

@@ -16,8 +16,9 @@
 //! - [`verdict`]: the smallest set of effects explaining the gap down to
 //!   the floor; `effect`, `none` or `unexplained`; plausibility checks.
 //! - [`analysis`]: residuals per channel, regime and time window.
-//! - [`report`], [`plots`]: `calibration.json`, `report.md`, SVG plots.
-//! - [`run`]: options, command-line arguments, [`run()`].
+//! - [`report`]: `calibration.json`, `report.md`; the SVG plots are drawn by
+//!   the application through [`run::PlotWriter`] (`cli/src/svg/calibration.rs`).
+//! - [`run`]: options, [`run()`].
 //!
 //! Outputs and their schema: [`report`] and the README.
 
@@ -28,7 +29,6 @@ pub mod data;
 pub mod error;
 pub mod fit;
 pub mod floor;
-pub mod plots;
 pub mod problem;
 pub mod report;
 pub mod run;
@@ -37,4 +37,6 @@ pub mod verdict;
 
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
-pub use run::{CalibrateArgs, CalibrateOptions, calibrate, run};
+pub use run::{
+    CalibrateOptions, Hooks, PlotWriter, calibrate, calibrate_with, effect_kinds, run, run_with,
+};

@@ -1,39 +1,18 @@
-//! `sdrs calibrate`: options, command-line arguments and the whole run.
+//! `sdrs calibrate`: options and the whole run (the command-line arguments
+//! are the application's, `cli/src/calibrate.rs`).
 
 use super::analysis::analyse;
 use super::data::{MIN_SAMPLES, Measured};
 use super::problem::Problem;
+use super::problem::Simulated;
 use super::report::{self, CalibrationResult};
 use super::select::{SelectOptions, select};
-use super::{CalibrateError, candidates, plots};
+use super::{CalibrateError, candidates};
 use crate::energy::effects::EffectKind;
+use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Command-line arguments of `sdrs calibrate`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct CalibrateArgs {
-    /// Scene YAML: the model to calibrate (its controller is the commanded one).
-    pub scene: PathBuf,
-    /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
-    #[arg(long)]
-    pub measured: PathBuf,
-    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Candidate effects, comma separated (default: all applicable):
-    /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
-    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
-    #[arg(long, value_delimiter = ',')]
-    pub effects: Option<Vec<String>>,
-    /// Fraction of the data (by time, at the end) held out for scoring.
-    #[arg(long, default_value_t = 0.3)]
-    pub holdout: f64,
-    /// No progress bar.
-    #[arg(long, short)]
-    pub quiet: bool,
-}
 
 /// Options of a calibration run.
 #[derive(Clone, Debug)]
@@ -47,39 +26,105 @@ pub struct CalibrateOptions {
     pub effects: Vec<EffectKind>,
     /// Held-out fraction, in (0, 1). Default 0.3.
     pub holdout: f64,
-    /// Hide the progress bar. Default false.
-    pub quiet: bool,
     /// Fitting and selection options (defaults: [`SelectOptions::default`]).
     pub select: SelectOptions,
 }
 
 impl CalibrateOptions {
-    /// Options from command-line arguments (unknown effect names are errors).
-    pub fn from_args(a: &CalibrateArgs) -> Result<Self, CalibrateError> {
-        let effects = match &a.effects {
-            None => EffectKind::ALL.to_vec(),
-            Some(names) => names
-                .iter()
-                .map(|n| {
-                    EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
-                        msg: format!(
-                            "unknown effect \"{n}\" (effects: {})",
-                            EffectKind::ALL.map(|k| k.name()).join(", ")
-                        ),
-                    })
-                })
-                .collect::<Result<_, _>>()?,
-        };
+    /// The options of `sdrs calibrate scene --measured measured --out out`
+    /// with `effects` named (`None`: all) and the given held-out fraction;
+    /// unknown effect names are errors.
+    pub fn new(
+        scene: PathBuf,
+        measured: PathBuf,
+        out: PathBuf,
+        effects: Option<&[String]>,
+        holdout: f64,
+    ) -> Result<Self, CalibrateError> {
         Ok(CalibrateOptions {
-            scene: a.scene.clone(),
-            measured: a.measured.clone(),
-            out: a.out.clone(),
-            effects,
-            holdout: a.holdout,
-            quiet: a.quiet,
+            scene,
+            measured,
+            out,
+            effects: effect_kinds(effects)?,
+            holdout,
             select: SelectOptions::default(),
         })
     }
+}
+
+/// The effect kinds `names` lists (`None`: all of [`EffectKind::ALL`]); an
+/// unknown name is an error listing the known ones.
+pub fn effect_kinds(names: Option<&[String]>) -> Result<Vec<EffectKind>, CalibrateError> {
+    let Some(names) = names else {
+        return Ok(EffectKind::ALL.to_vec());
+    };
+    names
+        .iter()
+        .map(|n| {
+            EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
+                msg: format!(
+                    "unknown effect \"{n}\" (effects: {})",
+                    EffectKind::ALL.map(|k| k.name()).join(", ")
+                ),
+            })
+        })
+        .collect()
+}
+
+/// Draws calibration's SVG plots: the application's (`cli/src/svg`); the
+/// core draws nothing. Errors are messages (the plot is not written).
+pub trait PlotWriter: Sync {
+    /// Channel `c` of `m`: the measured samples, the simulation `before`
+    /// (as given) and `after` (calibrated), the held-out window from
+    /// `split_t` (s) on shaded.
+    fn channel_svg(
+        &self,
+        m: &Measured,
+        c: usize,
+        before: &Simulated,
+        after: &Simulated,
+        split_t: f64,
+    ) -> Result<String, String>;
+    /// The residuals (simulated − measured) of every channel, before and
+    /// after.
+    fn residuals_svg(
+        &self,
+        m: &Measured,
+        before: &Simulated,
+        after: &Simulated,
+    ) -> Result<String, String>;
+}
+
+/// What a calibration run reports to and asks of its caller.
+#[derive(Clone, Copy)]
+pub struct Hooks<'a> {
+    /// Told about the candidate fits (one unit per fit). Default [`Silent`].
+    pub progress: &'a dyn Progress,
+    /// Draws `channel_<name>.svg` and `residuals.svg`; `None` (the default)
+    /// writes no plots.
+    pub plots: Option<&'a dyn PlotWriter>,
+}
+
+impl Default for Hooks<'_> {
+    fn default() -> Self {
+        Hooks {
+            progress: &Silent,
+            plots: None,
+        }
+    }
+}
+
+/// A file-name-safe version of a channel name (`arm/elbow` → `arm_elbow`).
+pub fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
@@ -95,6 +140,15 @@ pub type Files = Vec<(String, Vec<u8>)>;
 /// Computes the calibration without writing anything; returns the result
 /// and the output files.
 pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), CalibrateError> {
+    calibrate_with(opts, &Hooks::default())
+}
+
+/// [`calibrate`] with progress reports and plots ([`Hooks`]).
+pub fn calibrate_with(
+    opts: &CalibrateOptions,
+    hooks: &Hooks,
+) -> Result<(CalibrationResult, Files), CalibrateError> {
+    let progress = hooks.progress;
     let t0 = Instant::now();
     if !(opts.holdout > 0.0 && opts.holdout < 1.0) {
         return Err(CalibrateError::Holdout(opts.holdout));
@@ -128,29 +182,18 @@ pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), 
         split,
     };
     let cands = candidates::candidates(&scene, &opts.effects);
-    let pbar = if opts.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let p = indicatif::ProgressBar::new(0);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
-        ) {
-            p.set_style(style);
-        }
-        p
-    };
     let sel = select(
         &pb,
         cands,
         &opts.select,
-        &|n| pbar.set_length(n as u64),
-        &|| pbar.inc(1),
-    )
-    .ok_or_else(|| CalibrateError::Output {
+        &|n| progress.start(n as u64, "candidate fits"),
+        &|| progress.inc(),
+    );
+    progress.finish();
+    let sel = sel.ok_or_else(|| CalibrateError::Output {
         path: opts.scene.clone(),
         msg: "the scene as given could not be simulated".into(),
     })?;
-    pbar.finish_and_clear();
     let after_sim = sel
         .chosen
         .map(|i| &sel.ranking[i].sim)
@@ -194,18 +237,19 @@ pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), 
         path: opts.out.join(name),
         msg,
     };
-    for c in 0..measured.channels.len() {
-        let name = format!(
-            "channel_{}.svg",
-            plots::file_stem(&measured.channels[c].name)
-        );
-        let svg = plots::channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
-            .map_err(|m| plot_err(&name, m))?;
-        files.push((name, svg.into_bytes()));
+    if let Some(plots) = hooks.plots {
+        for c in 0..measured.channels.len() {
+            let name = format!("channel_{}.svg", file_stem(&measured.channels[c].name));
+            let svg = plots
+                .channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
+                .map_err(|m| plot_err(&name, m))?;
+            files.push((name, svg.into_bytes()));
+        }
+        let svg = plots
+            .residuals_svg(&measured, &sel.baseline.sim, after_sim)
+            .map_err(|m| plot_err("residuals.svg", m))?;
+        files.push(("residuals.svg".into(), svg.into_bytes()));
     }
-    let svg = plots::residuals_svg(&measured, &sel.baseline.sim, after_sim)
-        .map_err(|m| plot_err("residuals.svg", m))?;
-    files.push(("residuals.svg".into(), svg.into_bytes()));
     for (name, _) in &files {
         let p = opts.out.join(name);
         if same_file(&p, &opts.scene) || same_file(&p, &opts.measured) {
@@ -261,7 +305,15 @@ pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> Result<(), Calibr
 
 /// Runs a calibration and writes its outputs (nothing is written on error).
 pub fn run(opts: &CalibrateOptions) -> Result<CalibrationResult, CalibrateError> {
-    let (res, files) = calibrate(opts)?;
+    run_with(opts, &Hooks::default())
+}
+
+/// [`run`] with progress reports and plots ([`Hooks`]).
+pub fn run_with(
+    opts: &CalibrateOptions,
+    hooks: &Hooks,
+) -> Result<CalibrationResult, CalibrateError> {
+    let (res, files) = calibrate_with(opts, hooks)?;
     write_files(&opts.out, &files)?;
     Ok(res)
 }

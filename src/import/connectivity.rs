@@ -83,9 +83,7 @@ impl DesignHull {
 ///   blocks' coincident corners are one variable ([`super::grid::corner_ties`]),
 ///   so the blocks form a deformable hexahedral lattice in which no block can
 ///   move away from its neighbours.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Ties {
     #[default]
@@ -99,6 +97,17 @@ impl Ties {
             Ties::SharedVertex => "shared_vertex",
             Ties::Corners => "corners",
         }
+    }
+}
+
+impl std::str::FromStr for Ties {
+    type Err = String;
+    /// `shared-vertex` or `corners` (any case; the command-line spelling).
+    fn from_str(s: &str) -> Result<Self, String> {
+        super::pick_name(s, &[Ties::SharedVertex, Ties::Corners], |t| match t {
+            Ties::SharedVertex => "shared-vertex",
+            Ties::Corners => "corners",
+        })
     }
 }
 

@@ -41,7 +41,7 @@ use parry3d_f64::transformation::vhacd::{VHACD, VHACDParameters};
 use serde::{Deserialize, Serialize};
 
 /// Which decomposition to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Decomposer {
     Vhacd,
@@ -63,8 +63,23 @@ impl Decomposer {
     }
 }
 
+impl std::str::FromStr for Decomposer {
+    type Err = String;
+    /// `vhacd`, `coacd`, `hull`, `none` or `grid` (any case).
+    fn from_str(s: &str) -> Result<Self, String> {
+        let all = [
+            Decomposer::Vhacd,
+            Decomposer::Coacd,
+            Decomposer::Hull,
+            Decomposer::None,
+            Decomposer::Grid,
+        ];
+        super::pick_name(s, &all, |d| d.name())
+    }
+}
+
 /// Which points span a decomposed part's hull.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum HullPoints {
     /// The decomposer's own points (V-HACD: every surface voxel corner).
@@ -72,6 +87,17 @@ pub enum HullPoints {
     Voxels,
     /// The source mesh's vertices, partitioned by the parts (module docs).
     Mesh,
+}
+
+impl std::str::FromStr for HullPoints {
+    type Err = String;
+    /// `voxels` or `mesh` (any case).
+    fn from_str(s: &str) -> Result<Self, String> {
+        super::pick_name(s, &[HullPoints::Voxels, HullPoints::Mesh], |h| match h {
+            HullPoints::Voxels => "voxels",
+            HullPoints::Mesh => "mesh",
+        })
+    }
 }
 
 /// Decomposes `mesh` into at most `opts.max_hulls` convex hulls.
@@ -258,7 +284,7 @@ fn coacd(
         element: ctx.element.clone(),
         msg,
     };
-    let tmp = super::child::TempDir::create(std::env::temp_dir().join(format!(
+    let tmp = python::TempDir::create(std::env::temp_dir().join(format!(
         "sdrs-coacd-{}-{}",
         std::process::id(),
         COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed)

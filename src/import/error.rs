@@ -84,6 +84,9 @@ pub enum ImportError {
     },
     #[error("{msg}")]
     Python { msg: String },
+    /// An option value no import can use; the message names the option.
+    #[error("{msg}")]
+    Options { msg: String },
     #[error("{}: {msg}", path.display())]
     Output { path: PathBuf, msg: String },
     #[error("{}: the imported design does not validate: {msg}", path.display())]

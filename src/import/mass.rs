@@ -22,11 +22,22 @@ use nalgebra::{Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// How masses are assigned.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MassMode {
     Urdf,
     Density,
+}
+
+impl std::str::FromStr for MassMode {
+    type Err = String;
+    /// `urdf` or `density` (any case).
+    fn from_str(s: &str) -> Result<Self, String> {
+        super::pick_name(s, &[MassMode::Urdf, MassMode::Density], |m| match m {
+            MassMode::Urdf => "urdf",
+            MassMode::Density => "density",
+        })
+    }
 }
 
 /// Where a link's mass came from.

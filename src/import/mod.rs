@@ -9,14 +9,12 @@
 //! [`mesh`] + [`decompose`]) → [`connectivity`] (shared vertices inside
 //! hull intersections, attachment points) → [`mass`] → [`report`] → a scene
 //! (`version: 1`, one robot, `design:` section with the ties). [`write`]
-//! puts the scene, an OBJ per link and the report on disk atomically; [`cli`]
-//! is the `sdrs import` command.
+//! puts the scene, an OBJ per link and the report on disk atomically; [`job`]
+//! is one whole run (`sdrs import`).
 
 // Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod child;
-pub mod cli;
 pub mod collada;
 pub mod connectivity;
 pub mod decompose;
@@ -25,6 +23,7 @@ pub mod fkcheck;
 pub mod grid;
 pub mod guard;
 pub mod interior;
+pub mod job;
 pub mod limits;
 pub mod mass;
 pub mod mesh;
@@ -40,12 +39,13 @@ pub mod tolerant;
 pub mod urdf;
 pub mod write;
 
-pub use cli::{ImportArgs, run_import};
 pub use decompose::{Decomposer, HullPoints};
 pub use error::ImportError;
+pub use job::{ImportJob, run_job, run_job_with};
 pub use mass::MassMode;
 pub use report::ImportReport;
 
+use crate::progress::Progress;
 use crate::scene::schema::*;
 use connectivity::{DesignHull, attach_point, connect_link, hull_volume};
 use mesh::{MeshContext, TriMesh};
@@ -101,8 +101,32 @@ pub struct ImportOptions {
     pub volume_grid: usize,
     /// Seed for sampling and CoACD. Default 0.
     pub seed: u64,
-    /// Show a progress bar while decomposing many links. Default true.
-    pub progress: bool,
+}
+
+/// The value of `options` whose `name` is `s` (ASCII case ignored), or a
+/// message listing the names: the `FromStr` of the option enums.
+fn pick_name<T: Copy>(
+    s: &str,
+    options: &[T],
+    name: impl Fn(T) -> &'static str,
+) -> Result<T, String> {
+    let names: Vec<&str> = options.iter().map(|&o| name(o)).collect();
+    options
+        .iter()
+        .find(|&&o| name(o).eq_ignore_ascii_case(s))
+        .copied()
+        .ok_or_else(|| format!("unknown value \"{s}\" (one of: {})", names.join(", ")))
+}
+
+impl ImportOptions {
+    /// The concavity threshold used when none is given: 0.05 for CoACD
+    /// (its own default), else [`ImportOptions::default`]'s 0.01.
+    pub fn default_threshold(decomposer: Decomposer) -> f64 {
+        match decomposer {
+            Decomposer::Coacd => 0.05,
+            _ => ImportOptions::default().threshold,
+        }
+    }
 }
 
 impl Default for ImportOptions {
@@ -124,7 +148,6 @@ impl Default for ImportOptions {
             coverage_samples: 2000,
             volume_grid: 48,
             seed: 0,
-            progress: true,
         }
     }
 }
@@ -160,6 +183,16 @@ fn is_urdf(p: &Path) -> bool {
 
 /// Imports a `.urdf`, `.obj`, `.stl` or `.dae` file.
 pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportError> {
+    import_with(input, opts, &crate::progress::Silent)
+}
+
+/// [`import`], reporting the links' decomposition to `progress` (one unit
+/// per link, the link's name as the message).
+pub fn import_with(
+    input: &Path,
+    opts: &ImportOptions,
+    progress: &dyn Progress,
+) -> Result<Imported, ImportError> {
     let t0 = Instant::now();
     if !input.is_file() {
         return Err(ImportError::Io {
@@ -169,7 +202,7 @@ pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
     }
     if mjcf::is_mjcf(input) {
         let (src, extra) = mjcf::read_mjcf(input, opts)?;
-        let mut imp = build(src, opts, t0)?;
+        let mut imp = build(src, opts, t0, progress)?;
         add_mjcf_scene(&mut imp, extra, input)?;
         return Ok(imp);
     }
@@ -178,7 +211,7 @@ pub fn import(input: &Path, opts: &ImportOptions) -> Result<Imported, ImportErro
     } else {
         SourceRobot::from_mesh(input)
     };
-    build(src, opts, t0)
+    build(src, opts, t0, progress)
 }
 
 /// Puts what an MJCF file adds (gravity, ground, obstacles, MuJoCo's
@@ -409,7 +442,12 @@ fn units_hint(m: &TriMesh, element: &str, path: &Path) -> Option<String> {
     })
 }
 
-fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported, ImportError> {
+fn build(
+    src: SourceRobot,
+    opts: &ImportOptions,
+    t0: Instant,
+    progress: &dyn Progress,
+) -> Result<Imported, ImportError> {
     if opts.ties == connectivity::Ties::Corners && opts.decomposer != decompose::Decomposer::Grid {
         return Err(ImportError::Invalid {
             path: src.file.clone(),
@@ -433,23 +471,18 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
     }
     // 1. Geometry → hulls, link by link.
     let n = src.links.len();
-    let bar = if opts.progress && n > 1 {
-        let b = indicatif::ProgressBar::new(n as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("decomposing {bar:30} {pos}/{len} links {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    progress.start(n as u64, "links");
     let mut geoms = Vec::with_capacity(n);
     for li in 0..n {
-        bar.set_message(src.links[li].name.clone());
-        geoms.push(link_geometry(&src, li, opts)?);
-        bar.inc(1);
+        progress.message(&src.links[li].name);
+        let g = link_geometry(&src, li, opts);
+        if g.is_err() {
+            progress.finish();
+        }
+        geoms.push(g?);
+        progress.inc();
     }
-    bar.finish_and_clear();
+    progress.finish();
 
     // 2. Shared vertices inside each link.
     let mut conn = Vec::with_capacity(n);

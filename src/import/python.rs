@@ -18,7 +18,7 @@
 
 use super::error::ImportError;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 /// The command that installs the Python helpers' packages in a checkout.
@@ -35,6 +35,75 @@ pub trait HelperSource: Send + Sync {
 }
 
 static SOURCE: OnceLock<Box<dyn HelperSource>> = OnceLock::new();
+
+/// How helper processes run. The core only needs a helper's output; the
+/// embedding program decides how the process is tied to its own life (the
+/// `sdrs` binary kills its helpers and removes their folders when it is
+/// interrupted: `cli/src/child.rs`). Without a registered runner,
+/// [`Plain`] runs them.
+pub trait HelperRunner: Send + Sync {
+    /// Runs `cmd` to completion and collects its status, stdout and stderr,
+    /// like [`Command::output`].
+    fn output(&self, cmd: Command) -> std::io::Result<Output>;
+    /// `path`, a temporary folder just created for a helper, is to be
+    /// removed if the program is interrupted before [`Self::forget_folder`].
+    /// Default: nothing.
+    fn track_folder(&self, _path: &Path) {}
+    /// `path` is gone (removed by [`TempDir`]'s drop). Default: nothing.
+    fn forget_folder(&self, _path: &Path) {}
+}
+
+/// Runs a helper with [`Command::output`] and nothing more (the default
+/// runner; the Python package's).
+pub struct Plain;
+
+impl HelperRunner for Plain {
+    fn output(&self, mut cmd: Command) -> std::io::Result<Output> {
+        cmd.output()
+    }
+}
+
+static RUNNER: OnceLock<Box<dyn HelperRunner>> = OnceLock::new();
+
+/// Registers the program's helper runner (first call wins; returns whether
+/// this one was taken).
+pub fn set_helper_runner(runner: Box<dyn HelperRunner>) -> bool {
+    RUNNER.set(runner).is_ok()
+}
+
+/// The registered runner, else [`Plain`].
+fn runner() -> &'static dyn HelperRunner {
+    match RUNNER.get() {
+        Some(r) => r.as_ref(),
+        None => &Plain,
+    }
+}
+
+/// A temporary folder for a helper's files, removed on drop (and by the
+/// runner when the program is interrupted, see [`HelperRunner`]).
+pub struct TempDir {
+    path: PathBuf,
+}
+
+impl TempDir {
+    /// Creates `path` (and its parents) and tells the runner.
+    pub fn create(path: PathBuf) -> std::io::Result<TempDir> {
+        std::fs::create_dir_all(&path)?;
+        runner().track_folder(&path);
+        Ok(TempDir { path })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.path);
+        runner().forget_folder(&self.path);
+    }
+}
 
 /// Registers the program's helper source (first call wins; returns whether
 /// this one was taken).
@@ -99,7 +168,7 @@ pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput,
     let path = tool(script)?;
     let mut cmd = Command::new(&py);
     cmd.arg(&path).args(args);
-    let out = super::child::spawn_output(cmd).map_err(|e| ImportError::Python {
+    let out = runner().output(cmd).map_err(|e| ImportError::Python {
         msg: format!(
             "cannot run Python ({}): {e}; set SDRS_PYTHON to a Python 3 interpreter (in a source tree: `{SETUP_COMMAND}`)",
             py.display()

@@ -47,7 +47,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// How the robot's base is attached.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum BaseMode {
     /// Floating unless the input says the base is static (see module doc).
@@ -56,6 +56,19 @@ pub enum BaseMode {
     Fixed,
     /// A free 6-DOF body.
     Floating,
+}
+
+impl std::str::FromStr for BaseMode {
+    type Err = String;
+    /// `auto`, `fixed` or `floating` (any case).
+    fn from_str(s: &str) -> Result<Self, String> {
+        use BaseMode::*;
+        super::pick_name(s, &[Auto, Fixed, Floating], |b| match b {
+            Auto => "auto",
+            Fixed => "fixed",
+            Floating => "floating",
+        })
+    }
 }
 
 /// Options of [`make_ready`]; every default is in the module doc.

@@ -467,10 +467,7 @@ mod tests {
     fn design_yaml_round_trips_exactly() {
         let input = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("robots/parallel_jaw_gripper/parallel_jaw_gripper.urdf");
-        let opts = crate::import::ImportOptions {
-            progress: false,
-            ..Default::default()
-        };
+        let opts = crate::import::ImportOptions::default();
         let imp = crate::import::import(&input, &opts).unwrap();
         let yaml = super::to_yaml(&imp.scene);
         let back: crate::scene::SceneSpec = serde_yaml::from_str(&yaml).unwrap();

@@ -39,6 +39,8 @@ pub enum CheckpointError {
     },
     #[error("{}: malformed checkpoint: {msg}", path.display())]
     Parse { path: PathBuf, msg: String },
+    #[error("{}: cannot write the checkpoint: {msg}", path.display())]
+    Write { path: PathBuf, msg: String },
     #[error("{}: {what} differs from the run that wrote it (checkpoint: {had}, now: {now})", path.display())]
     Mismatch {
         path: PathBuf,
@@ -108,14 +110,19 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// Writes `dir/checkpoint.json` atomically.
-pub fn save(dir: &Path, key: &RunKey, state: &State) -> anyhow::Result<()> {
+pub fn save(dir: &Path, key: &RunKey, state: &State) -> Result<(), CheckpointError> {
     let c = Checkpoint {
         version: VERSION,
         key: key.clone(),
         state: state.clone(),
     };
-    crate::files::write_atomic(&dir.join(FILE), serde_json::to_string(&c)?.as_bytes())?;
-    Ok(())
+    let path = dir.join(FILE);
+    let write = |msg: String| CheckpointError::Write {
+        path: path.clone(),
+        msg,
+    };
+    let text = serde_json::to_string(&c).map_err(|e| write(e.to_string()))?;
+    crate::files::write_atomic(&path, text.as_bytes()).map_err(|e| write(e.to_string()))
 }
 
 /// Reads `dir/checkpoint.json` and checks it against `key`.

@@ -11,8 +11,8 @@
 //!
 //! Defaults: `tolerance = 0.02` m, `lift = 0.05` m.
 
-use super::Problem;
 use super::names;
+use super::{OptimizeError, Problem};
 use crate::kinematics::link_poses;
 use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
@@ -63,7 +63,7 @@ pub fn measure(
     p: &Problem,
     d: &DVector<f64>,
     c: &DVector<f64>,
-) -> anyhow::Result<Vec<GraspResult>> {
+) -> Result<Vec<GraspResult>, OptimizeError> {
     use rayon::prelude::*;
     super::multi::all(p)
         .par_iter()
@@ -72,21 +72,29 @@ pub fn measure(
         .collect()
 }
 
-fn measure_one(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<GraspResult> {
+fn measure_one(
+    p: &Problem,
+    d: &DVector<f64>,
+    c: &DVector<f64>,
+) -> Result<GraspResult, OptimizeError> {
     let g = p.task.grasp.as_ref().expect("filtered");
     let mut model = p.model.clone();
     p.design.apply(&mut model, d);
     let mut controller = p.controller.clone();
     p.controls.apply(&mut controller, c);
-    let obj = names::link(&model, &g.object).map_err(|e| anyhow::anyhow!("grasp.object: {e}"))?;
+    let invalid = |element: &str, msg: String| OptimizeError::Invalid {
+        element: element.into(),
+        msg,
+    };
+    let obj = names::link(&model, &g.object).map_err(|e| invalid("grasp.object", e.to_string()))?;
     let grip =
-        names::link(&model, &g.gripper).map_err(|e| anyhow::anyhow!("grasp.gripper: {e}"))?;
-    anyhow::ensure!(
-        g.from <= p.horizon,
-        "grasp.from = {} is beyond the horizon {}",
-        g.from,
-        p.horizon
-    );
+        names::link(&model, &g.gripper).map_err(|e| invalid("grasp.gripper", e.to_string()))?;
+    if g.from > p.horizon {
+        return Err(invalid(
+            "grasp.from",
+            format!("{} is beyond the horizon {}", g.from, p.horizon),
+        ));
+    }
     let fm = model.first_moment[obj];
     let c_local = Vector3::new(fm[0], fm[1], fm[2]) / fm[3];
     let mut scene = p.scene.clone();
@@ -104,8 +112,11 @@ fn measure_one(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Resul
     let mut last = c0;
     for k in 0..=p.horizon {
         if k > 0 {
-            sim.step()
-                .map_err(|e| anyhow::anyhow!("{}: step {k}: {e}", p.scene.source.display()))?;
+            sim.step().map_err(|err| OptimizeError::StepOf {
+                path: p.scene.source.clone(),
+                step: k,
+                err,
+            })?;
         }
         let (co, r) = at(&sim);
         if k == g.from {

@@ -3,7 +3,7 @@
 //! of every designable link ([`crate::geometry::topology`]), at the initial
 //! and the optimized design; and a runnable optimized scene per trajectory.
 
-use super::{Outcome, Problem, grasp, multi, names, output};
+use super::{OptimizeError, Outcome, Problem, grasp, multi, names, output};
 use crate::files::write_atomic;
 use crate::geometry::topology;
 use nalgebra::DVector;
@@ -13,7 +13,7 @@ use std::path::Path;
 pub const TOPOLOGY_RESOLUTION: usize = 64;
 
 /// Topology of each designable link (`design.vertices`) of `p` at `d`.
-pub fn topologies(p: &Problem, d: &DVector<f64>) -> anyhow::Result<serde_json::Value> {
+pub fn topologies(p: &Problem, d: &DVector<f64>) -> Result<serde_json::Value, OptimizeError> {
     let mut model = p.model.clone();
     p.design.apply(&mut model, d);
     let mut out = serde_json::Map::new();
@@ -24,14 +24,23 @@ pub fn topologies(p: &Problem, d: &DVector<f64>) -> anyhow::Result<serde_json::V
         .map(|x| x.vertices.clone())
         .unwrap_or_default();
     for name in links {
-        let l = names::link(&model, &name)?;
+        let l = names::link(&model, &name).map_err(|e| OptimizeError::Invalid {
+            element: "design.vertices".into(),
+            msg: e.to_string(),
+        })?;
         let hulls: Vec<_> = model.links[l]
             .hulls
             .iter()
             .map(|h| h.x_local.clone())
             .collect();
-        let t = topology::measure(&hulls, TOPOLOGY_RESOLUTION)?;
-        out.insert(name, serde_json::to_value(t)?);
+        let t = topology::measure(&hulls, TOPOLOGY_RESOLUTION).map_err(|err| {
+            OptimizeError::Topology {
+                link: name.clone(),
+                err,
+            }
+        })?;
+        let t = serde_json::to_value(t).map_err(|e| OptimizeError::serialize(&name, e))?;
+        out.insert(name, t);
     }
     Ok(serde_json::Value::Object(out))
 }
@@ -42,7 +51,7 @@ pub fn summary(
     d0: &DVector<f64>,
     c0: &DVector<f64>,
     o: &Outcome,
-) -> anyhow::Result<serde_json::Value> {
+) -> Result<serde_json::Value, OptimizeError> {
     let before = grasp::measure(p, d0, c0)?;
     let after = grasp::measure(p, &o.design, &o.controller)?;
     let count = |v: &[grasp::GraspResult]| v.iter().filter(|g| g.grasped).count();
@@ -78,7 +87,7 @@ pub fn summary(
 
 /// Writes `scenes/<scene file name>` for every trajectory: its scene with
 /// the optimized design and controller (`sdrs simulate` runs it).
-pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> anyhow::Result<()> {
+pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> Result<(), OptimizeError> {
     for q in multi::all(p) {
         let mut model = q.model.clone();
         q.design.apply(&mut model, &o.design);
@@ -97,10 +106,8 @@ pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> anyhow::Result<()> 
             p.task_path.display(),
             q.horizon
         );
-        write_atomic(
-            &dir.join("scenes").join(name),
-            (header + &serde_yaml::to_string(&spec)?).as_bytes(),
-        )?;
+        let yaml = serde_yaml::to_string(&spec).map_err(|e| OptimizeError::serialize(&name, e))?;
+        write_atomic(&dir.join("scenes").join(name), (header + &yaml).as_bytes())?;
     }
     Ok(())
 }

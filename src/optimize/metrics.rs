@@ -18,7 +18,7 @@
 //!   again is upright at H but has a `first_fall_time`).
 
 use super::names;
-use super::{Problem, TaskError};
+use super::{OptimizeError, Problem, TaskError};
 use crate::kinematics::link_poses;
 use crate::math::rot;
 use nalgebra::{DVector, Matrix3, Rotation3, Unit, Vector3};
@@ -131,7 +131,7 @@ impl Metrics {
         p: &Problem,
         d: &DVector<f64>,
         c: &DVector<f64>,
-    ) -> anyhow::Result<TaskMetrics> {
+    ) -> Result<TaskMetrics, OptimizeError> {
         let mut scene = p.scene.clone();
         let mut model = p.model.clone();
         p.design.apply(&mut model, d);

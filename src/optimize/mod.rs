@@ -4,6 +4,7 @@
 pub mod checkpoint;
 pub mod controls;
 pub mod design;
+pub mod error;
 pub mod grasp;
 pub mod grasp_metrics;
 pub mod method;
@@ -18,6 +19,7 @@ pub mod task;
 
 pub use controls::ControlSpace;
 pub use design::DesignSpace;
+pub use error::OptimizeError;
 pub use task::TaskSpec;
 
 use crate::control::Controller;
@@ -191,7 +193,11 @@ impl Problem {
     /// Loss and gradients at design `d` and controller `c` (forward +
     /// backward), with timings.
     /// With several trajectories, the sum over them ([`multi::evaluate`]).
-    pub fn evaluate(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+    pub fn evaluate(
+        &self,
+        d: &DVector<f64>,
+        c: &DVector<f64>,
+    ) -> Result<Evaluation, OptimizeError> {
         if self.others.is_empty() {
             self.evaluate_one(d, c)
         } else {
@@ -204,16 +210,15 @@ impl Problem {
     fn factory_for(
         &self,
         scene: &Scene,
-    ) -> anyhow::Result<Option<&dyn crate::scene::ContactModelFactory>> {
+    ) -> Result<Option<&dyn crate::scene::ContactModelFactory>, OptimizeError> {
         match scene.contact.as_ref().filter(|c| !c.model.is_sdrs()) {
             None => Ok(None),
             Some(c) => match &self.contact_factory {
                 Some(f) => Ok(Some(f.as_ref())),
-                None => anyhow::bail!(
-                    "{}: contact.model: {} needs the contact model's provider (the `sdrs` CLI passes the IPC baseline's)",
-                    scene.source.display(),
-                    c.model.name()
-                ),
+                None => Err(OptimizeError::NoContactProvider {
+                    path: scene.source.clone(),
+                    model: c.model.name().to_string(),
+                }),
             },
         }
     }
@@ -221,7 +226,7 @@ impl Problem {
     /// The simulator of `scene` (a variant of this problem's scene) with
     /// its contact model: [`Scene::simulator`] for SDRS scenes (unchanged),
     /// the factory's terms otherwise.
-    pub fn simulator(&self, scene: &Scene) -> anyhow::Result<crate::sim::Simulator> {
+    pub fn simulator(&self, scene: &Scene) -> Result<crate::sim::Simulator, OptimizeError> {
         Ok(match self.factory_for(scene)? {
             None => scene.simulator(),
             Some(f) => scene.simulator_with(f)?,
@@ -246,7 +251,7 @@ impl Problem {
     /// [`Problem::evaluate`]'s cost; for finite-difference checks). Summed
     /// over the trajectories like [`Problem::evaluate`] (same order), and
     /// bitwise equal to its `loss`.
-    pub fn loss_value(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+    pub fn loss_value(&self, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
         if self.others.is_empty() {
             self.loss_value_one(d, c)
         } else {
@@ -255,7 +260,7 @@ impl Problem {
     }
 
     /// [`Problem::loss_value`] of this trajectory alone.
-    pub fn loss_value_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+    pub fn loss_value_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
         let scene = self.scene_at(d, c);
         let mut sim = self.simulator(&scene)?;
         let tape = record(&mut sim, self.horizon)?;
@@ -267,7 +272,11 @@ impl Problem {
     }
 
     /// [`Problem::evaluate`] of this trajectory alone.
-    pub fn evaluate_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+    pub fn evaluate_one(
+        &self,
+        d: &DVector<f64>,
+        c: &DVector<f64>,
+    ) -> Result<Evaluation, OptimizeError> {
         let scene = self.scene_at(d, c);
         let model = scene.model.clone();
         let mut sim = self.simulator(&scene)?;
@@ -279,10 +288,9 @@ impl Problem {
             Some(f) => backward(&mut scene.adjoint_simulator_with(f)?, &tape, &self.loss)?,
         };
         if !grads.unavailable.is_empty() {
-            anyhow::bail!(
-                "the gradient needs derivatives that are not available yet: {}",
-                grads.unavailable.join(", ")
-            );
+            return Err(OptimizeError::Unavailable {
+                terms: grads.unavailable.iter().map(|t| t.to_string()).collect(),
+            });
         }
         let gd = self.design.gradient(&grads);
         let gc = self.controls.gradient(&grads);
@@ -480,8 +488,10 @@ pub fn optimize(
     p: &Problem,
     iters: usize,
     on_iter: impl FnMut(&IterRecord, &DVector<f64>),
-) -> anyhow::Result<Outcome> {
-    optimize_with(p, iters, &RunOptions::default(), on_iter, |_| Ok(()))
+) -> Result<Outcome, OptimizeError> {
+    optimize_with(p, iters, &RunOptions::default(), on_iter, |_| {
+        Ok::<(), OptimizeError>(())
+    })
 }
 
 /// Options of [`optimize_with`].
@@ -515,193 +525,279 @@ pub fn start(p: &Problem, seed: u64) -> (DVector<f64>, DVector<f64>) {
 /// `on_state` called with the full optimizer state after every iteration
 /// (for checkpoints). Resuming from the state after iteration `k` of a run
 /// gives bitwise the same iterates and losses as that run.
-pub fn optimize_with(
+///
+/// Phases: [`Run::begin`] (the start or the checkpoint), the first
+/// evaluation, then per iteration [`Run::propose`] (the method's step,
+/// projected onto the design bounds), the trial evaluation and
+/// [`Run::settle`] (accept or reject), and [`Run::outcome`].
+pub fn optimize_with<E: Into<OptimizeError>>(
     p: &Problem,
     iters: usize,
     opts: &RunOptions,
     mut on_iter: impl FnMut(&IterRecord, &DVector<f64>),
-    mut on_state: impl FnMut(&checkpoint::State) -> anyhow::Result<()>,
-) -> anyhow::Result<Outcome> {
-    let o = &p.task.optimizer;
-    let (lo, hi) = (p.design.lower(), p.design.upper());
-    let (mut d, mut c) = start(p, opts.seed);
-    let (mut rd, mut rc) = (o.step_design, o.step_controller);
-    let mut adam = (
-        Adam::new(d.len(), o.step_design),
-        Adam::new(c.len(), o.step_controller),
-    );
-    let mut history = Vec::with_capacity(iters + 1);
-    let mut best: Option<BestIterate> = None;
-    let mut first = 1;
-    let mut wall0 = 0.0;
-    if let Some(s) = &opts.resume {
-        if s.design.len() != d.len() || s.controller.len() != c.len() {
-            anyhow::bail!(
-                "the checkpoint has {} design and {} controller variables, the task {} and {}",
-                s.design.len(),
-                s.controller.len(),
-                d.len(),
-                c.len()
-            );
-        }
-        d = s.design.clone();
-        c = s.controller.clone();
-        (rd, rc) = (s.radius_design, s.radius_controller);
-        adam = (s.adam_design.clone(), s.adam_controller.clone());
-        history = s.history.clone();
-        best = s.best.clone();
-        first = s.iter + 1;
-        wall0 = history.last().map_or(0.0, |r: &IterRecord| r.wall_seconds);
+    mut on_state: impl FnMut(&checkpoint::State) -> Result<(), E>,
+) -> Result<Outcome, OptimizeError> {
+    let mut run = Run::begin(p, iters, opts)?;
+    let mut ev = p.evaluate(&run.d, &run.c)?;
+    run.initial_loss = opts.resume.as_ref().map_or(ev.loss, |s| s.initial_loss);
+    if opts.resume.is_none() || run.best.is_none() {
+        // A fresh start, or a checkpoint from before `best` was kept: the
+        // current iterate is the best known.
+        run.keep(run.first - 1, ev.loss);
     }
-    let t0 = Instant::now();
-    let mut ev = p.evaluate(&d, &c)?;
-    let initial_loss = opts.resume.as_ref().map_or(ev.loss, |s| s.initial_loss);
-    let mut push = |history: &mut Vec<IterRecord>,
-                    it,
-                    ev: &Evaluation,
-                    d: &DVector<f64>,
-                    best: f64,
-                    rd,
-                    rc,
-                    accepted| {
+    if opts.resume.is_none() {
+        let d = run.d.clone();
+        run.record(0, &ev, &d, ev.loss, true, &mut on_iter);
+        on_state(&run.state(0)).map_err(Into::into)?;
+    }
+    for it in run.first..=iters {
+        let (d_new, c_new) = run.propose(p, &ev);
+        let trial = p.evaluate(&d_new, &c_new);
+        run.settle(p, it, &mut ev, (d_new, c_new), trial, &mut on_iter)?;
+        on_state(&run.state(it)).map_err(Into::into)?;
+    }
+    Ok(run.outcome(p, ev))
+}
+
+/// The optimizer's iterate and bookkeeping during [`optimize_with`].
+struct Run {
+    /// Current design and controller.
+    d: DVector<f64>,
+    c: DVector<f64>,
+    /// Trust-region radii (design, controller).
+    rd: f64,
+    rc: f64,
+    adam: (Adam, Adam),
+    history: Vec<IterRecord>,
+    best: Option<BestIterate>,
+    /// The first iteration this session runs.
+    first: usize,
+    /// Wall time (s) of the sessions before a resume, and this session's clock.
+    wall0: f64,
+    t0: Instant,
+    /// The loss at the run's start (of the first session, after a resume).
+    initial_loss: f64,
+}
+
+impl Run {
+    /// The task's start ([`start`]) or, with `opts.resume`, the checkpoint's
+    /// state (checked against the task's sizes).
+    fn begin(p: &Problem, iters: usize, opts: &RunOptions) -> Result<Run, OptimizeError> {
+        let o = &p.task.optimizer;
+        let (d, c) = start(p, opts.seed);
+        let mut run = Run {
+            adam: (
+                Adam::new(d.len(), o.step_design),
+                Adam::new(c.len(), o.step_controller),
+            ),
+            d,
+            c,
+            rd: o.step_design,
+            rc: o.step_controller,
+            history: Vec::with_capacity(iters + 1),
+            best: None,
+            first: 1,
+            wall0: 0.0,
+            t0: Instant::now(),
+            initial_loss: f64::NAN,
+        };
+        if let Some(s) = &opts.resume {
+            if s.design.len() != run.d.len() || s.controller.len() != run.c.len() {
+                return Err(OptimizeError::CheckpointSize {
+                    design: s.design.len(),
+                    controller: s.controller.len(),
+                    task_design: run.d.len(),
+                    task_controller: run.c.len(),
+                });
+            }
+            run.d = s.design.clone();
+            run.c = s.controller.clone();
+            (run.rd, run.rc) = (s.radius_design, s.radius_controller);
+            run.adam = (s.adam_design.clone(), s.adam_controller.clone());
+            run.history = s.history.clone();
+            run.best = s.best.clone();
+            run.first = s.iter + 1;
+            run.wall0 = run.history.last().map_or(0.0, |r| r.wall_seconds);
+        }
+        run.t0 = Instant::now();
+        Ok(run)
+    }
+
+    /// Appends the row of iteration `it` (evaluation `ev` at design `d`,
+    /// best loss so far `best`, current radii) and shows it to `on_iter`.
+    fn record(
+        &mut self,
+        it: usize,
+        ev: &Evaluation,
+        d: &DVector<f64>,
+        best: f64,
+        accepted: bool,
+        on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
+    ) {
         let r = IterRecord {
             iter: it,
             loss: ev.loss,
             best_loss: best,
             grad_design_norm: ev.grad_design.norm(),
             grad_controller_norm: ev.grad_controller.norm(),
-            radius_design: rd,
-            radius_controller: rc,
+            radius_design: self.rd,
+            radius_controller: self.rc,
             accepted,
             forward_seconds: ev.forward_seconds,
             backward_seconds: ev.backward_seconds,
-            wall_seconds: wall0 + t0.elapsed().as_secs_f64(),
+            wall_seconds: self.wall0 + self.t0.elapsed().as_secs_f64(),
         };
         on_iter(&r, d);
-        history.push(r);
-    };
-    // The lowest loss so far (strictly lower replaces: ties keep the earliest).
-    let keep =
-        |best: &mut Option<BestIterate>, it, loss: f64, d: &DVector<f64>, c: &DVector<f64>| {
-            if best.as_ref().is_none_or(|b| loss < b.loss) {
-                *best = Some(BestIterate {
-                    iter: it,
-                    loss,
-                    design: d.clone(),
-                    controller: c.clone(),
-                });
-            }
-        };
-    let state = |it,
-                 d: &DVector<f64>,
-                 c: &DVector<f64>,
-                 rd,
-                 rc,
-                 adam: &(Adam, Adam),
-                 h: &[IterRecord],
-                 best: &Option<BestIterate>| {
+        self.history.push(r);
+    }
+
+    /// Keeps the current iterate as the best if its `loss` is strictly
+    /// lower (ties keep the earliest).
+    fn keep(&mut self, it: usize, loss: f64) {
+        if self.best.as_ref().is_none_or(|b| loss < b.loss) {
+            self.best = Some(BestIterate {
+                iter: it,
+                loss,
+                design: self.d.clone(),
+                controller: self.c.clone(),
+            });
+        }
+    }
+
+    /// The full optimizer state after iteration `it` (a checkpoint).
+    fn state(&self, it: usize) -> checkpoint::State {
         checkpoint::State {
             iter: it,
-            design: d.clone(),
-            controller: c.clone(),
-            radius_design: rd,
-            radius_controller: rc,
-            adam_design: adam.0.clone(),
-            adam_controller: adam.1.clone(),
-            initial_loss,
-            history: h.to_vec(),
-            best: best.clone(),
+            design: self.d.clone(),
+            controller: self.c.clone(),
+            radius_design: self.rd,
+            radius_controller: self.rc,
+            adam_design: self.adam.0.clone(),
+            adam_controller: self.adam.1.clone(),
+            initial_loss: self.initial_loss,
+            history: self.history.clone(),
+            best: self.best.clone(),
         }
-    };
-    if opts.resume.is_none() || best.is_none() {
-        // A fresh start, or a checkpoint from before `best` was kept: the
-        // current iterate is the best known.
-        keep(&mut best, first - 1, ev.loss, &d, &c);
     }
-    if opts.resume.is_none() {
-        push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
-        on_state(&state(0, &d, &c, rd, rc, &adam, &history, &best))?;
-    }
-    for it in first..=iters {
+
+    /// The trial point of the next iteration from the gradients of `ev`:
+    /// a trust-region step (design: projected-gradient step within the
+    /// radius; controller: the normalized gradient scaled by the radius) or
+    /// an Adam step on the clipped gradients; the design is projected onto
+    /// its bounds.
+    fn propose(&mut self, p: &Problem, ev: &Evaluation) -> (DVector<f64>, DVector<f64>) {
+        let o = &p.task.optimizer;
         let (dd, dc) = match o.method {
             Method::TrustRegion => (
-                trust_region_step(&ev.grad_design, &d, &lo, &hi, rd),
+                trust_region_step(
+                    &ev.grad_design,
+                    &self.d,
+                    &p.design.lower(),
+                    &p.design.upper(),
+                    self.rd,
+                ),
                 if ev.grad_controller.norm() > 0.0 {
-                    -rc * &ev.grad_controller / ev.grad_controller.norm()
+                    -self.rc * &ev.grad_controller / ev.grad_controller.norm()
                 } else {
-                    c.map(|_| 0.0)
+                    self.c.map(|_| 0.0)
                 },
             ),
             Method::Adam => (
-                adam.0.step(&method::clip_norm(
+                self.adam.0.step(&method::clip_norm(
                     &method::clip_parts(&ev.grad_design, &ev.parts_design, o.clip_trajectory),
                     o.clip_design,
                 )),
-                adam.1
+                self.adam
+                    .1
                     .step(&method::clip_norm(&ev.grad_controller, o.clip_controller)),
             ),
         };
-        let mut d_new = &d + dd;
+        let mut d_new = &self.d + dd;
         p.design.project(&mut d_new);
-        let c_new = &c + dc;
-        let trial = p.evaluate(&d_new, &c_new);
+        (d_new, &self.c + dc)
+    }
+
+    /// Takes or rejects the trial `(d_new, c_new)` of iteration `it`: Adam
+    /// always moves (a failed trial ends the run); the trust region moves
+    /// on a lower loss and grows its radii, else keeps the iterate, shrinks
+    /// them and records the trial (a trial that cannot be simulated is a
+    /// rejected step).
+    fn settle(
+        &mut self,
+        p: &Problem,
+        it: usize,
+        ev: &mut Evaluation,
+        (d_new, c_new): (DVector<f64>, DVector<f64>),
+        trial: Result<Evaluation, OptimizeError>,
+        on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
+    ) -> Result<(), OptimizeError> {
+        let o = &p.task.optimizer;
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => {
-                d = d_new;
-                c = c_new;
-                ev = e;
-                keep(&mut best, it, ev.loss, &d, &c);
-                let best_loss = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                push(&mut history, it, &ev, &d, best_loss, rd, rc, true);
+                (self.d, self.c, *ev) = (d_new, c_new, e);
+                self.keep(it, ev.loss);
+                let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+                let d = self.d.clone();
+                self.record(it, ev, &d, best_loss, true, on_iter);
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
-                d = d_new;
-                c = c_new;
-                ev = e;
-                rd = o.radius.next(rd, o.step_design, true);
-                rc = o.radius.next(rc, o.step_controller, true);
-                keep(&mut best, it, ev.loss, &d, &c);
-                push(&mut history, it, &ev, &d, ev.loss, rd, rc, true);
+                (self.d, self.c, *ev) = (d_new, c_new, e);
+                self.rd = o.radius.next(self.rd, o.step_design, true);
+                self.rc = o.radius.next(self.rc, o.step_controller, true);
+                self.keep(it, ev.loss);
+                let d = self.d.clone();
+                self.record(it, ev, &d, ev.loss, true, on_iter);
             }
             (Method::TrustRegion, Ok(e)) => {
                 // Rejected: the row shows the trial's loss; the iterate stays.
-                rd = o.radius.next(rd, o.step_design, false);
-                rc = o.radius.next(rc, o.step_controller, false);
-                push(&mut history, it, &e, &d_new, ev.loss, rd, rc, false);
+                self.rd = o.radius.next(self.rd, o.step_design, false);
+                self.rc = o.radius.next(self.rc, o.step_controller, false);
+                self.record(it, &e, &d_new, ev.loss, false, on_iter);
             }
-            (Method::Adam, Err(e)) => return Err(e.context(format!("iteration {it}"))),
+            (Method::Adam, Err(e)) => {
+                return Err(OptimizeError::Iteration {
+                    iter: it,
+                    source: Box::new(e),
+                });
+            }
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
-                rd = o.radius.next(rd, o.step_design, false);
-                rc = o.radius.next(rc, o.step_controller, false);
-                push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
+                self.rd = o.radius.next(self.rd, o.step_design, false);
+                self.rc = o.radius.next(self.rc, o.step_controller, false);
+                self.record(it, ev, &d_new, ev.loss, false, on_iter);
             }
         }
-        on_state(&state(it, &d, &c, rd, rc, &adam, &history, &best))?;
+        Ok(())
     }
-    // The last accepted iterate's iteration (rejected trust-region trials
-    // leave the iterate where it was).
-    let last_iter = history
-        .iter()
-        .rev()
-        .find(|r| r.accepted)
-        .map_or(0, |r| r.iter);
-    Ok(match (o.result, best) {
-        (task::ResultIterate::Best, Some(b)) => Outcome {
-            history,
-            loss: b.loss,
-            design: b.design,
-            controller: b.controller,
-            initial_loss,
-            iter: b.iter,
-        },
-        _ => Outcome {
-            history,
-            loss: ev.loss,
-            design: d,
-            controller: c,
-            initial_loss,
-            iter: last_iter,
-        },
-    })
+
+    /// The run's result: the best iterate or the last accepted one
+    /// (`optimizer.result`), with the whole history.
+    fn outcome(self, p: &Problem, ev: Evaluation) -> Outcome {
+        // The last accepted iterate's iteration (rejected trust-region
+        // trials leave the iterate where it was).
+        let last_iter = self
+            .history
+            .iter()
+            .rev()
+            .find(|r| r.accepted)
+            .map_or(0, |r| r.iter);
+        match (p.task.optimizer.result, self.best) {
+            (task::ResultIterate::Best, Some(b)) => Outcome {
+                history: self.history,
+                loss: b.loss,
+                design: b.design,
+                controller: b.controller,
+                initial_loss: self.initial_loss,
+                iter: b.iter,
+            },
+            _ => Outcome {
+                history: self.history,
+                loss: ev.loss,
+                design: self.d,
+                controller: self.c,
+                initial_loss: self.initial_loss,
+                iter: last_iter,
+            },
+        }
+    }
 }

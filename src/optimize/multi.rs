@@ -12,7 +12,7 @@
 
 use super::grasp::GraspSpec;
 use super::task::{LossSpec, TaskSpec};
-use super::{Evaluation, Problem, TaskError};
+use super::{Evaluation, OptimizeError, Problem, TaskError};
 use crate::diff::When;
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -127,30 +127,37 @@ pub fn all(p: &Problem) -> Vec<&Problem> {
 /// names its trajectory.
 fn sum_in_order<T: Send>(
     p: &Problem,
-    one: impl Fn(&Problem) -> anyhow::Result<T> + Sync,
+    one: impl Fn(&Problem) -> Result<T, OptimizeError> + Sync,
     mut add: impl FnMut(&mut T, T),
-) -> anyhow::Result<T> {
-    let parts: Vec<anyhow::Result<T>> = all(p).par_iter().map(|q| one(q)).collect();
+) -> Result<T, OptimizeError> {
+    let parts: Vec<Result<T, OptimizeError>> = all(p).par_iter().map(|q| one(q)).collect();
     let mut out: Option<T> = None;
     for (j, r) in parts.into_iter().enumerate() {
-        let x = r.map_err(|e| e.context(format!("trajectory {j}")))?;
+        let x = r.map_err(|e| OptimizeError::Trajectory {
+            index: j,
+            source: Box::new(e),
+        })?;
         match out.as_mut() {
             None => out = Some(x),
             Some(o) => add(o, x),
         }
     }
-    out.ok_or_else(|| anyhow::anyhow!("a task without trajectories"))
+    out.ok_or(OptimizeError::NoTrajectories)
 }
 
 /// The summed loss alone ([`Problem::loss_value`] of every trajectory,
 /// summed in trajectory order as [`evaluate`] does).
-pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<f64> {
+pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
     sum_in_order(p, |q| q.loss_value_one(d, c), |s, l| *s += l)
 }
 
 /// The summed evaluation (see the module docs). `grads` and `model` are the
 /// first trajectory's; the timings are sums (CPU seconds).
-pub fn evaluate(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Evaluation> {
+pub fn evaluate(
+    p: &Problem,
+    d: &DVector<f64>,
+    c: &DVector<f64>,
+) -> Result<Evaluation, OptimizeError> {
     sum_in_order(
         p,
         |q| {

@@ -1,5 +1,6 @@
 //! Files written by `sdrs optimize`.
 
+use super::OptimizeError;
 use super::{IterRecord, Outcome, Problem};
 use crate::control::Controller;
 use crate::files::write_atomic;
@@ -9,7 +10,6 @@ use crate::scene::schema::{
     Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
     Origin, SceneSpec, SignalList,
 };
-use anyhow::Result;
 use std::path::Path;
 
 /// `history.csv`.
@@ -34,35 +34,6 @@ pub fn history_csv(history: &[IterRecord]) -> String {
         ));
     }
     s
-}
-
-/// Convergence plot (best loss per iteration) as SVG, titled `title`;
-/// several labelled histories may share it (e.g. co-design vs controller
-/// only). The loss axis is logarithmic (padded to at least a decade, so it
-/// carries several labelled ticks) when every loss is positive, else linear.
-pub fn convergence_svg(title: &str, series: &[(&str, &[IterRecord])]) -> Result<String> {
-    use crate::output::plot::{Axes, Series, line_plot};
-    let positive = series
-        .iter()
-        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
-    let s: Vec<Series> = series
-        .iter()
-        .map(|(label, h)| Series {
-            label: label.to_string(),
-            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
-            dashed: false,
-        })
-        .collect();
-    line_plot(
-        &Axes {
-            title,
-            x: "iteration",
-            y: "best task loss",
-            log_x: false,
-            log_y: positive,
-        },
-        &s,
-    )
 }
 
 /// `task-folder: mode` of a run, for titles and legends (`chain_reach:
@@ -249,13 +220,15 @@ pub fn link_obj(model: &Model, link: usize) -> String {
     s
 }
 
-/// Writes every output of an optimization into `dir`.
+/// Writes the outputs of an optimization into `dir`: `history.csv`,
+/// `design.yaml`, `meshes/`, `summary.json` (the application adds its
+/// pictures: `convergence.svg`, `report.html`, …).
 pub fn write_all(
     dir: &Path,
     p: &Problem,
     outcome: &Outcome,
     extra: serde_json::Value,
-) -> Result<()> {
+) -> Result<(), OptimizeError> {
     let mut model = p.model.clone();
     p.design.apply(&mut model, &outcome.design);
     let mut controller = p.controller.clone();
@@ -264,17 +237,6 @@ pub fn write_all(
         &dir.join("history.csv"),
         history_csv(&outcome.history).as_bytes(),
     )?;
-    write_atomic(
-        &dir.join("convergence.svg"),
-        {
-            let label = run_label(p, extra["design"].as_str() != Some("off"));
-            convergence_svg(
-                &format!("{label}, best loss per iteration"),
-                &[(&label, &outcome.history)],
-            )?
-        }
-        .as_bytes(),
-    )?;
     let spec = design_scene(&p.scene.spec, &model, &controller);
     let header = format!(
         "# Optimized by `sdrs optimize {}` — a complete scene: `sdrs simulate` runs it.\n",
@@ -282,7 +244,10 @@ pub fn write_all(
     );
     write_atomic(
         &dir.join("design.yaml"),
-        (header + &serde_yaml::to_string(&spec)?).as_bytes(),
+        (header
+            + &serde_yaml::to_string(&spec)
+                .map_err(|e| OptimizeError::serialize("design.yaml", e))?)
+            .as_bytes(),
     )?;
     for (i, l) in model.links.iter().enumerate() {
         if model.robots[l.robot].name == crate::scene::environment::ENVIRONMENT {
@@ -327,7 +292,9 @@ pub fn write_all(
     });
     write_atomic(
         &dir.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
+        serde_json::to_string_pretty(&summary)
+            .map_err(|e| OptimizeError::serialize("summary.json", e))?
+            .as_bytes(),
     )?;
     Ok(())
 }

@@ -13,7 +13,7 @@
 //! link's pose at `t = 0` (attachment variables move links). The rollouts are extra forward simulations after the run; they
 //! do not touch the optimization.
 
-use super::Problem;
+use super::{OptimizeError, Problem};
 use crate::files::write_atomic;
 use crate::output::contacts::{active_contacts, contacts_csv};
 use crate::output::picture::{Panel, PictureOptions, render_hulls_svg};
@@ -27,7 +27,7 @@ pub type IterDesign = (usize, f64, DVector<f64>);
 
 /// Simulates design `d` with controller `c` over the horizon, recording
 /// link poses and contact planes.
-pub fn rollout(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> anyhow::Result<Playback> {
+pub fn rollout(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> Result<Playback, OptimizeError> {
     let mut scene = p.scene.clone();
     let mut model = p.model.clone();
     p.design.apply(&mut model, d);
@@ -51,7 +51,7 @@ pub fn write_playback(
     initial: &Playback,
     optimized: &Playback,
     iterations: &[IterDesign],
-) -> anyhow::Result<()> {
+) -> Result<(), OptimizeError> {
     let pb = dir.join("playback");
     for (name, run) in [("initial", initial), ("optimized", optimized)] {
         let d = pb.join(name);
@@ -61,7 +61,9 @@ pub fn write_playback(
         };
         write_atomic(
             &d.join("hulls.json"),
-            serde_json::to_string(&hulls)?.as_bytes(),
+            serde_json::to_string(&hulls)
+                .map_err(|e| OptimizeError::serialize("hulls.json", e))?
+                .as_bytes(),
         )?;
         let traj = crate::output::Trajectory {
             times: run.times.clone(),
@@ -112,7 +114,9 @@ pub fn write_playback(
         .collect();
     write_atomic(
         &pb.join("iterations.json"),
-        serde_json::to_string(&serde_json::json!({ "iterations": its }))?.as_bytes(),
+        serde_json::to_string(&serde_json::json!({ "iterations": its }))
+            .map_err(|e| OptimizeError::serialize("iterations.json", e))?
+            .as_bytes(),
     )?;
     Ok(())
 }

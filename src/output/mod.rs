@@ -6,7 +6,6 @@ pub mod gltf;
 pub mod mjcf;
 pub mod picture;
 pub mod playback;
-pub mod plot;
 
 use crate::model::Model;
 use crate::sim::{StageTime, StepDiagnostics};

@@ -124,7 +124,6 @@ pub fn listing(dir: &Path) -> Vec<String> {
 pub fn hull_options() -> sdrs::import::ImportOptions {
     sdrs::import::ImportOptions {
         decomposer: sdrs::import::Decomposer::Hull,
-        progress: false,
         ..sdrs::import::ImportOptions::default()
     }
 }

@@ -5,8 +5,8 @@
 use super::gate::{Verdict, markdown as gate_markdown};
 use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
 use anyhow::Result;
-use sdrs::output::plot::{Axes, Series, line_plot};
 use sdrs::output::write_atomic;
+use sdrs_cli::svg::{Axes, Series, line_plot};
 use std::path::Path;
 
 /// The paper's figures the report compares against (`evaluation.tex`).

@@ -2,9 +2,35 @@
 //! simulation as given vs the calibrated simulation (the held-out window
 //! shaded); and the residuals over time before and after.
 
-use super::data::Measured;
-use super::problem::Simulated;
 use plotters::prelude::*;
+use sdrs::calibrate::PlotWriter;
+use sdrs::calibrate::data::Measured;
+use sdrs::calibrate::problem::Simulated;
+
+/// The plots `sdrs calibrate` (and the Python `calibrate`) write.
+pub struct CalibrationPlots;
+
+impl PlotWriter for CalibrationPlots {
+    fn channel_svg(
+        &self,
+        m: &Measured,
+        c: usize,
+        before: &Simulated,
+        after: &Simulated,
+        split_t: f64,
+    ) -> Result<String, String> {
+        channel_svg(m, c, before, after, split_t)
+    }
+
+    fn residuals_svg(
+        &self,
+        m: &Measured,
+        before: &Simulated,
+        after: &Simulated,
+    ) -> Result<String, String> {
+        residuals_svg(m, before, after)
+    }
+}
 
 type PlotResult = Result<String, String>;
 
@@ -164,17 +190,4 @@ pub fn residuals_svg(m: &Measured, before: &Simulated, after: &Simulated) -> Plo
         root.present().map_err(err)?;
     }
     Ok(svg)
-}
-
-/// A file-name-safe version of a channel name (`arm/elbow` → `arm_elbow`).
-pub fn file_stem(name: &str) -> String {
-    name.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
 }

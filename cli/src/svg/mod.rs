@@ -1,6 +1,10 @@
-//! SVG line plots (`optimize`'s convergence, `sdrs plot`, the `compare` report; plotters' SVG backend): titled,
-//! labelled axes with units, a legend, log axes padded to at least one decade so
-//! that they carry several ticks.
+//! The application's SVG plots (plotters' SVG backend): line plots
+//! (`optimize`'s convergence, `sdrs plot`, the `compare` report) with
+//! titled, labelled axes with units, a legend, log axes padded to at least
+//! one decade so that they carry several ticks; and calibration's plots
+//! ([`calibration`]).
+
+pub mod calibration;
 
 use anyhow::Result;
 use plotters::prelude::*;
@@ -181,4 +185,35 @@ mod tests {
         let ticks = svg.matches("<text").count();
         assert!(ticks >= 8, "only {ticks} text elements");
     }
+}
+
+/// Convergence plot (best loss per iteration) as SVG, titled `title`;
+/// several labelled histories may share it (e.g. co-design vs controller
+/// only). The loss axis is logarithmic (padded to at least a decade, so it
+/// carries several labelled ticks) when every loss is positive, else linear.
+pub fn convergence_svg(
+    title: &str,
+    series: &[(&str, &[sdrs::optimize::IterRecord])],
+) -> Result<String> {
+    let positive = series
+        .iter()
+        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
+    let s: Vec<Series> = series
+        .iter()
+        .map(|(label, h)| Series {
+            label: label.to_string(),
+            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
+            dashed: false,
+        })
+        .collect();
+    line_plot(
+        &Axes {
+            title,
+            x: "iteration",
+            y: "best task loss",
+            log_x: false,
+            log_y: positive,
+        },
+        &s,
+    )
 }

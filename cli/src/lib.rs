@@ -1,0 +1,5 @@
+//! The parts of the `sdrs` application that the Python package shares
+//! (`sdrs-py` depends on this library): the SVG plots ([`svg`]). The command
+//! line itself is the `sdrs` binary (`main.rs`).
+
+pub mod svg;
