@@ -24,7 +24,7 @@ use crate::control::Controller;
 use crate::diff::{Gradients, Loss, LossTerm, backward, record};
 use crate::model::Model;
 use crate::scene::Scene;
-use method::{Adam, trust_region_step};
+use method::{Adam, Radii, RadiusSettings};
 use nalgebra::{DVector, Vector3};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -520,7 +520,12 @@ pub fn optimize_with(
     let o = &p.task.optimizer;
     let (lo, hi) = (p.design.lower(), p.design.upper());
     let (mut d, mut c) = start(p, opts.seed);
-    let (mut rd, mut rc) = (o.step_design, o.step_controller);
+    let rs = RadiusSettings {
+        rule: o.radius,
+        step_design: o.step_design,
+        step_controller: o.step_controller,
+    };
+    let mut radii = Radii::new(&rs);
     let mut adam = (
         Adam::new(d.len(), o.step_design),
         Adam::new(c.len(), o.step_controller),
@@ -541,7 +546,11 @@ pub fn optimize_with(
         }
         d = s.design.clone();
         c = s.controller.clone();
-        (rd, rc) = (s.radius_design, s.radius_controller);
+        radii = Radii {
+            design: s.radius_design,
+            controller: s.radius_controller,
+            hold_design: s.hold_design,
+        };
         adam = (s.adam_design.clone(), s.adam_controller.clone());
         history = s.history.clone();
         best = s.best.clone();
@@ -556,8 +565,7 @@ pub fn optimize_with(
                     ev: &Evaluation,
                     d: &DVector<f64>,
                     best: f64,
-                    rd,
-                    rc,
+                    radii: Radii,
                     accepted| {
         let r = IterRecord {
             iter: it,
@@ -565,8 +573,8 @@ pub fn optimize_with(
             best_loss: best,
             grad_design_norm: ev.grad_design.norm(),
             grad_controller_norm: ev.grad_controller.norm(),
-            radius_design: rd,
-            radius_controller: rc,
+            radius_design: radii.design,
+            radius_controller: radii.controller,
             accepted,
             forward_seconds: ev.forward_seconds,
             backward_seconds: ev.backward_seconds,
@@ -590,8 +598,7 @@ pub fn optimize_with(
     let state = |it,
                  d: &DVector<f64>,
                  c: &DVector<f64>,
-                 rd,
-                 rc,
+                 radii: Radii,
                  adam: &(Adam, Adam),
                  h: &[IterRecord],
                  best: &Option<BestIterate>| {
@@ -599,8 +606,9 @@ pub fn optimize_with(
             iter: it,
             design: d.clone(),
             controller: c.clone(),
-            radius_design: rd,
-            radius_controller: rc,
+            radius_design: radii.design,
+            radius_controller: radii.controller,
+            hold_design: radii.hold_design,
             adam_design: adam.0.clone(),
             adam_controller: adam.1.clone(),
             initial_loss,
@@ -614,19 +622,14 @@ pub fn optimize_with(
         keep(&mut best, first - 1, ev.loss, &d, &c);
     }
     if opts.resume.is_none() {
-        push(&mut history, 0, &ev, &d, ev.loss, rd, rc, true);
-        on_state(&state(0, &d, &c, rd, rc, &adam, &history, &best))?;
+        push(&mut history, 0, &ev, &d, ev.loss, radii, true);
+        on_state(&state(0, &d, &c, radii, &adam, &history, &best))?;
     }
     for it in first..=iters {
         let (dd, dc) = match o.method {
-            Method::TrustRegion => (
-                trust_region_step(&ev.grad_design, &d, &lo, &hi, rd),
-                if ev.grad_controller.norm() > 0.0 {
-                    -rc * &ev.grad_controller / ev.grad_controller.norm()
-                } else {
-                    c.map(|_| 0.0)
-                },
-            ),
+            Method::TrustRegion => {
+                radii.trial((&ev.grad_design, &ev.grad_controller), (&d, &lo, &hi))
+            }
             Method::Adam => (
                 adam.0
                     .step(&method::clip_norm(&ev.grad_design, o.clip_design)),
@@ -637,6 +640,7 @@ pub fn optimize_with(
         let mut d_new = &d + dd;
         p.design.project(&mut d_new);
         let c_new = &c + dc;
+        let moved = (d_new != d, c_new != c);
         let trial = p.evaluate(&d_new, &c_new);
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => {
@@ -645,32 +649,29 @@ pub fn optimize_with(
                 ev = e;
                 keep(&mut best, it, ev.loss, &d, &c);
                 let best_loss = history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                push(&mut history, it, &ev, &d, best_loss, rd, rc, true);
+                push(&mut history, it, &ev, &d, best_loss, radii, true);
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 d = d_new;
                 c = c_new;
                 ev = e;
-                rd = o.radius.next(rd, o.step_design, true);
-                rc = o.radius.next(rc, o.step_controller, true);
+                radii = radii.after(&rs, moved, true);
                 keep(&mut best, it, ev.loss, &d, &c);
-                push(&mut history, it, &ev, &d, ev.loss, rd, rc, true);
+                push(&mut history, it, &ev, &d, ev.loss, radii, true);
             }
             (Method::TrustRegion, Ok(e)) => {
                 // Rejected: the row shows the trial's loss; the iterate stays.
-                rd = o.radius.next(rd, o.step_design, false);
-                rc = o.radius.next(rc, o.step_controller, false);
-                push(&mut history, it, &e, &d_new, ev.loss, rd, rc, false);
+                radii = radii.after(&rs, moved, false);
+                push(&mut history, it, &e, &d_new, ev.loss, radii, false);
             }
             (Method::Adam, Err(e)) => return Err(e.context(format!("iteration {it}"))),
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
-                rd = o.radius.next(rd, o.step_design, false);
-                rc = o.radius.next(rc, o.step_controller, false);
-                push(&mut history, it, &ev, &d_new, ev.loss, rd, rc, false);
+                radii = radii.after(&rs, moved, false);
+                push(&mut history, it, &ev, &d_new, ev.loss, radii, false);
             }
         }
-        on_state(&state(it, &d, &c, rd, rc, &adam, &history, &best))?;
+        on_state(&state(it, &d, &c, radii, &adam, &history, &best))?;
     }
     // The last accepted iterate's iteration (rejected trust-region trials
     // leave the iterate where it was).

@@ -230,8 +230,9 @@ pub enum ResultIterate {
     Last,
 }
 
-/// How the trust-region radii change after a trial step (both blocks, design
-/// and controller, together: a trial moves both).
+/// How the trust-region radii change after a trial step (`adaptive`, `reset`:
+/// both blocks, design and controller, together, as a trial moves both;
+/// `split`: each block on its own outcome).
 #[derive(
     Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
 )]
@@ -252,16 +253,40 @@ pub enum RadiusRule {
     /// parameters), `adaptive` settles at radius ≈ ε and gains ≈ ε‖g‖ per
     /// step, whereas `reset` tries the large scale first every iteration.
     Reset,
+    /// `reset`, with the two blocks backtracked separately, so that a
+    /// design step that fails cannot throttle the controller
+    /// (`notes/locomotion-feet-and-radius.md`: under `reset` a rejected trial halves both radii,
+    /// and the spider's co-design advanced its controller 4× less per
+    /// accepted step than its controller-only twin). With radii `(r_d, r_c)`
+    /// and a flag *held* (initially `(ᾱ_d, ᾱ_c)`, not held):
+    /// - trial: `Δd = TR(∇_d L, r_d)` unless held (then `Δd = 0`),
+    ///   `Δc = −r_c ∇_c L/‖∇_c L‖`; a *joint* trial is one not held whose
+    ///   `Δd` and `Δc` are both non-zero;
+    /// - a rejected joint trial halves both radii and holds the design: the
+    ///   next trials move the controller alone, from `r_c/2` on;
+    /// - a held trial: rejected → `r_c ← r_c/2` (r_d frozen, still held);
+    ///   accepted → `r_c ← ᾱ_c`, the design is released at its halved `r_d`
+    ///   (so `r_d` is halved once per rejected joint trial and reset to
+    ///   `ᾱ_d` only when a joint trial is accepted);
+    /// - every other trial (accepted joint trial, or one block not moving:
+    ///   `--design off`, a zero gradient) follows `reset`.
+    ///
+    /// So the controller's radius ladder `ᾱ_c, ᾱ_c/2, …` costs the same
+    /// number of trials as without a design block (the first rung is tried
+    /// with the design), and `--design off` is bitwise the `reset` run.
+    Split,
 }
 
 impl RadiusRule {
     /// Radius after a trial of radius `r`, for a block whose task step is
-    /// `step` (formulas on the variants).
+    /// `step` (formulas on the variants; `split`'s per-block bookkeeping is
+    /// [`crate::optimize::method::Radii`], which uses this for the trials
+    /// that follow `reset`).
     pub fn next(self, r: f64, step: f64, accepted: bool) -> f64 {
         match (self, accepted) {
             (_, false) => 0.5 * r,
             (RadiusRule::Adaptive, true) => (r * 1.25).min(4.0 * step),
-            (RadiusRule::Reset, true) => step,
+            (RadiusRule::Reset | RadiusRule::Split, true) => step,
         }
     }
 }
