@@ -347,3 +347,50 @@ fn controller_step_probe() {
         }
     }
 }
+
+/// `optimizer.radius: split` on the spider (horizon 60, 8 iterations): a
+/// rejected trial that moved both blocks is followed by trials that keep the
+/// design at the iterate's (held) and halve only the controller radius
+/// until one is accepted; with `--design off` the run is bitwise the
+/// `reset` run (6 iterations).
+#[test]
+fn split_radius_holds_the_design_after_a_rejected_joint_trial() {
+    use sdrs::optimize::task::RadiusRule;
+    let load = |design: bool, rule: RadiusRule| {
+        let mut p = Problem::load(&task("spider"), design).unwrap();
+        p.horizon = 60;
+        p.task.optimizer.radius = rule;
+        p
+    };
+    let p = load(true, RadiusRule::Split);
+    let mut rows: Vec<(sdrs::optimize::IterRecord, DVector<f64>)> = Vec::new();
+    optimize(&p, 8, |r, d| rows.push((r.clone(), d.clone()))).unwrap();
+    let (mut iterate, mut held_seen, mut held) = (rows[0].1.clone(), 0, false);
+    for w in rows.windows(2) {
+        let ((prev, _), (r, d)) = (&w[0], &w[1]);
+        if held {
+            held_seen += 1;
+            assert_eq!(d, &iterate, "iteration {}: the design is held", r.iter);
+            assert_eq!(r.radius_design, prev.radius_design);
+            if !r.accepted {
+                assert_eq!(r.radius_controller, 0.5 * prev.radius_controller);
+            }
+        }
+        let joint = !held && d != &iterate;
+        held = if r.accepted { false } else { held || joint };
+        if r.accepted {
+            iterate = d.clone();
+        }
+    }
+    let rejected_joint = rows.iter().skip(1).any(|(r, _)| !r.accepted);
+    assert!(rejected_joint && held_seen > 0, "no held trial in 8 iterations");
+    let losses = |rule| {
+        let mut l = Vec::new();
+        optimize(&load(false, rule), 6, |r, _| {
+            l.push((r.loss, r.radius_controller, r.accepted))
+        })
+        .unwrap();
+        l
+    };
+    assert_eq!(losses(RadiusRule::Split), losses(RadiusRule::Reset));
+}

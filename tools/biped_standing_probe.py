@@ -79,13 +79,14 @@ def main():
                  "--out", str(d / "run"), "--force", "-q"],
                 check=True,
             )
-            m = json.loads((d / "run/summary.json").read_text())
-            rows.append((feet, moved, gait, m))
+            s_ = json.loads((d / "run/summary.json").read_text())
+            rows.append((feet, moved, gait, s_["initial_loss"], s_["extra"]["metrics"]["initial"]))
     print("| feet | vertices moved | gait | loss | distance (m) | upright at H | first fall (s) |")
     print("|---|---|---|---|---|---|---|")
-    for feet, moved, gait, m in rows:
-        print(f"| {feet} | {moved} | {gait} | {m.get('loss', m.get('final_loss'))} | "
-              f"{m.get('distance')} | {m.get('upright')} | {m.get('first_fall_s', m.get('fall_time'))} |")
+    for feet, moved, gait, loss, m in rows:
+        fall = m["first_fall_time"]
+        print(f"| {feet} | {moved} | {gait} | {loss:.3f} | {m['distance']:.3f} | "
+              f"{'yes' if m['upright_at_horizon'] else 'no'} | {'—' if fall is None else f'{fall:.2f}'} |")
     print(f"(summary.json files under {out})")
 
 
