@@ -383,7 +383,10 @@ fn split_radius_holds_the_design_after_a_rejected_joint_trial() {
         }
     }
     let rejected_joint = rows.iter().skip(1).any(|(r, _)| !r.accepted);
-    assert!(rejected_joint && held_seen > 0, "no held trial in 8 iterations");
+    assert!(
+        rejected_joint && held_seen > 0,
+        "no held trial in 8 iterations"
+    );
     let losses = |rule| {
         let mut l = Vec::new();
         optimize(&load(false, rule), 6, |r, _| {

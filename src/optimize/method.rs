@@ -268,7 +268,10 @@ mod tests {
             step_design,
             step_controller,
         };
-        let (lo, hi) = (DVector::repeat(d.len(), -1e9), DVector::repeat(d.len(), 1e9));
+        let (lo, hi) = (
+            DVector::repeat(d.len(), -1e9),
+            DVector::repeat(d.len(), 1e9),
+        );
         let mut r = Radii::new(&s);
         let (mut log, mut accepted) = (Vec::new(), 0);
         for _ in 0..n {
@@ -302,7 +305,10 @@ mod tests {
     fn split_radius_keeps_the_controller_moving_where_a_stiff_design_throttles_reset() {
         let f = |d: &DVector<f64>, c: &DVector<f64>| 1e3 * d.norm_squared() + c.norm_squared();
         let grad = |d: &DVector<f64>, c: &DVector<f64>| (2e3 * d, 2.0 * c);
-        let start = (DVector::from_element(1, 1e-3), DVector::from_vec(vec![3.0, 2.0]));
+        let start = (
+            DVector::from_element(1, 1e-3),
+            DVector::from_vec(vec![3.0, 2.0]),
+        );
         let run = |rule| trials(rule, (1.0, 0.5), &f, &grad, start.clone(), 200);
         let (dr, cr, _, nr) = run(RadiusRule::Reset);
         let (ds, cs, log, ns) = run(RadiusRule::Split);
@@ -316,11 +322,20 @@ mod tests {
         assert!(cr.norm() > 3.0, "reset |c| {}", cr.norm());
         assert!(cs.norm() < 0.05, "split |c| {}", cs.norm());
         assert!(f(&ds, &cs) < 0.01 * f(&dr, &cr));
-        assert!(1e3 * ds[0] * ds[0] <= 1e-3, "split D {}", 1e3 * ds[0] * ds[0]);
+        assert!(
+            1e3 * ds[0] * ds[0] <= 1e-3,
+            "split D {}",
+            1e3 * ds[0] * ds[0]
+        );
         // The design was released again after each hold and its radius
         // reset to ᾱ_d by an accepted joint trial at least once.
         assert!(log.iter().any(|r| r.hold_design));
-        assert!(log.iter().filter(|r| !r.hold_design && r.design == 1.0).count() > 1);
+        assert!(
+            log.iter()
+                .filter(|r| !r.hold_design && r.design == 1.0)
+                .count()
+                > 1
+        );
     }
 
     /// With a design block that cannot move (no design variables, as
@@ -334,7 +349,10 @@ mod tests {
         let gc = |c: &DVector<f64>| c.map(|v| 2.0 * v - a / lam * (v / lam).sin());
         let grad = |d: &DVector<f64>, c: &DVector<f64>| (d.map(|_| 0.0), gc(c));
         for nd in [0, 3] {
-            let start = (DVector::from_element(nd, 0.2), DVector::from_vec(vec![3.0, 2.0]));
+            let start = (
+                DVector::from_element(nd, 0.2),
+                DVector::from_vec(vec![3.0, 2.0]),
+            );
             let run = |rule| trials(rule, (0.05, 0.3), &f, &grad, start.clone(), 200);
             let (_, cr, lr, nr) = run(RadiusRule::Reset);
             let (_, cs, ls, ns) = run(RadiusRule::Split);
