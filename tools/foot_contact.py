@@ -9,11 +9,14 @@ The ground is the link named --ground (default: the link whose name contains
 closest to +z at step 0 (a static ground). For every vertex of the listed
 links' hulls (link frame, hulls.json; poses.csv gives the world pose per
 step) the signed height above that face's plane, h = n·x − n·p, is computed
-at every step. A vertex with h < s is inside the barrier's active range
-(the scene's contact `s`, 0.01 m for the locomotion scenes): only such
-vertices receive a direct contact gradient. Prints per link: vertices,
-vertices ever within s, the largest count within s at one step, the share
-of steps with any vertex within s, and the lowest h reached (m).
+at every step. The pair's contact potential is zero unless the hulls are
+closer than a = 2s/(1 − s) (DESIGN.md: the separating plane sits between
+them and each side's vertices feel the barrier P_s within s of the plane;
+s = 0.01 m in the locomotion scenes, a = 0.0202 m), so only vertices with
+h < a can receive a direct contact gradient (an upper bound: the nearest
+vertices of a hull take most of it). Prints per link: vertices, vertices
+ever within a, the largest count within a at one step, the share of steps
+with any vertex within a, and the lowest h reached (m).
 """
 import argparse
 import csv
@@ -56,11 +59,11 @@ def main():
         li = next(i for i, m in enumerate(names) if m == name or m.endswith("/" + name) or name.endswith("/" + m))
         v = np.unique(np.vstack([np.asarray(h, float) for h in hulls["links"][li]["hulls"]]), axis=0)
         heights = np.array([(v @ P[k][li][0].T + P[k][li][1]) @ n + c for k in steps])  # steps x vertices
-        near = heights < a.s
+        near = heights < 2 * a.s / (1 - a.s)
         report["links"][name] = {
             "vertices": int(v.shape[0]),
-            "ever_within_s": int(near.any(axis=0).sum()),
-            "max_within_s_at_one_step": int(near.sum(axis=1).max()),
+            "ever_within_a": int(near.any(axis=0).sum()),
+            "max_within_a_at_one_step": int(near.sum(axis=1).max()),
             "share_of_steps_with_contact": float(near.any(axis=1).mean()),
             "lowest_height": float(heights.min()),
         }

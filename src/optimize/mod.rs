@@ -549,7 +549,7 @@ pub fn optimize_with(
         radii = Radii {
             design: s.radius_design,
             controller: s.radius_controller,
-            hold_design: s.hold_design,
+            phase: s.phase,
         };
         adam = (s.adam_design.clone(), s.adam_controller.clone());
         history = s.history.clone();
@@ -608,7 +608,7 @@ pub fn optimize_with(
             controller: c.clone(),
             radius_design: radii.design,
             radius_controller: radii.controller,
-            hold_design: radii.hold_design,
+            phase: radii.phase,
             adam_design: adam.0.clone(),
             adam_controller: adam.1.clone(),
             initial_loss,

@@ -253,27 +253,29 @@ pub enum RadiusRule {
     /// parameters), `adaptive` settles at radius ≈ ε and gains ≈ ε‖g‖ per
     /// step, whereas `reset` tries the large scale first every iteration.
     Reset,
-    /// `reset`, with the two blocks backtracked separately, so that a
-    /// design step that fails cannot throttle the controller
-    /// (`notes/locomotion-feet-and-radius.md`: under `reset` a rejected trial halves both radii,
-    /// and the spider's co-design advanced its controller 4× less per
-    /// accepted step than its controller-only twin). With radii `(r_d, r_c)`
-    /// and a flag *held* (initially `(ᾱ_d, ᾱ_c)`, not held):
-    /// - trial: `Δd = TR(∇_d L, r_d)` unless held (then `Δd = 0`),
-    ///   `Δc = −r_c ∇_c L/‖∇_c L‖`; a *joint* trial is one not held whose
-    ///   `Δd` and `Δc` are both non-zero;
-    /// - a rejected joint trial halves both radii and holds the design: the
-    ///   next trials move the controller alone, from `r_c/2` on;
-    /// - a held trial: rejected → `r_c ← r_c/2` (r_d frozen, still held);
-    ///   accepted → `r_c ← ᾱ_c`, the design is released at its halved `r_d`
-    ///   (so `r_d` is halved once per rejected joint trial and reset to
-    ///   `ᾱ_d` only when a joint trial is accepted);
-    /// - every other trial (accepted joint trial, or one block not moving:
-    ///   `--design off`, a zero gradient) follows `reset`.
+    /// `reset`, with the two blocks backtracked separately, each radius
+    /// adapted on its own trials, so that a design step that fails cannot
+    /// throttle the controller and a controller step that fails cannot
+    /// shrink the design radius (`notes/locomotion-feet-and-radius.md`:
+    /// under `reset` a rejected trial halves both radii, and the spider's
+    /// co-design advanced its controller 4× less per accepted step than its
+    /// controller-only twin). Radii `(r_d, r_c)` (initially `(ᾱ_d, ᾱ_c)`)
+    /// and a phase (initially *joint*); `TR` is the trust-region step:
+    /// - *joint*: `Δd = TR(∇_d L, r_d)`, `Δc = −r_c ∇_c L/‖∇_c L‖`.
+    ///   Accepted → both radii reset to `(ᾱ_d, ᾱ_c)`, stay joint;
+    ///   rejected → *design* phase, radii unchanged.
+    /// - *design*: the design step alone (`Δc = 0`) at `r_d`. Accepted →
+    ///   `r_d ← ᾱ_d`; rejected → `r_d ← r_d/2`; either way → *controller*.
+    /// - *controller*: the controller step alone (`Δd = 0`) at `r_c`, the
+    ///   radius of the rejected joint trial first. Accepted → `r_c ← ᾱ_c`,
+    ///   → *joint*; rejected → `r_c ← r_c/2`, stay.
+    /// - a joint trial in which one block does not move (`--design off`, a
+    ///   zero gradient) follows `reset`, and so does a controller trial with
+    ///   `∇_c L = 0` (→ joint).
     ///
-    /// So the controller's radius ladder `ᾱ_c, ᾱ_c/2, …` costs the same
-    /// number of trials as without a design block (the first rung is tried
-    /// with the design), and `--design off` is bitwise the `reset` run.
+    /// Cost: the controller's ladder `ᾱ_c, ᾱ_c/2, …` costs two trials more
+    /// per accepted controller step than without a design block (the joint
+    /// and the design trial); `--design off` is bitwise the `reset` run.
     Split,
 }
 
