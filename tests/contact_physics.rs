@@ -142,6 +142,9 @@ fn two_free_bodies_colliding_in_zero_gravity_conserve_linear_momentum() {
 
 #[test]
 fn separation_checker_reports_overlapping_hulls() {
+    if common::skip_without_venv() {
+        return;
+    }
     // The checker must be able to fail: two unit cubes overlapping by 0.1 m.
     let dir = scratch_dir("fcl-bad");
     let cube: Vec<[f64; 3]> =

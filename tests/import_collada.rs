@@ -67,6 +67,9 @@ print(json.dumps(out))
 
 #[test]
 fn dae_meshes_match_trimesh_and_pycollada() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let files = all_dae();
     assert!(
         files.len() >= 14,
@@ -143,6 +146,9 @@ fn racecar_urdf(dir: &Path, ext: &str) -> PathBuf {
 
 #[test]
 fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("collada-urdf");
     let opts = hull_options();
     let dae = import(&racecar_urdf(&dir, "dae"), &opts).unwrap_or_else(|e| panic!("{e}"));
@@ -192,6 +198,9 @@ fn urdf_with_dae_collisions_imports_like_its_stl_twins() {
 
 #[test]
 fn a_bare_dae_file_imports_as_one_free_body() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let cone = pybullet_data().join("racecar/meshes/cone.dae");
     let opts = hull_options();
     let imp = import(&cone, &opts).unwrap_or_else(|e| panic!("{e}"));

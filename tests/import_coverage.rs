@@ -12,6 +12,9 @@ use std::path::Path;
 
 #[test]
 fn authored_robots_cover_their_source_meshes_per_trimesh() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("coverage");
     let opts = ImportOptions {
         progress: false,
@@ -51,6 +54,9 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
 
 #[test]
 fn coverage_check_fails_when_a_hull_is_missing() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     // Drop a hull of the single-jaw gripper: trimesh must see the hole.
     let input = robot_urdf("single_jaw_gripper");
     let opts = ImportOptions {

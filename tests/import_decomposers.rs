@@ -22,6 +22,9 @@ fn x_object() -> std::path::PathBuf {
 
 #[test]
 fn vhacd_and_coacd_split_the_x_object_into_connected_unchanged_hulls() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     for d in [Decomposer::Vhacd, Decomposer::Coacd] {
         let imp = import(&x_object(), &opts(d)).unwrap_or_else(|e| panic!("{d:?}: {e}"));
         let l = &imp.report.links[0];
@@ -70,6 +73,9 @@ fn vhacd_and_coacd_split_the_x_object_into_connected_unchanged_hulls() {
 
 #[test]
 fn coacd_decomposes_a_robot_link_mesh() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let urdf = robot_urdf("single_jaw_gripper");
     let imp = import(&urdf, &opts(Decomposer::Coacd)).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(imp.report.decomposer, "coacd");

@@ -33,23 +33,35 @@ fn check(urdf: &Path, tag: &str, seed: u64) {
 
 #[test]
 fn fk_of_authored_spider_matches_pinocchio() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     // Floating base, ball joints merged from revolute pairs, rotated hips.
     check(&robot_urdf("spider"), "spider", 1);
 }
 
 #[test]
 fn fk_of_authored_hand_and_chains_match_pinocchio() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     check(&robot_urdf("three_finger_hand"), "three_finger_hand", 2);
     check(&robot_urdf("chains_8link"), "chains_8link", 3);
 }
 
 #[test]
 fn fk_of_third_party_kuka_iiwa_matches_pinocchio() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     check(&third_party_urdf(), "kuka_iiwa", 4);
 }
 
 #[test]
 fn fk_check_detects_a_wrong_pose() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     // The checker must fail when our poses are wrong.
     let urdf = robot_urdf("three_finger_hand");
     let opts = hull_options();
@@ -68,6 +80,9 @@ fn fk_check_detects_a_wrong_pose() {
 
 #[test]
 fn fk_with_merged_fixed_links_primitives_continuous_and_prismatic_matches_pinocchio() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     // A geometry-less flange on a fixed joint is merged into its parent (its
     // child's origin composed through it); continuous joints are (cos, sin)
     // in Pinocchio.

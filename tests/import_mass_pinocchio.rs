@@ -78,6 +78,9 @@ fn check(urdf: &Path, tag: &str, perturb: f64) -> (bool, String, String) {
 
 #[test]
 fn mass_matrix_of_imported_kuka_iiwa_matches_pinocchio_crba() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let (ok, out, err) = check(&third_party_urdf(), "kuka", 0.0);
     eprintln!("kuka_iiwa: {}", out.trim());
     assert!(ok, "Pinocchio disagrees: {err}{out}");
@@ -88,6 +91,9 @@ fn mass_matrix_of_imported_kuka_iiwa_matches_pinocchio_crba() {
 
 #[test]
 fn mass_matrix_check_detects_a_wrong_entry() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     // A relative change of 1e-7 in one entry must fail the 1e-9 check.
     let (ok, _out, err) = check(&third_party_urdf(), "kuka-wrong", 1e-7);
     assert!(!ok && err.contains("mass matrix mismatch"), "{err}");
@@ -95,6 +101,9 @@ fn mass_matrix_check_detects_a_wrong_entry() {
 
 #[test]
 fn density_mass_gives_solid_links_and_the_report_compares_inertials() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let urdf = third_party_urdf();
     let opts = ImportOptions {
         decomposer: Decomposer::Hull,

@@ -163,6 +163,9 @@ fn run_check(xml: &Path, s: &serde_json::Value, tag: &str) {
 
 #[test]
 fn third_party_mjcf_mass_matrices_match_mujoco_full_m() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     for name in [
         "ant.xml",
         "humanoid.xml",
@@ -176,6 +179,9 @@ fn third_party_mjcf_mass_matrices_match_mujoco_full_m() {
 
 #[test]
 fn anchors_multi_joint_bodies_ref_ball_and_free_joints_match_mujoco() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let xml = import_support::root().join("tests/data/mjcf_frames.xml");
     check_mass_matrix(&xml, "mjcf_frames");
 }
@@ -183,6 +189,9 @@ fn anchors_multi_joint_bodies_ref_ball_and_free_joints_match_mujoco() {
 /// The checker is not blind: a 1e-6 change of one inertia is caught.
 #[test]
 fn mass_matrix_check_catches_a_wrong_inertia() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let xml = import_support::root().join("tests/data/mjcf_frames.xml");
     let mut s = samples(&xml, 6);
     let m = &mut s["configurations"][0]["M"][0][0];
@@ -205,6 +214,9 @@ fn mass_matrix_check_catches_a_wrong_inertia() {
 
 #[test]
 fn mjcf_structure_limits_effects_filters_and_ground() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let xml = import_support::root().join("tests/data/mjcf_frames.xml");
     let imp = import(&xml, &hull_options()).unwrap();
     let r = &imp.scene.robots[0];
@@ -262,6 +274,9 @@ fn mjcf_structure_limits_effects_filters_and_ground() {
 
 #[test]
 fn bad_mjcf_names_file_element_and_line() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("mjcf-bad");
     let bad = dir.join("bad.xml");
     std::fs::write(
@@ -282,6 +297,9 @@ fn bad_mjcf_names_file_element_and_line() {
 /// four-chain scene (two-hinge `ball` joints, `vertices` masses).
 #[test]
 fn exported_mjcf_has_our_mass_matrix() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("mjcf-export");
     let frames = import_support::root().join("tests/data/mjcf_frames.xml");
     let imp = import(&frames, &hull_options()).unwrap();
@@ -336,6 +354,9 @@ fn gymnasium_mjcf(name: &str) -> PathBuf {
 /// `gymnasium_free_joint_models_import_and_simulate_200_steps` with it).
 #[test]
 fn gymnasium_models_mass_matrices_match_mujoco() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     for name in [
         "ant.xml",
         "half_cheetah.xml",
@@ -362,6 +383,9 @@ fn gymnasium_models_mass_matrices_match_mujoco() {
 /// pair values it cannot represent. (Before: always 0.5, silently.)
 #[test]
 fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("mjcf-friction");
     let xml = dir.join("fric.xml");
     std::fs::write(

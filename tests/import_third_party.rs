@@ -10,6 +10,9 @@ use sdrs::scene::Scene;
 
 #[test]
 fn third_party_kuka_iiwa_imports_and_simulates() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let urdf = third_party_urdf();
     let opts = ImportOptions {
         progress: false,

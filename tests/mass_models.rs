@@ -52,6 +52,9 @@ fn moment(x: &[Vector3<f64>], density: f64) -> Matrix4<f64> {
 
 #[test]
 fn solid_mass_properties_match_trimesh() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let hulls = random_hulls(30, 11);
     let densities: Vec<f64> = (0..hulls.len()).map(|i| 500.0 + 97.0 * i as f64).collect();
     let spec = serde_json::json!({

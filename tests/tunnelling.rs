@@ -83,6 +83,9 @@ fn fcl_check(dir: &Path) {
 
 #[test]
 fn no_body_tunnels_through_a_thin_obstacle_with_ccd_and_python_fcl_agrees() {
+    if common::skip_without_venv() {
+        return;
+    }
     let dir = common::scratch_dir("tunnelling");
     let mut failures = Vec::new();
     let (mut caps, mut fallbacks) = (0, 0);
@@ -164,6 +167,9 @@ fn without_ccd_the_side_check_catches_tunnelling() {
 /// The reproducers of issue 19, as given (`tests/data/tunnel/`).
 #[test]
 fn issue_19_reproducers_stay_on_their_side() {
+    if common::skip_without_venv() {
+        return;
+    }
     let dir = common::scratch_dir("tunnel-repro");
     for (file, side) in tunnel::reproducers() {
         let path = common::root().join("tests/data/tunnel").join(file);

@@ -24,6 +24,9 @@ fn sdrs_scene(n: usize) -> sdrs::scene::Scene {
 
 #[test]
 fn harness_is_well_formed_and_mujoco_bodies_match_sdrs_links() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("bench-mujoco");
     let rows_path = dir.join("rows.jsonl");
     let o = std::process::Command::new("bash")

@@ -11,6 +11,9 @@ mod support;
 
 #[test]
 fn reacher_clean_is_none_and_damping_is_named_alone() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = support::scratch_dir("calibrate-acceptance");
     let o = support::python()
         .arg(support::root().join("tools/calib_acceptance.py"))

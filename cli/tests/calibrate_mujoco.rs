@@ -45,6 +45,9 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
 
 #[test]
 fn mujoco_damping_frictionloss_and_armature_are_named_and_close_the_gap() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = common::scratch_dir("calibrate-mujoco");
     let scene = common::robots("calibrate/arm2_fine.yaml");
     let export = dir.join("export");

@@ -23,6 +23,9 @@ fn alive(pid: u32) -> bool {
 
 #[test]
 fn sigterm_stops_the_coacd_helper_and_removes_its_temporary_folder() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("sigterm");
     let mut run = sdrs()
         .args([

@@ -67,6 +67,9 @@ fn import_and_run(
 
 #[test]
 fn an_imported_arm_holds_its_pose_on_the_ground() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("first-hour-arm");
     let urdf = pybullet_data().join("kuka_iiwa/model.urdf");
     let (header, rows, _) = import_and_run(&dir, &urdf, "kuka", false);
@@ -85,6 +88,9 @@ fn an_imported_arm_holds_its_pose_on_the_ground() {
 
 #[test]
 fn an_imported_quadruped_stands_on_the_ground() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("first-hour-quadruped");
     let urdf = pybullet_data().join("a1/a1.urdf");
     let (header, rows, summary) = import_and_run(&dir, &urdf, "a1", true);
@@ -135,6 +141,9 @@ fn an_imported_quadruped_stands_on_the_ground() {
 
 #[test]
 fn a_third_imported_robot_runs_on_the_ground_without_error() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("first-hour-r2d2");
     let urdf = pybullet_data().join("r2d2.urdf");
     let (_, rows, summary) = import_and_run(&dir, &urdf, "r2d2", false);

@@ -54,6 +54,9 @@ fn a_binary_outside_the_source_tree_imports_mjcf_with_its_own_helpers() {
 
 #[test]
 fn a_python_without_mujoco_gets_the_package_name_and_install_command() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("installed-missing");
     // The venv's interpreter without its site-packages: no mujoco.
     let wrapper = dir.join("python-bare");

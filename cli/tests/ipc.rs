@@ -47,6 +47,9 @@ fn four_chains_under_ipc(steps: usize) {
 /// `NewtonOptions::eig_abs`.)
 #[test]
 fn four_chains_under_ipc_run_2000_steps_and_python_fcl_finds_every_pair_separated() {
+    if support::skip_without_venv() {
+        return;
+    }
     four_chains_under_ipc(2000);
 }
 

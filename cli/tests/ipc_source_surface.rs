@@ -40,6 +40,9 @@ objects:
 
 #[test]
 fn non_convex_source_surfaces_run_and_python_fcl_finds_every_mesh_pair_separated() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("ipc_source");
     write_obj(&dir.join("channel.obj"), &channel());
     write_obj(&dir.join("ell.obj"), &l_shape());
@@ -88,6 +91,9 @@ fn non_convex_source_surfaces_run_and_python_fcl_finds_every_mesh_pair_separated
 
 #[test]
 fn import_writes_the_source_mesh_and_ipc_uses_it() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("ipc_source_import");
     let input = dir.join("channel.obj");
     write_obj(&input, &channel());
@@ -196,6 +202,9 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
 /// with its hull the start is rejected (the box is inside the hull).
 #[test]
 fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("ipc_source_torus");
     let input = support::pybullet_data().join("torus/torus_textured.obj");
     let design = dir.join("torus.yaml");

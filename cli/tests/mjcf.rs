@@ -46,16 +46,25 @@ fn on_ground(model: &str, import_args: &[&str]) {
 
 #[test]
 fn pybullet_mjcf_ant_floating_on_the_ground() {
+    if support::skip_without_venv() {
+        return;
+    }
     on_ground("ant", &["--ground", "--base", "floating"]);
 }
 
 #[test]
 fn pybullet_mjcf_humanoid_falls_onto_the_ground() {
+    if support::skip_without_venv() {
+        return;
+    }
     on_ground("humanoid", &["--ground", "--base", "floating"]);
 }
 
 #[test]
 fn pybullet_mjcf_thrower_with_its_own_ground_plane() {
+    if support::skip_without_venv() {
+        return;
+    }
     on_ground("thrower", &[]);
 }
 
@@ -64,6 +73,9 @@ fn pybullet_mjcf_thrower_with_its_own_ground_plane() {
 /// overwritten without `--force`.
 #[test]
 fn export_mjcf_writes_a_model_mujoco_loads_and_keeps_existing_files() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("export-mjcf");
     let out = dir.join("four_chains.xml");
     let scene = support::robots("four_chains.yaml");
@@ -113,6 +125,9 @@ fn export_mjcf_writes_a_model_mujoco_loads_and_keeps_existing_files() {
 /// 1e-6 relative (Newton's stopping tolerance), chosen before the run.
 #[test]
 fn gymnasium_free_joint_models_import_and_simulate_200_steps() {
+    if support::skip_without_venv() {
+        return;
+    }
     let assets =
         support::root().join(".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets");
     for model in ["ant", "humanoid", "humanoidstandup"] {

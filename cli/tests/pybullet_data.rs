@@ -125,10 +125,16 @@ fn run_all(base: &str) {
 
 #[test]
 fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_fixed_base() {
+    if support::skip_without_venv() {
+        return;
+    }
     run_all("fixed");
 }
 
 #[test]
 fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_floating_base() {
+    if support::skip_without_venv() {
+        return;
+    }
     run_all("floating");
 }

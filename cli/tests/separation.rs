@@ -7,6 +7,9 @@ use support::{robots, scratch_dir};
 
 #[test]
 fn four_chains_tangle_for_2000_steps_and_python_fcl_finds_every_pair_separated() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("fcl");
     let summary = support::simulate_export(&dir, &["--steps", "2000"], &robots("four_chains.yaml"));
     let links = summary["final_state"]

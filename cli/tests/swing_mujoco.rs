@@ -30,6 +30,9 @@ fn table(dir: &std::path::Path, script: &str, args: &[&std::ffi::OsStr]) -> serd
 
 #[test]
 fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("swing-mujoco");
     let urdf = pybullet_data().join("kuka_iiwa/model.urdf");
     let scene = dir.join("iiwa.yaml");
@@ -77,6 +80,9 @@ fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
 /// 1e-4, reference at 1e-6 s) in `notes/mjcf-in-and-out.md`.
 #[test]
 fn spider_pd_tracking_converges_to_mujoco_at_first_order() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("pd-mujoco");
     let spider = root().join("robots/spider/scene.yaml");
     let v = table(

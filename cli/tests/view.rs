@@ -39,6 +39,9 @@ fn counts(attr: &str) -> Vec<(String, usize)> {
 
 #[test]
 fn four_chain_viewer_plays_and_glb_validates() {
+    if support::skip_without_chromium() {
+        return;
+    }
     let dir = scratch_dir("view-four-chains");
     let exp = dir.join("run");
     run_ok(

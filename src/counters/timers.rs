@@ -211,12 +211,13 @@ mod tests {
             let mut depth = 0;
             let mut p = s;
             while let Some(up) = p.parent() {
-                assert!(up.is_group(), "{s:?}: parent {up:?} is not a group");
                 p = up;
                 depth += 1;
                 assert!(depth < Stage::ALL.len());
             }
             assert_eq!(p, Stage::Step);
+            // Groups have children; every timed stage is reported under its name.
+            assert!(!s.is_group() || Stage::ALL.iter().any(|c| c.parent() == Some(s)));
         }
     }
 

@@ -1,7 +1,9 @@
 //! The forward pass with everything the backward pass needs.
 
+use crate::sim::run::run_observed;
 use crate::sim::{SimState, Simulator, StepError};
 use nalgebra::{DVector, Matrix3};
+use std::ops::ControlFlow;
 
 /// One step: the state it started from and the solution `θ^{t}` in the
 /// charts of `before` (the chart it was solved in).
@@ -42,20 +44,27 @@ impl Tape {
 }
 
 /// Runs `steps` steps from the simulator's current state, recording them.
+/// The run loop is [`crate::sim::run::run_observed`] (the one every
+/// recorder and stream uses); this observer keeps, per step, the state it
+/// started from and its solution.
 pub fn record(sim: &mut Simulator, steps: usize) -> Result<Tape, StepError> {
     let mut tape = Tape {
         steps: Vec::with_capacity(steps),
         dt: sim.settings.dt,
     };
-    for _ in 0..steps {
-        let before = sim.state.clone();
-        sim.step()?;
-        // The solution in the chart it was solved in: `sim.state.q` may have
-        // been re-centred after acceptance; poses are chart-independent, so
-        // recover the pre-re-centring coordinates from `before`'s charts.
-        let q_new = solution_in_chart(sim, &before);
-        tape.steps.push(StepRecord { before, q_new });
-    }
+    let mut before = sim.state.clone();
+    run_observed(sim, steps, |k, sim, _| {
+        if k > 0 {
+            // The solution in the chart it was solved in: `sim.state.q` may
+            // have been re-centred after acceptance; poses are
+            // chart-independent, so recover the pre-re-centring coordinates
+            // from `before`'s charts.
+            let q_new = solution_in_chart(sim, &before);
+            let before = std::mem::replace(&mut before, sim.state.clone());
+            tape.steps.push(StepRecord { before, q_new });
+        }
+        ControlFlow::Continue(())
+    })?;
     Ok(tape)
 }
 

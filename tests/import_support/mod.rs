@@ -1,5 +1,10 @@
 //! Shared helpers of the `import_*` integration tests.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
+
+#[allow(dead_code, unused_imports)]
+#[path = "../common/mod.rs"]
+mod common;
+pub use common::{skip_without_chromium, skip_without_venv};
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -82,6 +82,19 @@ fn render(results: &Path, out: &Path) -> Result<()> {
     }
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create the output directory", out.display()))?;
+    // The optimized-shape pictures are files of the run (`plots/shapes_*.svg`),
+    // not results: carried over from beside the results when they are there.
+    let from = results.parent().unwrap_or(Path::new("."));
+    for f in r.codesign.iter().filter_map(|b| b.shapes_svg.as_ref()) {
+        let (src, dst) = (from.join(f), out.join(f));
+        if src.is_file() && !dst.exists() {
+            if let Some(d) = dst.parent() {
+                std::fs::create_dir_all(d)?;
+            }
+            std::fs::copy(&src, &dst)
+                .with_context(|| format!("{}: cannot copy to {}", src.display(), dst.display()))?;
+        }
+    }
     report::write(out, &r, None)?;
     eprintln!(
         "report: {} (from {})",
