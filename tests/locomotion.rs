@@ -347,3 +347,85 @@ fn controller_step_probe() {
         }
     }
 }
+
+/// `optimizer.radius: split` on the spider (horizon 60, 10 iterations): a
+/// rejected trial that moved both blocks is followed by one trial that
+/// moves the design alone at the same design radius (controller radius
+/// unchanged; rejected → design radius halved), then by trials that keep the
+/// design at the iterate's and halve only the controller radius until one
+/// is accepted; with `--design off` the run is bitwise the `reset` run
+/// (6 iterations).
+#[test]
+fn split_radius_backtracks_the_design_and_the_controller_separately() {
+    use sdrs::optimize::task::RadiusRule;
+    let load = |design: bool, rule: RadiusRule| {
+        let mut p = Problem::load(&task("spider"), design).unwrap();
+        p.horizon = 60;
+        p.task.optimizer.radius = rule;
+        p
+    };
+    let p = load(true, RadiusRule::Split);
+    let mut rows: Vec<(sdrs::optimize::IterRecord, DVector<f64>)> = Vec::new();
+    optimize(&p, 10, |r, d| rows.push((r.clone(), d.clone()))).unwrap();
+    // Phases as the rule defines them, checked on what each trial simulated.
+    #[derive(PartialEq)]
+    enum Ph {
+        Joint,
+        Design,
+        Controller,
+    }
+    let (mut iterate, mut ph, mut seen) = (rows[0].1.clone(), Ph::Joint, [0; 3]);
+    for w in rows.windows(2) {
+        let ((prev, _), (r, d)) = (&w[0], &w[1]);
+        let moved_design = d != &iterate;
+        ph = match ph {
+            Ph::Joint => {
+                seen[0] += 1;
+                if r.accepted || !moved_design {
+                    Ph::Joint
+                } else {
+                    Ph::Design
+                }
+            }
+            Ph::Design => {
+                seen[1] += 1;
+                assert!(moved_design, "iteration {}: design trial", r.iter);
+                assert_eq!(r.radius_controller, prev.radius_controller);
+                let want = if r.accepted {
+                    p.task.optimizer.step_design
+                } else {
+                    0.5 * prev.radius_design
+                };
+                assert_eq!(r.radius_design, want, "iteration {}", r.iter);
+                Ph::Controller
+            }
+            Ph::Controller => {
+                seen[2] += 1;
+                assert!(!moved_design, "iteration {}: the design is held", r.iter);
+                assert_eq!(r.radius_design, prev.radius_design);
+                if r.accepted {
+                    Ph::Joint
+                } else {
+                    assert_eq!(r.radius_controller, 0.5 * prev.radius_controller);
+                    Ph::Controller
+                }
+            }
+        };
+        if r.accepted {
+            iterate = d.clone();
+        }
+    }
+    assert!(
+        seen[1] > 0 && seen[2] > 0,
+        "phases seen {seen:?} in 10 iterations"
+    );
+    let losses = |rule| {
+        let mut l = Vec::new();
+        optimize(&load(false, rule), 6, |r, _| {
+            l.push((r.loss, r.radius_controller, r.accepted))
+        })
+        .unwrap();
+        l
+    };
+    assert_eq!(losses(RadiusRule::Split), losses(RadiusRule::Reset));
+}

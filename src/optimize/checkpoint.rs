@@ -59,6 +59,10 @@ pub struct State {
     pub controller: DVector<f64>,
     pub radius_design: f64,
     pub radius_controller: f64,
+    /// `optimizer.radius: split`: the blocks the next trial moves (absent in
+    /// checkpoints written before `split` existed: joint).
+    #[serde(default)]
+    pub phase: super::method::Phase,
     pub adam_design: Adam,
     pub adam_controller: Adam,
     pub initial_loss: f64,

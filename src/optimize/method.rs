@@ -1,5 +1,6 @@
 //! Update rules.
 
+use super::task::RadiusRule;
 use nalgebra::DVector;
 
 /// The paper's trust-region projected-gradient step for one block:
@@ -48,6 +49,114 @@ pub fn trust_region_step(
         }
     }
     delta(b.exp())
+}
+
+/// Which blocks the next trust-region trial moves ([`RadiusRule::Split`];
+/// always `Joint` under the other rules).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Both blocks.
+    #[default]
+    Joint,
+    /// The design alone.
+    Design,
+    /// The controller alone.
+    Controller,
+}
+
+/// Trust-region radii of the two blocks after the trials so far, and the
+/// phase of the next trial. Stored in checkpoints.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Radii {
+    /// Design radius `r_d` (m).
+    pub design: f64,
+    /// Controller radius `r_c` (controller parameter units).
+    pub controller: f64,
+    /// Blocks the next trial moves.
+    pub phase: Phase,
+}
+
+/// Task steps `(ᾱ_d, ᾱ_c)` and the radius rule: what [`Radii::after`] needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusSettings {
+    pub rule: RadiusRule,
+    pub step_design: f64,
+    pub step_controller: f64,
+}
+
+impl Radii {
+    /// The start: `(ᾱ_d, ᾱ_c)`, joint.
+    pub fn new(s: &RadiusSettings) -> Self {
+        Radii {
+            design: s.step_design,
+            controller: s.step_controller,
+            phase: Phase::Joint,
+        }
+    }
+
+    /// The trial steps at iterate `(d, c)` with gradients `(g_d, g_c)` and
+    /// design box `[lo, hi]`: `Δd = TR(g_d, r_d)` ([`trust_region_step`];
+    /// zero in the controller phase) and `Δc = −r_c g_c/‖g_c‖` (zero in the
+    /// design phase or if `g_c = 0`).
+    pub fn trial(
+        &self,
+        (g_d, g_c): (&DVector<f64>, &DVector<f64>),
+        (d, lo, hi): (&DVector<f64>, &DVector<f64>, &DVector<f64>),
+    ) -> (DVector<f64>, DVector<f64>) {
+        let dd = if self.phase == Phase::Controller {
+            DVector::zeros(d.len())
+        } else {
+            trust_region_step(g_d, d, lo, hi, self.design)
+        };
+        let n = g_c.norm();
+        let dc = if n > 0.0 && self.phase != Phase::Design {
+            -self.controller * g_c / n
+        } else {
+            DVector::zeros(g_c.len())
+        };
+        (dd, dc)
+    }
+
+    /// The radii and phase after a trial that moved the design (`moved.0`:
+    /// the projected trial design differs from the iterate's) and/or the
+    /// controller (`moved.1`) and was `accepted` or not (rules on
+    /// [`RadiusRule`]'s variants).
+    pub fn after(self, s: &RadiusSettings, moved: (bool, bool), accepted: bool) -> Radii {
+        let reset_like = |r: Radii| Radii {
+            design: s.rule.next(r.design, s.step_design, accepted),
+            controller: s.rule.next(r.controller, s.step_controller, accepted),
+            phase: Phase::Joint,
+        };
+        if s.rule != RadiusRule::Split {
+            return reset_like(self);
+        }
+        match (self.phase, accepted) {
+            (Phase::Joint, false) if moved.0 && moved.1 => Radii {
+                phase: Phase::Design,
+                ..self
+            },
+            (Phase::Joint, _) => reset_like(self),
+            (Phase::Design, ok) => Radii {
+                design: if ok { s.step_design } else { 0.5 * self.design },
+                phase: Phase::Controller,
+                ..self
+            },
+            (Phase::Controller, _) if !moved.1 => Radii {
+                phase: Phase::Joint,
+                ..self
+            },
+            (Phase::Controller, true) => Radii {
+                controller: s.step_controller,
+                phase: Phase::Joint,
+                ..self
+            },
+            (Phase::Controller, false) => Radii {
+                controller: 0.5 * self.controller,
+                ..self
+            },
+        }
+    }
 }
 
 /// `g` rescaled to Euclidean norm at most `max`: `g · min(1, max/‖g‖)`
@@ -185,7 +294,6 @@ mod tests {
     /// run stalled the first way (notes/locomotion-feet-and-radius.md).
     #[test]
     fn reset_radius_crosses_a_ripple_where_the_adaptive_radius_collapses() {
-        use crate::optimize::task::RadiusRule;
         let (a, lam) = (0.1, 0.01);
         let f = |x: &DVector<f64>| x.iter().map(|v| v * v + a * (v / lam).cos()).sum::<f64>();
         let grad = |x: &DVector<f64>| x.map(|v| 2.0 * v - a / lam * (v / lam).sin());
@@ -208,6 +316,112 @@ mod tests {
         eprintln!("adaptive: f {fa} radius {ra:e}; reset: f {fr}");
         assert!(fa > 1.5 && ra < 1e-30, "adaptive f {fa} r {ra}");
         assert!(fr < 0.0, "reset f {fr}");
+    }
+
+    /// `n` trust-region trials (accept iff the loss decreases) of `rule` on
+    /// `f(d, c)` with gradient `grad`, from `(d, c)`, steps `(ᾱ_d, ᾱ_c)`, no
+    /// box: the final iterate, the radii after every trial and the number
+    /// of accepted trials.
+    #[allow(clippy::type_complexity)]
+    fn trials(
+        rule: RadiusRule,
+        (step_design, step_controller): (f64, f64),
+        f: &dyn Fn(&DVector<f64>, &DVector<f64>) -> f64,
+        grad: &dyn Fn(&DVector<f64>, &DVector<f64>) -> (DVector<f64>, DVector<f64>),
+        (mut d, mut c): (DVector<f64>, DVector<f64>),
+        n: usize,
+    ) -> (DVector<f64>, DVector<f64>, Vec<Radii>, usize) {
+        let s = RadiusSettings {
+            rule,
+            step_design,
+            step_controller,
+        };
+        let (lo, hi) = (
+            DVector::repeat(d.len(), -1e9),
+            DVector::repeat(d.len(), 1e9),
+        );
+        let mut r = Radii::new(&s);
+        let (mut log, mut accepted) = (Vec::new(), 0);
+        for _ in 0..n {
+            let (gd, gc) = grad(&d, &c);
+            let (dd, dc) = r.trial((&gd, &gc), (&d, &lo, &hi));
+            let (td, tc) = (&d + &dd, &c + &dc);
+            let ok = f(&td, &tc) < f(&d, &c);
+            r = r.after(&s, (td != d, tc != c), ok);
+            if ok {
+                (d, c) = (td, tc);
+                accepted += 1;
+            }
+            log.push(r);
+        }
+        (d, c, log, accepted)
+    }
+
+    /// A stiff design block `D(d) = 10³ d²` from `d = 10⁻³` with the step
+    /// ᾱ_d = 1 (every design step above ~2·10⁻³ raises the loss by far more
+    /// than any controller step lowers it) next to a controller bowl
+    /// `‖c‖²` from (3, 2) with ᾱ_c = 0.5; 200 trials. Under `reset` every
+    /// rejection halves both radii, so each accepted trial comes at
+    /// `r_c ≈ ᾱ_c/256` and the controller barely moves (measured ‖c‖ ≈ 3.5);
+    /// under `split` the controller backtracks on its own scale and reaches
+    /// the bottom (measured ‖c‖ ≈ 3e-8; asserted < 0.05). The design itself
+    /// gains nothing under either rule here (measured d: 1e-3 → 1e-3 under
+    /// `split`, → 4.9e-3 under `reset`, whose controller decrease pays for
+    /// design steps that raise `D`); asserted: `D` does not rise under
+    /// `split`, and its joint trials are accepted (radius back at ᾱ_d).
+    #[test]
+    fn split_radius_keeps_the_controller_moving_where_a_stiff_design_throttles_reset() {
+        let f = |d: &DVector<f64>, c: &DVector<f64>| 1e3 * d.norm_squared() + c.norm_squared();
+        let grad = |d: &DVector<f64>, c: &DVector<f64>| (2e3 * d, 2.0 * c);
+        let start = (
+            DVector::from_element(1, 1e-3),
+            DVector::from_vec(vec![3.0, 2.0]),
+        );
+        let run = |rule| trials(rule, (1.0, 0.5), &f, &grad, start.clone(), 200);
+        let (dr, cr, _, nr) = run(RadiusRule::Reset);
+        let (ds, cs, log, ns) = run(RadiusRule::Split);
+        eprintln!(
+            "reset: |c| {} d {} ({nr} accepted); split: |c| {} d {} ({ns} accepted)",
+            cr.norm(),
+            dr[0],
+            cs.norm(),
+            ds[0]
+        );
+        assert!(cr.norm() > 3.0, "reset |c| {}", cr.norm());
+        assert!(cs.norm() < 0.05, "split |c| {}", cs.norm());
+        assert!(f(&ds, &cs) < 0.01 * f(&dr, &cr));
+        assert!(
+            1e3 * ds[0] * ds[0] <= 1e-3,
+            "split D {}",
+            1e3 * ds[0] * ds[0]
+        );
+        // Both single-block phases ran.
+        assert!(log.iter().any(|r| r.phase == Phase::Design));
+        assert!(log.iter().any(|r| r.phase == Phase::Controller));
+    }
+
+    /// With a design block that cannot move (no design variables, as
+    /// `--design off`, or a zero design gradient) `split` is `reset`, trial
+    /// for trial and bitwise (the rippled bowl of the test above).
+    #[test]
+    fn split_radius_is_reset_when_the_design_does_not_move() {
+        let (a, lam) = (0.1, 0.01);
+        let ripple = |x: &DVector<f64>| x.iter().map(|v| v * v + a * (v / lam).cos()).sum::<f64>();
+        let f = |_: &DVector<f64>, c: &DVector<f64>| ripple(c);
+        let gc = |c: &DVector<f64>| c.map(|v| 2.0 * v - a / lam * (v / lam).sin());
+        let grad = |d: &DVector<f64>, c: &DVector<f64>| (d.map(|_| 0.0), gc(c));
+        for nd in [0, 3] {
+            let start = (
+                DVector::from_element(nd, 0.2),
+                DVector::from_vec(vec![3.0, 2.0]),
+            );
+            let run = |rule| trials(rule, (0.05, 0.3), &f, &grad, start.clone(), 200);
+            let (_, cr, lr, nr) = run(RadiusRule::Reset);
+            let (_, cs, ls, ns) = run(RadiusRule::Split);
+            assert_eq!((cr, nr), (cs, ns));
+            assert_eq!(lr, ls);
+            assert!(nr > 20, "{nr} accepted");
+        }
     }
 
     #[test]

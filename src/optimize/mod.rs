@@ -26,7 +26,7 @@ use crate::control::Controller;
 use crate::diff::{Gradients, Loss, LossTerm, backward, record};
 use crate::model::Model;
 use crate::scene::Scene;
-use method::{Adam, trust_region_step};
+use method::{Adam, Radii, RadiusSettings};
 use nalgebra::{DVector, Vector3};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -559,14 +559,24 @@ pub fn optimize_with<E: Into<OptimizeError>>(
     Ok(run.outcome(p, ev))
 }
 
+/// The trust region's radius settings of the task.
+fn radius_settings(p: &Problem) -> RadiusSettings {
+    let o = &p.task.optimizer;
+    RadiusSettings {
+        rule: o.radius,
+        step_design: o.step_design,
+        step_controller: o.step_controller,
+    }
+}
+
 /// The optimizer's iterate and bookkeeping during [`optimize_with`].
 struct Run {
     /// Current design and controller.
     d: DVector<f64>,
     c: DVector<f64>,
-    /// Trust-region radii (design, controller).
-    rd: f64,
-    rc: f64,
+    /// Trust-region radii (design, controller) and, for `radius: split`,
+    /// which block the next trial moves.
+    radii: Radii,
     adam: (Adam, Adam),
     history: Vec<IterRecord>,
     best: Option<BestIterate>,
@@ -592,8 +602,7 @@ impl Run {
             ),
             d,
             c,
-            rd: o.step_design,
-            rc: o.step_controller,
+            radii: Radii::new(&radius_settings(p)),
             history: Vec::with_capacity(iters + 1),
             best: None,
             first: 1,
@@ -612,7 +621,11 @@ impl Run {
             }
             run.d = s.design.clone();
             run.c = s.controller.clone();
-            (run.rd, run.rc) = (s.radius_design, s.radius_controller);
+            run.radii = Radii {
+                design: s.radius_design,
+                controller: s.radius_controller,
+                phase: s.phase,
+            };
             run.adam = (s.adam_design.clone(), s.adam_controller.clone());
             run.history = s.history.clone();
             run.best = s.best.clone();
@@ -640,8 +653,8 @@ impl Run {
             best_loss: best,
             grad_design_norm: ev.grad_design.norm(),
             grad_controller_norm: ev.grad_controller.norm(),
-            radius_design: self.rd,
-            radius_controller: self.rc,
+            radius_design: self.radii.design,
+            radius_controller: self.radii.controller,
             accepted,
             forward_seconds: ev.forward_seconds,
             backward_seconds: ev.backward_seconds,
@@ -670,8 +683,9 @@ impl Run {
             iter: it,
             design: self.d.clone(),
             controller: self.c.clone(),
-            radius_design: self.rd,
-            radius_controller: self.rc,
+            radius_design: self.radii.design,
+            radius_controller: self.radii.controller,
+            phase: self.radii.phase,
             adam_design: self.adam.0.clone(),
             adam_controller: self.adam.1.clone(),
             initial_loss: self.initial_loss,
@@ -688,19 +702,9 @@ impl Run {
     fn propose(&mut self, p: &Problem, ev: &Evaluation) -> (DVector<f64>, DVector<f64>) {
         let o = &p.task.optimizer;
         let (dd, dc) = match o.method {
-            Method::TrustRegion => (
-                trust_region_step(
-                    &ev.grad_design,
-                    &self.d,
-                    &p.design.lower(),
-                    &p.design.upper(),
-                    self.rd,
-                ),
-                if ev.grad_controller.norm() > 0.0 {
-                    -self.rc * &ev.grad_controller / ev.grad_controller.norm()
-                } else {
-                    self.c.map(|_| 0.0)
-                },
+            Method::TrustRegion => self.radii.trial(
+                (&ev.grad_design, &ev.grad_controller),
+                (&self.d, &p.design.lower(), &p.design.upper()),
             ),
             Method::Adam => (
                 self.adam.0.step(&method::clip_norm(
@@ -732,6 +736,8 @@ impl Run {
         on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
     ) -> Result<(), OptimizeError> {
         let o = &p.task.optimizer;
+        let rs = radius_settings(p);
+        let moved = (d_new != self.d, c_new != self.c);
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => {
                 (self.d, self.c, *ev) = (d_new, c_new, e);
@@ -742,16 +748,14 @@ impl Run {
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 (self.d, self.c, *ev) = (d_new, c_new, e);
-                self.rd = o.radius.next(self.rd, o.step_design, true);
-                self.rc = o.radius.next(self.rc, o.step_controller, true);
+                self.radii = self.radii.after(&rs, moved, true);
                 self.keep(it, ev.loss);
                 let d = self.d.clone();
                 self.record(it, ev, &d, ev.loss, true, on_iter);
             }
             (Method::TrustRegion, Ok(e)) => {
                 // Rejected: the row shows the trial's loss; the iterate stays.
-                self.rd = o.radius.next(self.rd, o.step_design, false);
-                self.rc = o.radius.next(self.rc, o.step_controller, false);
+                self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, &e, &d_new, ev.loss, false, on_iter);
             }
             (Method::Adam, Err(e)) => {
@@ -762,8 +766,7 @@ impl Run {
             }
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
-                self.rd = o.radius.next(self.rd, o.step_design, false);
-                self.rc = o.radius.next(self.rc, o.step_controller, false);
+                self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, ev, &d_new, ev.loss, false, on_iter);
             }
         }

@@ -230,8 +230,9 @@ pub enum ResultIterate {
     Last,
 }
 
-/// How the trust-region radii change after a trial step (both blocks, design
-/// and controller, together: a trial moves both).
+/// How the trust-region radii change after a trial step (`adaptive`, `reset`:
+/// both blocks, design and controller, together, as a trial moves both;
+/// `split`: each block on its own outcome).
 #[derive(
     Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
 )]
@@ -252,16 +253,42 @@ pub enum RadiusRule {
     /// parameters), `adaptive` settles at radius ≈ ε and gains ≈ ε‖g‖ per
     /// step, whereas `reset` tries the large scale first every iteration.
     Reset,
+    /// `reset`, with the two blocks backtracked separately, each radius
+    /// adapted on its own trials, so that a design step that fails cannot
+    /// throttle the controller and a controller step that fails cannot
+    /// shrink the design radius (`notes/locomotion-feet-and-radius.md`:
+    /// under `reset` a rejected trial halves both radii, and the spider's
+    /// co-design advanced its controller 4× less per accepted step than its
+    /// controller-only twin). Radii `(r_d, r_c)` (initially `(ᾱ_d, ᾱ_c)`)
+    /// and a phase (initially *joint*); `TR` is the trust-region step:
+    /// - *joint*: `Δd = TR(∇_d L, r_d)`, `Δc = −r_c ∇_c L/‖∇_c L‖`.
+    ///   Accepted → both radii reset to `(ᾱ_d, ᾱ_c)`, stay joint;
+    ///   rejected → *design* phase, radii unchanged.
+    /// - *design*: the design step alone (`Δc = 0`) at `r_d`. Accepted →
+    ///   `r_d ← ᾱ_d`; rejected → `r_d ← r_d/2`; either way → *controller*.
+    /// - *controller*: the controller step alone (`Δd = 0`) at `r_c`, the
+    ///   radius of the rejected joint trial first. Accepted → `r_c ← ᾱ_c`,
+    ///   → *joint*; rejected → `r_c ← r_c/2`, stay.
+    /// - a joint trial in which one block does not move (`--design off`, a
+    ///   zero gradient) follows `reset`, and so does a controller trial with
+    ///   `∇_c L = 0` (→ joint).
+    ///
+    /// Cost: the controller's ladder `ᾱ_c, ᾱ_c/2, …` costs two trials more
+    /// per accepted controller step than without a design block (the joint
+    /// and the design trial); `--design off` is bitwise the `reset` run.
+    Split,
 }
 
 impl RadiusRule {
     /// Radius after a trial of radius `r`, for a block whose task step is
-    /// `step` (formulas on the variants).
+    /// `step` (formulas on the variants; `split`'s per-block bookkeeping is
+    /// [`crate::optimize::method::Radii`], which uses this for the trials
+    /// that follow `reset`).
     pub fn next(self, r: f64, step: f64, accepted: bool) -> f64 {
         match (self, accepted) {
             (_, false) => 0.5 * r,
             (RadiusRule::Adaptive, true) => (r * 1.25).min(4.0 * step),
-            (RadiusRule::Reset, true) => step,
+            (RadiusRule::Reset | RadiusRule::Split, true) => step,
         }
     }
 }
