@@ -118,29 +118,74 @@ pub fn make_ready(
     root_static: bool,
     opts: &ReadyOptions,
 ) -> Result<ReadyReport, ImportError> {
-    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
-        path: file.to_path_buf(),
-        element,
-        msg,
+    let (floating, base) = choose_base(&mut scene.robots[0], root_static, opts.base);
+    apply_pose(&mut scene.robots[0], file, &opts.pose)?;
+    // The scene as it stands, for geometry and gains.
+    let load = |spec: &SceneSpec| {
+        Scene::from_spec(spec.clone(), file).map_err(|e| ImportError::Invalid {
+            path: file.to_path_buf(),
+            msg: e.to_string(),
+        })
     };
-    let robot = &mut scene.robots[0];
+    let mut report = ReadyReport {
+        base,
+        excluded_pairs: Vec::new(),
+        ground_lift: None,
+        gains: BTreeMap::new(),
+    };
+    let contact = ContactSpec {
+        mu: opts.mu.unwrap_or(0.5),
+        ..ContactSpec::default()
+    };
+    let range = ContactParams::with_width(contact.s).support_distance();
+    let plain = load(scene)?;
+    let model = &plain.model;
+    let mut hulls = WorldHulls::new(model);
+    let poses = crate::sim::SimState::new(
+        model,
+        plain.q0.clone(),
+        &plain.qdot0,
+        plain.charts.clone(),
+        plain.settings.dt,
+    )
+    .poses;
+    hulls.update(model, &poses);
+    if opts.contact {
+        report.excluded_pairs = rest_pose_exclusions(model, &hulls, range);
+        add_contact(scene, &report.excluded_pairs, contact);
+    }
+    if opts.ground {
+        report.ground_lift = Some(place_on_ground(scene, &hulls, range));
+    }
+    if opts.hold {
+        report.gains = hold_gains(scene, file, floating, &load)?;
+        hold_initial_pose(&mut scene.robots[0], &report.gains);
+    }
+    load(scene)?;
+    Ok(report)
+}
+
+/// Whether the base floats, and why (for the report); a fixed root becomes
+/// free or a free root is welded where it stands accordingly. Only a fixed
+/// or free root changes: a root on a revolute or prismatic joint (a robot
+/// on a rail or a hinge to the world) keeps its joint.
+fn choose_base(robot: &mut RobotSpec, root_static: bool, mode: BaseMode) -> (bool, String) {
     let root = robot
         .links
         .iter()
         .position(|l| l.parent.is_none())
         .expect("an imported robot has a root");
-    let root_free = robot.links[root].joint.kind == JointType::Free;
     let root_kind = robot.links[root].joint.kind;
-    let floating = match opts.base {
-        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => false,
+    let root_free = root_kind == JointType::Free;
+    let own_joint = !matches!(root_kind, JointType::Fixed | JointType::Free);
+    let floating = match mode {
+        _ if own_joint => false,
         BaseMode::Fixed => false,
         BaseMode::Floating => true,
         BaseMode::Auto => root_free || !root_static,
     };
-    let base = match (opts.base, floating) {
-        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => {
-            "attached to the world by the root link's own joint"
-        }
+    let base = match (mode, floating) {
+        _ if own_joint => "attached to the world by the root link's own joint",
         (BaseMode::Auto, true) if root_free => "floating (the input's root joint is floating)",
         (BaseMode::Auto, true) => "floating (the root link has a mass; --base fixed bolts it down)",
         (BaseMode::Auto, false) => {
@@ -150,16 +195,26 @@ pub fn make_ready(
         (_, false) => "fixed (--base fixed)",
     }
     .to_string();
-    // Only a fixed or free root changes: a root on a revolute or prismatic
-    // joint (a robot on a rail or a hinge to the world) keeps its joint.
-    let root_fixed = robot.links[root].joint.kind == JointType::Fixed;
-    if floating && root_fixed {
+    if floating && root_kind == JointType::Fixed {
         robot.links[root].joint.kind = JointType::Free;
     } else if !floating && root_free {
         fix_free_root(robot, root);
     }
-    // Pose.
-    for (joint, value) in &opts.pose {
+    (floating, base)
+}
+
+/// `--pose`: initial coordinates of named revolute/prismatic joints.
+fn apply_pose(
+    robot: &mut RobotSpec,
+    file: &Path,
+    pose: &BTreeMap<String, f64>,
+) -> Result<(), ImportError> {
+    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+        path: file.to_path_buf(),
+        element,
+        msg,
+    };
+    for (joint, value) in pose {
         let Some(link) = robot
             .links
             .iter()
@@ -195,115 +250,95 @@ pub fn make_ready(
             },
         );
     }
+    Ok(())
+}
 
-    // The scene as it stands, for geometry and gains.
-    let load = |spec: &SceneSpec| {
-        Scene::from_spec(spec.clone(), file).map_err(|e| ImportError::Invalid {
-            path: file.to_path_buf(),
-            msg: e.to_string(),
-        })
-    };
-    let mut report = ReadyReport {
-        base,
-        excluded_pairs: Vec::new(),
-        ground_lift: None,
-        gains: BTreeMap::new(),
-    };
-    let contact = ContactSpec {
-        mu: opts.mu.unwrap_or(0.5),
-        ..ContactSpec::default()
-    };
-    let range = ContactParams::with_width(contact.s).support_distance();
-    let plain = load(scene)?;
-    let model = &plain.model;
-    let mut hulls = WorldHulls::new(model);
-    let poses = crate::sim::SimState::new(
-        model,
-        plain.q0.clone(),
-        &plain.qdot0,
-        plain.charts.clone(),
-        plain.settings.dt,
-    )
-    .poses;
-    hulls.update(model, &poses);
-
-    if opts.contact {
-        let mut close = BTreeSet::new();
-        let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
-        for a in 0..hulls.ids.len() {
-            for b in a + 1..hulls.ids.len() {
-                let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-                if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
-                    continue;
-                }
-                let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
-                    Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
-                    _ => true,
-                };
-                if near {
-                    close.insert((la.min(lb), la.max(lb)));
-                }
+/// Link pairs (`robot/link` names) whose hulls intersect or lie within
+/// `1.5 × range` of each other in the initial pose.
+fn rest_pose_exclusions(
+    model: &crate::model::Model,
+    hulls: &WorldHulls,
+    range: f64,
+) -> Vec<[String; 2]> {
+    let mut close = BTreeSet::new();
+    let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
+    for a in 0..hulls.ids.len() {
+        for b in a + 1..hulls.ids.len() {
+            let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+            if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
+                continue;
             }
-        }
-        let mut exclude = Vec::new();
-        for (la, lb) in close {
-            let name = |l: usize| {
-                let link = &model.links[l];
-                format!("{}/{}", model.robots[link.robot].name, link.name)
+            let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
+                Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
+                _ => true,
             };
-            exclude.push([name(la), name(lb)]);
-        }
-        report.excluded_pairs = exclude.clone();
-        // Exclusions the input gave (MJCF's contact filter) stay.
-        let mut all = scene
-            .contact
-            .as_ref()
-            .map(|c| c.exclude.clone())
-            .unwrap_or_default();
-        for e in exclude {
-            if !all.contains(&e) {
-                all.push(e);
+            if near {
+                close.insert((la.min(lb), la.max(lb)));
             }
         }
-        scene.contact = Some(ContactSpec {
-            exclude: all,
-            ..contact
-        });
     }
-    if opts.ground {
-        let min_z = (0..hulls.ids.len())
-            .flat_map(|h| hulls.hull(h).iter().map(|x| x.z))
-            .fold(f64::INFINITY, f64::min);
-        let lift = range - min_z;
-        scene.robots[0].base.xyz[2] += lift;
-        scene.ground = Some(serde_yaml::from_str::<GroundSpec>("height: 0").expect("static"));
-        report.ground_lift = Some(lift);
-    }
-    if opts.hold {
-        report.gains = hold_gains(scene, file, floating, &load)?;
-        let robot = &mut scene.robots[0];
-        for (joint, [kp, kd]) in &report.gains {
-            let q = robot
-                .initial
-                .get(joint)
-                .and_then(|i| i.q.first())
-                .copied()
-                .unwrap_or(0.0);
-            robot.controller.gains.insert(
-                joint.clone(),
-                Gains {
-                    kp: Some(*kp),
-                    kd: Some(*kd),
-                },
-            );
-            robot.controller.targets.insert(
-                joint.clone(),
-                SignalList::One(Signal::Constant { value: q }),
-            );
+    let name = |l: usize| {
+        let link = &model.links[l];
+        format!("{}/{}", model.robots[link.robot].name, link.name)
+    };
+    close
+        .into_iter()
+        .map(|(la, lb)| [name(la), name(lb)])
+        .collect()
+}
+
+/// Turns contact on with `exclude` added to the exclusions the input gave
+/// (MJCF's contact filter).
+fn add_contact(scene: &mut SceneSpec, exclude: &[[String; 2]], contact: ContactSpec) {
+    let mut all = scene
+        .contact
+        .as_ref()
+        .map(|c| c.exclude.clone())
+        .unwrap_or_default();
+    for e in exclude {
+        if !all.contains(e) {
+            all.push(e.clone());
         }
     }
-    load(scene)?;
-    Ok(report)
+    scene.contact = Some(ContactSpec {
+        exclude: all,
+        ..contact
+    });
+}
+
+/// Adds the plane z = 0 and lifts the base so that the lowest hull vertex
+/// is at `range` (the barrier's edge); returns the lift (m).
+fn place_on_ground(scene: &mut SceneSpec, hulls: &WorldHulls, range: f64) -> f64 {
+    let min_z = (0..hulls.ids.len())
+        .flat_map(|h| hulls.hull(h).iter().map(|x| x.z))
+        .fold(f64::INFINITY, f64::min);
+    let lift = range - min_z;
+    scene.robots[0].base.xyz[2] += lift;
+    scene.ground = Some(serde_yaml::from_str::<GroundSpec>("height: 0").expect("static"));
+    lift
+}
+
+/// PD gains and constant targets at the initial coordinate (default 0).
+fn hold_initial_pose(robot: &mut RobotSpec, gains: &BTreeMap<String, [f64; 2]>) {
+    for (joint, [kp, kd]) in gains {
+        let q = robot
+            .initial
+            .get(joint)
+            .and_then(|i| i.q.first())
+            .copied()
+            .unwrap_or(0.0);
+        robot.controller.gains.insert(
+            joint.clone(),
+            Gains {
+                kp: Some(*kp),
+                kd: Some(*kd),
+            },
+        );
+        robot.controller.targets.insert(
+            joint.clone(),
+            SignalList::One(Signal::Constant { value: q }),
+        );
+    }
 }
 
 /// Welds a free root where it stands: its initial pose `θ = [p, φ]`
