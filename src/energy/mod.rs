@@ -231,6 +231,7 @@ pub trait Energy: Send + Sync {
     /// [`KinOrder::Pose`](crate::kinematics::KinOrder), with `charts`: the
     /// step's kinematics at `θ^t` when `q = θ^t`). Adds nothing to the
     /// objective. Default `α` (no check).
+    // Arguments kept separate: trait method mirroring `ccd::certify`'s inputs (the step's state at the line-search trial); a term uses a few of them.
     #[allow(clippy::too_many_arguments)]
     fn certify_step(
         &mut self,

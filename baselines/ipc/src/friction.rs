@@ -160,6 +160,7 @@ pub fn lag_piece(
 /// world vertices `world` (step-`t` ones in `world_prev`), `ε = ε_v Δt`;
 /// with `derivs`, adds `∂D/∂A_a`, `∂D/∂A_b` into `grad` and, when given, the
 /// 24×24 pose-space Hessian into `hess`. Returns the value (J).
+// Arguments kept separate: one pair's stencils, meshes, previous/current vertices and the two outputs, in the friction term's inner loop.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_pair_friction<'c>(
     contacts: impl Iterator<Item = (&'c StencilIds, &'c FrictionStencil)>,
