@@ -9,6 +9,7 @@ use super::source::SourceRobot;
 use super::{
     ImportError, ImportOptions, ImportedLink, LinkGeometry, decompose, grid, mass, report,
 };
+use crate::energy::effects::{EffectKind, EffectSpec};
 use crate::scene::schema::*;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -305,14 +306,47 @@ pub(super) fn extension_notes(attachments: &[report::AttachmentReport], notes: &
     }
 }
 
+/// URDF `<dynamics damping friction>` as `joint_damping`/`joint_friction`
+/// effects on the scene joint of the same name (revolute or prismatic);
+/// a report line when the input joint was merged into a ball joint.
+pub(super) fn dynamics_effects(src: &SourceRobot, notes: &mut Vec<String>) -> Vec<EffectSpec> {
+    let mut out = Vec::new();
+    for l in &src.links {
+        let one = matches!(l.joint.kind, JointType::Revolute | JointType::Prismatic);
+        for j in &l.joint.input_joints {
+            for (kind, v, what) in [
+                (EffectKind::JointDamping, j.damping, "damping"),
+                (EffectKind::JointFriction, j.friction, "friction"),
+            ] {
+                let Some(v) = v else { continue };
+                if one && j.name == l.joint.name {
+                    out.push(EffectSpec {
+                        effect: kind,
+                        on: j.name.clone(),
+                        values: vec![v],
+                        eps: None,
+                    });
+                } else {
+                    notes.push(format!(
+                        "joint \"{}\": <dynamics {what}=\"{v}\"> left out (the joint is part of scene joint \"{}\", which takes no per-axis {what})",
+                        j.name, l.joint.name
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The design scene: one robot at the origin, its initial coordinates and
-/// design section, the default gravity, no ground or contact.
+/// design section, the default gravity, no ground or contact, `effects`.
 pub(super) fn design_scene(
     src: &SourceRobot,
     opts: &ImportOptions,
     links: Vec<LinkSpec>,
     ties: Vec<Vec<VertexRef>>,
     attachments: Vec<AttachmentTie>,
+    effects: Vec<EffectSpec>,
 ) -> SceneSpec {
     let robot = RobotSpec {
         name: src.name.clone(),
@@ -351,6 +385,6 @@ pub(super) fn design_scene(
         ground: None,
         obstacles: Vec::new(),
         contact: None,
-        effects: Vec::new(),
+        effects,
     }
 }

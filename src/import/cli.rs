@@ -61,13 +61,17 @@ pub struct ImportArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Base: `auto` floats the robot unless its root link is massless or
-    /// `world` (pybullet's convention for a static base).
+    /// Base: `auto` floats the robot unless the input's root is static (massless or `world`
+    /// URDF root, MJCF body without a free joint) or one chain hangs from it (an arm).
     #[arg(long, value_enum, default_value_t = BaseMode::Auto)]
     pub base: BaseMode,
-    /// Add a ground plane and place the robot on it.
+    /// Add a ground plane and place the robot on it, whatever the base [default: only
+    /// when the base floats and the input has no ground].
     #[arg(long)]
     pub ground: bool,
+    /// No ground, even under a floating base.
+    #[arg(long, conflicts_with = "ground")]
+    pub no_ground: bool,
     /// Leave contact off (by default it is on, with exclusions for link
     /// pairs that overlap in the initial pose, listed in the report).
     #[arg(long)]
@@ -135,7 +139,7 @@ pub fn run_import(args: &ImportArgs) -> anyhow::Result<()> {
     let mut imported = import(&args.input, &opts)?;
     let ready_opts = ReadyOptions {
         base: args.base,
-        ground: args.ground,
+        ground: (args.ground || args.no_ground).then_some(args.ground),
         contact: !args.no_contact,
         hold: !args.no_hold,
         pose: args.pose.iter().cloned().collect(),

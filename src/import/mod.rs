@@ -446,7 +446,8 @@ fn build(src: SourceRobot, opts: &ImportOptions, t0: Instant) -> Result<Imported
         .map(|r| r.name.clone())
         .collect();
     assemble::extension_notes(&attach.reports, &mut notes);
-    let scene = assemble::design_scene(&src, opts, out.specs, ties, attach.ties);
+    let effects = assemble::dynamics_effects(&src, &mut notes);
+    let scene = assemble::design_scene(&src, opts, out.specs, ties, attach.ties, effects);
     // The design must load as a scene.
     crate::scene::Scene::from_spec(scene.clone(), &src.file).map_err(|e| ImportError::Invalid {
         path: src.file.clone(),

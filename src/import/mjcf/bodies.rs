@@ -275,11 +275,15 @@ fn input_joint(j: &DumpJoint, kind: JointType) -> InputJoint {
         limited,
         velocity: None,
         effort: None,
+        // MJCF joint dynamics become effects here ([`joint_effects`]).
+        damping: None,
+        friction: None,
     }
 }
 
-/// `damping`/`armature`/`frictionloss` → effects on hinge/slide joints
-/// (a report line otherwise); a joint spring → a report line.
+/// `damping`/`armature`/`frictionloss` → effects on hinge/slide joints,
+/// `stiffness` with `springref` → a `joint_spring` effect (a report line
+/// on other joints).
 fn joint_effects(
     j: &DumpJoint,
     one_dof: bool,
@@ -309,10 +313,18 @@ fn joint_effects(
         }
     }
     if j.stiffness > 0.0 {
-        notes.push(format!(
-            "{jel}: joint spring (stiffness {}) left out",
-            j.stiffness
-        ));
+        match j.springref.as_slice() {
+            [r] if one_dof => effects.push(EffectSpec {
+                effect: EffectKind::JointSpring,
+                on: j.name.clone(),
+                values: vec![j.stiffness, *r],
+                eps: None,
+            }),
+            _ => notes.push(format!(
+                "{jel}: joint spring (stiffness {}) left out (only hinge and slide joints take it)",
+                j.stiffness
+            )),
+        }
     }
 }
 

@@ -285,7 +285,8 @@ fn source_joint(path: &Path, j: &urdf_rs::Joint) -> Result<SourceJoint, ImportEr
 }
 
 /// The input joint behind a moving URDF joint: its sampling range, whether
-/// it limits position, `<limit velocity effort>` when positive.
+/// it limits position, `<limit velocity effort>` and `<dynamics damping
+/// friction>` when positive.
 fn input_joint(j: &urdf_rs::Joint) -> InputJoint {
     let (lower, upper) = limits(j);
     let (lo, hi) = (j.limit.lower, j.limit.upper);
@@ -303,6 +304,8 @@ fn input_joint(j: &urdf_rs::Joint) -> InputJoint {
             && lo < hi,
         velocity: positive(j.limit.velocity),
         effort: positive(j.limit.effort),
+        damping: j.dynamics.as_ref().and_then(|d| positive(d.damping)),
+        friction: j.dynamics.as_ref().and_then(|d| positive(d.friction)),
     }
 }
 
