@@ -200,6 +200,10 @@ impl Energy for IpcFriction {
         "ipc_friction"
     }
 
+    fn kind(&self) -> sdrs::energy::TermKind {
+        sdrs::energy::TermKind::Friction
+    }
+
     fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {
         transform(&self.meshes, ctx.poses_prev, &mut self.world_prev);
         let p = &self.params;
