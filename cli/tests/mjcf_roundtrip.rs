@@ -107,7 +107,7 @@ fn contact_free_trajectories_converge_to_mujocos() {
     // (model, initial pose, duration): the single pendulum for 0.5 s, before
     // it reaches its ±90° limit (a soft constraint in MuJoCo, a barrier here).
     for (name, pose, seconds) in [
-        ("inverted_double_pendulum", "hinge=0.1", 1.0),
+        ("inverted_double_pendulum", "hinge=0.1", 1.0f64),
         ("inverted_pendulum", "hinge=0.1", 0.5),
     ] {
         let (scene, xml) =
