@@ -401,14 +401,16 @@ fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
 /// ω = √(k/I). Tolerance chosen before the run: implicit Euler at Δt = 1e-4
 /// loses amplitude as exp(−ω² Δt t / 2), 6e-4 rad at t = 1 s; bound 1.5e-3
 /// rad. A ball joint's spring is listed in the report, and each actuator
-/// gets a report line (kind, gear, gains, range, joint).
+/// gets a report line (kind, gear, gains, range, joint). (`angle="radian"`:
+/// MJCF's default is degrees, and `springref` follows it — the first run
+/// without it read 0.3° = 5.236e-3 rad, as MuJoCo compiles it.)
 #[test]
 fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
     let dir = temp_dir("mjcf-spring");
     let xml = dir.join("spring.xml");
     std::fs::write(
         &xml,
-        r#"<mujoco model="spring"><option gravity="0 0 -9.81"/><worldbody>
+        r#"<mujoco model="spring"><compiler angle="radian"/><option gravity="0 0 -9.81"/><worldbody>
   <body name="rotor" pos="0 0 1">
     <joint name="h" type="hinge" axis="0 0 1" stiffness="4" springref="0.3"/>
     <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>
