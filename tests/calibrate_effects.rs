@@ -186,6 +186,57 @@ fn effect_terms_gradient_and_hessian_match_finite_differences() {
 }
 
 #[test]
+fn joint_spring_gradient_and_hessian_match_finite_differences() {
+    // Stiffness from soft to stiff, rest values on both sides of the
+    // coordinates (0.3, −0.2, 0) and at them (zero spring force).
+    let vs = [0.0, 1e-3, 0.3, -2.0, 5.0];
+    for spec in [
+        "{effect: joint_spring, on: all, values: [2.5, 0.1]}",
+        "{effect: joint_spring, on: elbow, values: [400.0, -0.7]}",
+        "{effect: joint_spring, on: slide, values: [1.0e-3, 0.0]}",
+        "{effect: joint_spring, on: shoulder, values: [30.0, 0.3]}",
+    ] {
+        check_term(spec, "joint_spring", &vs, 1e-6);
+    }
+}
+
+/// The spring's force `−k (θ − r)` (the negated gradient of its energy) at
+/// a known point, independent of the finite differences: the objective
+/// with the spring alone on the elbow minus the objective with no term
+/// (what remains, inertia, is the same in both; no controller).
+#[test]
+fn joint_spring_force_is_hookes_law() {
+    let text =
+        format!("{ARM}\neffects:\n  - {{effect: joint_spring, on: elbow, values: [40.0, 0.25]}}\n");
+    let mut sc = scene(&text);
+    sc.controller.channels.clear();
+    let eval = |keep: bool| {
+        let mut sim = sc.simulator();
+        sim.energies.retain(|e| keep && e.name() == "joint_spring");
+        let q = sim.state.q.clone();
+        sim.objective(&q, Need::Hessian).unwrap()
+    };
+    let (ea, ga, ha) = eval(true);
+    let (eb, gb, hb) = eval(false);
+    let (e, g, h) = (ea - eb, ga - gb, ha - hb);
+    // The elbow starts at −0.2 rad: energy ½·40·0.45², gradient 40·(−0.45).
+    assert!((e - 0.5 * 40.0 * 0.45 * 0.45).abs() < 1e-9, "{e}");
+    assert!((g[1] - 40.0 * (-0.2 - 0.25)).abs() < 1e-9, "{g}");
+    assert!(g[0].abs() < 1e-9 && g[2].abs() < 1e-9, "{g}");
+    let mut h_rest = h.clone();
+    h_rest[(1, 1)] -= 40.0;
+    assert!(h_rest.amax() < 1e-6, "{h}");
+}
+
+#[test]
+fn joint_spring_parameter_gradients_match_finite_differences() {
+    let text = format!(
+        "{ARM}effects:\n  - {{effect: joint_spring, on: all, values: [3.0, 0.1]}}\n  - {{effect: joint_spring, on: elbow, values: [20.0, -0.4]}}\n"
+    );
+    check_trajectory(&text, 40, 1e-5);
+}
+
+#[test]
 fn smoothed_abs_is_exact_near_zero_velocity() {
     use sdrs::energy::effects::coulomb::smooth_abs;
     for eps in [1e-8, 1e-4, 1.0] {

@@ -417,3 +417,121 @@ fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
     assert_eq!(imp.scene.contact.as_ref().unwrap().mu, 0.8);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A MuJoCo joint spring becomes a `joint_spring` effect and moves the
+/// joint as Hooke's law says. A hinge about z (no gravity torque) of
+/// inertia I = 0.1 kg m² with `stiffness` k = 4 N·m/rad and `springref`
+/// r = 0.3 rad, released at rest from θ = 0: θ(t) = r (1 − cos ωt),
+/// ω = √(k/I). Tolerance chosen before the run: implicit Euler at Δt = 1e-4
+/// loses amplitude as exp(−ω² Δt t / 2), 6e-4 rad at t = 1 s; bound 1.5e-3
+/// rad. A ball joint's spring is listed in the report, and each actuator
+/// gets a report line (kind, gear, gains, range, joint). (`angle="radian"`:
+/// MJCF's default is degrees, and `springref` follows it — the first run
+/// without it read 0.3° = 5.236e-3 rad, as MuJoCo compiles it.)
+#[test]
+fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
+    let dir = temp_dir("mjcf-spring");
+    let xml = dir.join("spring.xml");
+    std::fs::write(
+        &xml,
+        r#"<mujoco model="spring"><compiler angle="radian"/><option gravity="0 0 -9.81"/><worldbody>
+  <body name="rotor" pos="0 0 1">
+    <joint name="h" type="hinge" axis="0 0 1" stiffness="4" springref="0.3"/>
+    <inertial pos="0 0 0" mass="1" diaginertia="0.1 0.1 0.1"/>
+    <geom type="box" size="0.1 0.2 0.05" contype="0" conaffinity="0"/>
+    <body name="bob" pos="0.5 0 0">
+      <joint name="b" type="ball" stiffness="2"/>
+      <inertial pos="0 0 0" mass="0.1" diaginertia="0.001 0.001 0.001"/>
+      <geom type="sphere" size="0.05" contype="0" conaffinity="0"/>
+    </body>
+  </body></worldbody>
+  <actuator><motor name="m" joint="h" gear="50" ctrlrange="-1 1"/>
+    <position name="p" joint="h" kp="20" kv="2"/></actuator></mujoco>"#,
+    )
+    .unwrap();
+    let opts = sdrs::import::ImportOptions {
+        dt: 1e-4,
+        steps: 10_000,
+        ..hull_options()
+    };
+    let imp = import(&xml, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let springs: Vec<_> = imp
+        .scene
+        .effects
+        .iter()
+        .filter(|e| e.effect == EffectKind::JointSpring)
+        .map(|e| (e.on.as_str(), e.values.clone()))
+        .collect();
+    assert_eq!(springs, vec![("h", vec![4.0, 0.3])]);
+    let notes = &imp.report.notes;
+    let has = |s: &str| notes.iter().any(|n| n.contains(s));
+    assert!(
+        has("joint \"b\" of body \"bob\": joint spring (stiffness 2) left out"),
+        "{notes:?}"
+    );
+    assert!(
+        has("actuator \"m\" (motor, gear 50, ctrlrange [-1, 1]) on joint \"h\" left out"),
+        "{notes:?}"
+    );
+    assert!(
+        has("actuator \"p\" (position, gear 1, kp 20, kv 2) on joint \"h\" left out"),
+        "{notes:?}"
+    );
+    // Only the hinge moves: weld the ball (its spring is not simulated).
+    let mut spec = imp.scene.clone();
+    for l in &mut spec.robots[0].links {
+        if l.name == "bob" {
+            l.joint.kind = sdrs::scene::schema::JointType::Fixed;
+        }
+    }
+    // The bob adds m d² = 0.1 · 0.25 (and its own 0.001) about the hinge.
+    let inertia = 0.1 + 0.1 * 0.25 + 0.001;
+    let scene = Scene::from_spec(spec, &xml).unwrap();
+    let mut sim = scene.simulator();
+    let (k, r) = (4.0f64, 0.3f64);
+    let w = (k / inertia).sqrt();
+    let mut worst: f64 = 0.0;
+    for step in 1..=10_000 {
+        sim.step().unwrap();
+        let t = step as f64 * 1e-4;
+        worst = worst.max((sim.state.q[0] - r * (1.0 - (w * t).cos())).abs());
+    }
+    eprintln!(
+        "spring hinge: ω = {w:.4} rad/s, worst |θ − r(1 − cos ωt)| over 1 s = {worst:.3e} rad"
+    );
+    assert!(worst < 1.5e-3, "{worst}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--ground` on a robot without colliding hulls is a clear error (it was
+/// a base height of −inf, refused by the scene check with a puzzling
+/// message: gymnasium's swimmer); without `--ground`, a base that does not
+/// float (the swimmer's root is on slide joints) gets no ground.
+#[test]
+fn ground_on_a_robot_without_colliding_hulls_is_a_clear_error() {
+    let xml = gymnasium_mjcf("swimmer.xml");
+    let imp = import(&xml, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
+    let ready = |ground: Option<bool>| {
+        let mut scene = imp.scene.clone();
+        let opts = sdrs::import::ready::ReadyOptions {
+            ground,
+            ..Default::default()
+        };
+        sdrs::import::ready::make_ready(&mut scene, &xml, imp.root_static, &opts)
+            .map(|r| (r, scene))
+    };
+    match ready(Some(true)) {
+        Ok((r, scene)) => {
+            let lift = r.ground_lift.unwrap();
+            assert!(lift.is_finite() && scene.robots[0].base.xyz[2].is_finite());
+        }
+        Err(e) => assert!(
+            e.to_string()
+                .contains("--ground: the robot has no colliding hull"),
+            "{e}"
+        ),
+    }
+    let (r, _) = ready(None).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!r.base.starts_with("floating"), "{}", r.base);
+    assert!(r.ground_lift.is_none());
+}

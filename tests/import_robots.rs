@@ -183,7 +183,15 @@ fn authored_robots_and_objects_write_outputs_that_simulate() {
         assert!(report.is_file());
         let meshes = dir.join(format!("{robot}_{stem}_meshes"));
         let scene = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
-        for l in &scene.model.links {
+        // The robot's links have meshes; the environment (the ground a
+        // floating import now gets by default) has none.
+        let env = sdrs::scene::environment::ENVIRONMENT;
+        for l in scene
+            .model
+            .links
+            .iter()
+            .filter(|l| scene.model.robots[l.robot].name != env)
+        {
             assert!(
                 meshes.join(format!("{}.obj", l.name)).is_file(),
                 "{}",

@@ -17,6 +17,10 @@ the numbers printed here are the model MuJoCo simulates:
 - geoms (world geoms under body -1): type, `size`, `pos`/`quat` in the body
   frame, contype/conaffinity/group, friction; mesh geoms carry the
   compiled mesh's vertices and faces in the geom frame;
+- actuators: name, kind (motor|position|velocity|general, from MuJoCo's
+  gain/bias types and parameters), the joint it drives (null for other
+  transmissions), gear, kp, kv, ctrlrange (null when not limited), for the
+  import notes;
 - `option`: gravity and timestep; `unsupported`: counts of what the
   importer leaves out (tendons, equality constraints, actuators, sites with
   sensors are not needed), for the import notes.
@@ -114,16 +118,41 @@ def main():
                 "faces": np.asarray(m.mesh_face[fa:fa + fn], dtype=int).tolist(),
             }
         geoms.append(geom)
+    actuators = []
+    for a in range(m.nu):
+        gain, bias = int(m.actuator_gaintype[a]), int(m.actuator_biastype[a])
+        gp, bp = m.actuator_gainprm[a], m.actuator_biasprm[a]
+        kind = "general"
+        if int(m.actuator_dyntype[a]) == 0 and gain == 0:
+            if bias == 0:
+                kind = "motor"
+            elif bias == 1 and bp[0] == 0 and bp[1] == -gp[0] and bp[2] <= 0:
+                kind = "position"
+            elif bias == 1 and bp[0] == 0 and bp[1] == 0 and bp[2] == -gp[0]:
+                kind = "velocity"
+        joint = None
+        if int(m.actuator_trntype[a]) == 0:  # mjTRN_JOINT
+            joint = name_of(m, mujoco.mjtObj.mjOBJ_JOINT, int(m.actuator_trnid[a][0]),
+                            f"joint{int(m.actuator_trnid[a][0])}")
+        actuators.append({
+            "name": name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, f"actuator{a}"),
+            "kind": kind,
+            "joint": joint,
+            "gear": float(m.actuator_gear[a][0]),
+            "kp": float(gp[0]) if kind == "position" else None,
+            "kv": float(-bp[2]) + 0.0 if kind == "position" else (float(gp[0]) if kind == "velocity" else None),
+            "ctrlrange": floats(m.actuator_ctrlrange[a]) if m.actuator_ctrllimited[a] else None,
+        })
     out = {
         "file": path,
         "model": m.names[:m.names.index(b"\0")].decode() if m.names else "",
         "option": {"gravity": floats(m.opt.gravity), "timestep": float(m.opt.timestep)},
         "bodies": bodies,
         "geoms": geoms,
+        "actuators": actuators,
         "unsupported": {
             "tendons": int(m.ntendon),
             "equality constraints": int(m.neq),
-            "actuators": int(m.nu),
             "height fields": int(m.nhfield),
         },
     }

@@ -67,13 +67,17 @@ pub struct ImportArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Base: `auto` floats the robot unless its root link is massless or
-    /// `world` (pybullet's convention for a static base).
+    /// Base: `auto` floats the robot unless the input's root is static (massless or `world`
+    /// URDF root, MJCF body without a free joint) or one chain hangs from it (an arm).
     #[arg(long, value_enum, default_value_t = BaseModeArg::Auto)]
     pub base: BaseModeArg,
-    /// Add a ground plane and place the robot on it.
+    /// Add a ground plane and place the robot on it, whatever the base [default: only
+    /// when the base floats and the input has no ground].
     #[arg(long)]
     pub ground: bool,
+    /// No ground, even under a floating base.
+    #[arg(long, conflicts_with = "ground")]
+    pub no_ground: bool,
     /// Leave contact off (by default it is on, with exclusions for link
     /// pairs that overlap in the initial pose, listed in the report).
     #[arg(long)]
@@ -215,7 +219,7 @@ impl ImportArgs {
             force: self.force,
             options,
             base: self.base.into(),
-            ground: self.ground,
+            ground: (self.ground || self.no_ground).then_some(self.ground),
             contact: !self.no_contact,
             hold: !self.no_hold,
             pose: self.pose.clone(),

@@ -57,7 +57,7 @@ pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
 #[pyfunction]
 #[pyo3(signature = (input, out, *, decomposer="vhacd", max_hulls=16, resolution=64,
     threshold=None, designable=None, mass="urdf", density=1000.0, report=None,
-    force=false, bridge=true, ties="shared_vertex", base="auto", ground=false, contact=true,
+    force=false, bridge=true, ties="shared_vertex", base="auto", ground=None, contact=true,
     hold=true, pose=None))]
 // Arguments kept separate: a Python function with keyword arguments mirroring `sdrs import`'s flags (PyO3 maps each argument to a keyword).
 #[allow(clippy::too_many_arguments)]
@@ -77,7 +77,7 @@ fn import_robot(
     bridge: bool,
     ties: &str,
     base: &str,
-    ground: bool,
+    ground: Option<bool>,
     contact: bool,
     hold: bool,
     pose: Option<std::collections::BTreeMap<String, f64>>,

@@ -28,8 +28,10 @@ pub struct ImportJob {
     pub options: ImportOptions,
     /// Base attachment. Default [`BaseMode::Auto`].
     pub base: BaseMode,
-    /// Add a ground plane and place the robot on it. Default false.
-    pub ground: bool,
+    /// Ground plane: `None` adds one (and places the robot on it) when the
+    /// base floats and the input has no ground; `Some(true)` always
+    /// (`--ground`); `Some(false)` never (`--no-ground`). Default `None`.
+    pub ground: Option<bool>,
     /// Turn contact on (with rest-pose exclusions). Default true.
     pub contact: bool,
     /// PD gains holding the initial pose. Default true.
@@ -48,7 +50,7 @@ impl ImportJob {
             force: false,
             options: ImportOptions::default(),
             base: BaseMode::Auto,
-            ground: false,
+            ground: None,
             contact: true,
             hold: true,
             pose: Vec::new(),

@@ -15,6 +15,7 @@
 // Comparisons are written `!(x > 0.0)` on purpose: they reject NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod assemble;
 pub mod collada;
 pub mod connectivity;
 pub mod decompose;
@@ -47,12 +48,11 @@ pub use report::ImportReport;
 
 use crate::progress::Progress;
 use crate::scene::schema::*;
-use connectivity::{DesignHull, attach_point, connect_link, hull_volume};
+use connectivity::DesignHull;
 use mesh::{MeshContext, TriMesh};
 use nalgebra::Vector3;
 use polytope::convex_hull;
 use source::{SourceRobot, SourceShape};
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -448,27 +448,7 @@ fn build(
     t0: Instant,
     progress: &dyn Progress,
 ) -> Result<Imported, ImportError> {
-    if opts.ties == connectivity::Ties::Corners && opts.decomposer != decompose::Decomposer::Grid {
-        return Err(ImportError::Invalid {
-            path: src.file.clone(),
-            msg: format!(
-                "--ties corners ties the coincident corners of grid blocks and needs --decomposer grid (got {})",
-                opts.decomposer.name()
-            ),
-        });
-    }
-    if let Some(d) = &opts.designable {
-        for name in d {
-            if !src.links.iter().any(|l| &l.name == name) {
-                let known: Vec<&str> = src.links.iter().map(|l| l.name.as_str()).collect();
-                return Err(ImportError::InvalidUrdf {
-                    path: src.file.clone(),
-                    element: format!("--designable {name}"),
-                    msg: format!("no such link (links: {})", known.join(", ")),
-                });
-            }
-        }
-    }
+    assemble::check_options(&src, opts)?;
     // 1. Geometry → hulls, link by link.
     let n = src.links.len();
     progress.start(n as u64, "links");
@@ -483,259 +463,39 @@ fn build(
         progress.inc();
     }
     progress.finish();
-
-    // 2. Shared vertices inside each link.
-    let mut conn = Vec::with_capacity(n);
-    for g in geoms.iter_mut() {
-        let grid = opts.decomposer == decompose::Decomposer::Grid;
-        conn.push(match opts.ties {
-            connectivity::Ties::Corners if grid => grid::corner_ties(&g.hulls),
-            connectivity::Ties::SharedVertex if grid => grid::face_ties(&mut g.hulls),
-            _ => connect_link(&mut g.hulls, opts.bridge_gaps),
-        });
-    }
-    // 3. Attachment points.
-    let mut notes_attach = Vec::new();
-    let mut attachments = Vec::new();
-    let mut attach_ties = Vec::new();
-    for (li, l) in src.links.iter().enumerate() {
-        let Some(p) = l.parent else { continue };
-        let xyz = Vector3::from(l.joint.origin.xyz);
-        if src.keep_geometry
-            && !(connectivity::point_inside(&geoms[p].hulls, &xyz)
-                && connectivity::point_inside(&geoms[li].hulls, &Vector3::zeros()))
-        {
-            if !l.frame_only && !src.links[p].frame_only {
-                notes_attach.push(format!(
-                    "joint \"{}\": the attachment point is outside the hulls; not tied in the design (shapes kept as given)",
-                    l.joint.name
-                ));
-            }
-            continue;
-        }
-        let parent_site = attach_point(&mut geoms[p].hulls, xyz);
-        let child_site = attach_point(&mut geoms[li].hulls, Vector3::zeros());
-        attach_ties.push(AttachmentTie {
-            link: l.name.clone(),
-            parent_vertex: VertexRef {
-                link: src.links[p].name.clone(),
-                hull: parent_site.hull,
-                vertex: parent_site.vertex,
-            },
-            child_vertex: VertexRef {
-                link: l.name.clone(),
-                hull: child_site.hull,
-                vertex: child_site.vertex,
-            },
-        });
-        attachments.push(report::AttachmentReport {
-            link: l.name.clone(),
-            joint: l.joint.name.clone(),
-            parent: src.links[p].name.clone(),
-            parent_site,
-            child_site,
-        });
-    }
-    // 4. Ties: shared vertices, grouped when they share a vertex.
-    let mut ties: Vec<Vec<VertexRef>> = Vec::new();
-    for (li, c) in conn.iter().enumerate() {
-        for s in &c.shared {
-            let a = VertexRef {
-                link: src.links[li].name.clone(),
-                hull: s.hulls[0],
-                vertex: s.vertices[0],
-            };
-            let b = VertexRef {
-                link: src.links[li].name.clone(),
-                hull: s.hulls[1],
-                vertex: s.vertices[1],
-            };
-            let hits: Vec<usize> = (0..ties.len())
-                .filter(|&k| ties[k].contains(&a) || ties[k].contains(&b))
-                .collect();
-            let mut group = vec![a, b];
-            for &k in hits.iter().rev() {
-                group.extend(ties.swap_remove(k));
-            }
-            group.sort();
-            group.dedup();
-            ties.push(group);
-        }
-    }
-    ties.sort();
-
+    // 2. Shared vertices inside each link; 3. attachment points; 4. tie groups.
+    let conn = assemble::link_ties(&mut geoms, opts);
+    let attach = assemble::attachments(&src, &mut geoms);
+    let ties = assemble::tie_groups(&src, &conn);
     // 5. Masses, report, scene.
-    let mut link_specs = Vec::with_capacity(n);
-    let mut link_reports = Vec::with_capacity(n);
-    let mut imported_links = Vec::with_capacity(n);
     let mut notes = src.notes.clone();
     notes.extend(geoms.iter().flat_map(|g| g.notes.iter().cloned()));
-    notes.extend(notes_attach);
-    let mut joints = BTreeMap::new();
-    for (li, l) in src.links.iter().enumerate() {
-        let g = &geoms[li];
-        let polys: Vec<_> = g.hulls.iter().map(|h| h.poly.clone()).collect();
-        let uv = report::union_volume(&polys, opts.volume_grid);
-        let hull_vertices_now: Vec<&[Vector3<f64>]> =
-            g.hulls.iter().map(|h| h.vertices.as_slice()).collect();
-        let lm = if l.frame_only {
-            mass::massless_frame()
-        } else {
-            mass::link_mass_model(
-                opts.mass,
-                l.moment.as_ref(),
-                opts.density,
-                &hull_vertices_now,
-            )
-            .map_err(|msg| ImportError::Invalid {
-                path: src.file.clone(),
-                msg: format!("link \"{}\": {msg}", l.name),
-            })?
-        };
-        let (mass, mass_source) = (lm.mass, lm.source);
-        if let Some(why) = &lm.fallback {
-            notes.push(format!(
-                "link \"{}\": {why}: solid hulls at density {} kg/m³ ({:.4} kg)",
-                l.name, opts.density, mass
-            ));
-        }
-        let (mut cov, mut maxd) = (1.0f64, 0.0f64);
-        for (k, s) in g.sources.iter().enumerate() {
-            let (c, d) = report::coverage(s, &polys, opts.coverage_samples, opts.seed + k as u64);
-            cov = cov.min(c);
-            maxd = maxd.max(d);
-        }
-        let max_change = g
-            .hulls
-            .iter()
-            .map(|h| (hull_volume(&h.vertices) - h.initial_volume).abs() / h.initial_volume)
-            .fold(0.0, f64::max);
-        let hull_vertices: Vec<usize> = g.hulls.iter().map(|h| h.vertices.len()).collect();
-        link_reports.push(report::LinkReport {
-            name: l.name.clone(),
-            hulls: g.hulls.len(),
-            vertices: hull_vertices.iter().sum(),
-            hull_vertices,
-            mass,
-            mass_source,
-            mass_model: lm.model_name(),
-            inertial_input: lm.input.clone(),
-            inertial_hulls: lm.hulls.clone(),
-            union_volume: uv,
-            source_volume: g.source_volume,
-            coverage: cov,
-            coverage_error: 1.0 - cov,
-            max_distance: maxd,
-            connectivity: conn[li].clone(),
-            max_hull_volume_change: max_change,
-            decompose_seconds: g.seconds,
-        });
-        if !l.joint.input_joints.is_empty() {
-            joints.insert(l.joint.name.clone(), l.joint.input_joints.clone());
-        }
-        link_specs.push(LinkSpec {
-            name: l.name.clone(),
-            parent: l.parent.map(|p| src.links[p].name.clone()),
-            joint: JointSpec {
-                name: (l.joint.name != l.name).then(|| l.joint.name.clone()),
-                kind: l.joint.kind,
-                axis: l.joint.axis,
-                axes: l.joint.axes,
-                origin: l.joint.origin.clone(),
-                limit: joint_limit(l, src.initial.get(&l.joint.name), &mut notes),
-                mimic: mimic(l, &src, &mut notes),
-            },
-            mass: None,
-            vertex_mass: None,
-            mass_model: Some(lm.spec.clone()),
-            hulls: g
-                .hulls
-                .iter()
-                .map(|h| {
-                    HullSpec::from_vertices(h.vertices.iter().map(|v| [v.x, v.y, v.z]).collect())
-                })
-                .collect(),
-            collide: l.collides,
-            // Filled in by `write::write_outputs` (relative to the design).
-            surface_mesh: None,
-        });
-        imported_links.push(ImportedLink {
-            name: l.name.clone(),
-            hulls: g.hulls.iter().map(|h| h.vertices.clone()).collect(),
-            sources: g.sources.clone(),
-        });
-    }
-    let disconnected: Vec<String> = link_reports
+    notes.extend(attach.notes);
+    let out = assemble::link_outputs(&src, &geoms, &conn, opts, &mut notes)?;
+    let disconnected: Vec<String> = out
+        .reports
         .iter()
         .filter(|r| r.connectivity.components > 1)
         .map(|r| r.name.clone())
         .collect();
-    for a in &attachments {
-        for (side, s) in [("parent", &a.parent_site), ("child", &a.child_site)] {
-            if s.extended {
-                notes.push(format!(
-                    "joint \"{}\": the attachment point was {:.3e} m outside the {side} link's hulls; hull {} was extended to it",
-                    a.joint, s.distance, s.hull
-                ));
-            }
-        }
-    }
-    let robot = RobotSpec {
-        name: src.name.clone(),
-        base: Origin::default(),
-        links: link_specs,
-        chain: None,
-        controller: ControllerSpec::default(),
-        initial: src
-            .initial
-            .iter()
-            .map(|(j, q)| {
-                (
-                    j.clone(),
-                    InitialSpec {
-                        q: q.clone(),
-                        qdot: Vec::new(),
-                    },
-                )
-            })
-            .collect(),
-        design: Some(DesignSpec {
-            designable: opts.designable.clone(),
-            ties,
-            attachments: attach_ties,
-            bound: None,
-        }),
-    };
-    let scene = SceneSpec {
-        version: 1,
-        dt: opts.dt,
-        steps: opts.steps,
-        gravity: [0.0, 0.0, -9.81],
-        solver: Default::default(),
-        robots: vec![robot],
-        objects: Vec::new(),
-        ground: None,
-        obstacles: Vec::new(),
-        contact: None,
-        effects: Vec::new(),
-    };
+    assemble::extension_notes(&attach.reports, &mut notes);
+    let effects = assemble::dynamics_effects(&src, &mut notes);
+    let scene = assemble::design_scene(&src, opts, out.specs, ties, attach.ties, effects);
     // The design must load as a scene.
     crate::scene::Scene::from_spec(scene.clone(), &src.file).map_err(|e| ImportError::Invalid {
         path: src.file.clone(),
         msg: e.to_string(),
     })?;
-    let total_hulls = link_reports.iter().map(|r| r.hulls).sum();
-    let total_vertices = link_reports.iter().map(|r| r.vertices).sum();
     let report = ImportReport {
         input: src.file.display().to_string(),
         robot: src.name.clone(),
         decomposer: opts.decomposer.name().into(),
         ties: opts.ties.name(),
-        links: link_reports,
-        attachments,
-        joints,
-        total_hulls,
-        total_vertices,
+        total_hulls: out.reports.iter().map(|r| r.hulls).sum(),
+        total_vertices: out.reports.iter().map(|r| r.vertices).sum(),
+        links: out.reports,
+        attachments: attach.reports,
+        joints: out.joints,
         disconnected_links: disconnected,
         notes,
         ready: None,
@@ -744,7 +504,7 @@ fn build(
     let root = src.links.iter().find(|l| l.parent.is_none());
     Ok(Imported {
         scene,
-        links: imported_links,
+        links: out.imported,
         report,
         root_static: root.is_some_and(|r| ready::root_is_static(&r.name, r.mass)),
         friction: None,

@@ -3,11 +3,23 @@
 //! for link pairs that overlap in the rest pose, and PD gains that hold the
 //! initial pose under gravity.
 //!
-//! - **Base** ([`BaseMode::Auto`], the default): floating when the input's
-//!   root is a floating joint, or when the root link has a positive mass;
-//!   fixed when the root link is massless or missing an `<inertial>` (the
-//!   convention of pybullet's URDF loader, where a massless base is
-//!   static) or is named `world`. A floating root becomes a `free` joint.
+//! - **Base** ([`BaseMode::Auto`], the default), in this order:
+//!   1. floating when the input's root joint is floating (URDF `floating`,
+//!      MJCF `<freejoint/>` / `<joint type="free">`, a bare mesh);
+//!   2. fixed when the input says the root is static: a URDF root link
+//!      that is massless, lacks an `<inertial>` (pybullet's convention: a
+//!      massless base is static) or is named `world`; an MJCF body without
+//!      a free joint (MuJoCo welds it to the world);
+//!   3. fixed when the robot is a manipulator: exactly one moving joint
+//!      hangs from the root link (through fixed joints), i.e. one chain
+//!      from the base (xArm, KUKA iiwa, a pendulum): the convention of
+//!      MuJoCo's URDF compiler and Pinocchio, where a URDF root is fixed
+//!      unless a free joint is added, and of ROS arms bolted to a table;
+//!   4. floating otherwise (legs, wheels, several chains from the base:
+//!      quadrupeds, humanoids, mobile robots, a single rigid body).
+//!
+//!   A floating root becomes a `free` joint. The choice and its reason are
+//!   in the report (`ready.base`).
 //! - **Pose** (`--pose joint=value,…`): initial coordinates of revolute and
 //!   prismatic joints (rad or m); the PD targets hold this pose.
 //! - **Contact** (on by default): `s = 0.01`, `κ = 1`, `μ = 0.5`; every pair
@@ -15,11 +27,15 @@
 //!   other in the initial pose is excluded (listed in the report): the
 //!   barrier could never start from such a state, and a designed overlap is
 //!   not a collision.
-//! - **Ground** (`--ground`): a plane at height 0; the robot is lifted so
-//!   that its lowest hull vertex starts at the edge of the barrier's range
-//!   `2s/(1−s)`: no contact force yet, and a drop of millimetres to where
-//!   the barrier carries the weight (starting deeper inside the range
-//!   launches robots whose feet have many low vertices).
+//! - **Ground** (by default when the base floats and the input has no
+//!   ground of its own; `--ground` adds it whatever the base, `--no-ground`
+//!   never): a plane at height 0; the robot is lifted so that its lowest
+//!   hull vertex starts at the edge of the barrier's range `2s/(1−s)`
+//!   (the clearance, 0.0202 m at `s = 0.01`): no contact force yet, and a
+//!   drop of millimetres to where the barrier carries the weight (starting
+//!   deeper inside the range launches robots whose feet have many low
+//!   vertices). A robot whose input brings a ground (MJCF planes) stays
+//!   where the input puts it.
 //! - **Gains** per actuated joint `j` (paper convention, restoring force
 //!   `2 k_p (θ* − θ)`, damping `(2 k_d/Δt) θ̇`):
 //!   `k_p,j = max(k_min, T_j / (2 θ_hold))` with `T_j = m_j g r_j` the
@@ -75,8 +91,10 @@ impl std::str::FromStr for BaseMode {
 #[derive(Clone, Debug)]
 pub struct ReadyOptions {
     pub base: BaseMode,
-    /// Add a ground plane and place the robot on it. Default false.
-    pub ground: bool,
+    /// Ground plane, robot placed on it: `None` (default) when the base
+    /// floats and the scene has no ground yet; `Some(true)` always
+    /// (`--ground`); `Some(false)` never (`--no-ground`).
+    pub ground: Option<bool>,
     /// Turn contact on (with rest-pose exclusions). Default true.
     pub contact: bool,
     /// Add PD gains and targets holding the initial pose. Default true.
@@ -92,7 +110,7 @@ impl Default for ReadyOptions {
     fn default() -> Self {
         ReadyOptions {
             base: BaseMode::Auto,
-            ground: false,
+            ground: None,
             contact: true,
             hold: true,
             pose: BTreeMap::new(),
@@ -131,48 +149,115 @@ pub fn make_ready(
     root_static: bool,
     opts: &ReadyOptions,
 ) -> Result<ReadyReport, ImportError> {
-    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
-        path: file.to_path_buf(),
-        element,
-        msg,
+    let (floating, base) = choose_base(&mut scene.robots[0], root_static, opts.base);
+    apply_pose(&mut scene.robots[0], file, &opts.pose)?;
+    // The scene as it stands, for geometry and gains.
+    let load = |spec: &SceneSpec| {
+        Scene::from_spec(spec.clone(), file).map_err(|e| ImportError::Invalid {
+            path: file.to_path_buf(),
+            msg: e.to_string(),
+        })
     };
-    let robot = &mut scene.robots[0];
+    let mut report = ReadyReport {
+        base,
+        excluded_pairs: Vec::new(),
+        ground_lift: None,
+        gains: BTreeMap::new(),
+    };
+    let contact = ContactSpec {
+        mu: opts.mu.unwrap_or(0.5),
+        ..ContactSpec::default()
+    };
+    let range = ContactParams::with_width(contact.s).support_distance();
+    let plain = load(scene)?;
+    let model = &plain.model;
+    let mut hulls = WorldHulls::new(model);
+    let poses = crate::sim::SimState::new(
+        model,
+        plain.q0.clone(),
+        &plain.qdot0,
+        plain.charts.clone(),
+        plain.settings.dt,
+    )
+    .poses;
+    hulls.update(model, &poses);
+    if opts.contact {
+        report.excluded_pairs = rest_pose_exclusions(model, &hulls, range);
+        add_contact(scene, &report.excluded_pairs, contact);
+    }
+    let ground = opts.ground.unwrap_or(floating && scene.ground.is_none());
+    if ground {
+        report.ground_lift = place_on_ground(scene, &hulls, range);
+        if report.ground_lift.is_none() && opts.ground == Some(true) {
+            return Err(ImportError::Invalid {
+                path: file.to_path_buf(),
+                msg: "--ground: the robot has no colliding hull to place on the ground (e.g. MJCF geoms with contype = conaffinity = 0)".into(),
+            });
+        }
+    }
+    if opts.hold {
+        report.gains = hold_gains(scene, file, floating, &load)?;
+        hold_initial_pose(&mut scene.robots[0], &report.gains);
+    }
+    load(scene)?;
+    Ok(report)
+}
+
+/// Whether the base floats, and why (for the report); a fixed root becomes
+/// free or a free root is welded where it stands accordingly. Only a fixed
+/// or free root changes: a root on a revolute or prismatic joint (a robot
+/// on a rail or a hinge to the world) keeps its joint.
+fn choose_base(robot: &mut RobotSpec, root_static: bool, mode: BaseMode) -> (bool, String) {
     let root = robot
         .links
         .iter()
         .position(|l| l.parent.is_none())
         .expect("an imported robot has a root");
-    let root_free = robot.links[root].joint.kind == JointType::Free;
     let root_kind = robot.links[root].joint.kind;
-    let floating = match opts.base {
-        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => false,
+    let root_free = root_kind == JointType::Free;
+    let own_joint = !matches!(root_kind, JointType::Fixed | JointType::Free);
+    let chains = root_chains(robot, root);
+    let floating = match mode {
+        _ if own_joint => false,
         BaseMode::Fixed => false,
         BaseMode::Floating => true,
-        BaseMode::Auto => root_free || !root_static,
+        BaseMode::Auto => root_free || (!root_static && chains != 1),
     };
-    let base = match (opts.base, floating) {
-        _ if !matches!(root_kind, JointType::Fixed | JointType::Free) => {
-            "attached to the world by the root link's own joint"
+    let base = match (mode, floating) {
+        _ if own_joint => "attached to the world by the root link's own joint".to_string(),
+        (BaseMode::Auto, true) if root_free => {
+            "floating (the input's root joint is floating)".to_string()
         }
-        (BaseMode::Auto, true) if root_free => "floating (the input's root joint is floating)",
-        (BaseMode::Auto, true) => "floating (the root link has a mass; --base fixed bolts it down)",
-        (BaseMode::Auto, false) => {
-            "fixed (the root link is massless or `world`; --base floating frees it)"
+        (BaseMode::Auto, true) => format!(
+            "floating ({chains} moving joints hang from the root link, which has a mass: legs, wheels or several chains; --base fixed bolts it down)"
+        ),
+        (BaseMode::Auto, false) if root_static => {
+            "fixed (the input's root is static: a massless or `world` URDF root link, or an MJCF body without a free joint; --base floating frees it)".to_string()
         }
-        (_, true) => "floating (--base floating)",
-        (_, false) => "fixed (--base fixed)",
-    }
-    .to_string();
-    // Only a fixed or free root changes: a root on a revolute or prismatic
-    // joint (a robot on a rail or a hinge to the world) keeps its joint.
-    let root_fixed = robot.links[root].joint.kind == JointType::Fixed;
-    if floating && root_fixed {
+        (BaseMode::Auto, false) => "fixed (one chain hangs from the root link: a manipulator; --base floating frees it)".to_string(),
+        (_, true) => "floating (--base floating)".to_string(),
+        (_, false) => "fixed (--base fixed)".to_string(),
+    };
+    if floating && root_kind == JointType::Fixed {
         robot.links[root].joint.kind = JointType::Free;
     } else if !floating && root_free {
         fix_free_root(robot, root);
     }
-    // Pose.
-    for (joint, value) in &opts.pose {
+    (floating, base)
+}
+
+/// `--pose`: initial coordinates of named revolute/prismatic joints.
+fn apply_pose(
+    robot: &mut RobotSpec,
+    file: &Path,
+    pose: &BTreeMap<String, f64>,
+) -> Result<(), ImportError> {
+    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+        path: file.to_path_buf(),
+        element,
+        msg,
+    };
+    for (joint, value) in pose {
         let Some(link) = robot
             .links
             .iter()
@@ -208,115 +293,136 @@ pub fn make_ready(
             },
         );
     }
+    Ok(())
+}
 
-    // The scene as it stands, for geometry and gains.
-    let load = |spec: &SceneSpec| {
-        Scene::from_spec(spec.clone(), file).map_err(|e| ImportError::Invalid {
-            path: file.to_path_buf(),
-            msg: e.to_string(),
-        })
-    };
-    let mut report = ReadyReport {
-        base,
-        excluded_pairs: Vec::new(),
-        ground_lift: None,
-        gains: BTreeMap::new(),
-    };
-    let contact = ContactSpec {
-        mu: opts.mu.unwrap_or(0.5),
-        ..ContactSpec::default()
-    };
-    let range = ContactParams::with_width(contact.s).support_distance();
-    let plain = load(scene)?;
-    let model = &plain.model;
-    let mut hulls = WorldHulls::new(model);
-    let poses = crate::sim::SimState::new(
-        model,
-        plain.q0.clone(),
-        &plain.qdot0,
-        plain.charts.clone(),
-        plain.settings.dt,
-    )
-    .poses;
-    hulls.update(model, &poses);
-
-    if opts.contact {
-        let mut close = BTreeSet::new();
-        let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
-        for a in 0..hulls.ids.len() {
-            for b in a + 1..hulls.ids.len() {
-                let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-                if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
-                    continue;
-                }
-                let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
-                    Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
-                    _ => true,
-                };
-                if near {
-                    close.insert((la.min(lb), la.max(lb)));
-                }
+/// Link pairs (`robot/link` names) whose hulls intersect or lie within
+/// `1.5 × range` of each other in the initial pose.
+fn rest_pose_exclusions(
+    model: &crate::model::Model,
+    hulls: &WorldHulls,
+    range: f64,
+) -> Vec<[String; 2]> {
+    let mut close = BTreeSet::new();
+    let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
+    for a in 0..hulls.ids.len() {
+        for b in a + 1..hulls.ids.len() {
+            let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+            if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
+                continue;
             }
-        }
-        let mut exclude = Vec::new();
-        for (la, lb) in close {
-            let name = |l: usize| {
-                let link = &model.links[l];
-                format!("{}/{}", model.robots[link.robot].name, link.name)
+            let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
+                Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
+                _ => true,
             };
-            exclude.push([name(la), name(lb)]);
-        }
-        report.excluded_pairs = exclude.clone();
-        // Exclusions the input gave (MJCF's contact filter) stay.
-        let mut all = scene
-            .contact
-            .as_ref()
-            .map(|c| c.exclude.clone())
-            .unwrap_or_default();
-        for e in exclude {
-            if !all.contains(&e) {
-                all.push(e);
+            if near {
+                close.insert((la.min(lb), la.max(lb)));
             }
         }
-        scene.contact = Some(ContactSpec {
-            exclude: all,
-            ..contact
-        });
     }
-    if opts.ground {
-        let min_z = (0..hulls.ids.len())
-            .flat_map(|h| hulls.hull(h).iter().map(|x| x.z))
-            .fold(f64::INFINITY, f64::min);
-        let lift = range - min_z;
-        scene.robots[0].base.xyz[2] += lift;
-        scene.ground = Some(serde_yaml::from_str::<GroundSpec>("height: 0").expect("static"));
-        report.ground_lift = Some(lift);
-    }
-    if opts.hold {
-        report.gains = hold_gains(scene, file, floating, &load)?;
-        let robot = &mut scene.robots[0];
-        for (joint, [kp, kd]) in &report.gains {
-            let q = robot
-                .initial
-                .get(joint)
-                .and_then(|i| i.q.first())
-                .copied()
-                .unwrap_or(0.0);
-            robot.controller.gains.insert(
-                joint.clone(),
-                Gains {
-                    kp: Some(*kp),
-                    kd: Some(*kd),
-                },
-            );
-            robot.controller.targets.insert(
-                joint.clone(),
-                SignalList::One(Signal::Constant { value: q }),
-            );
+    let name = |l: usize| {
+        let link = &model.links[l];
+        format!("{}/{}", model.robots[link.robot].name, link.name)
+    };
+    close
+        .into_iter()
+        .map(|(la, lb)| [name(la), name(lb)])
+        .collect()
+}
+
+/// Turns contact on with `exclude` added to the exclusions the input gave
+/// (MJCF's contact filter).
+fn add_contact(scene: &mut SceneSpec, exclude: &[[String; 2]], contact: ContactSpec) {
+    let mut all = scene
+        .contact
+        .as_ref()
+        .map(|c| c.exclude.clone())
+        .unwrap_or_default();
+    for e in exclude {
+        if !all.contains(e) {
+            all.push(e.clone());
         }
     }
-    load(scene)?;
-    Ok(report)
+    scene.contact = Some(ContactSpec {
+        exclude: all,
+        ..contact
+    });
+}
+
+/// Adds the plane z = 0 and lifts the base so that the lowest hull vertex
+/// is at `range` (the barrier's edge); returns the lift (m), or `None`
+/// (and no ground) when the robot has no colliding hull.
+fn place_on_ground(scene: &mut SceneSpec, hulls: &WorldHulls, range: f64) -> Option<f64> {
+    let min_z = (0..hulls.ids.len())
+        .flat_map(|h| hulls.hull(h).iter().map(|x| x.z))
+        .fold(f64::INFINITY, f64::min);
+    if !min_z.is_finite() {
+        return None;
+    }
+    let lift = range - min_z;
+    scene.robots[0].base.xyz[2] += lift;
+    scene.ground = Some(serde_yaml::from_str::<GroundSpec>("height: 0").expect("static"));
+    Some(lift)
+}
+
+/// PD gains and constant targets at the initial coordinate (default 0).
+fn hold_initial_pose(robot: &mut RobotSpec, gains: &BTreeMap<String, [f64; 2]>) {
+    for (joint, [kp, kd]) in gains {
+        let q = robot
+            .initial
+            .get(joint)
+            .and_then(|i| i.q.first())
+            .copied()
+            .unwrap_or(0.0);
+        robot.controller.gains.insert(
+            joint.clone(),
+            Gains {
+                kp: Some(*kp),
+                kd: Some(*kd),
+            },
+        );
+        robot.controller.targets.insert(
+            joint.clone(),
+            SignalList::One(Signal::Constant { value: q }),
+        );
+    }
+}
+
+/// The moving joints that hang from the root link `root` through fixed
+/// joints only: 1 for a manipulator (one chain from the base), 4 for a
+/// quadruped's legs, 0 for a single rigid body.
+pub fn root_chains(robot: &RobotSpec, root: usize) -> usize {
+    let by_name: BTreeMap<&str, usize> = robot
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.name.as_str(), i))
+        .collect();
+    // A link is on the base when every joint from it up to the root is fixed.
+    let on_base = |mut i: usize| loop {
+        if i == root {
+            return true;
+        }
+        let l = &robot.links[i];
+        if l.joint.kind != JointType::Fixed {
+            return false;
+        }
+        match l.parent.as_deref().and_then(|p| by_name.get(p)) {
+            Some(&p) => i = p,
+            None => return false,
+        }
+    };
+    robot
+        .links
+        .iter()
+        .filter(|l| l.joint.kind != JointType::Fixed)
+        .filter(|l| {
+            l.parent
+                .as_deref()
+                .and_then(|p| by_name.get(p))
+                .is_some_and(|&p| on_base(p))
+        })
+        .count()
 }
 
 /// Welds a free root where it stands: its initial pose `θ = [p, φ]`

@@ -89,6 +89,14 @@ pub struct InputJoint {
     /// URDF `<limit effort>` (N·m or N) when positive; reported only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub effort: Option<f64>,
+    /// URDF `<dynamics damping>` (N·m·s/rad or N·s/m) when positive: a
+    /// `joint_damping` effect (see `assemble::dynamics_effects`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// URDF `<dynamics friction>` (N·m or N) when positive: a
+    /// `joint_friction` effect.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
 }
 
 /// One link.

@@ -20,8 +20,9 @@
 //!   link of a scene without `contact:`, get `contype = conaffinity = 0`;
 //!   excluded pairs become `<exclude>`;
 //! - the initial state as keyframe `initial`, limits as `range`, the joint
-//!   effects `joint_damping`, `armature`, `joint_friction` as `damping`,
-//!   `armature`, `frictionloss`; contact `μ` as the geoms' sliding friction.
+//!   effects `joint_damping`, `armature`, `joint_friction`, `joint_spring`
+//!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`;
+//!   contact `μ` as the geoms' sliding friction.
 //!
 //! Not translated (MuJoCo has its own): the SDRS barrier and friction
 //! smoothing, PD controllers, mimic ties, the other calibration effects.
@@ -80,13 +81,16 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
         scene.settings.dt,
         v3(&g)
     );
-    // Joint effects by coordinate.
-    let mut joint_effect = vec![[0.0f64; 3]; model.ndof()];
+    // Joint effects by coordinate: damping, armature, friction, Σk, Σk·r
+    // (springs on one coordinate add up to one spring of stiffness Σk at
+    // rest Σk·r / Σk, the same energy up to a constant).
+    let mut joint_effect = vec![[0.0f64; 5]; model.ndof()];
     for e in &scene.spec.effects {
         let slot = match e.effect {
             EffectKind::JointDamping => 0,
             EffectKind::Armature => 1,
             EffectKind::JointFriction => 2,
+            EffectKind::JointSpring => 3,
             _ => continue,
         };
         for (k, d) in model.dofs.iter().enumerate() {
@@ -97,6 +101,9 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
             let bare = d.name.rsplit_once('/').map(|(_, n)| n).unwrap_or(&d.name);
             if one && (e.on == "all" || e.on == d.name || e.on == bare) {
                 joint_effect[k][slot] += e.values[0];
+                if slot == 3 {
+                    joint_effect[k][4] += e.values[0] * e.values[1];
+                }
             }
         }
     }
@@ -180,7 +187,7 @@ fn write_body(
     i: usize,
     depth: usize,
     mu: f64,
-    joint_effect: &[[f64; 3]],
+    joint_effect: &[[f64; 5]],
     key_qpos: &mut Vec<f64>,
     x: &mut String,
 ) {
@@ -205,7 +212,7 @@ fn write_body(
     );
     let jn = joint_name(scene, i);
     let extras = |k: usize| {
-        let [d, a, fl] = joint_effect[k];
+        let [d, a, fl, sk, skr] = joint_effect[k];
         let mut s = String::new();
         if d > 0.0 {
             let _ = write!(s, " damping=\"{d}\"");
@@ -215,6 +222,9 @@ fn write_body(
         }
         if fl > 0.0 {
             let _ = write!(s, " frictionloss=\"{fl}\"");
+        }
+        if sk > 0.0 {
+            let _ = write!(s, " stiffness=\"{sk}\" springref=\"{}\"", skr / sk);
         }
         s
     };

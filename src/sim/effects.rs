@@ -6,7 +6,7 @@ use super::Simulator;
 use crate::energy::Energy;
 use crate::energy::effects::extra_mass::{ExtraMass, ExtraMassKind};
 use crate::energy::effects::{
-    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, gain,
+    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, gain, spring,
 };
 use nalgebra::Vector3;
 
@@ -30,6 +30,10 @@ pub fn install(effects: &[Effect], sim: &mut Simulator) {
             (Target::Dofs(d), EffectKind::Armature) => Some(Box::new(armature::Armature(
                 JointCoeffs::shared(d, v, e.slot),
             ))),
+            (Target::Dofs(d), EffectKind::JointSpring) => Some(Box::new(spring::JointSpring {
+                coeffs: JointCoeffs::shared(d, v, e.slot),
+                rest: e.values[1],
+            })),
             (Target::Dofs(d), EffectKind::ActuatorGain) => {
                 gain::apply(&mut sim.controller, d, v);
                 None

@@ -37,6 +37,7 @@ pub mod damping;
 pub mod extra_mass;
 pub mod gain;
 pub mod offset;
+pub mod spring;
 
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
@@ -77,6 +78,11 @@ pub enum EffectKind {
     ContactKappa,
     /// Barrier support `s` (m): [`crate::contact::params`].
     ContactS,
+    /// Joint spring: stiffness `k` (N·m/rad) and rest value `r` (rad):
+    /// [`spring`] (MuJoCo's `stiffness`, `springref`). Not a calibration
+    /// candidate (not in [`EffectKind::ALL`]): a model property the import
+    /// writes.
+    JointSpring,
 }
 
 /// What an effect acts on.
@@ -128,9 +134,11 @@ impl EffectKind {
             EffectKind::ContactMu => "contact_mu",
             EffectKind::ContactKappa => "contact_kappa",
             EffectKind::ContactS => "contact_s",
+            EffectKind::JointSpring => "joint_spring",
         }
     }
 
+    /// The calibration candidate of that name (one of [`EffectKind::ALL`]).
     pub fn from_name(s: &str) -> Option<EffectKind> {
         Self::ALL.into_iter().find(|k| k.name() == s)
     }
@@ -150,6 +158,7 @@ impl EffectKind {
     pub fn param_names(self) -> &'static [&'static str] {
         match self {
             EffectKind::Payload => &["mass", "x", "y", "z"],
+            EffectKind::JointSpring => &["stiffness", "springref"],
             _ => &[""],
         }
     }
@@ -165,6 +174,7 @@ impl EffectKind {
             EffectKind::Payload => &["kg", "m", "m", "m"],
             EffectKind::ContactKappa => &["J·m"],
             EffectKind::ContactS => &["m"],
+            EffectKind::JointSpring => &["N·m/rad", "rad"],
         }
     }
 
@@ -181,7 +191,9 @@ impl EffectKind {
                 (EffectKind::ActuatorGain | EffectKind::LinkMassScale, _) => v > 0.0,
                 (EffectKind::ContactKappa, _) => v > 0.0,
                 (EffectKind::ContactS, _) => v > 0.0 && v < 1.0,
-                (EffectKind::JointOffset, _) | (EffectKind::Payload, 1..) => true,
+                (EffectKind::JointOffset, _)
+                | (EffectKind::Payload, 1..)
+                | (EffectKind::JointSpring, 1) => true,
                 _ => v >= 0.0,
             };
         if ok {
@@ -199,7 +211,11 @@ impl EffectKind {
                     | EffectKind::LinkMassScale
                     | EffectKind::ContactKappa => "finite and > 0",
                     EffectKind::ContactS => "in (0, 1)",
-                    EffectKind::JointOffset | EffectKind::Payload if k > 0 => "finite",
+                    EffectKind::JointOffset | EffectKind::Payload | EffectKind::JointSpring
+                        if k > 0 =>
+                    {
+                        "finite"
+                    }
                     _ => "finite and ≥ 0",
                 }
             ))

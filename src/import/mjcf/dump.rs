@@ -16,6 +16,9 @@ pub struct Dump {
     pub option: DumpOption,
     pub bodies: Vec<DumpBody>,
     pub geoms: Vec<DumpGeom>,
+    /// Every actuator (listed in the import notes).
+    #[serde(default)]
+    pub actuators: Vec<DumpActuator>,
     pub unsupported: std::collections::BTreeMap<String, usize>,
 }
 
@@ -63,7 +66,12 @@ pub struct DumpJoint {
     pub armature: f64,
     /// N·m or N.
     pub frictionloss: f64,
+    /// N·m/rad or N/m.
     pub stiffness: f64,
+    /// The spring's rest configuration (`qpos_spring`; hinge/slide: one
+    /// value, rad or m, in `qpos` units).
+    #[serde(default)]
+    pub springref: Vec<f64>,
     /// Reference configuration (`qpos0`): the value at which the body is
     /// in its XML pose (hinge/slide `ref`; free: position + quaternion).
     pub qpos0: Vec<f64>,
@@ -98,6 +106,24 @@ impl DumpGeom {
     pub fn may_collide_with(&self, other: &DumpGeom) -> bool {
         (self.contype & other.conaffinity) | (other.contype & self.conaffinity) != 0
     }
+}
+
+/// An actuator as MuJoCo compiled it.
+#[derive(Clone, Debug, Deserialize)]
+pub struct DumpActuator {
+    pub name: String,
+    /// `motor`, `position`, `velocity` or `general`.
+    pub kind: String,
+    /// The driven joint (joint transmissions only).
+    pub joint: Option<String>,
+    /// First gear component (length = gear · q).
+    pub gear: f64,
+    /// Position gain (N·m per unit control), position actuators.
+    pub kp: Option<f64>,
+    /// Velocity gain, position (with `kv`) and velocity actuators.
+    pub kv: Option<f64>,
+    /// `[lower, upper]` when the control is limited.
+    pub ctrlrange: Option<[f64; 2]>,
 }
 
 /// A compiled mesh in its geom's frame.

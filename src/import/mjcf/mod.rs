@@ -40,9 +40,14 @@
 //!   masks never match, bodies welded together, and parent–child weld groups
 //!   are excluded;
 //! - joint ranges → limits, `damping`/`armature`/`frictionloss` → the
-//!   scene's `joint_damping`/`armature`/`joint_friction` effects, gravity →
-//!   the scene's gravity. Tendons, equality constraints, actuators, joint
-//!   springs and height fields are reported in the notes and left out;
+//!   scene's `joint_damping`/`armature`/`joint_friction` effects,
+//!   `stiffness` with `springref` → a `joint_spring` effect (hinge and
+//!   slide joints; on ball and free joints a report line), gravity → the
+//!   scene's gravity. Every actuator is listed in the notes (kind, gear,
+//!   gains, control range, joint) and left out: the scene has no control
+//!   inputs, and the import's PD gains hold the joints instead; tendons,
+//!   equality constraints and height fields are counted in the notes and
+//!   left out;
 //! - geom sliding friction → the scene's one contact `μ` (MuJoCo's pair
 //!   value `max(μ₁, μ₂)`, largest over the pairs with the floor; other pair
 //!   values are listed in the notes: [`contact_friction`]).
@@ -130,6 +135,31 @@ pub fn contact_friction(d: &dump::Dump, notes: &mut Vec<String>) -> Option<f64> 
     Some(mu)
 }
 
+/// The report line of an actuator: the scene has no control inputs, so it
+/// is listed with what it was and what holds its joint instead.
+fn actuator_note(a: &dump::DumpActuator) -> String {
+    let mut what = format!("{}, gear {}", a.kind, a.gear);
+    if let Some(kp) = a.kp {
+        what.push_str(&format!(", kp {kp}"));
+    }
+    if let Some(kv) = a.kv {
+        what.push_str(&format!(", kv {kv}"));
+    }
+    if let Some([lo, hi]) = a.ctrlrange {
+        what.push_str(&format!(", ctrlrange [{lo}, {hi}]"));
+    }
+    match &a.joint {
+        Some(j) => format!(
+            "actuator \"{}\" ({what}) on joint \"{j}\" left out: the scene has no control inputs; the joint is held by the import's PD gains (report: ready.gains)",
+            a.name
+        ),
+        None => format!(
+            "actuator \"{}\" ({what}) left out: only joint transmissions are read, and the scene has no control inputs",
+            a.name
+        ),
+    }
+}
+
 /// Whether `path` is an MJCF file (its root element is `<mujoco>`).
 pub fn is_mjcf(path: &Path) -> bool {
     let Ok(text) = std::fs::read_to_string(path) else {
@@ -162,6 +192,7 @@ pub fn read_mjcf(
             notes.push(format!("{n} {what} left out (not simulated)"));
         }
     }
+    notes.extend(d.actuators.iter().map(actuator_note));
     let nb = d.bodies.len();
     if nb == 0 {
         return Err(invalid(

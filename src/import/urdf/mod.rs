@@ -29,6 +29,8 @@
 mod frames;
 mod geometry;
 mod prescan;
+mod simplify;
+mod tree;
 
 pub use geometry::resolve_mesh_path;
 
@@ -40,9 +42,8 @@ use super::source::*;
 use crate::scene::schema::{JointType, Origin};
 use frames::*;
 use geometry::*;
-use nalgebra::{Matrix3, Matrix4, Vector3};
+use nalgebra::Vector3;
 use prescan::*;
-use std::collections::HashMap;
 use std::path::Path;
 
 /// Reads a URDF file.
@@ -119,223 +120,71 @@ fn convert(
     special_notes: &mut Vec<String>,
     opts: &ImportOptions,
 ) -> Result<SourceRobot, ImportError> {
-    let invalid = |element: String, msg: String| ImportError::InvalidUrdf {
+    if robot.links.is_empty() {
+        return Err(invalid(
+            path,
+            "robot".into(),
+            "the URDF has no <link>".into(),
+        ));
+    }
+    let tree = tree::tree(path, robot)?;
+    let (tmp, massless) = initial_links(path, robot, &tree, special, special_notes)?;
+    let mut links: simplify::Slots = tmp.into_iter().map(Some).collect();
+    let mut notes = Vec::new();
+    if !massless.is_empty() {
+        notes.push(format!(
+            "links with <mass value=\"0\"> get the mass of their hulls at the default density: {}",
+            massless.join(", ")
+        ));
+    }
+    simplify::drop_bare_root(&mut links, &mut notes);
+    simplify::merge_fixed_bare_links(&mut links, &mut notes);
+    simplify::merge_hinge_pairs(&mut links, &mut notes);
+    simplify::fill_bare_links(&mut links, opts, &mut notes);
+    Ok(SourceRobot {
+        name: sanitize(&robot.name),
+        file: path.to_path_buf(),
+        links: simplify::compact(links),
+        notes,
+        initial: Default::default(),
+        keep_geometry: false,
+    })
+}
+
+fn invalid(path: &Path, element: String, msg: String) -> ImportError {
+    ImportError::InvalidUrdf {
         path: path.to_path_buf(),
         element,
         msg,
-    };
-    if robot.links.is_empty() {
-        return Err(invalid("robot".into(), "the URDF has no <link>".into()));
     }
-    let mut index = HashMap::new();
-    for (i, l) in robot.links.iter().enumerate() {
-        if index.insert(l.name.as_str(), i).is_some() {
-            return Err(invalid(
-                format!("link \"{}\"", l.name),
-                "duplicate link name".into(),
-            ));
-        }
-    }
-    // Parent joint of each link.
-    let mut parent_joint: Vec<Option<usize>> = vec![None; robot.links.len()];
-    let mut joint_names = HashMap::new();
-    for (ji, j) in robot.joints.iter().enumerate() {
-        if joint_names.insert(j.name.as_str(), ji).is_some() {
-            return Err(invalid(
-                format!("joint \"{}\"", j.name),
-                "duplicate joint name".into(),
-            ));
-        }
-        for (role, l) in [("parent", &j.parent.link), ("child", &j.child.link)] {
-            if !index.contains_key(l.as_str()) {
-                return Err(invalid(
-                    format!("joint \"{}\"", j.name),
-                    format!("{role} link \"{l}\" does not exist"),
-                ));
-            }
-        }
-        if matches!(j.joint_type, urdf_rs::JointType::Planar) {
-            return Err(ImportError::UnsupportedJoint {
-                path: path.to_path_buf(),
-                joint: j.name.clone(),
-                kind: type_name(&j.joint_type).into(),
-            });
-        }
-        let c = index[j.child.link.as_str()];
-        if let Some(prev) = parent_joint[c] {
-            return Err(ImportError::KinematicLoop {
-                path: path.to_path_buf(),
-                msg: format!(
-                    "link \"{}\" is the child of two joints, \"{}\" and \"{}\" (URDF describes trees only)",
-                    robot.links[c].name, robot.joints[prev].name, j.name
-                ),
-            });
-        }
-        parent_joint[c] = Some(ji);
-    }
-    // Cycles: follow parents.
-    for start in 0..robot.links.len() {
-        let mut seen = vec![start];
-        let mut cur = start;
-        while let Some(ji) = parent_joint[cur] {
-            let p = index[robot.joints[ji].parent.link.as_str()];
-            if let Some(pos) = seen.iter().position(|&x| x == p) {
-                let names: Vec<String> = seen[pos..]
-                    .iter()
-                    .rev()
-                    .map(|&k| format!("\"{}\"", robot.links[k].name))
-                    .collect();
-                return Err(ImportError::KinematicLoop {
-                    path: path.to_path_buf(),
-                    msg: format!(
-                        "the links {} form a cycle through joint \"{}\"",
-                        names.join(" → "),
-                        robot.joints[ji].name
-                    ),
-                });
-            }
-            seen.push(p);
-            cur = p;
-        }
-    }
-    let roots: Vec<usize> = (0..robot.links.len())
-        .filter(|&i| parent_joint[i].is_none())
-        .collect();
-    if roots.len() != 1 {
-        let names: Vec<&str> = roots
-            .iter()
-            .map(|&i| robot.links[i].name.as_str())
-            .collect();
-        return Err(invalid(
-            "robot".into(),
-            format!(
-                "a URDF needs exactly one root link, found {}: {}",
-                roots.len(),
-                names.join(", ")
-            ),
-        ));
-    }
-    // Children lists, then a depth-first order from the root.
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); robot.links.len()];
-    for (ji, j) in robot.joints.iter().enumerate() {
-        children[index[j.parent.link.as_str()]].push(ji);
-    }
-    let mut order = vec![roots[0]];
-    let mut k = 0;
-    while k < order.len() {
-        for &ji in &children[order[k]] {
-            order.push(index[robot.joints[ji].child.link.as_str()]);
-        }
-        k += 1;
-    }
+}
 
-    // Initial links.
+/// One link per URDF link in the tree's order, with its geometry, joint
+/// and inertial as given; also the names of links with geometry and a
+/// zero `<mass>`.
+fn initial_links(
+    path: &Path,
+    robot: &urdf_rs::Robot,
+    tree: &tree::Tree,
+    special: &SpecialShapes,
+    special_notes: &mut Vec<String>,
+) -> Result<(Vec<SourceLink>, Vec<String>), ImportError> {
     let mut tmp: Vec<SourceLink> = Vec::new();
     let mut massless = Vec::new();
     let mut pos = vec![usize::MAX; robot.links.len()];
-    for &li in &order {
+    for &li in &tree.order {
         let l = &robot.links[li];
         let geometry = link_geometry(path, l, special, special_notes)?;
-        let (parent, joint) = match parent_joint[li] {
-            None => (
-                None,
-                SourceJoint {
-                    name: l.name.clone(),
-                    kind: JointType::Fixed,
-                    axis: None,
-                    axes: None,
-                    origin: Origin::default(),
-                    input_joints: Vec::new(),
-                    mimic: None,
-                },
-            ),
+        let (parent, joint) = match tree.parent_joint[li] {
+            None => (None, root_joint(&l.name)),
             Some(ji) => {
                 let j = &robot.joints[ji];
-                let pi = pos[index[j.parent.link.as_str()]];
-                let origin = origin_of(&j.origin);
-                limits::check_coordinates(
-                    "origin",
-                    &[origin.xyz.as_slice(), origin.rpy.as_slice()].concat(),
-                )
-                .map_err(|m| invalid(format!("joint \"{}\"", j.name), m))?;
-                // The axis matters only for joints that move along or about
-                // it: fixed and floating joints ignore it (URDFs often give
-                // them a zero axis).
-                let moves_on_axis = matches!(
-                    j.joint_type,
-                    urdf_rs::JointType::Revolute
-                        | urdf_rs::JointType::Continuous
-                        | urdf_rs::JointType::Prismatic
-                );
-                let axis = {
-                    let a = Vector3::from(j.axis.xyz.0);
-                    if moves_on_axis && !(a.norm() > 1e-12 && a.iter().all(|c| c.is_finite())) {
-                        return Err(invalid(
-                            format!("joint \"{}\"", j.name),
-                            format!("axis {:?} must be finite and non-zero", j.axis.xyz.0),
-                        ));
-                    }
-                    let a = if moves_on_axis {
-                        a.normalize()
-                    } else {
-                        Vector3::z()
-                    };
-                    [a.x, a.y, a.z]
-                };
-                let (kind, axis) = match j.joint_type {
-                    urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
-                        (JointType::Revolute, Some(axis))
-                    }
-                    urdf_rs::JointType::Prismatic => (JointType::Prismatic, Some(axis)),
-                    urdf_rs::JointType::Fixed => (JointType::Fixed, None),
-                    urdf_rs::JointType::Floating => (JointType::Free, None),
-                    // pybullet's extension: a 3-DOF ball joint (rotation
-                    // vector in a re-centred chart: no gimbal lock).
-                    urdf_rs::JointType::Spherical => (JointType::Spherical, None),
-                    urdf_rs::JointType::Planar => unreachable!("rejected above"),
-                };
-                let (lower, upper) = limits(j);
-                let input_joints = if kind == JointType::Fixed {
-                    Vec::new()
-                } else {
-                    let (lo, hi) = (j.limit.lower, j.limit.upper);
-                    let positive = |v: f64| Some(v).filter(|v| *v > 0.0 && v.is_finite());
-                    vec![InputJoint {
-                        name: j.name.clone(),
-                        kind: type_name(&j.joint_type).into(),
-                        lower,
-                        upper,
-                        limited: matches!(
-                            j.joint_type,
-                            urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic
-                        ) && lo.is_finite()
-                            && hi.is_finite()
-                            && lo < hi,
-                        velocity: positive(j.limit.velocity),
-                        effort: positive(j.limit.effort),
-                    }]
-                };
-                (
-                    Some(pi),
-                    SourceJoint {
-                        name: j.name.clone(),
-                        kind,
-                        axis,
-                        axes: None,
-                        origin,
-                        input_joints,
-                        mimic: j.mimic.as_ref().map(|m| crate::scene::schema::MimicSpec {
-                            joint: m.joint.clone(),
-                            multiplier: m.multiplier,
-                            offset: m.offset,
-                            stiffness: None,
-                        }),
-                    },
-                )
+                let pi = pos[tree.index[j.parent.link.as_str()]];
+                (Some(pi), source_joint(path, j)?)
             }
         };
         limits::check_mass(l.inertial.mass.value)
-            .map_err(|m| invalid(format!("link \"{}\" <inertial>", l.name), m))?;
+            .map_err(|m| invalid(path, format!("link \"{}\" <inertial>", l.name), m))?;
         if l.inertial.mass.value == 0.0 && !geometry.is_empty() {
             massless.push(l.name.clone());
         }
@@ -351,149 +200,113 @@ fn convert(
             collides: true,
         });
     }
-    let mut links: Vec<Option<SourceLink>> = tmp.into_iter().map(Some).collect();
-    let mut notes = Vec::new();
-    if !massless.is_empty() {
-        notes.push(format!(
-            "links with <mass value=\"0\"> get the mass of their hulls at the default density: {}",
-            massless.join(", ")
-        ));
-    }
-    let n = links.len();
+    Ok((tmp, massless))
+}
 
-    // 1. Geometry-less root with children: dropped.
-    if links[0].as_ref().unwrap().geometry.is_empty() && !children_of_raw(&links, 0).is_empty() {
-        let root = links[0].take().unwrap();
-        for c in children_of_raw(&links, 0) {
-            links[c].as_mut().unwrap().parent = None;
-        }
-        notes.push(format!(
-            "link \"{}\" has no geometry and is the root: dropped, its child joints attach to the base",
-            root.name
+/// The root's joint: fixed at the world origin, named after the link.
+fn root_joint(name: &str) -> SourceJoint {
+    SourceJoint {
+        name: name.to_string(),
+        kind: JointType::Fixed,
+        axis: None,
+        axes: None,
+        origin: Origin::default(),
+        input_joints: Vec::new(),
+        mimic: None,
+    }
+}
+
+/// The unit axis of a joint that moves along or about it (`z` for fixed
+/// and floating joints, which ignore it: URDFs often give them a zero axis).
+fn joint_axis(path: &Path, j: &urdf_rs::Joint) -> Result<[f64; 3], ImportError> {
+    let moves_on_axis = matches!(
+        j.joint_type,
+        urdf_rs::JointType::Revolute
+            | urdf_rs::JointType::Continuous
+            | urdf_rs::JointType::Prismatic
+    );
+    let a = Vector3::from(j.axis.xyz.0);
+    if moves_on_axis && !(a.norm() > 1e-12 && a.iter().all(|c| c.is_finite())) {
+        return Err(invalid(
+            path,
+            format!("joint \"{}\"", j.name),
+            format!("axis {:?} must be finite and non-zero", j.axis.xyz.0),
         ));
     }
-    // 2. Geometry-less links on fixed joints: merged into their parents.
-    for i in 0..n {
-        let Some(l) = links[i].as_ref() else { continue };
-        if !l.geometry.is_empty() || l.joint.kind != JointType::Fixed {
-            continue;
+    let a = if moves_on_axis {
+        a.normalize()
+    } else {
+        Vector3::z()
+    };
+    Ok([a.x, a.y, a.z])
+}
+
+/// A URDF joint as a source joint (origin checked, axis normalised, type
+/// mapped, limits and mimic kept).
+fn source_joint(path: &Path, j: &urdf_rs::Joint) -> Result<SourceJoint, ImportError> {
+    let origin = origin_of(&j.origin);
+    limits::check_coordinates(
+        "origin",
+        &[origin.xyz.as_slice(), origin.rpy.as_slice()].concat(),
+    )
+    .map_err(|m| invalid(path, format!("joint \"{}\"", j.name), m))?;
+    let axis = joint_axis(path, j)?;
+    let (kind, axis) = match j.joint_type {
+        urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+            (JointType::Revolute, Some(axis))
         }
-        let Some(p) = l.parent else { continue };
-        let l = links[i].take().unwrap();
-        if let Some(m) = l.mass {
-            let pl = links[p].as_mut().unwrap();
-            pl.mass = Some(pl.mass.unwrap_or(0.0) + m);
-        }
-        if let Some(m) = l.moment {
-            let (r, t) = rt(&l.joint.origin);
-            let pl = links[p].as_mut().unwrap();
-            pl.moment = Some(pl.moment.unwrap_or_else(Matrix4::zeros) + moved_moment(&m, &r, &t));
-        }
-        for c in children_of_raw(&links, i) {
-            let cl = links[c].as_mut().unwrap();
-            cl.parent = Some(p);
-            cl.joint.origin = compose_origin(&l.joint.origin, &cl.joint.origin);
-        }
-        notes.push(format!(
-            "link \"{}\" has no geometry and a fixed joint: merged into \"{}\"",
-            l.name,
-            links[p].as_ref().unwrap().name
-        ));
-    }
-    // 3. Revolute pairs through a geometry-less link: one ball joint.
-    for i in 0..n {
-        let Some(m) = links[i].as_ref() else { continue };
-        if !m.geometry.is_empty() || m.joint.kind != JointType::Revolute {
-            continue;
-        }
-        let kids = children_of_raw(&links, i);
-        if kids.len() != 1 {
-            continue;
-        }
-        let c = kids[0];
-        let cl = links[c].as_ref().unwrap();
-        let zero = cl
-            .joint
-            .origin
-            .xyz
-            .iter()
-            .chain(&cl.joint.origin.rpy)
-            .all(|v| v.abs() < 1e-12);
-        let (a1, a2) = (m.joint.axis.unwrap(), cl.joint.axis.unwrap_or([0.0; 3]));
-        let dot: f64 = a1.iter().zip(&a2).map(|(x, y)| x * y).sum();
-        if cl.joint.kind != JointType::Revolute || !zero || dot.abs() > 1e-9 {
-            continue;
-        }
-        let m = links[i].take().unwrap();
-        let cl = links[c].as_mut().unwrap();
-        let mut inputs = m.joint.input_joints.clone();
-        inputs.append(&mut cl.joint.input_joints);
-        cl.joint = SourceJoint {
-            name: format!("{}+{}", m.joint.name, cl.joint.name),
-            kind: JointType::Ball,
-            axis: None,
-            axes: Some([a1, a2]),
-            origin: m.joint.origin.clone(),
-            input_joints: inputs,
-            mimic: None,
-        };
-        cl.parent = m.parent;
-        if let Some(mm) = m.mass {
-            cl.mass = Some(cl.mass.unwrap_or(0.0) + mm);
-        }
-        // The hinge link's frame is the child's at zero second-hinge angle;
-        // its inertial is added there (it then turns with the second hinge
-        // too: exact for mass and a COM on that hinge's axis).
-        if let Some(mm) = m.moment {
-            cl.moment = Some(cl.moment.unwrap_or_else(Matrix4::zeros) + mm);
-        }
-        notes.push(format!(
-            "link \"{}\" has no geometry between two orthogonal hinges: joints merged into ball joint \"{}\"",
-            m.name, cl.joint.name
-        ));
-    }
-    // 4. Remaining geometry-less links: a tiny cube.
-    for l in links.iter_mut().flatten() {
-        if l.geometry.is_empty() {
-            l.geometry.push(SourceGeometry {
-                element: format!("link \"{}\" (no geometry)", l.name),
-                rotation: Matrix3::identity(),
-                translation: Vector3::zeros(),
-                shape: SourceShape::Tiny {
-                    edge: opts.tiny_hull_size,
-                },
-            });
-            notes.push(format!(
-                "link \"{}\" has no geometry: a {} m cube at its origin stands in",
-                l.name, opts.tiny_hull_size
-            ));
-        }
-    }
-    // Compact, re-indexing parents.
-    let mut new_index = vec![usize::MAX; n];
-    let mut out = Vec::new();
-    for (i, l) in links.into_iter().enumerate() {
-        if let Some(mut l) = l {
-            l.parent = l.parent.map(|p| new_index[p]);
-            debug_assert!(l.parent.is_none_or(|p| p != usize::MAX));
-            new_index[i] = out.len();
-            out.push(l);
-        }
-    }
-    Ok(SourceRobot {
-        name: sanitize(&robot.name),
-        file: path.to_path_buf(),
-        links: out,
-        notes,
-        initial: Default::default(),
-        keep_geometry: false,
+        urdf_rs::JointType::Prismatic => (JointType::Prismatic, Some(axis)),
+        urdf_rs::JointType::Fixed => (JointType::Fixed, None),
+        urdf_rs::JointType::Floating => (JointType::Free, None),
+        // pybullet's extension: a 3-DOF ball joint (rotation
+        // vector in a re-centred chart: no gimbal lock).
+        urdf_rs::JointType::Spherical => (JointType::Spherical, None),
+        urdf_rs::JointType::Planar => unreachable!("rejected by the tree check"),
+    };
+    let input_joints = if kind == JointType::Fixed {
+        Vec::new()
+    } else {
+        vec![input_joint(j)]
+    };
+    Ok(SourceJoint {
+        name: j.name.clone(),
+        kind,
+        axis,
+        axes: None,
+        origin,
+        input_joints,
+        mimic: j.mimic.as_ref().map(|m| crate::scene::schema::MimicSpec {
+            joint: m.joint.clone(),
+            multiplier: m.multiplier,
+            offset: m.offset,
+            stiffness: None,
+        }),
     })
 }
 
-fn children_of_raw(links: &[Option<SourceLink>], p: usize) -> Vec<usize> {
-    (0..links.len())
-        .filter(|&c| links[c].as_ref().is_some_and(|l| l.parent == Some(p)))
-        .collect()
+/// The input joint behind a moving URDF joint: its sampling range, whether
+/// it limits position, `<limit velocity effort>` and `<dynamics damping
+/// friction>` when positive.
+fn input_joint(j: &urdf_rs::Joint) -> InputJoint {
+    let (lower, upper) = limits(j);
+    let (lo, hi) = (j.limit.lower, j.limit.upper);
+    let positive = |v: f64| Some(v).filter(|v| *v > 0.0 && v.is_finite());
+    InputJoint {
+        name: j.name.clone(),
+        kind: type_name(&j.joint_type).into(),
+        lower,
+        upper,
+        limited: matches!(
+            j.joint_type,
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Prismatic
+        ) && lo.is_finite()
+            && hi.is_finite()
+            && lo < hi,
+        velocity: positive(j.limit.velocity),
+        effort: positive(j.limit.effort),
+        damping: j.dynamics.as_ref().and_then(|d| positive(d.damping)),
+        friction: j.dynamics.as_ref().and_then(|d| positive(d.friction)),
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,168 @@
+//! MJCF round trip (issue 32, item 6): `sdrs import model.xml` → `sdrs
+//! export-mjcf` → MuJoCo, compared with the original model in MuJoCo by
+//! `tools/mjcf_roundtrip.py`.
+//!
+//! - Static, four of gymnasium's models (one with a floor and contact,
+//!   half_cheetah, which also has joint springs): every body's mass, centre
+//!   of mass and inertia tensor, every hinge/slide's type, axis, anchor,
+//!   range, damping, armature, frictionloss, stiffness and springref equal
+//!   to 1e-9 relative (a plain copy of compiled numbers: only round-off
+//!   may differ).
+//! - Trajectories, contact-free: the imported scene (`--no-hold
+//!   --no-contact`, released from a tilted pose) simulated by sdrs against
+//!   the original simulated by MuJoCo (RK4, 1e-5 s). SDRS's scheme is first
+//!   order, so the error must shrink with Δt: bounds chosen from that
+//!   before the runs, largest joint difference at Δt = 1e-4 ≤ 0.02 (rad or
+//!   m) and a ratio ≥ 5 between Δt = 1e-3 and 1e-4 (order ≥ 0.7).
+//!   Actuators are not exported (the scene has no control inputs); the
+//!   import lists each one in its report.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use support::{python, root, scratch_dir, sdrs};
+
+fn gymnasium(name: &str) -> PathBuf {
+    let p = root().join(format!(
+        ".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets/{name}.xml"
+    ));
+    assert!(p.is_file(), "{} not found", p.display());
+    p
+}
+
+/// Imports `name` with `args`, exports it; returns (scene, exported model).
+fn import_export(dir: &Path, name: &str, args: &[&str]) -> (PathBuf, PathBuf) {
+    let (scene, xml) = (
+        dir.join(format!("{name}.yaml")),
+        dir.join(format!("{name}.xml")),
+    );
+    support::run_ok(
+        sdrs()
+            .args(["import", "-q", "--decomposer", "hull"])
+            .args(args)
+            .arg("--out")
+            .arg(&scene)
+            .arg(gymnasium(name)),
+    );
+    support::run_ok(
+        sdrs()
+            .args(["export-mjcf"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&xml),
+    );
+    (scene, xml)
+}
+
+/// Runs the comparison; returns its JSON report (asserting it ran).
+fn compare(name: &str, exported: &Path, extra: &[&str]) -> serde_json::Value {
+    let out = python()
+        .arg(root().join("tools/mjcf_roundtrip.py"))
+        .arg(gymnasium(name))
+        .arg(exported)
+        .args(extra)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{name}: {text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn gymnasium_models_round_trip_with_equal_masses_inertias_and_joints() {
+    if support::skip_without_venv() {
+        return;
+    }
+    let dir = scratch_dir("mjcf-roundtrip");
+    for name in [
+        "inverted_pendulum",
+        "inverted_double_pendulum",
+        "reacher",
+        "half_cheetah",
+    ] {
+        let (_, xml) = import_export(&dir, name, &[]);
+        let r = compare(name, &xml, &[]);
+        eprintln!(
+            "{name}: {} bodies, {} joints, errors {}, actuators not exported {}",
+            r["bodies"], r["joints"], r["errors"], r["actuators_not_exported"]
+        );
+        assert!(r["ok"].as_bool().unwrap(), "{name}: {r:#}");
+        assert!(r["bodies"].as_u64().unwrap() > 0 && r["joints"].as_u64().unwrap() > 0);
+    }
+    // The springs made the trip (half_cheetah: six hinges with stiffness).
+    let text = std::fs::read_to_string(dir.join("half_cheetah.xml")).unwrap();
+    assert_eq!(text.matches("stiffness=").count(), 6, "{text}");
+}
+
+#[test]
+fn contact_free_trajectories_converge_to_mujocos() {
+    if support::skip_without_venv() {
+        return;
+    }
+    let dir = scratch_dir("mjcf-roundtrip-traj");
+    // (model, initial pose, duration): the single pendulum for 0.5 s, before
+    // it reaches its ±90° limit (a soft constraint in MuJoCo, a barrier here).
+    for (name, pose, seconds) in [
+        ("inverted_double_pendulum", "hinge=0.1", 1.0f64),
+        ("inverted_pendulum", "hinge=0.1", 0.5),
+    ] {
+        let (scene, xml) =
+            import_export(&dir, name, &["--no-hold", "--no-contact", "--pose", pose]);
+        let text = std::fs::read_to_string(&scene).unwrap();
+        let mut errors = Vec::new();
+        for dt in [1e-3, 1e-4] {
+            let scaled = dir.join(format!("{name}_{dt}.yaml"));
+            let body: String = text
+                .lines()
+                .map(|l| {
+                    if l.starts_with("dt:") {
+                        format!("dt: {dt}\n")
+                    } else {
+                        format!("{l}\n")
+                    }
+                })
+                .collect();
+            std::fs::write(&scaled, body).unwrap();
+            let csv = dir.join(format!("{name}_{dt}.csv"));
+            let steps = (seconds / dt).round() as usize;
+            support::run_ok(
+                sdrs()
+                    .args(["simulate", "-q", "--steps", &steps.to_string(), "--out"])
+                    .arg(&csv)
+                    .arg(&scaled),
+            );
+            let r = compare(
+                name,
+                &xml,
+                &[
+                    "--trajectory",
+                    csv.to_str().unwrap(),
+                    "--qpos",
+                    pose,
+                    "--traj-tol",
+                    "1e9",
+                ],
+            );
+            let worst = r["trajectory"]
+                .as_object()
+                .unwrap()
+                .values()
+                .map(|v| v.as_f64().unwrap())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "{name}: Δt {dt}: largest joint difference to MuJoCo over {seconds} s {worst:.3e} ({})",
+                r["trajectory"]
+            );
+            errors.push(worst);
+        }
+        assert!(errors[1] <= 0.02, "{name}: {errors:?}");
+        assert!(
+            errors[0] >= 5.0 * errors[1],
+            "{name}: not first order: {errors:?}"
+        );
+    }
+}
