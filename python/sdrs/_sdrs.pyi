@@ -171,7 +171,7 @@ def import_robot(
     bridge: bool = True,
     ties: str = "shared_vertex",
     base: str = "auto",
-    ground: bool = False,
+    ground: bool | None = None,
     contact: bool = True,
     hold: bool = True,
     pose: Mapping[str, float] | None = None,
