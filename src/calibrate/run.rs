@@ -24,7 +24,8 @@ pub struct CalibrateArgs {
     pub out: PathBuf,
     /// Candidate effects, comma separated (default: all applicable):
     /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
-    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
+    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s,
+    /// actuation_delay.
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
     /// Fraction of the data (by time, at the end) held out for scoring.
@@ -181,15 +182,15 @@ pub fn calibrate(opts: &CalibrateOptions) -> Result<(CalibrationResult, Files), 
         msg: e.to_string(),
     })?;
     files.push(("calibration.json".into(), json.into_bytes()));
-    files.push((
-        "report.md".into(),
-        report::markdown(
-            &res,
-            &opts.scene.display().to_string(),
-            &opts.measured.display().to_string(),
-        )
-        .into_bytes(),
-    ));
+    let mut md = report::markdown(
+        &res,
+        &opts.scene.display().to_string(),
+        &opts.measured.display().to_string(),
+    );
+    if let Some(r) = &res.residual_regression {
+        md.push_str(&super::residual::markdown(r));
+    }
+    files.push(("report.md".into(), md.into_bytes()));
     let plot_err = |name: &str, msg: String| CalibrateError::Output {
         path: opts.out.join(name),
         msg,

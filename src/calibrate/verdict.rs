@@ -22,14 +22,18 @@
 //!    of its own members fitted alone, the single leaves a held-out gap
 //!    above the floor, the pair explains at least [`SHARE_PAIR`] (half) of
 //!    what it leaves beyond the floor (`X_pair ≤ (1 − SHARE_PAIR) X_single`),
-//!    and has a lower held-out RMS *and* a lower criterion: held-out
-//!    improvement, not the training fit. When no single is eligible, a pair
+//!    and beats the single as the single beat the baseline: held-out RMS at
+//!    least `min_gain` (5 %) lower and criterion more than `min_delta` (10)
+//!    lower — held-out improvement, not the training fit. When no single is eligible, a pair
 //!    satisfying this against both its members and step 2 against the
 //!    baseline is chosen (two effects, neither of which explains the gap
 //!    alone).
 //! 4. **Unexplained**: no eligible candidate and `G > UNEXPLAINED_FACTOR · F`
-//!    (2): a discrepancy clearly beyond the floor that nothing in the
-//!    library explains; the report says where it sits (channels, regimes,
+//!    (2), or the model chosen by steps 2–3 still leaves a held-out gap
+//!    above `UNEXPLAINED_FACTOR · F` (a partial absorption, e.g. a damping
+//!    for a velocity-squared drag: the effect named must bring the gap down
+//!    to the floor): a discrepancy clearly beyond the floor that nothing in
+//!    the library explains; the report says where it sits (channels, regimes,
 //!    windows). Between `F` and `2F` with no eligible candidate: `none`
 //!    ("slightly above the floor; no candidate explains it").
 //!
@@ -92,6 +96,9 @@ pub struct Decision {
     pub verdict: Verdict,
     /// Index into the ranking of the chosen model (`Effect` only).
     pub chosen: Option<usize>,
+    /// The model the rule picked, also when it leaves more than
+    /// `UNEXPLAINED_FACTOR` × the floor and the verdict is `unexplained`.
+    pub best: Option<usize>,
     pub reason: String,
     /// `(candidate label, why)` of every implausible fit.
     pub implausible: Vec<(String, String)>,
@@ -175,14 +182,16 @@ pub fn implausible(pb: &Problem, s: &Scored, inertia: &[f64]) -> Option<String> 
 }
 
 /// Whether the pair `p` explains at least [`SHARE_PAIR`] of what its
-/// member `s` alone leaves beyond the floor `f`, with a lower held-out RMS
-/// and a lower criterion than `s`, and `s` leaves a gap above the floor.
-fn second_effect_pays(s: &Scored, p: &Scored, f: f64) -> bool {
+/// member `s` alone leaves beyond the floor `f`, and beats `s` as a single
+/// must beat the baseline: held-out RMS at least `min_gain` lower and
+/// criterion more than `min_delta` lower (and `s` leaves a gap above the
+/// floor).
+fn second_effect_pays(s: &Scored, p: &Scored, f: f64, opts: &SelectOptions) -> bool {
     let x_s = excess(s.rms_holdout(), f);
     x_s > 0.0
         && excess(p.rms_holdout(), f) <= (1.0 - SHARE_PAIR) * x_s
-        && p.rms_holdout() < s.rms_holdout()
-        && p.criterion < s.criterion
+        && p.rms_holdout() <= (1.0 - opts.min_gain) * s.rms_holdout()
+        && s.criterion - p.criterion > opts.min_delta
 }
 
 /// Applies the rule of the module doc to a ranking sorted by criterion.
@@ -199,6 +208,7 @@ pub fn decide(
     let mk = |verdict, chosen, reason: String| Decision {
         verdict,
         chosen,
+        best: chosen,
         reason,
         implausible: bad.clone(),
     };
@@ -224,13 +234,13 @@ pub fn decide(
                 ranking
                     .iter()
                     .find(|s| s.candidate.label == m)
-                    .is_some_and(|s| second_effect_pays(s, p, f))
+                    .is_some_and(|s| second_effect_pays(s, p, f, opts))
             })
     };
     let pair = match single {
         Some(i) => ranking
             .iter()
-            .position(|p| pair_ok(p) && second_effect_pays(&ranking[i], p, f)),
+            .position(|p| pair_ok(p) && second_effect_pays(&ranking[i], p, f, opts)),
         None => ranking.iter().position(|p| pair_ok(p) && beats_base(p)),
     };
     let Some(i) = single.or(pair) else {
@@ -273,13 +283,17 @@ pub fn decide(
         }
     );
     let left = c.rms_holdout() / f;
-    let reason = if left > UNEXPLAINED_FACTOR {
-        format!(
-            "{reason}; a held-out gap of {left:.1}× the floor remains that no candidate set explains"
-        )
-    } else {
-        reason
-    };
+    if left > UNEXPLAINED_FACTOR {
+        let mut d = mk(
+            Verdict::Unexplained,
+            None,
+            format!(
+                "{reason}, but a held-out gap of {left:.1}× the floor remains: the best candidate set is not the missing effect (or not all of it), so none is named"
+            ),
+        );
+        d.best = Some(k);
+        return d;
+    }
     mk(Verdict::Effect, Some(k), reason)
 }
 
