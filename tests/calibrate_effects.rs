@@ -325,7 +325,10 @@ fn signal_acceleration_is_the_derivative_of_the_velocity_target() {
             let h = 1e-6;
             let fd = (s.eval(t + h).1 - s.eval(t - h).1) / (2.0 * h);
             let a = s.accel(t);
-            assert!((fd - a).abs() <= 1e-5 * (1.0 + a.abs()), "{s:?} at {t}: fd {fd} vs {a}");
+            assert!(
+                (fd - a).abs() <= 1e-5 * (1.0 + a.abs()),
+                "{s:?} at {t}: fd {fd} vs {a}"
+            );
         }
     }
 }

@@ -45,12 +45,22 @@ fn regression(hidden: &[&str], seed: u64) -> ResidualRegression {
         split,
     };
     let base = pb.simulate(&[], m.times.len()).unwrap();
-    let r = regress(&scene, &m, &base, m.times[split], &ResidualOptions::default()).unwrap();
+    let r = regress(
+        &scene,
+        &m,
+        &base,
+        m.times[split],
+        &ResidualOptions::default(),
+    )
+    .unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&r).unwrap());
     r
 }
 
-fn joint<'a>(r: &'a ResidualRegression, name: &str) -> &'a sdrs::calibrate::residual::JointRegression {
+fn joint<'a>(
+    r: &'a ResidualRegression,
+    name: &str,
+) -> &'a sdrs::calibrate::residual::JointRegression {
     r.joints.iter().find(|j| j.joint == name).unwrap()
 }
 

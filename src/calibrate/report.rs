@@ -280,16 +280,13 @@ pub fn result(
     let gap_before = gap(&before, pb, base);
     let gap_after = gap(&after, pb, after_scored);
     let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
-    let residual_regression = super::residual::regress(
-        pb.scene,
-        pb.measured,
-        &base.sim,
-        split_time,
-        &Default::default(),
-    );
+    let residual_regression = sel.residual.clone();
     let mut reason = where_it_sits(&sel.decision, &before);
     if sel.decision.verdict == super::verdict::Verdict::Unexplained {
-        if let Some(st) = residual_regression.as_ref().and_then(|r| r.strongest.as_ref()) {
+        if let Some(st) = residual_regression
+            .as_ref()
+            .and_then(|r| r.strongest.as_ref())
+        {
             reason.push_str(&format!(
                 "; the residual force regression's strongest structure is `{st}` (residual_regression)"
             ));
