@@ -2,7 +2,7 @@
 # The full paper-suite comparison (robots/compare/paper.yaml): hull sizes
 # 8…1024, chains of 2…32 links with both contact models, the co-design
 # benchmarks at their full iteration counts. About 110 minutes on a 2-core
-# machine (2026-11-25, notes/paper_suite/);
+# machine (2026-11-25, docs/results/);
 # resumable: run it again with the same output directory after an
 # interruption and finished benchmarks (and the finished methods of a
 # co-design benchmark) are kept. While it runs, or after it stopped,

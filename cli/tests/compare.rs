@@ -416,3 +416,41 @@ fn bad_suite_and_tolerance_files_get_clear_errors() {
         "{e}"
     );
 }
+
+/// The results page `docs/results/` is generated from its `results.json`
+/// (`tools/render_results.sh`), never edited by hand: rendering the stored
+/// results again gives the committed `report.md` byte for byte, and the
+/// rendering writes nothing but the report's own files.
+#[test]
+fn results_page_is_rendered_from_its_results_json() {
+    let page = root().join("docs/results");
+    let out = scratch_dir("compare_render");
+    let render = |results: &Path, to: &Path| {
+        let args = ["compare", "--render", results.to_str().unwrap(), "--out"];
+        sdrs().args(args).arg(to).output().unwrap()
+    };
+    let o = render(&page.join("results.json"), &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let committed = std::fs::read_to_string(page.join("report.md")).unwrap();
+    let rendered = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        committed == rendered,
+        "docs/results/report.md differs from what `sdrs compare --render` makes of docs/results/results.json: run tools/render_results.sh (first differing line: {:?})",
+        committed
+            .lines()
+            .zip(rendered.lines())
+            .find(|(a, b)| a != b)
+    );
+    assert!(!out.join("parts").exists() && !out.join("work").exists());
+    // A file that is not a results.json: a clear error naming it.
+    let bad = out.join("not_results.json");
+    std::fs::write(&bad, "{\"suite\": 3}").unwrap();
+    let o = render(&bad, &out.join("again"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("not_results.json")
+            && err.contains("not a results.json"),
+        "{err}"
+    );
+}

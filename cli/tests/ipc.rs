@@ -26,7 +26,7 @@ fn four_chains_under_ipc(steps: usize) {
         .iter()
         .map(|s| s["stage"].as_str().unwrap())
         .collect();
-    for s in ["ipc_contact", "ipc_broad_phase", "ipc_ccd", "ipc_friction"] {
+    for s in ["ipc_contact", "broad_phase", "ccd", "ipc_friction"] {
         assert!(stages.contains(&s), "stage {s} missing from {stages:?}");
     }
     let r = support::python_fcl_check(&dir);

@@ -44,6 +44,7 @@ pub(crate) fn err(e: impl std::fmt::Display) -> PyErr {
     threshold=None, designable=None, mass="urdf", density=1000.0, report=None,
     force=false, bridge=true, ties="shared_vertex", base="auto", ground=false, contact=true,
     hold=true, pose=None))]
+// Arguments kept separate: a Python function with keyword arguments mirroring `sdrs import`'s flags (PyO3 maps each argument to a keyword).
 #[allow(clippy::too_many_arguments)]
 fn import_robot(
     py: Python<'_>,

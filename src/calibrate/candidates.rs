@@ -31,7 +31,8 @@ pub const MAX_DELAY: f64 = 0.1;
 /// Effective inertia of every coordinate at `θ^0` (see the module doc).
 pub fn effective_inertia(scene: &Scene) -> Vec<f64> {
     let mut sim = scene.simulator();
-    sim.energies.retain(|e| e.name() == "inertia");
+    sim.energies
+        .retain(|e| e.kind() == crate::energy::TermKind::Inertia);
     let dt = scene.settings.dt;
     let q = sim.state.q.clone();
     match sim.objective(&q, Need::Hessian) {

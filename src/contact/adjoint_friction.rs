@@ -233,6 +233,7 @@ fn polish(
 /// `kappa` and barrier width `s`); `xa_next`, `xb_next` are the step-`t+1` world vertices and
 /// `dxa`, `dxb` the direction `δX'`. Errors are those of [`friction_vertices`] (the inner
 /// problem is re-solved here). Cost `O(M)`.
+// Arguments kept separate: the lagged pair's state, its next vertices and their cotangents, per pair in the adjoint's inner loop.
 #[allow(clippy::too_many_arguments)]
 pub fn friction_vjp(
     lag: &LaggedContact,

@@ -326,6 +326,7 @@ impl Ccd {
     /// when given, is the kinematics at `q` as `Kinematics::update(q,
     /// charts, KinOrder::Pose)` computes it (bit for bit; e.g. the step's
     /// kinematics at `θ^t`), reused instead of evaluated again.
+    // Arguments kept separate: the line-search trial's state (q, Δq, α, charts, the reused kinematics), each owned by a different stage of the step.
     #[allow(clippy::too_many_arguments)]
     pub fn certify(
         &mut self,

@@ -1,18 +1,133 @@
-//! Stage timers of the time step (fed into the summary JSON and reports).
-//! Stages partition the step's wall time: no stage's time is counted in
-//! another (enclosing spans hand nested time over with [`StageTimers::transfer`]
-//! or exclude it).
+//! Stage timers of the time step (fed into the summary JSON and reports),
+//! indexed by the typed [`Stage`] (as MuJoCo's `mjtTimer`) and, inside
+//! [`Stage::Terms`], by energy term. The timed stages partition the step's
+//! wall time: no time is counted twice. A term's own sub-stage (the contact
+//! term's broad phase) is carved out of the term's time by the term itself
+//! in its `report` hook ([`StageTimers::carve`]).
 
 use serde::Serialize;
 use std::time::{Duration, Instant};
 
-/// Accumulated wall time per named stage, in the order stages first ran.
-#[derive(Clone, Debug, Default)]
-pub struct StageTimers {
-    stages: Vec<(&'static str, Duration, u64)>,
+/// A stage of the time step. The tree ([`Stage::parent`]):
+///
+/// ```text
+/// Step ─┬─ BeginStep
+///       ├─ Newton ─┬─ Kinematics
+///       │          ├─ Terms ── (one timer per energy term) ── BroadPhase
+///       │          ├─ Assembly
+///       │          ├─ LinearSolve
+///       │          └─ LineSearch ── Ccd
+///       └─ Accept
+/// ```
+///
+/// `Step`, `Newton` and `Terms` are groups (their time is their children's);
+/// the others are timed. Declaration order is the order of the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Stage {
+    /// The whole step (group).
+    Step,
+    /// Targets, lagged data and warm starts of the step (`begin_step` hooks).
+    BeginStep,
+    /// The Newton solve (group).
+    Newton,
+    /// Forward kinematics and its derivatives at each evaluation.
+    Kinematics,
+    /// The energy terms' evaluations (group; one timer per term).
+    Terms,
+    /// Broad phase of contact candidates (inside the contact term's evaluations).
+    BroadPhase,
+    /// Pose-space to joint-space assembly of gradient and Hessian (with the
+    /// accumulator's reset).
+    Assembly,
+    /// The Newton direction (factorization and solve).
+    LinearSolve,
+    /// The line search, less the evaluations it runs (timed in their stages).
+    LineSearch,
+    /// Continuous collision detection of line-search segments.
+    Ccd,
+    /// Accepting `θ^{t+1}`: diagnostics, the terms' reports, state update.
+    Accept,
 }
 
-/// One row of the stage breakdown.
+impl Stage {
+    /// Every stage, in report order.
+    pub const ALL: [Stage; 11] = [
+        Stage::Step,
+        Stage::BeginStep,
+        Stage::Newton,
+        Stage::Kinematics,
+        Stage::Terms,
+        Stage::BroadPhase,
+        Stage::Assembly,
+        Stage::LinearSolve,
+        Stage::LineSearch,
+        Stage::Ccd,
+        Stage::Accept,
+    ];
+
+    /// The name in reports and the summary JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Step => "step",
+            Stage::BeginStep => "begin_step",
+            Stage::Newton => "newton",
+            Stage::Kinematics => "kinematics",
+            Stage::Terms => "terms",
+            Stage::BroadPhase => "broad_phase",
+            Stage::Assembly => "assembly",
+            Stage::LinearSolve => "linear_solve",
+            Stage::LineSearch => "line_search",
+            Stage::Ccd => "ccd",
+            Stage::Accept => "accept",
+        }
+    }
+
+    /// The enclosing stage (`None` for [`Stage::Step`]).
+    pub fn parent(self) -> Option<Stage> {
+        match self {
+            Stage::Step => None,
+            Stage::BeginStep | Stage::Newton | Stage::Accept => Some(Stage::Step),
+            Stage::Kinematics
+            | Stage::Terms
+            | Stage::Assembly
+            | Stage::LinearSolve
+            | Stage::LineSearch => Some(Stage::Newton),
+            Stage::BroadPhase => Some(Stage::Terms),
+            Stage::Ccd => Some(Stage::LineSearch),
+        }
+    }
+
+    /// Groups are not timed themselves: their time is their children's.
+    pub fn is_group(self) -> bool {
+        matches!(self, Stage::Step | Stage::Newton | Stage::Terms)
+    }
+}
+
+/// Accumulated time and calls of one timer.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tally {
+    time: Duration,
+    calls: u64,
+}
+
+impl Tally {
+    fn add(&mut self, d: Duration) {
+        self.time += d;
+        self.calls += 1;
+    }
+}
+
+/// Accumulated wall time per [`Stage`] and per energy term.
+#[derive(Clone, Debug, Default)]
+pub struct StageTimers {
+    stages: [Tally; Stage::ALL.len()],
+    /// Per energy term, by its index in the simulator's term list.
+    terms: Vec<(&'static str, Tally)>,
+    /// The term whose `report` hook runs (see [`StageTimers::carve`]).
+    reporting: Option<usize>,
+}
+
+/// One row of the stage breakdown (a timed stage or an energy term).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct StageTime {
     pub stage: &'static str,
@@ -21,52 +136,109 @@ pub struct StageTime {
 }
 
 impl StageTimers {
-    /// Adds `d` to stage `name`.
-    pub fn add(&mut self, name: &'static str, d: Duration) {
-        // Stage names are string literals: the pointer test almost always
-        // decides without comparing bytes.
-        if let Some(s) = self
-            .stages
-            .iter_mut()
-            .find(|s| std::ptr::eq(s.0, name) || s.0 == name)
-        {
-            s.1 += d;
-            s.2 += 1;
-        } else {
-            self.stages.push((name, d, 1));
-        }
+    /// Adds `d` to the timed stage `stage` (a group stage is a caller bug).
+    pub fn add(&mut self, stage: Stage, d: Duration) {
+        debug_assert!(!stage.is_group(), "{stage:?} is a group stage");
+        self.stages[stage as usize].add(d);
     }
 
-    /// Runs `f`, timing it into stage `name`.
-    pub fn time<T>(&mut self, name: &'static str, f: impl FnOnce() -> T) -> T {
+    /// Runs `f`, timing it into `stage`.
+    pub fn time<T>(&mut self, stage: Stage, f: impl FnOnce() -> T) -> T {
         let t0 = Instant::now();
         let out = f();
-        self.add(name, t0.elapsed());
+        self.add(stage, t0.elapsed());
         out
     }
 
-    /// Moves `d` from stage `from` (which timed an enclosing span) to stage
-    /// `to`, so stages stay a partition of the step's time.
-    pub fn transfer(&mut self, from: &'static str, to: &'static str, d: Duration) {
-        if let Some(s) = self.stages.iter_mut().find(|s| s.0 == from) {
-            s.1 = s.1.saturating_sub(d);
+    /// Adds `d` to energy term number `index` (named `name`) of [`Stage::Terms`].
+    pub fn add_term(&mut self, index: usize, name: &'static str, d: Duration) {
+        if self.terms.len() <= index {
+            self.terms.resize(index + 1, ("", Tally::default()));
         }
-        self.add(to, d);
+        let t = &mut self.terms[index];
+        t.0 = name;
+        t.1.add(d);
     }
 
-    /// The breakdown, in first-run order.
+    /// Marks term `index` as the one whose `report` hook runs (`None` after it).
+    pub fn set_reporting(&mut self, index: Option<usize>) {
+        self.reporting = index;
+    }
+
+    /// Moves `d`, spent in `stage` inside the reporting term's evaluations,
+    /// out of that term's time and into `stage`, so the timers stay a
+    /// partition of the step (called from an `Energy::report` hook).
+    pub fn carve(&mut self, stage: Stage, d: Duration) {
+        if let Some(t) = self.reporting.and_then(|i| self.terms.get_mut(i)) {
+            t.1.time = t.1.time.saturating_sub(d);
+        }
+        self.add(stage, d);
+    }
+
+    /// The breakdown in report order (energy terms in place of
+    /// [`Stage::Terms`], in the simulator's term order); stages that never
+    /// ran are left out.
     pub fn report(&self) -> Vec<StageTime> {
-        self.stages
-            .iter()
-            .map(|(stage, d, calls)| StageTime {
-                stage,
-                seconds: d.as_secs_f64(),
-                calls: *calls,
-            })
-            .collect()
+        let row = |stage: &'static str, t: &Tally| StageTime {
+            stage,
+            seconds: t.time.as_secs_f64(),
+            calls: t.calls,
+        };
+        let mut out = Vec::new();
+        for s in Stage::ALL {
+            if s == Stage::Terms {
+                let ran = self.terms.iter().filter(|t| t.1.calls > 0);
+                out.extend(ran.map(|(name, t)| row(name, t)));
+            } else if !s.is_group() && self.stages[s as usize].calls > 0 {
+                out.push(row(s.name(), &self.stages[s as usize]));
+            }
+        }
+        out
     }
 
     pub fn clear(&mut self) {
-        self.stages.clear();
+        *self = Self::default();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stages_form_one_tree_rooted_at_step() {
+        for s in Stage::ALL {
+            let mut depth = 0;
+            let mut p = s;
+            while let Some(up) = p.parent() {
+                assert!(up.is_group(), "{s:?}: parent {up:?} is not a group");
+                p = up;
+                depth += 1;
+                assert!(depth < Stage::ALL.len());
+            }
+            assert_eq!(p, Stage::Step);
+        }
+    }
+
+    #[test]
+    fn carve_keeps_a_partition_and_report_follows_the_pipeline() {
+        let ms = Duration::from_millis;
+        let mut t = StageTimers::default();
+        t.add(Stage::Accept, ms(1));
+        t.add_term(1, "contact", ms(10));
+        t.add_term(0, "inertia", ms(2));
+        t.add(Stage::Kinematics, ms(3));
+        t.set_reporting(Some(1));
+        t.carve(Stage::BroadPhase, ms(4));
+        t.set_reporting(None);
+        let r = t.report();
+        let names: Vec<_> = r.iter().map(|r| r.stage).collect();
+        assert_eq!(
+            names,
+            ["kinematics", "inertia", "contact", "broad_phase", "accept"]
+        );
+        let total: f64 = r.iter().map(|r| r.seconds).sum();
+        assert!((total - 0.016).abs() < 1e-12);
+        assert!((r[2].seconds - 0.006).abs() < 1e-12);
     }
 }

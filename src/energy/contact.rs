@@ -20,7 +20,7 @@ use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::ContactSettings;
 use crate::contact::ccd::Ccd;
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
-use crate::counters::{StageTimers, StepDiagnostics};
+use crate::counters::{Stage, StageTimers, StepDiagnostics};
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
@@ -84,6 +84,10 @@ impl ContactEnergy {
 impl Energy for ContactEnergy {
     fn name(&self) -> &'static str {
         "contact"
+    }
+
+    fn kind(&self) -> crate::energy::TermKind {
+        crate::energy::TermKind::Contact
     }
 
     fn explain_infeasible(&self, model: &Model) -> Option<String> {
@@ -301,14 +305,10 @@ impl Energy for ContactEnergy {
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut StageTimers) {
         if self.ccd.options.enabled {
             d.ccd.merge(&std::mem::take(&mut self.ccd.stats));
-            timers.add("ccd", std::mem::take(&mut self.ccd_time));
+            timers.add(Stage::Ccd, std::mem::take(&mut self.ccd_time));
         }
         d.contact_pairs = self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
-        timers.transfer(
-            "contact",
-            "broad_phase",
-            std::mem::take(&mut self.broad_time),
-        );
+        timers.carve(Stage::BroadPhase, std::mem::take(&mut self.broad_time));
     }
 }

@@ -84,6 +84,10 @@ impl Energy for FrictionEnergy {
         "friction"
     }
 
+    fn kind(&self) -> crate::energy::TermKind {
+        crate::energy::TermKind::Friction
+    }
+
     fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {
         let model = ctx.model;
         let poses = ctx.poses_prev;

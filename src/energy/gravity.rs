@@ -19,6 +19,10 @@ impl Energy for Gravity {
         "gravity"
     }
 
+    fn kind(&self) -> crate::energy::TermKind {
+        crate::energy::TermKind::Gravity
+    }
+
     fn accumulate(
         &mut self,
         ctx: &StepContext,

@@ -22,6 +22,10 @@ impl Energy for Inertia {
         "inertia"
     }
 
+    fn kind(&self) -> crate::energy::TermKind {
+        crate::energy::TermKind::Inertia
+    }
+
     fn accumulate(
         &mut self,
         ctx: &StepContext,

@@ -151,10 +151,36 @@ impl EnergyAccumulator {
     }
 }
 
+/// What a term of the step objective is, for the step's bookkeeping (the
+/// work balance of [`crate::counters::StepWork`]) and for callers that keep
+/// or drop terms by role (calibration keeps only [`TermKind::Inertia`]).
+/// A term's [`Energy::name`] is for people (errors, timers); its kind is
+/// what code matches on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TermKind {
+    /// Kinetic term `½ Σ ρ ‖X^{t+1} − 2X^t + X^{t−1}‖² / Δt²`.
+    Inertia,
+    /// Gravity's potential.
+    Gravity,
+    /// A controller's energy (the PD term).
+    Controller,
+    /// A contact barrier (ours or the IPC baseline's).
+    Contact,
+    /// A friction potential (ours or the IPC baseline's).
+    Friction,
+    /// Anything else (joint limits, mimic couplings, calibration effects).
+    Other,
+}
+
 /// One term of the step objective.
 pub trait Energy: Send + Sync {
     /// Short name used in errors and stage timers.
     fn name(&self) -> &'static str;
+
+    /// The term's role (see [`TermKind`]); `Other` unless overridden.
+    fn kind(&self) -> TermKind {
+        TermKind::Other
+    }
 
     /// Called once per time step before the Newton solve (lagged quantities,
     /// warm starts).
@@ -231,6 +257,7 @@ pub trait Energy: Send + Sync {
     /// [`KinOrder::Pose`](crate::kinematics::KinOrder), with `charts`: the
     /// step's kinematics at `θ^t` when `q = θ^t`). Adds nothing to the
     /// objective. Default `α` (no check).
+    // Arguments kept separate: trait method mirroring `ccd::certify`'s inputs (the step's state at the line-search trial); a term uses a few of them.
     #[allow(clippy::too_many_arguments)]
     fn certify_step(
         &mut self,

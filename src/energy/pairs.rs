@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 /// and the 24×24 Hessian over `[vec A_a; vec A_b]`. Links without
 /// coordinates (static obstacles) receive nothing. Off-diagonal blocks of
 /// the same link pair are merged through `pair_slots`.
+// Arguments kept separate: hot inner loop of every contact pair: the slices and blocks are borrowed from different owners, so a struct would be rebuilt per pair.
 #[allow(clippy::too_many_arguments)]
 pub fn scatter_pair(
     model: &Model,
@@ -101,6 +102,7 @@ pub fn directional(acc: &EnergyAccumulator, dpose: &[crate::math::Pose]) -> f64 
 /// `scale·Σ_m (∂Φ/∂X_m) x̃_mᵀ` to `pose_out` (`∂Φ/∂A` at fixed `δA`) and
 /// `scale·(Rᵀ ∂Φ/∂X_m + δRᵀ ∂E/∂X_m)` to `vertex_out[m]` (`∂Φ/∂x_local`: through `X_m`
 /// and through `δX_m`), with `R`, `δR` the rotation blocks of `A`, `δA`.
+// Arguments kept separate: hot inner loop: value, tangent and adjoint inputs of one vertex chain, borrowed from different owners per call.
 #[allow(clippy::too_many_arguments)]
 pub fn scatter_vertex_products(
     x_local: &[nalgebra::Vector3<f64>],

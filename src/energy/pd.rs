@@ -23,6 +23,10 @@ impl Energy for PdController {
         "pd"
     }
 
+    fn kind(&self) -> crate::energy::TermKind {
+        crate::energy::TermKind::Controller
+    }
+
     fn accumulate(
         &mut self,
         ctx: &StepContext,

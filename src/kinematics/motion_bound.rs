@@ -138,6 +138,7 @@ impl SegmentMotion {
     ///   (an axis fixed in the parent turns at most at the parent's angular
     ///   speed, `‖R(α) − R(0)‖ ≤ α Ŵ`; `d_i` changes at most at
     ///   `Ŵ_λ ℓ_i + ‖τ̇_i‖`).
+    // Arguments kept separate: the line-search trial's state (poses before/after, charts, radii, q, Δq), each owned by a different stage of the step.
     #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,

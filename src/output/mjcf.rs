@@ -173,6 +173,7 @@ fn scoped(scene: &Scene, i: usize, name: &str) -> String {
     }
 }
 
+// Arguments kept separate: recursive private writer: the scene, the body's index and depth, and the two accumulators it appends to.
 #[allow(clippy::too_many_arguments)]
 fn write_body(
     scene: &Scene,

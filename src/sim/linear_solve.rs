@@ -350,6 +350,7 @@ impl BlockSolver {
     }
 
     /// The parallel path of [`BlockSolver::direction`].
+    // Arguments kept separate: private solver method: the matrix, right-hand side and output plus the clamp settings of one Newton iteration.
     #[allow(clippy::too_many_arguments)]
     fn direction_parallel(
         &mut self,
@@ -586,6 +587,7 @@ impl BlockScratch {
     /// One block `idx`; its direction is left in `rhs[..m]`. Returns
     /// whether it was eigen-decomposed. `last_shift` is the running shift
     /// of [`Mode::Shift`]; counters go to `stats`.
+    // Arguments kept separate: private solver method: one diagonal block's inputs, output and counters; called per block per iteration.
     #[allow(clippy::too_many_arguments)]
     fn solve_block(
         &mut self,

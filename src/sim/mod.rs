@@ -18,14 +18,15 @@ pub mod state;
 pub mod substitution;
 pub mod trajectory;
 
-pub use crate::counters::{StageTime, StageTimers, StepDiagnostics, StepWork};
+pub use crate::counters::{Stage, StageTime, StageTimers, StepDiagnostics, StepWork};
 
-/// Stages of a step, in order, as named in the timers.
 pub use newton::{Indefinite, NewtonError, NewtonOptions, NewtonReport, Predictor};
 pub use state::SimState;
 
 use crate::control::Controller;
-use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, PdTarget, StepContext};
+use crate::energy::{
+    Energy, EnergyAccumulator, EnergyError, Need, PdTarget, StepContext, TermKind,
+};
 use crate::kinematics::{KinOrder, Kinematics};
 use crate::math::Pose;
 use crate::model::Model;
@@ -150,12 +151,12 @@ impl Objective for StepObjective<'_> {
         let mut mark = Instant::now();
         self.kin.update(model, q, self.charts, order);
         let now = Instant::now();
-        timers.add("kinematics", now - mark);
+        timers.add(Stage::Kinematics, now - mark);
         mark = now;
         // Clearing the accumulator is counted with the assembly.
         self.acc.reset(need);
         let now = Instant::now();
-        timers.add("assembly", now - mark);
+        timers.add(Stage::Assembly, now - mark);
         mark = now;
         let track = need >= Need::Gradient && self.work.is_some();
         let mut work = StepWork::default();
@@ -165,9 +166,9 @@ impl Objective for StepObjective<'_> {
         // the value before the next (computed once; the same bits as
         // computing it again).
         let mut before: Option<f64> = None;
-        for e in self.energies.iter_mut() {
-            let name = e.name();
-            let kept = track && !matches!(name, "inertia" | "gravity");
+        for (index, e) in self.energies.iter_mut().enumerate() {
+            let kind = e.kind();
+            let kept = track && !matches!(kind, TermKind::Inertia | TermKind::Gravity);
             if kept && before.is_none() {
                 before = Some(gradient_dot_step(self.acc, self.kin, &self.ctx, q));
             }
@@ -176,17 +177,17 @@ impl Objective for StepObjective<'_> {
                 let after = gradient_dot_step(self.acc, self.kin, &self.ctx, q);
                 let w = before.unwrap_or(0.0) - after;
                 before = Some(after);
-                match name {
-                    "pd" => work.controller += w,
-                    "friction" | "ipc_friction" => work.friction += w,
-                    "contact" | "ipc_contact" => work.contact += w,
-                    _ => work.other += w,
+                match kind {
+                    TermKind::Controller => work.controller += w,
+                    TermKind::Friction => work.friction += w,
+                    TermKind::Contact => work.contact += w,
+                    TermKind::Inertia | TermKind::Gravity | TermKind::Other => work.other += w,
                 }
             } else {
                 before = None;
             }
             let now = Instant::now();
-            timers.add(e.name(), now - mark);
+            timers.add_term(index, e.name(), now - mark);
             mark = now;
             if !self.acc.value.is_finite() {
                 return Ok(self.acc.value);
@@ -197,7 +198,7 @@ impl Objective for StepObjective<'_> {
         }
         if need >= Need::Gradient {
             assemble::assemble_swapping(model, self.kin, self.acc, need, grad, hess, self.assemble);
-            timers.add("assembly", mark.elapsed());
+            timers.add(Stage::Assembly, mark.elapsed());
         }
         Ok(self.acc.value)
     }
@@ -440,7 +441,7 @@ impl Simulator {
         };
         let t0 = Instant::now();
         self.begin_next_step().map_err(|e| fail(e.into()))?;
-        self.timers.add("begin_step", t0.elapsed());
+        self.timers.add(Stage::BeginStep, t0.elapsed());
         let mut q = self.state.q.clone();
         // Continuous collision detection (`contact::ccd`): first an
         // optimistic solve without it, then one check of the straight
@@ -535,9 +536,11 @@ impl Simulator {
         if self.energy_balance {
             diag.work = Some(self.scratch.work);
         }
-        for e in self.energies.iter_mut() {
+        for (i, e) in self.energies.iter_mut().enumerate() {
+            self.timers.set_reporting(Some(i));
             e.report(&mut diag, &mut self.timers);
         }
+        self.timers.set_reporting(None);
         if fallback {
             diag.ccd.fallbacks += 1;
         }
@@ -547,7 +550,7 @@ impl Simulator {
         st.step = step_index;
         st.time = step_index as f64 * self.settings.dt;
         st.recenter_charts(&self.model);
-        self.timers.add("accept", t0.elapsed());
+        self.timers.add(Stage::Accept, t0.elapsed());
         diag
     }
 

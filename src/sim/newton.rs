@@ -32,7 +32,7 @@
 
 use super::linear_solve::{BlockSolver, Mode};
 pub use crate::counters::NewtonReport;
-use crate::counters::StageTimers;
+use crate::counters::{Stage, StageTimers};
 use crate::energy::{EnergyError, Need};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -457,7 +457,7 @@ impl Solve<'_> {
         };
         loop {
             let s = &mut *self.scratch;
-            self.timers.time("linear_solve", || {
+            self.timers.time(Stage::LinearSolve, || {
                 s.linear.direction(
                     &s.hess,
                     &s.grad,
@@ -528,7 +528,7 @@ impl Solve<'_> {
             start = certified.max(0.0);
         };
         self.timers
-            .add("line_search", t0.elapsed().saturating_sub(in_evals));
+            .add(Stage::LineSearch, t0.elapsed().saturating_sub(in_evals));
         Ok(accepted)
     }
 

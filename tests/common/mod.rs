@@ -92,7 +92,8 @@ pub fn skip_without_chromium() -> bool {
     skip_tier2("Chromium (run `bash tools/setup_system.sh`) and .venv")
 }
 
-fn venv_present() -> bool {
+/// Whether `.venv` is there (and not hidden by `SDRS_TEST_PRETEND_NO_VENV=1`).
+pub fn venv_present() -> bool {
     let pretend = std::env::var_os("SDRS_TEST_PRETEND_NO_VENV").is_some_and(|v| v == "1");
     root().join(".venv/bin/python").exists() && !pretend
 }
@@ -117,7 +118,7 @@ fn skip_tier2(what: &str) -> bool {
 pub fn python() -> Command {
     let py = root().join(".venv/bin/python");
     assert!(
-        py.exists(),
+        venv_present(),
         "{} is missing: run `bash tools/setup_python.sh` (tools/test.sh does it)",
         py.display()
     );

@@ -21,7 +21,7 @@ use sdrs::energy::pairs::scatter_pair;
 use sdrs::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use sdrs::kinematics::Kinematics;
 use sdrs::model::Model;
-use sdrs::sim::{StageTimers, StepDiagnostics};
+use sdrs::sim::{Stage, StageTimers, StepDiagnostics};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
@@ -157,6 +157,10 @@ impl IpcContact {
 impl Energy for IpcContact {
     fn name(&self) -> &'static str {
         "ipc_contact"
+    }
+
+    fn kind(&self) -> sdrs::energy::TermKind {
+        sdrs::energy::TermKind::Contact
     }
 
     fn accumulate(
@@ -306,11 +310,7 @@ impl Energy for IpcContact {
     fn report(&mut self, d: &mut StepDiagnostics, timers: &mut StageTimers) {
         d.contact_pairs += self.last_active;
         d.min_distance = d.min_distance.min(self.last_min_distance);
-        timers.transfer(
-            "ipc_contact",
-            "ipc_broad_phase",
-            std::mem::take(&mut self.time_broad),
-        );
-        timers.add("ipc_ccd", std::mem::take(&mut self.time_ccd));
+        timers.carve(Stage::BroadPhase, std::mem::take(&mut self.time_broad));
+        timers.add(Stage::Ccd, std::mem::take(&mut self.time_ccd));
     }
 }

@@ -160,6 +160,7 @@ pub fn lag_piece(
 /// world vertices `world` (step-`t` ones in `world_prev`), `ε = ε_v Δt`;
 /// with `derivs`, adds `∂D/∂A_a`, `∂D/∂A_b` into `grad` and, when given, the
 /// 24×24 pose-space Hessian into `hess`. Returns the value (J).
+// Arguments kept separate: one pair's stencils, meshes, previous/current vertices and the two outputs, in the friction term's inner loop.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_pair_friction<'c>(
     contacts: impl Iterator<Item = (&'c StencilIds, &'c FrictionStencil)>,
@@ -197,6 +198,10 @@ fn transform(meshes: &[LinkMesh], pose: &[sdrs::math::Pose], out: &mut [Vec<Vect
 impl Energy for IpcFriction {
     fn name(&self) -> &'static str {
         "ipc_friction"
+    }
+
+    fn kind(&self) -> sdrs::energy::TermKind {
+        sdrs::energy::TermKind::Friction
     }
 
     fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {

@@ -164,6 +164,7 @@ pub fn chord_deviation((u, a): (f64, f64), h: f64) -> f64 {
 
 /// Largest `α ∈ [0, 1]` such that the surfaces of every link pair stay
 /// disjoint along `θ + α' Δθ` for all `α' ≤ α` (see the module docs).
+// Arguments kept separate: the trial's state (q, Δq, kinematics, charts) plus the mesh set, options and reusable scratch, as the core's `ccd::certify`.
 #[allow(clippy::too_many_arguments)]
 pub fn max_collision_free_step(
     model: &Model,

@@ -161,6 +161,7 @@ pub fn evaluate_pair(
 /// Adds a stencil's gradient `g` and Hessian `h` (12, 12×12 over its four
 /// points) to the pose gradients of links a/b and the 24×24 pose Hessian
 /// (when given), through `X_k = A_{side_k} x̃_k` (see the module docs).
+// Arguments kept separate: chain rule of one stencil: its derivatives, sides and local points in, the two pose gradients and Hessian out.
 #[allow(clippy::too_many_arguments)]
 pub fn chain_to_poses(
     g: &crate::primitive::Vec12,

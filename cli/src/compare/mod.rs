@@ -56,6 +56,39 @@ pub struct CompareArgs {
     /// rest is listed as not finished.
     #[arg(long, conflicts_with = "force")]
     pub report_only: bool,
+    /// Run nothing: write the report (`report.md`, `report.html`, tables,
+    /// plots) into `--out` from this `results.json` of an earlier run. The
+    /// results page `docs/results/` is made this way
+    /// (`tools/render_results.sh`), never edited by hand.
+    #[arg(long, value_name = "RESULTS_JSON", conflicts_with_all = ["force", "report_only", "check"])]
+    pub render: Option<PathBuf>,
+}
+
+/// `--render`: the report of a stored `results.json`, written beside the
+/// output files of `report::write` only (nothing else in `out` is touched).
+fn render(results: &Path, out: &Path) -> Result<()> {
+    let r: Results = serde_json::from_str(
+        &std::fs::read_to_string(results)
+            .with_context(|| format!("{}: cannot read the results", results.display()))?,
+    )
+    .with_context(|| {
+        format!(
+            "{}: not a results.json of `sdrs compare`",
+            results.display()
+        )
+    })?;
+    if out.is_file() {
+        bail!("{}: the output must be a directory", out.display());
+    }
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create the output directory", out.display()))?;
+    report::write(out, &r, None)?;
+    eprintln!(
+        "report: {} (from {})",
+        out.join("report.md").display(),
+        results.display()
+    );
+    Ok(())
 }
 
 /// A finished benchmark as stored in `parts/`.
@@ -155,6 +188,9 @@ fn finished_only(suite: &suite::Suite, base: &Path, out: &Path, r: &mut Results)
 }
 
 pub fn run(a: CompareArgs) -> Result<()> {
+    if let Some(results) = &a.render {
+        return render(results, &a.out);
+    }
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build; timings are meaningless (use `cargo run --release`)");
     }
