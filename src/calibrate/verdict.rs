@@ -40,7 +40,7 @@
 //! 5. **Structure**: a chosen model acting on a joint whose residual force
 //!    regression ([`super::residual`]) has, as its strongest term explaining
 //!    at least half the held-out residual force, a term no library effect
-//!    has (`θ̇|θ̇|`, `θ`, `1`) is not named: `unexplained`
+//!    has (`θ̇|θ̇|`) is not named: `unexplained`
 //!    ([`check_structure`]).
 //!
 //! **Plausibility** (relative to the robot's own masses, inertias and
