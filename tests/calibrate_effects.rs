@@ -71,6 +71,8 @@ effects:
   - {effect: payload, on: fore, values: [0.3, 0.05, -0.02, -0.2]}
   - {effect: link_mass_scale, on: all, values: [1.2]}
   - {effect: link_mass_scale, on: upper, values: [0.9]}
+  - {effect: actuation_delay, on: all, values: [0.02]}
+  - {effect: actuation_delay, on: elbow, values: [0.013]}
 "#
 }
 
@@ -326,6 +328,60 @@ fn check_trajectory(text: &str, steps: usize, tol: f64) {
 #[test]
 fn whole_trajectory_effect_gradients_match_finite_differences() {
     check_trajectory(&format!("{ARM}{}", effects_yaml()), 40, 1e-5);
+}
+
+/// Actuation delay near its degenerate values: 0 (the nominal controller;
+/// the `−h` run reads the signal ahead), below one step (1e-4 s of a 10 ms
+/// step), several steps (0.053 s) and longer than the first 13 steps
+/// (signals read at negative times: the spline is held there, its velocity
+/// target jumps at the first knot, so no step reads it exactly at a knot
+/// end), on sine and spline targets (the spline's `θ̈*` is its
+/// interpolated moment) and a constant one (no gradient).
+#[test]
+fn actuation_delay_gradient_sweeps_near_degenerate_delays() {
+    let spline = ARM.replace(
+        "elbow: {type: sine, terms: [{amplitude: 0.5, frequency: 0.9, phase: 1.0}]}",
+        "elbow: {type: spline, times: [0.0, 0.1, 0.25, 0.6], values: [0.0, 0.4, -0.3, 0.2]}",
+    );
+    assert_ne!(spline, ARM);
+    for base in [ARM, spline.as_str()] {
+        for d in [0.0, 1e-4, 0.053, 0.137] {
+            let text = format!(
+                "{base}effects:\n  - {{effect: actuation_delay, on: all, values: [{d}]}}\n  - {{effect: actuation_delay, on: slide, values: [0.01]}}\n"
+            );
+            check_trajectory(&text, 40, 1e-5);
+        }
+    }
+}
+
+/// `Signal::accel` is the time derivative of the velocity target.
+#[test]
+fn signal_acceleration_is_the_derivative_of_the_velocity_target() {
+    use sdrs::control::Signal;
+    let sigs = [
+        Signal::Sine {
+            offset: 0.1,
+            terms: vec![
+                serde_yaml::from_str("{amplitude: 0.6, frequency: 1.3, phase: 0.4}").unwrap(),
+                serde_yaml::from_str("{amplitude: 0.2, frequency: 3.1}").unwrap(),
+            ],
+        },
+        Signal::Spline {
+            times: vec![0.0, 0.1, 0.25, 0.4],
+            values: vec![0.0, 0.4, -0.3, 0.2],
+        },
+    ];
+    for s in &sigs {
+        for t in [0.03, 0.07, 0.17, 0.33, 0.9] {
+            let h = 1e-6;
+            let fd = (s.eval(t + h).1 - s.eval(t - h).1) / (2.0 * h);
+            let a = s.accel(t);
+            assert!(
+                (fd - a).abs() <= 1e-5 * (1.0 + a.abs()),
+                "{s:?} at {t}: fd {fd} vs {a}"
+            );
+        }
+    }
 }
 
 #[test]

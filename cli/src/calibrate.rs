@@ -19,7 +19,8 @@ pub struct CalibrateArgs {
     pub out: PathBuf,
     /// Candidate effects, comma separated (default: all applicable):
     /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
-    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s.
+    /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s,
+    /// actuation_delay.
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
     /// Fraction of the data (by time, at the end) held out for scoring.

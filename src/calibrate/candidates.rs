@@ -7,7 +7,8 @@
 //! `I_k = Δt²·∂²(inertia term)/∂θ_k²` at `θ^0` (kg·m² or kg): damping
 //! `2 I_k` (a 0.5 s decay), friction `5 I_k` (5 rad/s² of deceleration),
 //! armature `0.2 I_k`. Bounds: coefficients in `[0, 10⁴·typical]`, gains and
-//! mass scales in `[0.05, 20]`, offsets in `[−0.5, 0.5]`, payload masses in
+//! mass scales in `[0.05, 20]`, offsets in `[−0.5, 0.5]`, actuation delays in
+//! `[0, 0.1]` s (typical 10 ms, start 5 ms), payload masses in
 //! `[0, 10 × total mass]` at positions within the link's hull box grown by
 //! half its size (at least 5 cm), `μ ∈ [0, 5]`, `κ ∈ [κ₀/100, 100κ₀]`,
 //! `s ∈ [s₀/10, min(0.5, 10s₀)]`.
@@ -23,6 +24,9 @@ use super::problem::{Candidate, Template};
 use crate::energy::Need;
 use crate::energy::effects::{self, EffectKind, EffectSpec, Scope};
 use crate::scene::Scene;
+
+/// Upper bound of an actuation delay's fit box (s).
+pub const MAX_DELAY: f64 = 0.1;
 
 /// Effective inertia of every coordinate at `θ^0` (see the module doc).
 pub fn effective_inertia(scene: &Scene) -> Vec<f64> {
@@ -77,6 +81,7 @@ fn joint_candidate(kind: EffectKind, on: String, inertia: f64) -> Candidate {
             single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
         EffectKind::ActuatorGain => single(kind, on, 0.05, 20.0, 1.0, &[1.0]),
+        EffectKind::ActuationDelay => single(kind, on, 0.0, MAX_DELAY, 0.01, &[0.005]),
         _ => single(kind, on, -0.5, 0.5, 0.05, &[0.0]),
     }
 }

@@ -79,6 +79,45 @@ pub struct ErrorFloor {
     /// Δt at which the integrator error falls below the noise (`null` when
     /// it already does).
     pub suggested_dt: Option<f64>,
+    /// The model whose floor `floor` (and `integrator_in_gap`) is: `none`
+    /// (the scene as given) or the chosen candidate, when its own floor is
+    /// higher ([`with_model`]).
+    pub floor_of: String,
+    /// The floor of the scene as given (= `floor` when `floor_of` is `none`).
+    pub floor_baseline: f64,
+}
+
+/// The floor re-estimated for a fitted model (issue 33, item 1): the
+/// scene with the candidate's effects at their fitted values is refined
+/// (Δt/2, Δt/4) and its own `E_gap` measured as for the baseline
+/// ([`estimate`]). `E_gap` of the baseline is 0 whenever the missing effect
+/// is anti-correlated with our integrator's error (a damping against the
+/// implicit step's numerical dissipation: `G* > G`), although the error is
+/// in the gap once the effect is added; the model's own estimate then
+/// measures it. Returns `base` with `floor` and `integrator_in_gap`
+/// replaced by the model's when its floor is higher (`floor_of` = `label`),
+/// `base` unchanged otherwise; `None` when a refined simulation fails.
+pub fn with_model(
+    pb: &Problem,
+    extra: &[crate::energy::effects::EffectSpec],
+    sim: &Simulated,
+    label: &str,
+    base: &ErrorFloor,
+) -> Option<ErrorFloor> {
+    let sc = pb.scene_with(extra)?;
+    let model_pb = Problem {
+        scene: &sc,
+        measured: pb.measured,
+        split: pb.split,
+    };
+    let m = estimate(&model_pb, sim)?;
+    let mut out = base.clone();
+    if m.floor > base.floor {
+        out.floor = m.floor;
+        out.integrator_in_gap = m.integrator_in_gap;
+        out.floor_of = label.to_string();
+    }
+    Some(out)
 }
 
 /// The baseline simulated with the scene's Δt divided by `factor`, the
@@ -86,14 +125,21 @@ pub struct ErrorFloor {
 /// `(2k_d/Δt)(θ̇* − θ̇)` ([`crate::energy::pd`]), so `k_d` is divided by
 /// `factor` too (every other term's force is independent of Δt).
 fn refined(pb: &Problem, factor: usize) -> Option<Simulated> {
-    let mut sc = pb.scene.clone();
+    let sc = refined_scene(pb.scene, factor);
+    let end = pb.measured.times.len();
+    let steps = (pb.measured.times[end - 1] / sc.settings.dt).ceil() as usize + 1;
+    pb.simulate_scene(&sc, steps)
+}
+
+/// `scene` with Δt divided by `factor` and the same continuous-time
+/// controller (`k_d` divided by `factor` too, see [`refined`]'s doc).
+pub fn refined_scene(scene: &crate::scene::Scene, factor: usize) -> crate::scene::Scene {
+    let mut sc = scene.clone();
     sc.settings.dt /= factor as f64;
     for ch in sc.controller.channels.iter_mut() {
         ch.kd /= factor as f64;
     }
-    let end = pb.measured.times.len();
-    let steps = (pb.measured.times[end - 1] / sc.settings.dt).ceil() as usize + 1;
-    pb.simulate_scene(&sc, steps)
+    sc
 }
 
 /// `σ̂` from third divided differences of the residual `r` (rows: samples
@@ -216,5 +262,7 @@ pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
         shrink_half_dt: g / gh.max(1e-300),
         floor,
         suggested_dt,
+        floor_of: "none".into(),
+        floor_baseline: floor,
     })
 }

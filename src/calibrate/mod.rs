@@ -16,6 +16,8 @@
 //! - [`verdict`]: the smallest set of effects explaining the gap down to
 //!   the floor; `effect`, `none` or `unexplained`; plausibility checks.
 //! - [`analysis`]: residuals per channel, regime and time window.
+//! - [`residual`]: sparse regression of the residual generalized force on
+//!   candidate terms per joint (effects outside the library).
 //! - [`report`]: `calibration.json`, `report.md`; the SVG plots are drawn by
 //!   the application through [`run::PlotWriter`] (`cli/src/svg/calibration.rs`).
 //! - [`run`]: options, [`run()`].
@@ -31,6 +33,7 @@ pub mod fit;
 pub mod floor;
 pub mod problem;
 pub mod report;
+pub mod residual;
 pub mod run;
 pub mod select;
 pub mod verdict;

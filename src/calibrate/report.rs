@@ -4,12 +4,20 @@
 //! verdict        "effect" | "none" | "unexplained"  (rule: calibrate::verdict)
 //! reason         why, in words (the floor, the share explained, where the gap sits)
 //! error_floor    {dt, noise, integrator, integrator_in_gap, order, gap, gap_half_dt,
-//!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, floor, suggested_dt}
-//!                the model's own error on the held-out window (calibrate::floor)
+//!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, floor, suggested_dt,
+//!                 floor_of, floor_baseline}
+//!                the model's own error on the held-out window (calibrate::floor);
+//!                floor_of: "none", or the chosen candidate when its own floor is higher
+//! residual_regression  {joints: [{joint, rms_force, terms: [{term, meaning, unit,
+//!                coefficient, low, high}], explained_holdout, rows}], strongest}
+//!                sparse regression of the residual generalized force (calibrate::residual)
 //! implausible    [{candidate, reason}] fits outside physically plausible ranges (never chosen)
 //! effect         documented name of the chosen effect (pairs: "a+b"), null for none
 //! candidate      chosen candidate label ("joint_damping/all"), null for none
-//! parameters     {"<effect>/<joint|link|all>[:<param>]": value (SI)}
+//! parameters     {"<effect>/<joint|link|all>[:<param>]": value (SI)}, extrapolated to
+//!                Δt → 0 (refit at Δt/2, Richardson order 1, when the data are fitted
+//!                better at Δt/2: calibrate::select), else as fitted at Δt
+//! parameters_at_dt  the same keys as fitted at the scene's Δt (in calibrated.yaml)
 //! confidence     {key: {value, low, high}}  95 % from the Gauss–Newton Hessian
 //!                (low/high null when the parameter is not identifiable)
 //! gap_before     {"channels": {name: held-out RMS}, "overall": RMS}  the scene as given
@@ -90,11 +98,23 @@ pub struct Samples {
 pub struct CalibrationResult {
     pub verdict: String,
     pub reason: String,
+    /// The residual generalized force of the scene as given regressed on
+    /// candidate terms per joint ([`super::residual`]); `null` for robots
+    /// with spherical or free joints, or too little data.
+    pub residual_regression: Option<super::residual::ResidualRegression>,
     pub error_floor: ErrorFloor,
     pub implausible: Vec<Implausible>,
     pub effect: Option<String>,
     pub candidate: Option<String>,
+    /// The chosen model's parameters extrapolated to Δt → 0 (the physical
+    /// estimate; [`super::select::extrapolate_to_zero_dt`]), or as fitted at
+    /// Δt when the data are fitted worse at Δt/2 (data carrying our own
+    /// integrator's error) or the refit failed.
     pub parameters: BTreeMap<String, f64>,
+    /// As fitted at the scene's Δt: what `calibrated.yaml` holds and
+    /// `gap_after` is measured with.
+    pub parameters_at_dt: BTreeMap<String, f64>,
+    /// 95 % intervals around `parameters` (half-widths from the fit at Δt).
     pub confidence: BTreeMap<String, Interval>,
     pub gap_before: Gap,
     pub gap_after: Gap,
@@ -227,14 +247,21 @@ pub fn result(
             explained: 1.0 - s.fit.rss / base.fit.rss.max(1e-300),
         })
         .collect();
+    let mut parameters_at_dt = BTreeMap::new();
     let (parameters, confidence, effects) = match chosen {
         Some(s) => {
             let list = param_list(pb, s);
-            let p = list.iter().cloned().collect();
+            parameters_at_dt = list.iter().cloned().collect();
+            let values = sel.extrapolated.as_ref().unwrap_or(&s.fit.params);
+            let p = list
+                .iter()
+                .zip(values)
+                .map(|((k, _), v)| (k.clone(), *v))
+                .collect();
             let conf = list
                 .iter()
                 .map(|(k, _)| k)
-                .zip(s.fit.params.iter().zip(&s.fit.half_width))
+                .zip(values.iter().zip(&s.fit.half_width))
                 .map(|(k, (v, hw))| {
                     (
                         k.clone(),
@@ -252,9 +279,23 @@ pub fn result(
     };
     let gap_before = gap(&before, pb, base);
     let gap_after = gap(&after, pb, after_scored);
+    let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
+    let residual_regression = sel.residual.clone();
+    let mut reason = where_it_sits(&sel.decision, &before);
+    if sel.decision.verdict == super::verdict::Verdict::Unexplained {
+        if let Some(st) = residual_regression
+            .as_ref()
+            .and_then(|r| r.strongest.as_ref())
+        {
+            reason.push_str(&format!(
+                "; the residual force regression's strongest structure is `{st}` (residual_regression)"
+            ));
+        }
+    }
     CalibrationResult {
         verdict: sel.decision.verdict.name().into(),
-        reason: where_it_sits(&sel.decision, &before),
+        reason,
+        residual_regression,
         error_floor: sel.floor.clone(),
         implausible: sel
             .decision
@@ -275,6 +316,7 @@ pub fn result(
         }),
         candidate: chosen.map(|s| s.candidate.label.clone()),
         parameters,
+        parameters_at_dt,
         confidence,
         gap_reduction: 1.0 - gap_after.overall / gap_before.overall.max(1e-300),
         gap_before,
@@ -303,7 +345,7 @@ pub fn result(
         residuals_before: before,
         residuals_after: after,
         holdout,
-        split_time: pb.measured.times[pb.split.min(pb.measured.times.len() - 1)],
+        split_time,
         samples: Samples {
             times: pb.measured.times.len(),
             train: base.fit.n,
@@ -337,6 +379,12 @@ fn floor_section(s: &mut String, f: &ErrorFloor) {
         super::floor::FLOOR_MARGIN,
         f.floor
     ));
+    if f.floor_of != "none" {
+        s.push_str(&format!(
+            "The floor and the integrator error in the gap are those of the chosen model `{}` (re-estimated at Δt/2, Δt/4 with its fitted effects); the scene as given has floor {:.3e}.\n\n",
+            f.floor_of, f.floor_baseline
+        ));
+    }
     if let Some(dt) = f.suggested_dt {
         s.push_str(&format!(
             "The integrator error at Δt = {} s is {:.1}× the noise: effects of the size of the noise become resolvable at Δt ≤ {:.2e} s.\n\n",

@@ -224,15 +224,15 @@ pub fn calibrate_with(
         msg: e.to_string(),
     })?;
     files.push(("calibration.json".into(), json.into_bytes()));
-    files.push((
-        "report.md".into(),
-        report::markdown(
-            &res,
-            &opts.scene.display().to_string(),
-            &opts.measured.display().to_string(),
-        )
-        .into_bytes(),
-    ));
+    let mut md = report::markdown(
+        &res,
+        &opts.scene.display().to_string(),
+        &opts.measured.display().to_string(),
+    );
+    if let Some(r) = &res.residual_regression {
+        md.push_str(&super::residual::markdown(r));
+    }
+    files.push(("report.md".into(), md.into_bytes()));
     let plot_err = |name: &str, msg: String| CalibrateError::Output {
         path: opts.out.join(name),
         msg,

@@ -32,6 +32,9 @@ pub struct ControlChannel {
     pub kp: f64,
     pub kd: f64,
     pub signal: Signal,
+    /// Actuation delay `d` (s, ≥ 0): the channel tracks `θ*(t − d)`,
+    /// `θ̇*(t − d)` ([`crate::energy::effects::delay`]). Default 0.
+    pub delay: f64,
 }
 
 /// Open-loop controller: a set of channels.
@@ -45,11 +48,12 @@ pub struct Controller {
 }
 
 impl Controller {
-    /// PD targets at time `t` (s), written into `out` (cleared first).
+    /// PD targets at time `t` (s), written into `out` (cleared first); a
+    /// channel with a delay `d` reads its signal at `t − d`.
     pub fn targets_at(&self, t: f64, out: &mut Vec<PdTarget>) {
         out.clear();
         out.extend(self.channels.iter().map(|c| {
-            let (q, qdot) = c.signal.eval(t);
+            let (q, qdot) = c.signal.eval(t - c.delay);
             PdTarget {
                 dof: c.dof,
                 kp: c.kp,

@@ -135,6 +135,33 @@ impl Signal {
 }
 
 impl Signal {
+    /// `θ̈*(t)`: the second time derivative (sine: `−Σ A_j ω_j² sin(ω_j t + φ_j)`;
+    /// spline: its moment interpolated linearly; constant, table, and outside
+    /// a spline's knots: 0 — a table's velocity jumps at its knots are not
+    /// represented).
+    pub fn accel(&self, t: f64) -> f64 {
+        match self {
+            Signal::Constant { .. } | Signal::Table { .. } => 0.0,
+            Signal::Sine { terms, .. } => terms
+                .iter()
+                .map(|term| {
+                    let w = TAU * term.frequency;
+                    -term.amplitude * w * w * (w * t + term.phase).sin()
+                })
+                .sum(),
+            Signal::Spline { times, values } => {
+                let n = times.len();
+                if t <= times[0] || t >= times[n - 1] {
+                    return 0.0;
+                }
+                let m = natural_spline_moments(times, values);
+                let i = times.partition_point(|&v| v <= t) - 1;
+                let h = times[i + 1] - times[i];
+                ((times[i + 1] - t) * m[i] + (t - times[i]) * m[i + 1]) / h
+            }
+        }
+    }
+
     /// Number of learnable parameters: constant `[value]`; sine `[offset,
     /// (amplitude, frequency, phase) per term]`; spline and table: the knot
     /// values (knot times are fixed).

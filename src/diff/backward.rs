@@ -17,6 +17,10 @@ use std::time::Instant;
 pub struct ChannelGrad {
     pub kp: f64,
     pub kd: f64,
+    /// W.r.t. the channel's actuation delay `d`:
+    /// `Σ_t (∂Φ_t/∂θ* θ̇*(t − d) + ∂Φ_t/∂θ̇* θ̈*(t − d))` (the signal is read
+    /// at `t − d`, so `∂θ*/∂d = −θ̇*`, `∂θ̇*/∂d = −θ̈*`).
+    pub delay: f64,
     /// W.r.t. the signal's parameters ([`crate::control::Signal::params`]).
     pub signal: Vec<f64>,
 }
@@ -199,6 +203,7 @@ fn zero_gradients(model: &Model, sim: &Simulator) -> Gradients {
                 kp: 0.0,
                 kd: 0.0,
                 signal: vec![0.0; c.signal.nparams()],
+                delay: 0.0,
             })
             .collect(),
         ..Default::default()
@@ -310,7 +315,10 @@ fn subtract_step(
     for (ch, (cg, a)) in g.channels.iter_mut().zip(&acc.channels).enumerate() {
         cg.kp -= a[2];
         cg.kd -= a[3];
-        let (dv, dd) = sim.controller.channels[ch].signal.param_grad(time);
+        let c = &sim.controller.channels[ch];
+        let td = time - c.delay;
+        cg.delay += a[0] * c.signal.eval(td).1 + a[1] * c.signal.accel(td);
+        let (dv, dd) = c.signal.param_grad(td);
         for (k, sg) in cg.signal.iter_mut().enumerate() {
             *sg -= a[0] * dv[k] + a[1] * dd[k];
         }

@@ -24,6 +24,9 @@ pub fn gradient(
                 (EffectKind::ActuatorGain, Target::Dofs(d)) => {
                     gain_gradient(controller, d, e.values[0], grads)
                 }
+                (EffectKind::ActuationDelay, Target::Dofs(d)) => {
+                    delay_gradient(controller, d, grads)
+                }
                 (_, Target::Contact) => contact_gradient(e.kind, grads),
                 (EffectKind::JointOffset, _) => 0.0,
                 _ => grads.effects.get(s).copied().unwrap_or(0.0),
@@ -53,5 +56,17 @@ pub fn gain_gradient(controller: &Controller, dofs: &[usize], g: f64, grads: &Gr
         .zip(&grads.channels)
         .filter(|(ch, _)| dofs.contains(&ch.dof))
         .map(|(ch, cg)| (ch.kp * cg.kp + ch.kd * cg.kd) / g)
+        .sum()
+}
+
+/// `dL/dd` of an actuation delay shared by the channels on `dofs`: the sum
+/// of their [`super::ChannelGrad::delay`].
+pub fn delay_gradient(controller: &Controller, dofs: &[usize], grads: &Gradients) -> f64 {
+    controller
+        .channels
+        .iter()
+        .zip(&grads.channels)
+        .filter(|(ch, _)| dofs.contains(&ch.dof))
+        .map(|(_, cg)| cg.delay)
         .sum()
 }

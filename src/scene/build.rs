@@ -318,6 +318,7 @@ fn add_targets(
                 kp,
                 kd,
                 signal: s.clone(),
+                delay: 0.0,
             });
         }
     }

@@ -6,7 +6,7 @@ use super::Simulator;
 use crate::energy::Energy;
 use crate::energy::effects::extra_mass::{ExtraMass, ExtraMassKind};
 use crate::energy::effects::{
-    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, gain, spring,
+    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, delay, gain, spring,
 };
 use nalgebra::Vector3;
 
@@ -36,6 +36,10 @@ pub fn install(effects: &[Effect], sim: &mut Simulator) {
             })),
             (Target::Dofs(d), EffectKind::ActuatorGain) => {
                 gain::apply(&mut sim.controller, d, v);
+                None
+            }
+            (Target::Dofs(d), EffectKind::ActuationDelay) => {
+                delay::apply(&mut sim.controller, d, v);
                 None
             }
             (Target::Links(l), EffectKind::Payload) => Some(Box::new(ExtraMass {

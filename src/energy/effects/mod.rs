@@ -3,7 +3,7 @@
 //! Each effect is either a term of the step objective (paper, eq. `SDRS`)
 //! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`armature`],
 //! [`extra_mass`] (payload, link mass scale) — or a parameter of an existing
-//! part of the model — [`gain`] (controller gains), [`crate::contact::params`]
+//! part of the model — [`gain`] (controller gains), [`delay`] (actuation delay), [`crate::contact::params`]
 //! (`μ`, `κ`, `s`) — or of the measurement — [`offset`] (encoder bias).
 //! Every parameter has an adjoint gradient: energy terms write
 //! `∂Φ/∂p` into the generic effect channel of the adjoint pass
@@ -34,6 +34,7 @@
 pub mod armature;
 pub mod coulomb;
 pub mod damping;
+pub mod delay;
 pub mod extra_mass;
 pub mod gain;
 pub mod offset;
@@ -83,6 +84,8 @@ pub enum EffectKind {
     /// candidate (not in [`EffectKind::ALL`]): a model property the import
     /// writes.
     JointSpring,
+    /// Actuation delay `d` (s) of the PD channels: [`delay`].
+    ActuationDelay,
 }
 
 /// What an effect acts on.
@@ -108,7 +111,7 @@ impl EffectKind {
         }
     }
 
-    pub const ALL: [EffectKind; 10] = [
+    pub const ALL: [EffectKind; 11] = [
         EffectKind::JointDamping,
         EffectKind::JointFriction,
         EffectKind::Armature,
@@ -119,6 +122,7 @@ impl EffectKind {
         EffectKind::ContactMu,
         EffectKind::ContactKappa,
         EffectKind::ContactS,
+        EffectKind::ActuationDelay,
     ];
 
     /// The documented name (as in scene files and `calibration.json`).
@@ -135,6 +139,7 @@ impl EffectKind {
             EffectKind::ContactKappa => "contact_kappa",
             EffectKind::ContactS => "contact_s",
             EffectKind::JointSpring => "joint_spring",
+            EffectKind::ActuationDelay => "actuation_delay",
         }
     }
 
@@ -175,6 +180,7 @@ impl EffectKind {
             EffectKind::ContactKappa => &["J·m"],
             EffectKind::ContactS => &["m"],
             EffectKind::JointSpring => &["N·m/rad", "rad"],
+            EffectKind::ActuationDelay => &["s"],
         }
     }
 

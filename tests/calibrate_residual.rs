@@ -1,0 +1,114 @@
+//! The residual force regression (issue 33, item 3,
+//! `sdrs::calibrate::residual`): on data from `arm2.yaml` integrated at
+//! Δt/16 (a stand-in for a finer engine) with 1e-3 rad noise, a hidden
+//! effect on one joint is found on that joint as the right basis term, with
+//! its coefficient's interval containing the truth; the other joint keeps
+//! no term of comparable size. The data from MuJoCo (delay, velocity-squared
+//! drag) are the acceptance script's (`tools/calib_acceptance.py`).
+
+mod calibrate_support;
+mod common;
+
+use calibrate_support::{Sampling, measured_csv, with_effects};
+use sdrs::calibrate::data::Measured;
+use sdrs::calibrate::problem::Problem;
+use sdrs::calibrate::residual::{ResidualOptions, ResidualRegression, regress};
+use sdrs::scene::Scene;
+use std::path::Path;
+
+fn arm2() -> String {
+    std::fs::read_to_string(common::robots("calibrate/arm2.yaml")).unwrap()
+}
+
+/// `arm2.yaml` at Δt/16 with the same continuous controller (`k_d/16`).
+fn fine(scene: &str) -> String {
+    assert!(scene.contains("kd: 0.0004\n"));
+    scene
+        .replace("dt: 0.002", "dt: 0.000125")
+        .replace("kd: 0.0004\n", "kd: 0.000025\n")
+}
+
+fn regression(hidden: &[&str], seed: u64) -> ResidualRegression {
+    let s = Sampling {
+        noise: 1e-3,
+        seed,
+        duration: 2.0,
+        ..Default::default()
+    };
+    let csv = measured_csv(&with_effects(&fine(&arm2()), hidden), &s);
+    let scene = Scene::from_str(&arm2(), Path::new("arm2.yaml")).unwrap();
+    let m = Measured::parse(&csv, Path::new("measured.csv"), &scene.model).unwrap();
+    let split = m.split(0.3);
+    let pb = Problem {
+        scene: &scene,
+        measured: &m,
+        split,
+    };
+    let base = pb.simulate(&[], m.times.len()).unwrap();
+    let r = regress(
+        &scene,
+        &m,
+        &base,
+        m.times[split],
+        &ResidualOptions::default(),
+    )
+    .unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&r).unwrap());
+    r
+}
+
+fn joint<'a>(
+    r: &'a ResidualRegression,
+    name: &str,
+) -> &'a sdrs::calibrate::residual::JointRegression {
+    r.joints.iter().find(|j| j.joint == name).unwrap()
+}
+
+/// A viscous damping of 0.3 N·m·s/rad on the elbow: the elbow's first term
+/// is `θ̇` with the truth inside its interval (and within 15 %); the
+/// shoulder's residual force is much smaller than the elbow's.
+#[test]
+fn hidden_damping_on_one_joint_is_found_as_theta_dot_there() {
+    let r = regression(&["{effect: joint_damping, on: elbow, values: [0.3]}"], 3);
+    assert_eq!(r.strongest.as_deref(), Some("elbow: θ̇"));
+    let e = joint(&r, "elbow");
+    let t = &e.terms[0];
+    assert_eq!(t.term, "θ̇");
+    assert!(t.low <= 0.3 && 0.3 <= t.high, "{t:?}");
+    assert!((t.coefficient / 0.3 - 1.0).abs() < 0.15, "{t:?}");
+    assert!(e.explained_holdout > 0.5, "{}", e.explained_holdout);
+}
+
+/// An actuation delay of 20 ms on the shoulder: the shoulder's strongest
+/// term is the PD command's rate `u̇` with coefficient the delay (within
+/// 20 %, truth inside the interval).
+#[test]
+fn hidden_delay_on_one_joint_is_found_as_the_command_rate_there() {
+    let r = regression(
+        &["{effect: actuation_delay, on: shoulder, values: [0.02]}"],
+        4,
+    );
+    assert_eq!(r.strongest.as_deref(), Some("shoulder: u̇"));
+    let t = &joint(&r, "shoulder").terms[0];
+    assert_eq!(t.term, "u̇");
+    assert!((t.coefficient / 0.02 - 1.0).abs() < 0.2, "{t:?}");
+    assert!(t.low <= 0.02 && 0.02 <= t.high, "{t:?}");
+}
+
+/// Clean data: no joint keeps a term explaining a material share of its
+/// (integrator- and noise-sized) residual force... or, if one is kept, its
+/// coefficient is small next to the effects above.
+#[test]
+fn clean_data_keep_no_large_term() {
+    let r = regression(&[], 5);
+    for j in &r.joints {
+        for t in &j.terms {
+            if t.term == "θ̇" {
+                assert!(t.coefficient.abs() < 0.05, "{} {t:?}", j.joint);
+            }
+            if t.term == "u̇" {
+                assert!(t.coefficient.abs() < 0.004, "{} {t:?}", j.joint);
+            }
+        }
+    }
+}
