@@ -395,16 +395,28 @@ fn floor_section(s: &mut String, f: &ErrorFloor) {
     }
 }
 
-/// `report.md`.
+/// `report.md`: the verdict, the findings, where the model disagrees and
+/// the ranking of the candidates.
 pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
     let mut s = String::new();
-    let w = |s: &mut String, t: String| {
-        s.push_str(&t);
-        s.push('\n');
-    };
-    w(&mut s, "# Calibration report\n".into());
+    md_verdict(&mut s, r, scene, measured);
+    md_findings(&mut s, r);
+    md_disagreement(&mut s, r);
+    md_ranking(&mut s, r);
+    s
+}
+
+/// Appends `t` and a newline.
+fn w(s: &mut String, t: String) {
+    s.push_str(&t);
+    s.push('\n');
+}
+
+/// Title, data, verdict, its reason and the error floor.
+fn md_verdict(s: &mut String, r: &CalibrationResult, scene: &str, measured: &str) {
+    w(s, "# Calibration report\n".into());
     w(
-        &mut s,
+        s,
         format!(
             "Scene `{scene}`, measured data `{measured}`: {} samples, training window up to t = {:.4} s ({} residuals), held-out window after it ({} residuals, holdout {}).\n",
             r.samples.times, r.split_time, r.samples.train, r.samples.holdout, r.holdout
@@ -412,7 +424,7 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
     );
     match (&r.candidate, r.verdict.as_str()) {
         (Some(c), _) => w(
-            &mut s,
+            s,
             format!(
                 "**Verdict: missing effect `{}`** (candidate `{c}`); the held-out RMS error shrinks from {:.4e} to {:.4e} ({:.1} %).\n",
                 r.effect.clone().unwrap_or_default(),
@@ -422,35 +434,39 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
             ),
         ),
         (None, "unexplained") => w(
-            &mut s,
+            s,
             format!(
                 "**Verdict: unexplained**: a discrepancy beyond the model's error floor that no candidate explains (held-out RMS {:.4e}).\n",
                 r.gap_before.overall
             ),
         ),
         (None, _) => w(
-            &mut s,
+            s,
             format!(
                 "**Verdict: no missing effect found** (held-out RMS {:.4e}).\n",
                 r.gap_before.overall
             ),
         ),
     }
-    w(&mut s, format!("Why: {}.\n", r.reason));
-    floor_section(&mut s, &r.error_floor);
+    w(s, format!("Why: {}.\n", r.reason));
+    floor_section(s, &r.error_floor);
+}
+
+/// Implausible fits, indistinguishable candidates, fitted parameters.
+fn md_findings(s: &mut String, r: &CalibrationResult) {
     if !r.implausible.is_empty() {
         w(
-            &mut s,
+            s,
             "Fits outside physically plausible ranges (never chosen):\n".into(),
         );
         for i in &r.implausible {
-            w(&mut s, format!("- `{}`: {}", i.candidate, i.reason));
+            w(s, format!("- `{}`: {}", i.candidate, i.reason));
         }
-        w(&mut s, String::new());
+        w(s, String::new());
     }
     if !r.indistinguishable.is_empty() {
         w(
-            &mut s,
+            s,
             format!(
                 "Indistinguishable on these data (criterion within 2): {}.\n",
                 r.indistinguishable
@@ -463,13 +479,13 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
     }
     if !r.parameters.is_empty() {
         w(
-            &mut s,
+            s,
             "| parameter | value | 95 % interval |\n|---|---:|---|".into(),
         );
         for (k, v) in &r.parameters {
             let ci = r.confidence.get(k).and_then(|c| Some((c.low?, c.high?)));
             w(
-                &mut s,
+                s,
                 format!(
                     "| `{k}` | {v:.6e} | {} |",
                     match ci {
@@ -479,13 +495,17 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
                 ),
             );
         }
-        w(&mut s, String::new());
+        w(s, String::new());
     }
+}
+
+/// Residual RMS per channel, window and regime, before and after; worst windows.
+fn md_disagreement(s: &mut String, r: &CalibrationResult) {
     w(
-        &mut s,
+        s,
         "## Where the model disagrees\n\nRMS of simulated − measured (SI units of each channel) overall, per window and per regime (–: no samples), before and after calibration.\n".into(),
     );
-    w(&mut s, "| channel | RMS | train | held-out | free | contact | moving | at rest | accelerating | braking | corr sign θ̇ | corr θ̇ | corr θ̈ |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
+    w(s, "| channel | RMS | train | held-out | free | contact | moving | at rest | accelerating | braking | corr sign θ̇ | corr θ̇ | corr θ̈ |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
     let cell = |x: &super::analysis::Rms| {
         if x.samples == 0 {
             "–".to_string()
@@ -512,7 +532,7 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
             .map(cell)
             .join(" | ");
             w(
-                &mut s,
+                s,
                 format!(
                     "| {} ({label}) | {cells} | {:+.2} | {:+.2} | {:+.2} |",
                     c.channel, c.corr_velocity_sign, c.corr_velocity, c.corr_acceleration
@@ -521,12 +541,12 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
         }
     }
     w(
-        &mut s,
+        s,
         "\nWindows where the error concentrates (before):\n".into(),
     );
     for win in &r.residuals_before.worst_windows {
         w(
-            &mut s,
+            s,
             format!(
                 "- t ∈ [{:.3}, {:.3}] s: RMS {:.3e}, {:.1} % of the squared error",
                 win.t_start,
@@ -536,8 +556,12 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
             ),
         );
     }
-    w(&mut s, "\n## Ranking\n\nCriterion `C = BIC(train) + n_ho ln(RSS_ho/n_ho)`; ΔC > 0 is better than the model as given.\n".into());
-    w(&mut s, "| # | candidate | ΔC | held-out RMS | train RMS | explained | parameters |\n|---:|---|---:|---:|---:|---:|---|".into());
+}
+
+/// The candidates' ranking and the baseline.
+fn md_ranking(s: &mut String, r: &CalibrationResult) {
+    w(s, "\n## Ranking\n\nCriterion `C = BIC(train) + n_ho ln(RSS_ho/n_ho)`; ΔC > 0 is better than the model as given.\n".into());
+    w(s, "| # | candidate | ΔC | held-out RMS | train RMS | explained | parameters |\n|---:|---|---:|---:|---:|---:|---|".into());
     for (i, c) in r.ranking.iter().enumerate() {
         let p: Vec<String> = c
             .parameters
@@ -545,7 +569,7 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
             .map(|(k, v)| format!("{k} = {v:.4e}"))
             .collect();
         w(
-            &mut s,
+            s,
             format!(
                 "| {} | `{}` | {:.1} | {:.3e} | {:.3e} | {:.3} | {} |",
                 i + 1,
@@ -559,15 +583,14 @@ pub fn markdown(r: &CalibrationResult, scene: &str, measured: &str) -> String {
         );
     }
     w(
-        &mut s,
+        s,
         format!(
             "\nBaseline (no effect): train RMS {:.3e}, held-out RMS {:.3e}. Simulations: {}.\n",
             r.baseline.rms_train, r.baseline.rms_holdout, r.simulations
         ),
     );
     w(
-        &mut s,
+        s,
         "Plots: `channel_<name>.svg` (measured, simulated, calibrated) and `residuals.svg`.".into(),
     );
-    s
 }
