@@ -282,15 +282,14 @@ pub fn result(
     let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
     let residual_regression = sel.residual.clone();
     let mut reason = where_it_sits(&sel.decision, &before);
-    if sel.decision.verdict == super::verdict::Verdict::Unexplained {
-        if let Some(st) = residual_regression
+    if sel.decision.verdict == super::verdict::Verdict::Unexplained
+        && let Some(st) = residual_regression
             .as_ref()
             .and_then(|r| r.strongest.as_ref())
-        {
-            reason.push_str(&format!(
-                "; the residual force regression's strongest structure is `{st}` (residual_regression)"
-            ));
-        }
+    {
+        reason.push_str(&format!(
+            "; the residual force regression's strongest structure is `{st}` (residual_regression)"
+        ));
     }
     CalibrationResult {
         verdict: sel.decision.verdict.name().into(),

@@ -1,7 +1,7 @@
 //! Shared helpers of the `import_*` integration tests.
 #![allow(dead_code, unused_imports)]
 
-#[allow(dead_code, unused_imports)]
+#[allow(unused_imports)]
 #[path = "../common/mod.rs"]
 mod common;
 pub use common::{skip_without_chromium, skip_without_venv};

@@ -152,6 +152,37 @@ pub fn line_plot(axes: &Axes<'_>, series: &[Series]) -> Result<String> {
     Ok(svg)
 }
 
+/// Convergence plot (best loss per iteration) as SVG, titled `title`;
+/// several labelled histories may share it (e.g. co-design vs controller
+/// only). The loss axis is logarithmic (padded to at least a decade, so it
+/// carries several labelled ticks) when every loss is positive, else linear.
+pub fn convergence_svg(
+    title: &str,
+    series: &[(&str, &[sdrs::optimize::IterRecord])],
+) -> Result<String> {
+    let positive = series
+        .iter()
+        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
+    let s: Vec<Series> = series
+        .iter()
+        .map(|(label, h)| Series {
+            label: label.to_string(),
+            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
+            dashed: false,
+        })
+        .collect();
+    line_plot(
+        &Axes {
+            title,
+            x: "iteration",
+            y: "best task loss",
+            log_x: false,
+            log_y: positive,
+        },
+        &s,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -185,35 +216,4 @@ mod tests {
         let ticks = svg.matches("<text").count();
         assert!(ticks >= 8, "only {ticks} text elements");
     }
-}
-
-/// Convergence plot (best loss per iteration) as SVG, titled `title`;
-/// several labelled histories may share it (e.g. co-design vs controller
-/// only). The loss axis is logarithmic (padded to at least a decade, so it
-/// carries several labelled ticks) when every loss is positive, else linear.
-pub fn convergence_svg(
-    title: &str,
-    series: &[(&str, &[sdrs::optimize::IterRecord])],
-) -> Result<String> {
-    let positive = series
-        .iter()
-        .all(|(_, h)| h.iter().all(|r| r.best_loss > 0.0));
-    let s: Vec<Series> = series
-        .iter()
-        .map(|(label, h)| Series {
-            label: label.to_string(),
-            points: h.iter().map(|r| (r.iter as f64, r.best_loss)).collect(),
-            dashed: false,
-        })
-        .collect();
-    line_plot(
-        &Axes {
-            title,
-            x: "iteration",
-            y: "best task loss",
-            log_x: false,
-            log_y: positive,
-        },
-        &s,
-    )
 }
