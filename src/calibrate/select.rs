@@ -242,7 +242,6 @@ pub fn select(
             super::verdict::implausible(pb, s, &inertia).map(|w| (s.candidate.label.clone(), w))
         })
         .collect();
-    let (floor, mut decision, refined) = decide_with_model_floor(pb, &base, &ranking, bad, opts)?;
     let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
     let residual = super::residual::regress(
         pb.scene,
@@ -251,19 +250,42 @@ pub fn select(
         split_time,
         &Default::default(),
     );
-    if let (Some(i), Some(r)) = (decision.chosen, &residual) {
-        super::verdict::check_structure(&mut decision, &ranking[i], r);
-    }
-    let chosen = decision.chosen;
-    let mut extrapolated = None;
-    let mut half_sims = 0;
-    if let Some(i) = chosen {
+    let (mut bad, mut half_sims) = (bad, 0);
+    // The chosen model's values extrapolated to Δt → 0 are the physical
+    // estimate, so they must be plausible too (a delay fitted at 0.72 ms
+    // on a 0.5 ms step extrapolates to 0.19 ms: integrator timing, not a
+    // delay); an implausible extrapolation removes the model and the
+    // choice is made again without it.
+    let (floor, decision, refined, extrapolated) = loop {
+        let (floor, mut decision, refined) =
+            decide_with_model_floor(pb, &base, &ranking, bad.clone(), opts)?;
+        if let (Some(i), Some(r)) = (decision.chosen, &residual) {
+            super::verdict::check_structure(&mut decision, &ranking[i], r);
+        }
+        let Some(i) = decision.chosen else {
+            break (floor, decision, refined, None);
+        };
         let s = &mut ranking[i];
         confidence(pb, &s.candidate, &mut s.fit, &opts.fit);
         let (p, n) = extrapolate_to_zero_dt(pb, s, opts);
-        extrapolated = p;
-        half_sims = 2 * n;
-    }
+        half_sims += 2 * n;
+        let mut at_zero = s.clone();
+        if let Some(p) = &p {
+            at_zero.fit.params = p.clone();
+        }
+        match p
+            .is_some()
+            .then(|| super::verdict::implausible(pb, &at_zero, &inertia))
+            .flatten()
+        {
+            Some(w) => bad.push((
+                s.candidate.label.clone(),
+                format!("extrapolated to Δt → 0: {w}"),
+            )),
+            None => break (floor, decision, refined, p),
+        }
+    };
+    let chosen = decision.chosen;
     // + the refined runs (Δt/2, Δt/4) for the floors.
     let simulations =
         1 + refined + half_sims + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
