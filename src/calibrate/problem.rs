@@ -91,6 +91,20 @@ impl Simulated {
         ((c - a) / (2.0 * h), (c - 2.0 * b + a) / (h * h))
     }
 
+    /// This trajectory as data: `m`'s sample times and channels (and its
+    /// gaps), each value `θ̂_c(t_i) + b_c` ([`Simulated::at`]). The
+    /// calibration runs its analyses on such data to tell what the model
+    /// itself produces from what the measurements add.
+    pub fn sampled_like(&self, m: &Measured) -> Measured {
+        let mut out = m.clone();
+        for ch in &mut out.channels {
+            for (v, &t) in ch.values.iter_mut().zip(&m.times) {
+                *v = v.map(|_| self.at(ch.dof, t));
+            }
+        }
+        out
+    }
+
     /// Whether contact is active at `t` (nearest recorded step).
     pub fn in_contact(&self, t: f64) -> bool {
         let k = ((t / self.dt).round() as usize).min(self.contact.len() - 1);

@@ -513,12 +513,45 @@ pub fn markdown(r: &ResidualRegression) -> String {
 /// `tests/calibrate_hidden.rs` lost `joint_offset/elbow` to them.)
 pub const OUTSIDE_LIBRARY: [&str; 1] = ["θ̇|θ̇|"];
 
+/// A term outside the library found as a joint's strongest
+/// ([`outside_structure`]).
+#[derive(Clone, Debug)]
+pub struct Structure {
+    /// The coordinate's column name.
+    pub joint: String,
+    pub term: Term,
+}
+
+impl std::fmt::Display for Structure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.joint, self.term.term)
+    }
+}
+
+impl Structure {
+    /// Whether `own`, the same regression run on data simulated by the
+    /// calibrated model at the scene's Δt, has this term on this joint
+    /// with a coefficient inside this one's 95 % interval: the structure
+    /// is then what the model's own step produces (the implicit step's
+    /// lag against the refined objective, module doc), not a missing
+    /// effect. The coefficient of the model's data is returned.
+    pub fn reproduced_by(&self, own: &ResidualRegression) -> Option<f64> {
+        own.joints
+            .iter()
+            .filter(|j| j.joint == self.joint)
+            .flat_map(|j| j.terms.iter())
+            .find(|t| t.term == self.term.term)
+            .map(|t| t.coefficient)
+            .filter(|c| (self.term.low..=self.term.high).contains(c))
+    }
+}
+
 /// The first joint among `joints` (column names; `all` = every joint) whose
 /// strongest term is outside the library ([`OUTSIDE_LIBRARY`]) and explains
-/// at least half of its held-out residual force, as `joint: term`. A library
-/// effect named on such a joint absorbs part of a structure it does not
-/// have (a damping for a velocity-squared drag).
-pub fn outside_structure(r: &ResidualRegression, joints: &[String]) -> Option<String> {
+/// at least half of its held-out residual force. A library effect named on
+/// such a joint absorbs part of a structure it does not have (a damping
+/// for a velocity-squared drag).
+pub fn outside_structure(r: &ResidualRegression, joints: &[String]) -> Option<Structure> {
     r.joints
         .iter()
         .filter(|j| joints.iter().any(|n| n == "all" || *n == j.joint))
@@ -528,5 +561,8 @@ pub fn outside_structure(r: &ResidualRegression, joints: &[String]) -> Option<St
                     .first()
                     .is_some_and(|t| OUTSIDE_LIBRARY.contains(&t.term.as_str()))
         })
-        .map(|j| format!("{}: {}", j.joint, j.terms[0].term))
+        .map(|j| Structure {
+            joint: j.joint.clone(),
+            term: j.terms[0].clone(),
+        })
 }

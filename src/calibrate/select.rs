@@ -260,7 +260,12 @@ pub fn select(
         let (floor, mut decision, refined) =
             decide_with_model_floor(pb, &base, &ranking, bad.clone(), opts)?;
         if let (Some(i), Some(r)) = (decision.chosen, &residual) {
-            super::verdict::check_structure(&mut decision, &ranking[i], r);
+            let sim = &ranking[i].sim;
+            let own = || {
+                let data = sim.sampled_like(pb.measured);
+                super::residual::regress(pb.scene, &data, sim, split_time, &Default::default())
+            };
+            super::verdict::check_structure(&mut decision, &ranking[i], r, own);
         }
         let Some(i) = decision.chosen else {
             break (floor, decision, refined, None);

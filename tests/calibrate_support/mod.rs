@@ -71,7 +71,11 @@ pub fn measured_csv(scene_text: &str, s: &Sampling) -> String {
     out.push('\n');
     let n = (s.duration / s.period) as usize;
     for i in 0..=n {
-        let j: f64 = rng.random_range(-s.jitter..s.jitter);
+        let j: f64 = if s.jitter > 0.0 {
+            rng.random_range(-s.jitter..s.jitter)
+        } else {
+            0.0
+        };
         let t = ((i as f64 + j) * s.period).clamp(0.0, s.duration);
         if t >= s.gap.0 && t < s.gap.1 {
             continue;
