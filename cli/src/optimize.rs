@@ -124,7 +124,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     };
     // Every iteration's design, for the viewer's design-at-iteration slider
     // (after a resume: the iterations of this session).
-    let mut designs: Vec<sdrs::optimize::playback::IterDesign> = Vec::new();
+    let mut designs: Vec<sdrs::output::codesign::IterDesign> = Vec::new();
     let outcome = sdrs::optimize::optimize_with(
         &problem,
         iters,
@@ -176,7 +176,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     )?;
     sdrs::output::write_atomic(&out.join("convergence.svg"), convergence.as_bytes())?;
     sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
-    let shapes = sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
+    let shapes = sdrs::output::codesign::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
     if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
     }
@@ -221,10 +221,10 @@ fn write_pictures(
     problem: &sdrs::optimize::Problem,
     (d0, c0): (&nalgebra::DVector<f64>, &nalgebra::DVector<f64>),
     outcome: &sdrs::optimize::Outcome,
-    designs: &[sdrs::optimize::playback::IterDesign],
+    designs: &[sdrs::output::codesign::IterDesign],
     shapes: Option<&str>,
 ) -> Result<()> {
-    use sdrs::optimize::playback as pb;
+    use sdrs::output::codesign as pb;
     let initial = pb::rollout(problem, d0, c0).context("rollout of the initial design")?;
     let optimized = pb::rollout(problem, &outcome.design, &outcome.controller)
         .context("rollout of the optimized design")?;

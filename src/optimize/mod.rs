@@ -12,9 +12,7 @@ pub mod metrics;
 pub mod multi;
 pub mod names;
 pub mod output;
-pub mod playback;
 pub mod report;
-pub mod shapes;
 pub mod task;
 
 pub use controls::ControlSpace;

@@ -100,7 +100,7 @@ pub fn run(
         if design && cage.is_none() {
             let (d0, _) = sdrs::optimize::start(&p, 0);
             if let Some(svg) =
-                sdrs::optimize::shapes::initial_vs_optimized_svg(&p, &d0, &out.design)
+                sdrs::output::codesign::initial_vs_optimized_svg(&p, &d0, &out.design)
             {
                 std::fs::create_dir_all(out_dir.join("plots"))?;
                 sdrs::output::write_atomic(&out_dir.join(&shapes_rel), svg.as_bytes())?;
