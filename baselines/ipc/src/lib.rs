@@ -21,7 +21,6 @@
 pub mod adjoint;
 pub mod adjoint_stencil;
 pub mod barrier;
-pub mod bench;
 pub mod broad_phase;
 pub mod cage;
 pub mod ccd;
