@@ -17,7 +17,7 @@ fn ties_and_bounds_hold_after_every_optimizer_iteration() {
     assert!(p.design.vars.iter().all(|v| v.targets.len() == 2));
     let mut checked = 0;
     optimize(&p, 12, |_, d| {
-        let mut model = p.model.clone();
+        let mut model = p.first().model.clone();
         p.design.apply(&mut model, d);
         p.design.check(&model).unwrap();
         checked += 1;

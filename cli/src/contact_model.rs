@@ -106,12 +106,10 @@ pub fn configure_problem(
 ) -> Result<()> {
     let factory: sdrs::scene::SharedContactFactory =
         std::sync::Arc::new(sdrs_ipc::IpcFactory::default());
-    args.apply(&mut problem.scene)?;
-    problem.contact_factory = Some(factory.clone());
-    for o in &mut problem.others {
-        args.apply(&mut o.scene)?;
-        o.contact_factory = Some(factory.clone());
+    for t in &mut problem.trajectories {
+        args.apply(&mut t.scene)?;
     }
+    problem.set_contact_factory(factory);
     let Some(cage) = cage else {
         sdrs_ipc::surface::design::check_vertex_design(problem)?;
         return Ok(());
@@ -122,12 +120,12 @@ pub fn configure_problem(
             .as_ref()
             .is_some_and(|c| c.model == ContactModelKind::Ipc)
     };
-    if !is_ipc(&problem.scene) {
+    let first = &problem.first().scene;
+    if !is_ipc(first) {
         bail!(
             "--cage {cage}: a cage deforms the IPC baseline's meshes, but {} uses contact.model: {} (add --contact ipc)",
-            problem.scene.source.display(),
-            problem
-                .scene
+            first.source.display(),
+            first
                 .contact
                 .as_ref()
                 .map_or("none (no contact section)", |c| c.model.name())

@@ -169,8 +169,14 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
     let mut p = sdrs::optimize::Problem::load(&task, true).unwrap();
     let s = sdrs_ipc::cage::cage_problem(&mut p, sdrs_ipc::cage::CageResolution::Coarse).unwrap();
     assert_eq!(s.cage_vertices, vec![26]);
-    let ell = p.model.links.iter().position(|l| l.name == "ell").unwrap();
-    assert_eq!(p.model.links[ell].surface.len(), 12);
+    let ell = p
+        .first()
+        .model
+        .links
+        .iter()
+        .position(|l| l.name == "ell")
+        .unwrap();
+    assert_eq!(p.first().model.links[ell].surface.len(), 12);
     let blends = p
         .design
         .vars
@@ -181,15 +187,19 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
     assert!(blends > 0);
     // Moving every cage vertex by +1 cm in x moves the source mesh with it
     // (mean value coordinates reproduce translations).
-    let mut x = p.design.values(&p.model);
+    let mut x = p.design.values(&p.first().model);
     for (k, v) in p.design.vars.iter().enumerate() {
         if v.name.ends_with(".x") {
             x[k] += 0.01;
         }
     }
-    let mut m = p.model.clone();
+    let mut m = p.first().model.clone();
     p.design.apply(&mut m, &x);
-    for (a, b) in m.links[ell].surface.iter().zip(&p.model.links[ell].surface) {
+    for (a, b) in m.links[ell]
+        .surface
+        .iter()
+        .zip(&p.first().model.links[ell].surface)
+    {
         assert!(((a - b) - nalgebra::Vector3::new(0.01, 0.0, 0.0)).norm() < 1e-12);
     }
 }

@@ -55,16 +55,17 @@ fn serialize(what: &str, e: serde_json::Error) -> CodesignOutputError {
     }
 }
 
-/// Simulates design `d` with controller `c` over the horizon, recording
-/// link poses and contact planes.
+/// Simulates design `d` with controller `c` over the horizon of the (first)
+/// trajectory, recording link poses and contact planes.
 pub fn rollout(
     p: &Problem,
     d: &DVector<f64>,
     c: &DVector<f64>,
 ) -> Result<Playback, CodesignOutputError> {
-    let scene = p.scene_at(d, c);
-    let mut sim = p.simulator(&scene)?;
-    let traj = crate::sim::run::run_recording(&mut sim, p.horizon, true, |_| {})?;
+    let t = p.first();
+    let scene = p.scene_at(t, d, c);
+    let mut sim = t.simulator(&scene)?;
+    let traj = crate::sim::run::run_recording(&mut sim, t.horizon, true, |_| {})?;
     let contacts = match &scene.contact {
         Some(cs) => active_contacts(&scene.model, cs.s, &cs.excluded, &traj.poses)?,
         None => Vec::new(),
@@ -100,7 +101,7 @@ pub fn write_playback(
         };
         write_atomic(
             &d.join("poses.csv"),
-            super::poses_csv(&traj, &p.model).as_bytes(),
+            super::poses_csv(&traj, &p.first().model).as_bytes(),
         )?;
         write_atomic(
             &d.join("contacts.csv"),
@@ -123,7 +124,7 @@ pub fn write_playback(
 /// One entry of `iterations.json`: iteration `k`, its `loss`, the designed
 /// links' hulls at design `d` and every link's pose at `t = 0`.
 fn iteration_json(p: &Problem, k: usize, loss: f64, d: &DVector<f64>) -> serde_json::Value {
-    let mut m = p.model.clone();
+    let mut m = p.first().model.clone();
     p.design.apply(&mut m, d);
     let hulls: serde_json::Map<String, serde_json::Value> = p
         .design
@@ -139,7 +140,7 @@ fn iteration_json(p: &Problem, k: usize, loss: f64, d: &DVector<f64>) -> serde_j
         })
         .collect();
     // Link poses at t = 0 of this design (attachments move links).
-    let mut scene = p.scene.clone();
+    let mut scene = p.first().scene.clone();
     scene.model = m;
     let poses: Vec<_> = scene
         .simulator()
@@ -209,14 +210,15 @@ pub fn initial_vs_optimized_svg(
     if links.is_empty() {
         return None;
     }
-    let (mut m0, mut m1) = (p.model.clone(), p.model.clone());
+    let model = &p.first().model;
+    let (mut m0, mut m1) = (model.clone(), model.clone());
     p.design.apply(&mut m0, initial);
     p.design.apply(&mut m1, optimized);
     let mut panels = Vec::new();
     for &l in &links {
         let name = format!(
             "{}/{}",
-            p.model.robots[p.model.links[l].robot].name, p.model.links[l].name
+            model.robots[model.links[l].robot].name, model.links[l].name
         );
         for (m, what, color) in [
             (&m0, "initial", [170, 170, 170]),

@@ -31,7 +31,7 @@ pub enum SurfaceDesignError {
 /// Checks every trajectory of `problem` (see the module docs).
 pub fn check_vertex_design(problem: &Problem) -> Result<(), SurfaceDesignError> {
     let task = problem.task_path.display().to_string();
-    for p in std::iter::once(problem).chain(problem.others.iter()) {
+    for p in &problem.trajectories {
         let Some(c) = p.scene.contact.as_ref() else {
             continue;
         };
@@ -42,7 +42,7 @@ pub fn check_vertex_design(problem: &Problem) -> Result<(), SurfaceDesignError> 
             task: task.clone(),
             msg: e.at(&p.scene.source).to_string(),
         })?;
-        for t in p.design.vars.iter().flat_map(|v| &v.targets) {
+        for t in problem.design.vars.iter().flat_map(|v| &v.targets) {
             let link = match *t {
                 Target::Vertex { link, .. } | Target::Blend { link, .. } => link,
                 _ => continue,
