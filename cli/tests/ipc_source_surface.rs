@@ -19,7 +19,7 @@ use support::{scratch_dir, sdrs};
 const SCENE: &str = "
 version: 1
 dt: 0.005
-contact: {model: ipc, surface: source, mu: 0.3}
+contact: {model: ipc, mu: 0.3, ipc: {surface: source}}
 obstacles:
   - name: channel
     hulls: [{box: {size: [0.6, 0.6, 0.3], center: [0, 0, 0.15]}}]
@@ -118,7 +118,7 @@ fn import_writes_the_source_mesh_and_ipc_uses_it() {
     // Switch the design to IPC on its source mesh and run it.
     let ipc = text.replacen(
         "contact:\n",
-        "contact:\n  model: ipc\n  surface: source\n",
+        "contact:\n  model: ipc\n  ipc: {surface: source}\n",
         1,
     );
     assert_ne!(ipc, text, "the design has no contact section");

@@ -17,7 +17,7 @@ dt: 0.01
 gravity: [0, 0, -9.81]
 solver: {tol: 1.0e-12}
 ground: {height: 0}
-contact: {model: ipc, dhat: 1.0e-3, mu: 0.4, eps_v: 1.0e-2}
+contact: {model: ipc, mu: 0.4, ipc: {dhat: 1.0e-3, eps_v: 1.0e-2}}
 robots:
   - name: finger
     links:
@@ -148,7 +148,7 @@ fn optimize_with_ipc_and_a_coarse_cage_lowers_the_loss_and_starts_from_the_fd_gr
 #[test]
 fn cage_needs_ipc_contact_and_a_valid_resolution() {
     let (dir, task) = write_task("optimize_ipc_bad");
-    let sdrs_scene = SCENE.replace("model: ipc, dhat: 1.0e-3, ", "");
+    let sdrs_scene = SCENE.replace("model: ipc, ", "");
     std::fs::write(dir.join("scene.yaml"), sdrs_scene).unwrap();
     let run = |extra: &[&str]| {
         let o = sdrs()

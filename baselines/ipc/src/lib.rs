@@ -34,6 +34,7 @@ pub mod mesh;
 pub mod mollifier;
 pub mod pair;
 pub mod primitive;
+pub mod settings;
 pub mod start_check;
 pub mod surface;
 

@@ -42,7 +42,7 @@ dt: 0.01
 gravity: [0, 0, -9.81]
 solver: {tol: 1.0e-12}
 ground: {height: 0}
-contact: {model: ipc, dhat: 1.0e-3, kappa: {KAPPA}, mu: 0.4, eps_v: 1.0e-2}
+contact: {model: ipc, kappa: {KAPPA}, mu: 0.4, ipc: {dhat: 1.0e-3, eps_v: 1.0e-2}}
 robots:
   - name: finger
     links:
@@ -285,8 +285,8 @@ fn ipc_cage_gradients_through_a_source_mesh_surface_match_finite_differences() {
     let text = PUSH
         .replace("{KAPPA}", &format!("{:e}", kappa()))
         .replace(
-            "contact: {model: ipc,",
-            "contact: {model: ipc, surface: source,",
+            "ipc: {dhat: 1.0e-3,",
+            "ipc: {surface: source, dhat: 1.0e-3,",
         )
         .replace(
             "    initial: {q: [0, 0, 0.1006, 0, 0, 0]}",
@@ -298,7 +298,7 @@ fn ipc_cage_gradients_through_a_source_mesh_surface_match_finite_differences() {
     let mut setup = ipc_setup(&text, 60);
     let bx = setup.link("box");
     let topology =
-        sdrs_ipc::factory::link_meshes(&setup.scene, sdrs::scene::schema::SurfaceKind::Source)
+        sdrs_ipc::factory::link_meshes(&setup.scene, sdrs_ipc::settings::SurfaceKind::Source)
             .unwrap();
     assert!(matches!(
         topology[bx].origin,

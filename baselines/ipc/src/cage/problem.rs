@@ -92,7 +92,8 @@ fn cage_one(
 ) -> Result<(sdrs::optimize::DesignSpace, CageSummary), CageSetupError> {
     let mut scene = p.scene.clone();
     scene.model = p.model.clone();
-    let topology = crate::factory::link_meshes(&scene, crate::factory::surface_kind(&scene))
+    let topology = crate::factory::surface_kind(&scene)
+        .and_then(|kind| crate::factory::link_meshes(&scene, kind))
         .map_err(|e| CageSetupError::Mesh(e.at(&scene.source).to_string()))?;
     let mut cages = Vec::with_capacity(links.len());
     for &l in links {

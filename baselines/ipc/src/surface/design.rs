@@ -8,7 +8,8 @@
 use super::paths::surface_paths;
 use sdrs::optimize::Problem;
 use sdrs::optimize::design::Target;
-use sdrs::scene::schema::{ContactModelKind, SurfaceKind};
+use crate::settings::{IpcSettings, SurfaceKind};
+use sdrs::scene::schema::ContactModelKind;
 use std::path::PathBuf;
 
 /// Why a design cannot run with source-mesh surfaces.
@@ -35,7 +36,14 @@ pub fn check_vertex_design(problem: &Problem) -> Result<(), SurfaceDesignError> 
         let Some(c) = p.scene.contact.as_ref() else {
             continue;
         };
-        if c.model != ContactModelKind::Ipc || c.surface != SurfaceKind::Source {
+        if c.model != ContactModelKind::Ipc {
+            continue;
+        }
+        let ipc = IpcSettings::of(c).map_err(|e| SurfaceDesignError::Scene {
+            task: task.clone(),
+            msg: e.at(&p.scene.source).to_string(),
+        })?;
+        if ipc.surface != SurfaceKind::Source {
             continue;
         }
         let paths = surface_paths(&p.scene).map_err(|e| SurfaceDesignError::Scene {
