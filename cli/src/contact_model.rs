@@ -53,8 +53,8 @@ impl ContactArgs {
                     "--dhat: the IPC activation distance must be positive and finite (m), got {d}"
                 );
             }
-            let mut ipc = sdrs_ipc::settings::IpcSettings::of(c)
-                .map_err(|e| e.at(&scene.source))?;
+            let mut ipc =
+                sdrs_ipc::settings::IpcSettings::of(c).map_err(|e| e.at(&scene.source))?;
             ipc.dhat = d;
             ipc.store(c).map_err(|e| e.at(&scene.source))?;
         }
@@ -85,8 +85,7 @@ pub fn export_surfaces(dir: &std::path::Path, scene: &Scene) -> Result<()> {
     if surface.is_hulls() {
         return Ok(());
     }
-    let meshes =
-        sdrs_ipc::factory::link_meshes(scene, surface).map_err(|e| e.at(&scene.source))?;
+    let meshes = sdrs_ipc::factory::link_meshes(scene, surface).map_err(|e| e.at(&scene.source))?;
     if let Some(json) = sdrs_ipc::surface::export::surfaces_json(&scene.model, &meshes) {
         sdrs::output::write_atomic(
             &dir.join("surfaces.json"),

@@ -1,4 +1,4 @@
-//! `contact.surface: source` end to end: non-convex source meshes (a
+//! `contact.ipc.surface: source` end to end: non-convex source meshes (a
 //! U-shaped channel, an L-shaped bar) as IPC contact surfaces under `sdrs
 //! simulate --contact ipc --export`, checked pair by pair with python-fcl on
 //! the meshes themselves (`surfaces.json`); `sdrs import` writes the source
@@ -253,7 +253,7 @@ fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
     let with_box = |surface: &str| {
         let s = text.replacen(
             "contact:\n",
-            &format!("contact:\n  model: ipc\n  surface: {surface}\n"),
+            &format!("contact:\n  model: ipc\n  ipc: {{surface: {surface}}}\n"),
             1,
         ) + &format!(
             "objects:\n  - name: peg\n    mass: 0.2\n    hulls: [{{box: {{size: [0.1, 0.1, 0.1]}}}}]\n    initial: {{q: [0, 0, {zc}, 0, 0, 0]}}\n"

@@ -40,7 +40,7 @@ fn optimize_cli_writes_outputs_and_the_design_reproduces_the_loss() {
     let scene = sdrs::scene::Scene::load(out.join("design.yaml")).unwrap();
     let mut sim = scene.simulator();
     let tape = sdrs::diff::record(&mut sim, p.first().horizon).unwrap();
-    let loss = sdrs::diff::loss_of(&scene.model, &tape, &p.loss);
+    let loss = sdrs::diff::loss_of(&scene.model, &tape, &p.first().loss);
     eprintln!("design.yaml reproduces loss {loss:.6e} (optimizer reported {final_loss:.6e})");
     assert!((loss - final_loss).abs() <= 1e-9 * final_loss.max(1e-12) + 1e-12);
     // A second run refuses to write into the non-empty directory.

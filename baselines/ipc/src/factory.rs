@@ -9,9 +9,9 @@ use crate::contact::{IpcContact, IpcParams};
 use crate::friction::{IpcFriction, IpcFrictionParams};
 use crate::line_search::CcdOptions;
 use crate::mesh::{LinkMesh, MeshOrigin};
+use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::energy::Energy;
 use sdrs::kinematics::{KinOrder, Kinematics};
-use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::scene::schema::ContactModelKind;
 use sdrs::scene::{ContactModelFactory, ContactSettings, Invalid, Scene};
 

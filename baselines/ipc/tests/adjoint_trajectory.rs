@@ -239,7 +239,7 @@ fn ipc_trajectory_gradients_wrt_cage_vertices_match_finite_differences() {
 }
 
 /// The same run with the box's IPC surface its *source mesh*
-/// (`contact.surface: source`; the mesh has the hull's vertices and a fixed
+/// (`contact.ipc.surface: source`; the mesh has the hull's vertices and a fixed
 /// triangulation) and the cage deforming mesh and hull together: the
 /// gradient `dL/dc = Φᵀ dL/dx + Ψᵀ dL/ds` (hull vertices `x`, source-mesh
 /// vertices `s = Ψ c`, `Link::surface`) against central differences in the

@@ -3,7 +3,7 @@
 //! `design.vertices` links become the design (bounds `design.bound`), and
 //! the IPC surfaces keep the rest triangulation while the cage moves their
 //! vertices ([`crate::IpcFactory::topology`]) — the hull surfaces' or, with
-//! `contact.surface: source`, the source mesh's.
+//! `contact.ipc.surface: source`, the source mesh's.
 
 use super::{CageDesign, CageError, CageResolution, LinkCage};
 use crate::IpcFactory;
@@ -80,7 +80,7 @@ pub fn cage_problem(
 
 /// One trajectory's frozen-surface factory (set on it) and cage design
 /// (returned: the same for every trajectory of a task, checked). A caged link
-/// whose IPC surface is its source mesh (`contact.surface: source`) gets
+/// whose IPC surface is its source mesh (`contact.ipc.surface: source`) gets
 /// the mesh's vertices as `Link::surface`, the cage around hulls and mesh,
 /// and the mesh's coordinates in the cage ([`LinkCage::with_surface`]), so
 /// the cage deforms the contact surface and the hulls (mass) together.

@@ -6,9 +6,9 @@
 //! ([`crate::cage::cage_problem`]).
 
 use super::paths::surface_paths;
+use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::optimize::Problem;
 use sdrs::optimize::design::Target;
-use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::scene::schema::ContactModelKind;
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceDesignError {
     #[error(
-        "{task}: the design moves hull vertices of link \"{link}\" (design.vertices), but under contact.surface: source its IPC contact surface is the source mesh {} (scene key {key}), which a hull edit does not move (the contact gradient would be zero); use --cage coarse|fine|K (the cage deforms the source mesh and the hulls together), contact.surface: hulls, or leave the link out of design.vertices",
+        "{task}: the design moves hull vertices of link \"{link}\" (design.vertices), but under contact.ipc.surface: source its IPC contact surface is the source mesh {} (scene key {key}), which a hull edit does not move (the contact gradient would be zero); use --cage coarse|fine|K (the cage deforms the source mesh and the hulls together), contact.ipc.surface: hulls, or leave the link out of design.vertices",
         mesh.display()
     )]
     HullEditOfSourceSurface {
