@@ -65,8 +65,8 @@
 //! U_L = Σ_{joints j on the path to L} (‖Δθ_j^rot‖ R_{j,L} + [j has a moving ancestor] ‖Δθ_j^trans‖)
 //! ```
 //!
-//! (m per unit `α`; `R_{L,L} = max ‖x̃‖`, `R_{j,L} = ‖t(C_c)‖ + max_α ‖t(J_c)‖
-//! + R_{c,L}` for the child `c` of `j` on the path) and acceleration at most
+//! (m per unit `α`; `R_{L,L} = max ‖x̃‖` and, for the child `c` of `j` on
+//! the path, `R_{j,L} = ‖t(C_c)‖ + max_α ‖t(J_c)‖ + R_{c,L}`) and acceleration at most
 //! `A_L` ([`chord_speed_bounds`]). A path with speed ≤ `U` and acceleration
 //! ≤ `A` deviates from its chord over a sub-interval of length `h` by at
 //! most `min(U h/2, A h²/8)` ([`chord_deviation`]). Its joint rates differ
