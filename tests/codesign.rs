@@ -17,7 +17,7 @@ fn ties_and_bounds_hold_after_every_optimizer_iteration() {
     assert!(p.design.vars.iter().all(|v| v.targets.len() == 2));
     let mut checked = 0;
     optimize(&p, 12, |_, d| {
-        let mut model = p.model.clone();
+        let mut model = p.first().model.clone();
         p.design.apply(&mut model, d);
         p.design.check(&model).unwrap();
         checked += 1;
@@ -137,8 +137,8 @@ fn adam_gradient_clip_is_validated_and_wired() {
     assert_eq!(run(Some(1e300)), free);
     let p0 = Problem::load(&path, true).unwrap();
     let (d0, c0) = (
-        p0.design.values(&p0.model),
-        p0.controls.values(&p0.controller),
+        p0.design.values(&p0.first().model),
+        p0.controls.values(&p0.first().controller),
     );
     let grad0 = p0.evaluate(&d0, &c0).unwrap().grad_design.norm();
     assert!(grad0 > 0.0);

@@ -48,8 +48,7 @@ fn shortened(name: &str, h: Option<usize>, tol: f64) -> Problem {
     } else {
         multi::load(&path, task, true).unwrap()
     };
-    p.scene.settings.newton.tol = tol;
-    for q in &mut p.others {
+    for q in &mut p.trajectories {
         q.scene.settings.newton.tol = tol;
     }
     p
@@ -72,8 +71,8 @@ fn fd_check(name: &str, h: Option<usize>, eps: f64, need: usize) {
 /// [`fd_check`] on a loaded problem (a task, or one trajectory of a
 /// collective task), `name` labelling the output.
 fn fd_check_problem(p: &Problem, name: &str, eps: f64, need: usize) {
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
+    let d = p.design.values(&p.first().model);
+    let c = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d, &c).unwrap();
     let idx = largest_vertex_components(p, &ev, name);
     // Central differences D(h) = (L(d + h e_i) − L(d − h e_i))/2h carry an
@@ -210,8 +209,8 @@ fn parallel_jaw_design_gradient_matches_central_differences() {
 fn parallel_jaw_full_horizon_design_gradient_matches_fitted_central_differences() {
     let name = "parallel_jaw_gripper";
     let p = shortened(name, None, 1e-11);
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
+    let d = p.design.values(&p.first().model);
+    let c = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d, &c).unwrap();
     let idx = largest_vertex_components(&p, &ev, name);
     let eps: f64 = std::env::var("FD_EPS")
@@ -228,9 +227,9 @@ fn parallel_jaw_full_horizon_design_gradient_matches_fitted_central_differences(
 #[test]
 fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
     let p = shortened("parallel_jaw_gripper", Some(40), 1e-6);
-    assert_eq!(p.others.len(), 3, "four trajectories");
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
+    assert_eq!(p.trajectories.len(), 4, "four trajectories");
+    let d = p.design.values(&p.first().model);
+    let c = p.controls.values(&p.first().controller);
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -249,9 +248,10 @@ fn collective_evaluation_is_bitwise_the_same_for_one_and_two_threads() {
     // The sum is the sum of the parts, in order; the per-trajectory design
     // gradients (`parts_design`, used by `optimizer.clip_trajectory`) are
     // each trajectory's own, bitwise.
-    let ones: Vec<_> = multi::all(&p)
+    let ones: Vec<_> = p
+        .trajectories
         .iter()
-        .map(|q| q.evaluate_one(&d, &c).unwrap())
+        .map(|q| p.evaluate_trajectory(q, &d, &c).unwrap())
         .collect();
     assert_eq!(a.parts_design.len(), 4);
     for (part, one) in a.parts_design.iter().zip(&ones) {
@@ -298,8 +298,8 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
     let verts: usize = links
         .iter()
         .map(|n| {
-            let l = sdrs::optimize::names::link(&p.model, n).unwrap();
-            p.model.links[l]
+            let l = sdrs::optimize::names::link(&p.first().model, n).unwrap();
+            p.first().model.links[l]
                 .hulls
                 .iter()
                 .map(|h| h.x_local.len())
@@ -327,7 +327,7 @@ fn ties_and_bounds_hold(name: &str, links: &[&str], h: usize, shared: usize) {
     let mut checked = 0;
     let lo = p.design.lower();
     optimize(&p, 2, |_, d: &DVector<f64>| {
-        let mut model = p.model.clone();
+        let mut model = p.first().model.clone();
         p.design.apply(&mut model, d);
         p.design.check(&model).unwrap();
         checked += 1;
@@ -407,8 +407,8 @@ fn hand_full_horizon() -> (
     usize,
 ) {
     let p = shortened("three_finger_hand", None, 1e-11);
-    let d = p.design.values(&p.model);
-    let c = p.controls.values(&p.controller);
+    let d = p.design.values(&p.first().model);
+    let c = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d, &c).unwrap();
     let i = (0..p.design.len())
         .max_by(|&a, &b| ev.grad_design[a].abs().total_cmp(&ev.grad_design[b].abs()))
@@ -428,9 +428,9 @@ fn hand_full_horizon() -> (
 fn three_finger_full_horizon_probe() {
     let (p, d, c, _, i) = hand_full_horizon();
     eprintln!("variable {}", p.design.vars[i].name);
-    let all = multi::all(&p);
+    let all = p.trajectories.iter().collect::<Vec<_>>();
     for (k, q) in all.iter().enumerate() {
-        let e = q.evaluate_one(&d, &c).unwrap();
+        let e = p.evaluate_trajectory(q, &d, &c).unwrap();
         eprintln!(
             "trajectory {k}: loss {:.9e} analytic {:.6e}",
             e.loss, e.grad_design[i]
@@ -443,8 +443,8 @@ fn three_finger_full_horizon_probe() {
             let mut dm = d.clone();
             dm[i] -= h;
             let (lp, lm) = (
-                q.loss_value_one(&dp, &c).unwrap(),
-                q.loss_value_one(&dm, &c).unwrap(),
+                p.trajectory_loss(q, &dp, &c).unwrap(),
+                p.trajectory_loss(q, &dm, &c).unwrap(),
             );
             eprintln!(
                 "  h {h:e}: L+ {lp:.12e} L- {lm:.12e} central {:.6e}",
@@ -455,10 +455,14 @@ fn three_finger_full_horizon_probe() {
     // The cube and cylinder trajectories alone (the ball's loss does not
     // converge under central differences above; this selection was made
     // after seeing that), Richardson at h = 1e-7, all 12 asserted.
-    // (`all[0]` carries the others: a copy without them is the cube alone.)
-    let mut cube = p.clone();
-    cube.others.clear();
-    for (q, label) in [(&cube, "cube"), (all[1], "cylinder")] {
+    // (A copy of the task with one of its trajectories is that one alone.)
+    let alone = |j: usize| {
+        let mut one = p.clone();
+        one.trajectories = vec![p.trajectories[j].clone()];
+        one
+    };
+    let (cube, cylinder) = (alone(0), alone(1));
+    for (q, label) in [(&cube, "cube"), (&cylinder, "cylinder")] {
         fd_check_problem(q, &format!("three_finger_hand/{label} (H = 200)"), 1e-7, 12);
     }
 }
@@ -481,10 +485,10 @@ fn three_finger_full_horizon_probe() {
 #[ignore]
 fn three_finger_ball_sensitivity_grows_at_the_pivot_rate() {
     let (p, d, c, _, i) = hand_full_horizon();
-    let ball = multi::all(&p)[2];
+    let ball = &p.trajectories[2];
     // Link poses after every step (chart independent).
     let poses = |d: &DVector<f64>| {
-        let mut sim = ball.simulator(&ball.scene_at(d, &c)).unwrap();
+        let mut sim = ball.simulator(&p.scene_at(ball, d, &c)).unwrap();
         (0..ball.horizon)
             .map(|_| {
                 let iters = sim.step().unwrap().newton.iters;
@@ -586,12 +590,12 @@ fn parallel_jaw_gradient_spike_probe() {
             .unwrap()
     });
     let d = designs[k].clone();
-    let c = p.controls.values(&p.controller);
+    let c = p.controls.values(&p.first().controller);
     eprintln!("probing iterate {k}: |g| {:.3e}", norms[k]);
-    let all = multi::all(&p);
+    let all = p.trajectories.iter().collect::<Vec<_>>();
     let evs: Vec<_> = all
         .iter()
-        .map(|q| q.evaluate_one(&d, &c).unwrap())
+        .map(|q| p.evaluate_trajectory(q, &d, &c).unwrap())
         .collect();
     for (j, e) in evs.iter().enumerate() {
         let g = &e.grad_design;
@@ -623,8 +627,8 @@ fn parallel_jaw_gradient_spike_probe() {
         1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 3e-12, 1e-12,
     ] {
         let (lp, lm) = (
-            q.loss_value_one(&(&d + h * &u), &c).unwrap(),
-            q.loss_value_one(&(&d - h * &u), &c).unwrap(),
+            p.trajectory_loss(q, &(&d + h * &u), &c).unwrap(),
+            p.trajectory_loss(q, &(&d - h * &u), &c).unwrap(),
         );
         eprintln!(
             "trajectory {j} along u: h {h:e} L+ {lp:.12e} L- {lm:.12e} central {:.4e} (adjoint {gn:.4e})",
@@ -633,7 +637,7 @@ fn parallel_jaw_gradient_spike_probe() {
     }
     truncated_check(&path, &d, &c, j);
     let run = |d: &DVector<f64>| {
-        let mut sim = q.simulator(&q.scene_at(d, &c)).unwrap();
+        let mut sim = q.simulator(&p.scene_at(q, d, &c)).unwrap();
         (0..q.horizon)
             .map(|_| {
                 let s = sim.step().unwrap();
@@ -692,12 +696,13 @@ fn truncated_check(path: &std::path::Path, d: &DVector<f64>, c: &DVector<f64>, j
         }
     }
     let p = multi::load(path, task, true).unwrap();
-    let q = multi::all(&p)[j];
-    let e = q.evaluate_one(d, c).unwrap();
+    let q = &p.trajectories[j];
+    let e = p.evaluate_trajectory(q, d, c).unwrap();
     let gn = e.grad_design.norm();
     let u = &e.grad_design / gn;
     let central = |h: f64| {
-        (q.loss_value_one(&(d + h * &u), c).unwrap() - q.loss_value_one(&(d - h * &u), c).unwrap())
+        (p.trajectory_loss(q, &(d + h * &u), c).unwrap()
+            - p.trajectory_loss(q, &(d - h * &u), c).unwrap())
             / (2.0 * h)
     };
     for h in [1e-5, 1e-6, 1e-7, 1e-8, 1e-9] {

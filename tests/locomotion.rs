@@ -33,7 +33,7 @@ fn smoke_two_iterations_keep_ties_and_bounds() {
                     "{name}: variable {i} out of bounds"
                 );
             }
-            let mut model = p.model.clone();
+            let mut model = p.first().model.clone();
             p.design.apply(&mut model, d);
             p.design.check(&model).unwrap();
             checked += 1;
@@ -43,7 +43,10 @@ fn smoke_two_iterations_keep_ties_and_bounds() {
         let off = Problem::load(&task(name), false).unwrap();
         assert!(off.design.is_empty());
         let e = off
-            .evaluate(&DVector::zeros(0), &off.controls.values(&off.controller))
+            .evaluate(
+                &DVector::zeros(0),
+                &off.controls.values(&off.first().controller),
+            )
             .unwrap();
         assert_eq!(e.loss, out.initial_loss, "{name}: same start");
     }
@@ -67,11 +70,11 @@ fn fd_setup(
 ) {
     let mut p = Problem::load(&task(name), true).unwrap();
     if let Some(h) = horizon {
-        p.horizon = h;
+        p.first_mut().horizon = h;
     }
-    p.scene.settings.newton.tol = env_or("SDRS_FD_TOL", tol);
-    let d0 = p.design.values(&p.model);
-    let c0 = p.controls.values(&p.controller);
+    p.first_mut().scene.settings.newton.tol = env_or("SDRS_FD_TOL", tol);
+    let d0 = p.design.values(&p.first().model);
+    let c0 = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d0, &c0).unwrap();
     let mut idx: Vec<usize> = (0..p.design.len())
         .filter(|&i| matches!(p.design.vars[i].targets[0], Target::Vertex { .. }))
@@ -113,7 +116,8 @@ fn fd_check_full(name: &str) -> (usize, bool) {
     let h = env_or("SDRS_FD_H", if name == "spider" { 2e-6 } else { 1e-6 });
     let label = format!(
         "{name} H={} h={h:.0e} tol={:.0e}",
-        p.horizon, p.scene.settings.newton.tol
+        p.first().horizon,
+        p.first().scene.settings.newton.tol
     );
     let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
     common::fd::check_problem_sample(&label, &p, &d0, &c0, &ev, &picked, h, stencil)
@@ -146,7 +150,8 @@ fn fd_check_short(name: &str) -> (usize, bool) {
     let h = env_or("SDRS_FD_H", if name == "spider" { 4e-6 } else { 1e-6 });
     let label = format!(
         "{name} H={} h={h:.0e} tol={:.0e}",
-        p.horizon, p.scene.settings.newton.tol
+        p.first().horizon,
+        p.first().scene.settings.newton.tol
     );
     let stencil = common::fd::stencil_from_env(common::fd::Stencil::Richardson { levels: 1 });
     common::fd::check_problem_sample(&label, &p, &d0, &c0, &ev, &picked, h, stencil)
@@ -201,7 +206,7 @@ fn full_horizon_design_gradients_match_central_differences() {
 fn exported_optimized_scene_reproduces_the_final_loss() {
     let dir = scratch_dir("loco-export");
     let mut p = Problem::load(&task("biped"), true).unwrap();
-    p.horizon = 120;
+    p.first_mut().horizon = 120;
     let out = optimize(&p, 2, |_, _| {}).unwrap();
     assert!(out.loss < out.initial_loss, "2 iterations improve the loss");
     sdrs::optimize::output::write_all(&dir, &p, &out, serde_json::Value::Null).unwrap();
@@ -214,7 +219,10 @@ fn exported_optimized_scene_reproduces_the_final_loss() {
     std::fs::write(&tp, task_yaml).unwrap();
     let q = Problem::load(&tp, false).unwrap();
     let e = q
-        .evaluate(&DVector::zeros(0), &q.controls.values(&q.controller))
+        .evaluate(
+            &DVector::zeros(0),
+            &q.controls.values(&q.first().controller),
+        )
         .unwrap();
     let rel = (e.loss - out.loss).abs() / out.loss;
     eprintln!(
@@ -223,7 +231,7 @@ fn exported_optimized_scene_reproduces_the_final_loss() {
     );
     assert!(rel <= 1e-8, "replayed {} vs {}", e.loss, out.loss);
     // The design really changed (else the test would not test the export).
-    assert!(out.design != p.design.values(&p.model));
+    assert!(out.design != p.design.values(&p.first().model));
     // The per-link OBJs of the feet exist.
     assert!(dir.join("meshes/biped_left_foot.obj").exists());
 }
@@ -235,15 +243,19 @@ fn metrics_distinguish_standing_from_falling() {
     let p = Problem::load(&task("biped"), false).unwrap();
     let m = Metrics::from_problem(&p).unwrap().unwrap();
     let t = m
-        .measure(&p, &DVector::zeros(0), &p.controls.values(&p.controller))
+        .measure(
+            &p,
+            &DVector::zeros(0),
+            &p.controls.values(&p.first().controller),
+        )
         .unwrap();
     assert!(!t.upright_at_horizon && t.tilt_final_deg > 60.0, "{t:?}");
     assert!(t.first_fall_time.unwrap() < 2.0, "{t:?}");
     // Spider with every sine amplitude zero (the gait's offsets are 0: the
     // PD holds the initial pose): stands still on the slope.
     let mut p = Problem::load(&task("spider"), false).unwrap();
-    p.horizon = 200;
-    let mut c = p.controls.values(&p.controller);
+    p.first_mut().horizon = 200;
+    let mut c = p.controls.values(&p.first().controller);
     let zero_amp = amplitude_indices(&p);
     for &i in &zero_amp {
         c[i] = 0.0;
@@ -286,8 +298,9 @@ fn controller_step_probe() {
     use sdrs::optimize::controls::ControlTarget;
     let name = std::env::var("SDRS_PROBE_TASK").unwrap_or_else(|_| "spider".into());
     let mut p = Problem::load(&task(&name), false).unwrap();
-    p.scene.settings.newton.tol = env_or("SDRS_FD_TOL", p.scene.settings.newton.tol);
-    let mut c = p.controls.values(&p.controller);
+    p.first_mut().scene.settings.newton.tol =
+        env_or("SDRS_FD_TOL", p.first().scene.settings.newton.tol);
+    let mut c = p.controls.values(&p.first().controller);
     if let Ok(dir) = std::env::var("SDRS_PROBE_DIR") {
         let scene = task(&name).parent().unwrap().join(&p.task.scene);
         let key = checkpoint::RunKey::new(&task(&name), &scene, false, 0).unwrap();
@@ -310,7 +323,7 @@ fn controller_step_probe() {
     }
     eprintln!(
         "tol {:.0e} loss {:.12e} |g| {:.6e}; |g| by kind offset {:.3e} amplitude {:.3e} frequency {:.3e} phase {:.3e}",
-        p.scene.settings.newton.tol,
+        p.first().scene.settings.newton.tol,
         ev.loss,
         g.norm(),
         kinds[0].sqrt(),
@@ -360,7 +373,7 @@ fn split_radius_backtracks_the_design_and_the_controller_separately() {
     use sdrs::optimize::task::RadiusRule;
     let load = |design: bool, rule: RadiusRule| {
         let mut p = Problem::load(&task("spider"), design).unwrap();
-        p.horizon = 60;
+        p.first_mut().horizon = 60;
         p.task.optimizer.radius = rule;
         p
     };

@@ -15,7 +15,7 @@ use sdrs::optimize::{Problem, optimize};
 
 fn problem(task: &str, tol: f64) -> Problem {
     let mut p = Problem::load(&robots(&format!("topology_peg/{task}")), true).unwrap();
-    p.scene.settings.newton.tol = tol;
+    p.first_mut().scene.settings.newton.tol = tol;
     p
 }
 
@@ -40,7 +40,7 @@ fn env<T: std::str::FromStr>(key: &str, default: T) -> T {
 
 /// The optimizer's iterate after `k` iterations of the committed task.
 fn iterate(p: &Problem, k: usize) -> DVector<f64> {
-    let mut last = p.design.values(&p.model);
+    let mut last = p.design.values(&p.first().model);
     optimize(p, k, |_, d: &DVector<f64>| last = d.clone()).unwrap();
     last
 }
@@ -59,7 +59,7 @@ fn vertex_of(p: &Problem, i: usize) -> (usize, usize) {
 /// gradients, its largest component, plus the variables `extra`. Returns
 /// `(variable, relative error)` for each.
 fn check(p: &Problem, d: &DVector<f64>, extra: &[usize], label: &str) -> Vec<(usize, f64)> {
-    let c = p.controls.values(&p.controller);
+    let c = p.controls.values(&p.first().controller);
     let ev = p.evaluate(d, &c).unwrap();
     let g = &ev.grad_design;
     let mut best: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
@@ -139,7 +139,7 @@ fn design_gradient_of_the_shared_vertex_space_matches_central_differences() {
 fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences() {
     let p = problem("task.yaml", 1e-11);
     let mut d = iterate(&p, env("FD_ITER", CHECK_ITER));
-    let c = p.controls.values(&p.controller);
+    let c = p.controls.values(&p.first().controller);
     let g0 = p.evaluate(&d, &c).unwrap().grad_design;
     let h = vertex_of(&p, g0.iamax()).0;
     let zs: Vec<usize> = vars_of_block(&p, h)
@@ -152,7 +152,7 @@ fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences()
     for &i in &zs {
         d[i] = top - 1e-4 * (top - d[i]);
     }
-    let mut model = p.model.clone();
+    let mut model = p.first().model.clone();
     p.design.apply(&mut model, &d);
     p.design.check(&model).unwrap();
     let x = &model.links[0].hulls[h].x_local;
@@ -210,13 +210,13 @@ fn ties_and_bounds_hold_at_every_iterate_for_both_connectivities() {
             "task.yaml" => assert_eq!(points, 16 * 8 + 24, "{task}: corners + face points"),
             _ => assert_eq!(points, 5 * 5 * 2, "{task}: lattice points"),
         }
-        let d0 = p.design.values(&p.model);
+        let d0 = p.design.values(&p.first().model);
         let tied: Vec<usize> = (0..p.design.len())
             .filter(|&i| p.design.vars[i].targets.len() >= 2)
             .collect();
         let (mut checked, mut moved) = (0, false);
         optimize(&p, 40, |_, d: &DVector<f64>| {
-            let mut model = p.model.clone();
+            let mut model = p.first().model.clone();
             p.design.apply(&mut model, d);
             p.design.check(&model).unwrap();
             checked += 1;

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Timing of one barrier-potential evaluation (value + gradient + Hessian,
 vertex space, collision set built from scratch) with ipc-toolkit on the hull
-pairs written by `cargo run --release -p sdrs-ipc --example bench_potential
+pairs written by `cargo run --release -p sdrs-cli --example bench_potential
 CASES.json`, for the side-by-side table of the README.
 
 The two hulls are one ipctk CollisionMesh without a per-pair filter: a

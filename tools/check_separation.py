@@ -10,7 +10,7 @@ lower bound of the distance). Prints a JSON report and exits 1 if any pair is
 at distance <= 0 (touching or overlapping), 2 on bad input.
 
 If DIR/surfaces.json exists (written by `sdrs simulate --contact ipc --export`
-when `contact.surface: source`), the links it lists are checked with those
+when `contact.ipc.surface: source`), the links it lists are checked with those
 triangle meshes (possibly non-convex) instead of their hulls: mesh pairs use
 FCL's BVH–BVH distance (OBBRSS), and since a surface distance cannot see one
 solid inside another, a pair with a positive distance whose world boxes nest

@@ -209,11 +209,11 @@ def three_finger(tmp):
             "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
                          "initial": {"q": [0.0, 0.0, zc, 0.0, 0.0, 0.0]}}],
             "ground": {"height": 0.0},
-            # dhat: IPC only (the mesh baseline, `--contact ipc`), ignored by SDRS: d̂ = 3 mm =
+            # ipc.dhat: IPC only (the mesh baseline, `--contact ipc`), ignored by SDRS: d̂ = 3 mm =
             # the SDRS barrier support s. Set 2026-11-26 after measuring that IPC's default
             # d̂ = 1 mm (and 1 mm with κ = 1e4 or 1e6) stops at step 60 of the cube trajectory
             # (line search: no decrease at ‖∇O‖∞ = 1.4e-3); with 3 mm all three run 200 steps.
-            "contact": {**g["contact"], "exclude": exclude, "s": 0.003, "mu": 0.05, "dhat": 0.003},
+            "contact": {**g["contact"], "exclude": exclude, "s": 0.003, "mu": 0.05, "ipc": {"dhat": 0.003}},
         }
         write(d / f"scene_{name}.yaml", scene,
               f"# Three-fingered hand grasping the {name} (written by tools/make_grasp_scenes.py;\n"

@@ -14,7 +14,7 @@ pub struct ContactArgs {
     /// IPC baseline). Default: the scene's `contact.model`.
     #[arg(long, value_parser = ["sdrs", "ipc"])]
     pub contact: Option<String>,
-    /// IPC activation distance d̂ (m), overriding `contact.dhat`.
+    /// IPC activation distance d̂ (m), overriding `contact.ipc.dhat`.
     #[arg(long)]
     pub dhat: Option<f64>,
     /// IPC barrier stiffness κ (J/m⁴), overriding `contact.kappa`. When a
@@ -53,7 +53,10 @@ impl ContactArgs {
                     "--dhat: the IPC activation distance must be positive and finite (m), got {d}"
                 );
             }
-            c.dhat = d;
+            let mut ipc =
+                sdrs_ipc::settings::IpcSettings::of(c).map_err(|e| e.at(&scene.source))?;
+            ipc.dhat = d;
+            ipc.store(c).map_err(|e| e.at(&scene.source))?;
         }
         if let Some(k) = self.kappa {
             if !(k > 0.0 && k.is_finite()) {
@@ -66,18 +69,23 @@ impl ContactArgs {
     }
 }
 
-/// With `--export` under IPC with `contact.surface: source`: writes
+/// With `--export` under IPC with `contact.ipc.surface: source`: writes
 /// `DIR/surfaces.json` (the source-mesh surfaces, link frame), which
 /// `tools/check_separation.py` uses instead of those links' hulls.
 pub fn export_surfaces(dir: &std::path::Path, scene: &Scene) -> Result<()> {
     let Some(c) = scene.contact.as_ref() else {
         return Ok(());
     };
-    if c.model != ContactModelKind::Ipc || c.surface.is_hulls() {
+    if c.model != ContactModelKind::Ipc {
         return Ok(());
     }
-    let meshes =
-        sdrs_ipc::factory::link_meshes(scene, c.surface).map_err(|e| e.at(&scene.source))?;
+    let surface = sdrs_ipc::settings::IpcSettings::of(c)
+        .map_err(|e| e.at(&scene.source))?
+        .surface;
+    if surface.is_hulls() {
+        return Ok(());
+    }
+    let meshes = sdrs_ipc::factory::link_meshes(scene, surface).map_err(|e| e.at(&scene.source))?;
     if let Some(json) = sdrs_ipc::surface::export::surfaces_json(&scene.model, &meshes) {
         sdrs::output::write_atomic(
             &dir.join("surfaces.json"),
@@ -106,12 +114,10 @@ pub fn configure_problem(
 ) -> Result<()> {
     let factory: sdrs::scene::SharedContactFactory =
         std::sync::Arc::new(sdrs_ipc::IpcFactory::default());
-    args.apply(&mut problem.scene)?;
-    problem.contact_factory = Some(factory.clone());
-    for o in &mut problem.others {
-        args.apply(&mut o.scene)?;
-        o.contact_factory = Some(factory.clone());
+    for t in &mut problem.trajectories {
+        args.apply(&mut t.scene)?;
     }
+    problem.set_contact_factory(factory);
     let Some(cage) = cage else {
         sdrs_ipc::surface::design::check_vertex_design(problem)?;
         return Ok(());
@@ -122,12 +128,12 @@ pub fn configure_problem(
             .as_ref()
             .is_some_and(|c| c.model == ContactModelKind::Ipc)
     };
-    if !is_ipc(&problem.scene) {
+    let first = &problem.first().scene;
+    if !is_ipc(first) {
         bail!(
             "--cage {cage}: a cage deforms the IPC baseline's meshes, but {} uses contact.model: {} (add --contact ipc)",
-            problem.scene.source.display(),
-            problem
-                .scene
+            first.source.display(),
+            first
                 .contact
                 .as_ref()
                 .map_or("none (no contact section)", |c| c.model.name())

@@ -1,5 +1,8 @@
 //! The parts of the `sdrs` application that the Python package shares
-//! (`sdrs-py` depends on this library): the SVG plots ([`svg`]). The command
+//! (`sdrs-py` depends on this library): the SVG plots ([`svg`]), and what
+//! the binary shares with its examples: the contact-potential benchmark
+//! ([`potential_bench`], `sdrs compare` and `examples/bench_potential.rs`). The command
 //! line itself is the `sdrs` binary (`main.rs`).
 
+pub mod potential_bench;
 pub mod svg;

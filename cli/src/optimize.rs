@@ -74,8 +74,8 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         a.cage.as_deref(),
         design_on,
     )?;
-    let metrics = sdrs::optimize::metrics::Metrics::from_problem(&problem)?;
-    let key = checkpoint::RunKey::new(&a.task, &problem.scene.source, design_on, a.seed)
+    let metrics = sdrs::optimize::metric::task_metrics(&problem)?;
+    let key = checkpoint::RunKey::new(&a.task, &problem.first().scene.source, design_on, a.seed)
         .with_context(|| format!("{}: cannot hash the task and scene", a.task.display()))?;
     let resume = match &a.resume {
         Some(dir) => Some(checkpoint::load(dir, &key)?),
@@ -103,7 +103,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         a.task.display(),
         problem.design.len(),
         problem.controls.len(),
-        problem.horizon,
+        problem.first().horizon,
         iters,
         resume
             .as_ref()
@@ -124,7 +124,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     };
     // Every iteration's design, for the viewer's design-at-iteration slider
     // (after a resume: the iterations of this session).
-    let mut designs: Vec<sdrs::optimize::playback::IterDesign> = Vec::new();
+    let mut designs: Vec<sdrs::output::codesign::IterDesign> = Vec::new();
     let outcome = sdrs::optimize::optimize_with(
         &problem,
         iters,
@@ -138,20 +138,9 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     )?;
     pb.finish_and_clear();
     let (d0, c0) = sdrs::optimize::start(&problem, a.seed);
-    let task_metrics = match &metrics {
-        Some(m) => serde_json::json!({
-            "initial": m.measure(&problem, &d0, &c0)?,
-            "final": m.measure(&problem, &outcome.design, &outcome.controller)?,
-            "definitions": "distance = (COM(H) - COM(0)) . direction (m); tilt = angle (deg) between the reference up n and the torso's initially-up axis; fall = first step with tilt > fall_tilt_deg; upright_at_horizon = tilt(H) <= fall_tilt_deg (see sdrs::optimize::metrics)",
-        }),
-        None => serde_json::Value::Null,
-    };
-    // Locomotion metrics (initial/final/definitions) and the grasp and
-    // topology metrics side by side under `extra.metrics`.
-    let mut metrics_json = sdrs::optimize::grasp_metrics::summary(&problem, &d0, &c0, &outcome)?;
-    if let (Some(m), serde_json::Value::Object(t)) = (metrics_json.as_object_mut(), &task_metrics) {
-        m.extend(t.clone());
-    }
+    // The grasp, topology and (with a `metrics:` section) locomotion
+    // metrics side by side under `extra.metrics`.
+    let metrics_json = sdrs::optimize::metric::summarize(&problem, &metrics, (&d0, &c0), &outcome)?;
     sdrs::optimize::output::write_all(
         &out,
         &problem,
@@ -165,7 +154,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
                 "iterate": problem.task.optimizer.result,
                 "iteration": outcome.iter,
             },
-            "trajectories": 1 + problem.others.len(),
+            "trajectories": problem.trajectories.len(),
             "metrics": metrics_json,
         }),
     )?;
@@ -176,7 +165,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     )?;
     sdrs::output::write_atomic(&out.join("convergence.svg"), convergence.as_bytes())?;
     sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
-    let shapes = sdrs::optimize::shapes::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
+    let shapes = sdrs::output::codesign::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
     if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
     }
@@ -199,11 +188,11 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         iters,
         out.display()
     );
-    if let Some(m) = task_metrics.get("final") {
+    if let Some(m) = metrics_json.get("final") {
         eprintln!(
             "distance {:.3} m (initial {:.3}), upright at H: {}, first fall: {}",
             m["distance"].as_f64().unwrap_or(f64::NAN),
-            task_metrics["initial"]["distance"]
+            metrics_json["initial"]["distance"]
                 .as_f64()
                 .unwrap_or(f64::NAN),
             m["upright_at_horizon"],
@@ -221,10 +210,10 @@ fn write_pictures(
     problem: &sdrs::optimize::Problem,
     (d0, c0): (&nalgebra::DVector<f64>, &nalgebra::DVector<f64>),
     outcome: &sdrs::optimize::Outcome,
-    designs: &[sdrs::optimize::playback::IterDesign],
+    designs: &[sdrs::output::codesign::IterDesign],
     shapes: Option<&str>,
 ) -> Result<()> {
-    use sdrs::optimize::playback as pb;
+    use sdrs::output::codesign as pb;
     let initial = pb::rollout(problem, d0, c0).context("rollout of the initial design")?;
     let optimized = pb::rollout(problem, &outcome.design, &outcome.controller)
         .context("rollout of the optimized design")?;

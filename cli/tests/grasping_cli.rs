@@ -208,7 +208,7 @@ fn three_finger_smoke_runs_keep_ties_and_bounds_and_report_metrics() {
     // hull touching an object, so it is not asserted.
     check_ties("three_finger_hand/scene_cube.yaml", &scenes, 17);
     let initial = sdrs::optimize::Problem::load(&robots(task), true).unwrap();
-    let d0 = initial.design.values(&initial.model);
+    let d0 = initial.design.values(&initial.first().model);
     let vals = on["design"].as_object().unwrap();
     assert!(
         initial

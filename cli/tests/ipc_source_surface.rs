@@ -1,4 +1,4 @@
-//! `contact.surface: source` end to end: non-convex source meshes (a
+//! `contact.ipc.surface: source` end to end: non-convex source meshes (a
 //! U-shaped channel, an L-shaped bar) as IPC contact surfaces under `sdrs
 //! simulate --contact ipc --export`, checked pair by pair with python-fcl on
 //! the meshes themselves (`surfaces.json`); `sdrs import` writes the source
@@ -19,7 +19,7 @@ use support::{scratch_dir, sdrs};
 const SCENE: &str = "
 version: 1
 dt: 0.005
-contact: {model: ipc, surface: source, mu: 0.3}
+contact: {model: ipc, mu: 0.3, ipc: {surface: source}}
 obstacles:
   - name: channel
     hulls: [{box: {size: [0.6, 0.6, 0.3], center: [0, 0, 0.15]}}]
@@ -118,7 +118,7 @@ fn import_writes_the_source_mesh_and_ipc_uses_it() {
     // Switch the design to IPC on its source mesh and run it.
     let ipc = text.replacen(
         "contact:\n",
-        "contact:\n  model: ipc\n  surface: source\n",
+        "contact:\n  model: ipc\n  ipc: {surface: source}\n",
         1,
     );
     assert_ne!(ipc, text, "the design has no contact section");
@@ -169,8 +169,14 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
     let mut p = sdrs::optimize::Problem::load(&task, true).unwrap();
     let s = sdrs_ipc::cage::cage_problem(&mut p, sdrs_ipc::cage::CageResolution::Coarse).unwrap();
     assert_eq!(s.cage_vertices, vec![26]);
-    let ell = p.model.links.iter().position(|l| l.name == "ell").unwrap();
-    assert_eq!(p.model.links[ell].surface.len(), 12);
+    let ell = p
+        .first()
+        .model
+        .links
+        .iter()
+        .position(|l| l.name == "ell")
+        .unwrap();
+    assert_eq!(p.first().model.links[ell].surface.len(), 12);
     let blends = p
         .design
         .vars
@@ -181,15 +187,19 @@ fn optimize_refuses_hull_edits_of_a_source_surface_and_cages_the_source_mesh() {
     assert!(blends > 0);
     // Moving every cage vertex by +1 cm in x moves the source mesh with it
     // (mean value coordinates reproduce translations).
-    let mut x = p.design.values(&p.model);
+    let mut x = p.design.values(&p.first().model);
     for (k, v) in p.design.vars.iter().enumerate() {
         if v.name.ends_with(".x") {
             x[k] += 0.01;
         }
     }
-    let mut m = p.model.clone();
+    let mut m = p.first().model.clone();
     p.design.apply(&mut m, &x);
-    for (a, b) in m.links[ell].surface.iter().zip(&p.model.links[ell].surface) {
+    for (a, b) in m.links[ell]
+        .surface
+        .iter()
+        .zip(&p.first().model.links[ell].surface)
+    {
         assert!(((a - b) - nalgebra::Vector3::new(0.01, 0.0, 0.0)).norm() < 1e-12);
     }
 }
@@ -243,7 +253,7 @@ fn imported_torus_holds_a_box_in_its_hole_only_with_its_source_mesh() {
     let with_box = |surface: &str| {
         let s = text.replacen(
             "contact:\n",
-            &format!("contact:\n  model: ipc\n  surface: {surface}\n"),
+            &format!("contact:\n  model: ipc\n  ipc: {{surface: {surface}}}\n"),
             1,
         ) + &format!(
             "objects:\n  - name: peg\n    mass: 0.2\n    hulls: [{{box: {{size: [0.1, 0.1, 0.1]}}}}]\n    initial: {{q: [0, 0, {zc}, 0, 0, 0]}}\n"

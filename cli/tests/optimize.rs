@@ -39,8 +39,8 @@ fn optimize_cli_writes_outputs_and_the_design_reproduces_the_loss() {
     let p = Problem::load(&task(), true).unwrap();
     let scene = sdrs::scene::Scene::load(out.join("design.yaml")).unwrap();
     let mut sim = scene.simulator();
-    let tape = sdrs::diff::record(&mut sim, p.horizon).unwrap();
-    let loss = sdrs::diff::loss_of(&scene.model, &tape, &p.loss);
+    let tape = sdrs::diff::record(&mut sim, p.first().horizon).unwrap();
+    let loss = sdrs::diff::loss_of(&scene.model, &tape, &p.first().loss);
     eprintln!("design.yaml reproduces loss {loss:.6e} (optimizer reported {final_loss:.6e})");
     assert!((loss - final_loss).abs() <= 1e-9 * final_loss.max(1e-12) + 1e-12);
     // A second run refuses to write into the non-empty directory.
@@ -80,7 +80,7 @@ fn imported_shared_vertex_ties_are_one_design_variable_and_hold_while_optimizing
     );
     let mut checked = 0;
     optimize(&p, 3, |_, d| {
-        let mut model = p.model.clone();
+        let mut model = p.first().model.clone();
         p.design.apply(&mut model, d);
         p.design.check(&model).unwrap();
         checked += 1;

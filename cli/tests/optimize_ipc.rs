@@ -17,7 +17,7 @@ dt: 0.01
 gravity: [0, 0, -9.81]
 solver: {tol: 1.0e-12}
 ground: {height: 0}
-contact: {model: ipc, dhat: 1.0e-3, mu: 0.4, eps_v: 1.0e-2}
+contact: {model: ipc, mu: 0.4, ipc: {dhat: 1.0e-3, eps_v: 1.0e-2}}
 robots:
   - name: finger
     links:
@@ -116,7 +116,7 @@ fn optimize_with_ipc_and_a_coarse_cage_lowers_the_loss_and_starts_from_the_fd_gr
 
     // The gradient at the start against central differences of the loss.
     let p = caged_problem(&task);
-    let d0 = p.design.values(&p.model);
+    let d0 = p.design.values(&p.first().model);
     let c0 = DVector::zeros(p.controls.len());
     let ev = p.evaluate(&d0, &c0).unwrap();
     assert!((ev.loss - l0).abs() <= 1e-12 * l0, "{} vs {l0}", ev.loss);
@@ -148,7 +148,7 @@ fn optimize_with_ipc_and_a_coarse_cage_lowers_the_loss_and_starts_from_the_fd_gr
 #[test]
 fn cage_needs_ipc_contact_and_a_valid_resolution() {
     let (dir, task) = write_task("optimize_ipc_bad");
-    let sdrs_scene = SCENE.replace("model: ipc, dhat: 1.0e-3, ", "");
+    let sdrs_scene = SCENE.replace("model: ipc, ", "");
     std::fs::write(dir.join("scene.yaml"), sdrs_scene).unwrap();
     let run = |extra: &[&str]| {
         let o = sdrs()
@@ -189,7 +189,7 @@ fn caged_box_shaped_link_keeps_its_triangulation_and_the_gradient_matches_fd() {
     assert_ne!(boxy, SCENE);
     std::fs::write(dir.join("scene.yaml"), boxy).unwrap();
     let p = caged_problem(&task);
-    let d0 = p.design.values(&p.model);
+    let d0 = p.design.values(&p.first().model);
     let c0 = DVector::zeros(p.controls.len());
     let ev = p.evaluate(&d0, &c0).unwrap();
     let g = &ev.grad_design;
@@ -221,7 +221,7 @@ fn caged_box_shaped_link_keeps_its_triangulation_and_the_gradient_matches_fd() {
     if std::env::var("IPC_CAGE_DIAG").is_ok() {
         // Without the frozen triangulation (re-triangulated hulls).
         let mut q = p.clone();
-        q.contact_factory = Some(std::sync::Arc::new(sdrs_ipc::IpcFactory::default()));
+        q.set_contact_factory(std::sync::Arc::new(sdrs_ipc::IpcFactory::default()));
         let gq = q.evaluate(&d0, &c0).unwrap().grad_design;
         for &i in order.iter().take(6) {
             eprintln!(

@@ -34,7 +34,7 @@ fn slice(x: &Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option<Vec<f64>>> {
 
 impl PyTask {
     fn single(&self) -> PyResult<()> {
-        if self.problem.others.is_empty() {
+        if self.problem.trajectories.len() == 1 {
             Ok(())
         } else {
             Err(SdrsError::new_err(format!(
@@ -55,20 +55,20 @@ impl PyTask {
         let pr = &self.problem;
         let d = match d {
             Some(d) => vector("design", &d, pr.design.len())?,
-            None => pr.design.values(&pr.model),
+            None => pr.design.values(&pr.first().model),
         };
         let c = match c {
             Some(c) => vector("controller", &c, pr.controls.len())?,
-            None => pr.controls.values(&pr.controller),
+            None => pr.controls.values(&pr.first().controller),
         };
-        let mut model = pr.model.clone();
+        let mut model = pr.first().model.clone();
         pr.design.apply(&mut model, &d);
-        let mut controller = pr.controller.clone();
+        let mut controller = pr.first().controller.clone();
         pr.controls.apply(&mut controller, &c);
-        let mut scene = pr.scene.clone();
+        let mut scene = pr.first().scene.clone();
         scene.model = model;
         scene.controller = controller;
-        let p = p.unwrap_or_else(|| physics_values(&pr.scene));
+        let p = p.unwrap_or_else(|| physics_values(&pr.first().scene));
         apply_physics(&mut scene, &p)?;
         Ok((scene, p))
     }
@@ -111,14 +111,14 @@ impl PyTask {
     /// Steps `H` per rollout.
     #[getter]
     fn horizon(&self) -> usize {
-        self.problem.horizon
+        self.problem.first().horizon
     }
 
     /// Initial design vector (attachment points and vertices the task
     /// designs, m).
     #[getter]
     fn design<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        arr(py, &self.problem.design.values(&self.problem.model))
+        arr(py, &self.problem.design.values(&self.problem.first().model))
     }
 
     /// Names of `design` (`robot/link.attach.x`, vertex coordinates).
@@ -148,27 +148,34 @@ impl PyTask {
     /// parameters, and gains with `controller.gains`).
     #[getter]
     fn controller<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        arr(py, &self.problem.controls.values(&self.problem.controller))
+        arr(
+            py,
+            &self
+                .problem
+                .controls
+                .values(&self.problem.first().controller),
+        )
     }
 
     /// Names of `controller` (`robot/joint.<signal parameter>`, gains).
     #[getter]
     fn controller_names(&self) -> Vec<String> {
-        self.problem
-            .controls
-            .names(&self.problem.model, &self.problem.controller)
+        self.problem.controls.names(
+            &self.problem.first().model,
+            &self.problem.first().controller,
+        )
     }
 
     /// The scene's physics vector (see `Scene.physics`).
     #[getter]
     fn physics<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        physics_values(&self.problem.scene).into_pyarray(py)
+        physics_values(&self.problem.first().scene).into_pyarray(py)
     }
 
     /// Names of `physics`.
     #[getter]
     fn physics_names(&self) -> Vec<String> {
-        physics_names(&self.problem.scene)
+        physics_names(&self.problem.first().scene)
     }
 
     /// The optimizer's starting point `(design, controller)` for `seed`
@@ -200,15 +207,15 @@ impl PyTask {
         let (g, p) = py
             .detach(|| {
                 let (scene, p) = self.configured(d, c, p)?;
-                let mut rec = forward(&scene, pr.horizon)?;
-                Ok::<_, String>((backward_of(&mut rec, &pr.loss)?, p))
+                let mut rec = forward(&scene, pr.first().horizon)?;
+                Ok::<_, String>((backward_of(&mut rec, &pr.first().loss)?, p))
             })
             .map_err(err)?;
         let out = grads_dict(
             py,
             &pr.design,
             &pr.controls,
-            pr.scene.contact.is_some(),
+            pr.first().scene.contact.is_some(),
             &p,
             &g,
         )?;
@@ -243,25 +250,25 @@ impl PyTask {
         let (rec, p, scene) = py
             .detach(|| {
                 let (scene, p) = self.configured(d, c, p)?;
-                Ok::<_, String>((forward(&scene, pr.horizon)?, p, scene))
+                Ok::<_, String>((forward(&scene, pr.first().horizon)?, p, scene))
             })
             .map_err(err)?;
         let loss = if state {
             f64::NAN
         } else {
-            sdrs::diff::loss_of(&rec.sim.model, &rec.tape, &pr.loss)
+            sdrs::diff::loss_of(&rec.sim.model, &rec.tape, &pr.first().loss)
         };
         Ok(PyRollout {
             rec: Some(rec),
-            loss_terms: pr.loss.clone(),
+            loss_terms: pr.first().loss.clone(),
             design: pr.design.clone(),
             controls: pr.controls.clone(),
-            contact: pr.scene.contact.is_some(),
+            contact: pr.first().scene.contact.is_some(),
             physics: p,
             state,
             loss,
             scene,
-            steps: pr.horizon,
+            steps: pr.first().horizon,
             backward_done: false,
         })
     }
@@ -310,7 +317,7 @@ impl PyTask {
             self.problem.task_path.display(),
             self.problem.design.len(),
             self.problem.controls.len(),
-            self.problem.horizon
+            self.problem.first().horizon
         )
     }
 }

@@ -65,11 +65,10 @@
 //! ground plane (a half-space cannot be tunnelled through) are not tested.
 
 use super::separation::{Separation, separate};
-use crate::geometry::{BroadPhase, WorldHulls, hull_boxes};
+use crate::geometry::{Aabb, BroadPhase, WorldHulls, hull_boxes};
 use crate::kinematics::{KinOrder, Kinematics, SegmentMotion, hull_radii};
 use crate::model::Model;
 use nalgebra::{DVector, Matrix3, Vector3};
-use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::query::gjk::VoronoiSimplex;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -237,7 +236,7 @@ impl Ccd {
         let (pa, pb) = (self.pad[a], self.pad[b]);
         let (ba, bb) = (&ba[a], &bb[b]);
         (0..3)
-            .map(|e| (bb.mins[e] + pb - (ba.maxs[e] - pa)).max(ba.mins[e] + pa - (bb.maxs[e] - pb)))
+            .map(|e| (bb.lo[e] + pb - (ba.hi[e] - pa)).max(ba.lo[e] + pa - (bb.hi[e] - pb)))
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
@@ -308,10 +307,10 @@ impl Ccd {
             let slack = 1e-12 * (pad[a] + pad[b]);
             let box_gap = (0..3)
                 .map(|e| {
-                    let m = 1e-12 * (ba.mins[e].abs() + ba.maxs[e].abs())
-                        + 1e-12 * (bb.mins[e].abs() + bb.maxs[e].abs())
+                    let m = 1e-12 * (ba.lo[e].abs() + ba.hi[e].abs())
+                        + 1e-12 * (bb.lo[e].abs() + bb.hi[e].abs())
                         + slack;
-                    (bb.mins[e] - ba.maxs[e]).max(ba.mins[e] - bb.maxs[e]) - m
+                    (bb.lo[e] - ba.hi[e]).max(ba.lo[e] - bb.hi[e]) - m
                 })
                 .fold(f64::NEG_INFINITY, f64::max);
             let (sa, sb) = (sphere(hulls, spheres, a), sphere(hulls, spheres, b));

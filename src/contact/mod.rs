@@ -79,4 +79,4 @@ pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
     VertexOutcome, contact_pair, contact_vertices,
 };
-pub use settings::{ContactModelKind, ContactSettings, SurfaceKind};
+pub use settings::{ContactModelKind, ContactSettings};

@@ -1,6 +1,7 @@
 //! Validated contact parameters of a scene: the model (SDRS or the IPC
 //! baseline), the barrier's support `s` and stiffness `κ`, friction, the
-//! excluded link pairs and the CCD options. The scene loader
+//! excluded link pairs and the CCD options; the IPC baseline's own section
+//! (`contact.ipc`) is kept as written for the baseline to read. The scene loader
 //! (`crate::scene`) fills them from a file's `contact:` section.
 
 use serde::{Deserialize, Serialize};
@@ -17,32 +18,6 @@ pub enum ContactModelKind {
     /// Mesh-based Incremental Potential Contact (Li et al. 2020), the
     /// baseline in `baselines/ipc`.
     Ipc,
-}
-
-/// The IPC baseline's contact surface of each link (`contact.surface`).
-#[derive(
-    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum SurfaceKind {
-    /// The triangulated boundaries of the link's convex hulls.
-    #[default]
-    Hulls,
-    /// The link's `surface_mesh` (its hulls where it has none).
-    Source,
-}
-
-impl SurfaceKind {
-    pub fn is_hulls(&self) -> bool {
-        *self == SurfaceKind::Hulls
-    }
-    /// Name as written in scene files.
-    pub fn name(&self) -> &'static str {
-        match self {
-            SurfaceKind::Hulls => "hulls",
-            SurfaceKind::Source => "source",
-        }
-    }
 }
 
 impl ContactModelKind {
@@ -63,12 +38,10 @@ impl ContactModelKind {
 pub struct ContactSettings {
     /// The contact model (`contact.model`; default SDRS).
     pub model: ContactModelKind,
-    /// The IPC baseline's contact surface (`contact.surface`; default hulls).
-    pub surface: SurfaceKind,
-    /// IPC activation distance `d̂` (m; unused by the SDRS model).
-    pub dhat: f64,
-    /// IPC friction smoothing speed `ε_v` (m/s; unused by the SDRS model).
-    pub eps_v: f64,
+    /// The IPC baseline's own settings (`contact.ipc`), as written: the
+    /// core passes them through uninterpreted; the baseline parses and
+    /// checks them (`sdrs_ipc::settings`).
+    pub ipc: Option<serde_yaml::Value>,
     /// Barrier support `s`.
     pub s: f64,
     /// Barrier stiffness `κ`.

@@ -20,9 +20,8 @@
 //! the pair set is the same as before, and it is returned sorted: the result
 //! does not depend on the sweep order, and is deterministic.
 
+use super::aabb::Aabb;
 use super::hulls::WorldHulls;
-use parry3d_f64::bounding_volume::Aabb;
-use parry3d_f64::math::Vector;
 use std::cmp::Ordering;
 use std::collections::BTreeSet;
 
@@ -31,7 +30,7 @@ use std::collections::BTreeSet;
 #[derive(Clone, Default)]
 pub struct BroadPhase {
     aabbs: Vec<Aabb>,
-    /// Box indices sorted by `(mins[axis], index)`; kept between queries.
+    /// Box indices sorted by `(lo[axis], index)`; kept between queries.
     order: Vec<usize>,
     /// Sweep axis (0, 1, 2) of `order`.
     axis: usize,
@@ -39,25 +38,12 @@ pub struct BroadPhase {
 
 /// The box of `x` (componentwise minimum and maximum).
 fn tight_box(x: &[nalgebra::Vector3<f64>]) -> Aabb {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for v in x {
-        for e in 0..3 {
-            lo[e] = lo[e].min(v[e]);
-            hi[e] = hi[e].max(v[e]);
-        }
-    }
-    Aabb::new(
-        Vector::new(lo[0], lo[1], lo[2]),
-        Vector::new(hi[0], hi[1], hi[2]),
-    )
+    Aabb::of_points(x)
 }
 
 /// `b` padded by `half` on every side.
 fn padded(b: &Aabb, half: f64) -> Aabb {
-    Aabb::new(
-        Vector::new(b.mins[0] - half, b.mins[1] - half, b.mins[2] - half),
-        Vector::new(b.maxs[0] + half, b.maxs[1] + half, b.maxs[2] + half),
-    )
+    b.padded(half)
 }
 
 /// The box of `x` padded by `half` on every side.
@@ -76,7 +62,7 @@ pub fn hull_boxes(hulls: &WorldHulls, out: &mut Vec<Aabb>) {
 /// (`false` when a bound is NaN).
 #[inline]
 fn overlap(a: &Aabb, b: &Aabb, e: usize) -> bool {
-    b.mins[e] <= a.maxs[e] && a.mins[e] <= b.maxs[e]
+    a.overlaps_on(b, e)
 }
 
 impl BroadPhase {
@@ -181,7 +167,7 @@ impl BroadPhase {
         for (e, s) in spread.iter_mut().enumerate() {
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
             for b in boxes {
-                let c = b.mins[e] + b.maxs[e];
+                let c = b.lo[e] + b.hi[e];
                 lo = lo.min(c);
                 hi = hi.max(c);
             }
@@ -198,9 +184,9 @@ impl BroadPhase {
             self.order.extend(0..n);
         }
         self.axis = axis;
-        // Insertion sort by (mins[axis], index): a total order, so the
+        // Insertion sort by (lo[axis], index): a total order, so the
         // sorted sequence is unique whatever the previous one was.
-        let key = |i: usize| (boxes[i].mins[axis], i);
+        let key = |i: usize| (boxes[i].lo[axis], i);
         let less =
             |a: (f64, usize), b: (f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
         let order = &mut self.order;
@@ -224,12 +210,12 @@ impl BroadPhase {
                 // (NaN bounds compare as "past" too: no pair, as in the
                 // overlap test.)
                 if !matches!(
-                    bb.mins[axis].partial_cmp(&ba.maxs[axis]),
+                    bb.lo[axis].partial_cmp(&ba.hi[axis]),
                     Some(Ordering::Less | Ordering::Equal)
                 ) {
                     break;
                 }
-                if !(ba.mins[axis] <= bb.maxs[axis] && overlap(ba, bb, o1) && overlap(ba, bb, o2)) {
+                if !(ba.lo[axis] <= bb.hi[axis] && overlap(ba, bb, o1) && overlap(ba, bb, o2)) {
                     continue;
                 }
                 let (a, b) = (a.min(b), a.max(b));

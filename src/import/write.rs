@@ -1,7 +1,7 @@
 //! Writing an import's outputs: the design YAML, `<stem>_meshes/<link>.obj`
 //! (each hull as one OBJ object, for viewing), `<stem>_meshes/<link>.source.obj`
 //! (the link's source meshes in its frame, named by the link's
-//! `surface_mesh`: the IPC baseline's `contact.surface: source`) and the
+//! `surface_mesh`: the IPC baseline's `contact.ipc.surface: source`) and the
 //! JSON report.
 //!
 //! Safety rules: an existing output is never replaced without `force`; the
@@ -196,7 +196,7 @@ fn stage(
     Ok(())
 }
 
-/// `<link>.source.obj`: the link's source surface (IPC `contact.surface: source`).
+/// `<link>.source.obj`: the link's source surface (IPC `contact.ipc.surface: source`).
 fn source_obj_name(link: &str) -> String {
     format!("{}.source.obj", super::source::sanitize(link))
 }

@@ -369,6 +369,25 @@ impl DesignSpace {
         DVector::from_iterator(self.len(), self.vars.iter().map(|v| v.upper))
     }
 
+    /// Links whose hull vertices are design variables (attachments alone
+    /// do not count), sorted, each once.
+    pub fn designed_links(&self) -> Vec<usize> {
+        let mut links: Vec<usize> = self
+            .vars
+            .iter()
+            .flat_map(|v| v.targets.iter())
+            .filter_map(|t| match t {
+                Target::Vertex { link, .. }
+                | Target::Blend { link, .. }
+                | Target::SurfaceBlend { link, .. } => Some(*link),
+                Target::Attachment { .. } => None,
+            })
+            .collect();
+        links.sort_unstable();
+        links.dedup();
+        links
+    }
+
     /// Whether every tie holds exactly in `model` and every variable is
     /// within its bounds.
     pub fn check(&self, model: &Model) -> Result<(), String> {

@@ -63,9 +63,6 @@ pub enum OptimizeError {
         link: String,
         err: crate::geometry::topology::TopologyError,
     },
-    /// The contacts of a rollout could not be recorded.
-    #[error(transparent)]
-    Contacts(#[from] crate::output::contacts::ContactsError),
     /// In iteration `iter` of the optimizer.
     #[error("iteration {iter}")]
     Iteration {

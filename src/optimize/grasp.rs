@@ -12,7 +12,7 @@
 //! Defaults: `tolerance = 0.02` m, `lift = 0.05` m.
 
 use super::names;
-use super::{OptimizeError, Problem};
+use super::{OptimizeError, Problem, Trajectory};
 use crate::kinematics::link_poses;
 use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
@@ -65,23 +65,22 @@ pub fn measure(
     c: &DVector<f64>,
 ) -> Result<Vec<GraspResult>, OptimizeError> {
     use rayon::prelude::*;
-    super::multi::all(p)
+    p.trajectories
         .par_iter()
-        .filter(|q| q.task.grasp.is_some())
-        .map(|q| measure_one(q, d, c))
+        .filter(|t| t.grasp.is_some())
+        .map(|t| measure_one(p, t, d, c))
         .collect()
 }
 
 fn measure_one(
     p: &Problem,
+    t: &Trajectory,
     d: &DVector<f64>,
     c: &DVector<f64>,
 ) -> Result<GraspResult, OptimizeError> {
-    let g = p.task.grasp.as_ref().expect("filtered");
-    let mut model = p.model.clone();
-    p.design.apply(&mut model, d);
-    let mut controller = p.controller.clone();
-    p.controls.apply(&mut controller, c);
+    let g = t.grasp.as_ref().expect("filtered");
+    let scene = p.scene_at(t, d, c);
+    let model = scene.model.clone();
     let invalid = |element: &str, msg: String| OptimizeError::Invalid {
         element: element.into(),
         msg,
@@ -89,18 +88,15 @@ fn measure_one(
     let obj = names::link(&model, &g.object).map_err(|e| invalid("grasp.object", e.to_string()))?;
     let grip =
         names::link(&model, &g.gripper).map_err(|e| invalid("grasp.gripper", e.to_string()))?;
-    if g.from > p.horizon {
+    if g.from > t.horizon {
         return Err(invalid(
             "grasp.from",
-            format!("{} is beyond the horizon {}", g.from, p.horizon),
+            format!("{} is beyond the horizon {}", g.from, t.horizon),
         ));
     }
     let fm = model.first_moment[obj];
     let c_local = Vector3::new(fm[0], fm[1], fm[2]) / fm[3];
-    let mut scene = p.scene.clone();
-    scene.model = model.clone();
-    scene.controller = controller;
-    let mut sim = p.simulator(&scene)?;
+    let mut sim = t.simulator(&scene)?;
     let at = |sim: &crate::sim::Simulator| {
         let poses = link_poses(&model, &sim.state.q, &sim.state.charts);
         let co = crate::math::transform_point(&poses[obj], &c_local);
@@ -110,10 +106,10 @@ fn measure_one(
     let (c0, _) = at(&sim);
     let (mut r_from, mut drift) = (Vector3::zeros(), 0.0f64);
     let mut last = c0;
-    for k in 0..=p.horizon {
+    for k in 0..=t.horizon {
         if k > 0 {
             sim.step().map_err(|err| OptimizeError::StepOf {
-                path: p.scene.source.clone(),
+                path: t.scene.source.clone(),
                 step: k,
                 err,
             })?;
@@ -131,7 +127,7 @@ fn measure_one(
     let held = drift <= g.tolerance;
     let lifted = rise >= g.lift;
     Ok(GraspResult {
-        scene: p.scene.source.display().to_string(),
+        scene: t.scene.source.display().to_string(),
         grasped: held && lifted,
         held,
         lifted,

@@ -1,9 +1,8 @@
-//! Grasp and topology metrics added to `summary.json` by `sdrs optimize`: the grasp of
-//! every trajectory with a `grasp:` spec ([`super::grasp`]) and the topology
-//! of every designable link ([`crate::geometry::topology`]), at the initial
-//! and the optimized design; and a runnable optimized scene per trajectory.
+//! The topology of every designable link ([`crate::geometry::topology`]),
+//! for the topology metric ([`super::metric::TopologyMetric`]), and a
+//! runnable optimized scene per trajectory.
 
-use super::{OptimizeError, Outcome, Problem, grasp, multi, names, output};
+use super::{OptimizeError, Outcome, Problem, names, output};
 use crate::files::write_atomic;
 use crate::geometry::topology;
 use nalgebra::DVector;
@@ -14,7 +13,7 @@ pub const TOPOLOGY_RESOLUTION: usize = 64;
 
 /// Topology of each designable link (`design.vertices`) of `p` at `d`.
 pub fn topologies(p: &Problem, d: &DVector<f64>) -> Result<serde_json::Value, OptimizeError> {
-    let mut model = p.model.clone();
+    let mut model = p.first().model.clone();
     p.design.apply(&mut model, d);
     let mut out = serde_json::Map::new();
     let links = p
@@ -45,54 +44,14 @@ pub fn topologies(p: &Problem, d: &DVector<f64>) -> Result<serde_json::Value, Op
     Ok(serde_json::Value::Object(out))
 }
 
-/// Grasp and topology at the initial (`d0`, `c0`) and optimized design.
-pub fn summary(
-    p: &Problem,
-    d0: &DVector<f64>,
-    c0: &DVector<f64>,
-    o: &Outcome,
-) -> Result<serde_json::Value, OptimizeError> {
-    let before = grasp::measure(p, d0, c0)?;
-    let after = grasp::measure(p, &o.design, &o.controller)?;
-    let count = |v: &[grasp::GraspResult]| v.iter().filter(|g| g.grasped).count();
-    let t0 = topologies(p, d0)?;
-    let t1 = topologies(p, &o.design)?;
-    // A topology change: some link's (components, holes, cavities) differ.
-    let betti = |t: &serde_json::Value| -> Vec<serde_json::Value> {
-        t.as_object()
-            .map(|m| {
-                m.values()
-                    .map(|v| serde_json::json!([v["components"], v["holes"], v["cavities"]]))
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
-    let changed = betti(&t0) != betti(&t1);
-    Ok(serde_json::json!({
-        "grasp": {
-            "trajectories": before.len(),
-            "grasped_before": count(&before),
-            "grasped_after": count(&after),
-            "before": before,
-            "after": after,
-        },
-        "topology": {
-            "resolution": TOPOLOGY_RESOLUTION,
-            "before": t0,
-            "after": t1,
-            "changed": changed,
-        },
-    }))
-}
-
 /// Writes `scenes/<scene file name>` for every trajectory: its scene with
 /// the optimized design and controller (`sdrs simulate` runs it).
 pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> Result<(), OptimizeError> {
-    for q in multi::all(p) {
+    for q in &p.trajectories {
         let mut model = q.model.clone();
-        q.design.apply(&mut model, &o.design);
+        p.design.apply(&mut model, &o.design);
         let mut controller = q.controller.clone();
-        q.controls.apply(&mut controller, &o.controller);
+        p.controls.apply(&mut controller, &o.controller);
         let spec = output::design_scene(&q.scene.spec, &model, &controller);
         let name = q
             .scene

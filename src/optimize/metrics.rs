@@ -84,10 +84,11 @@ impl Metrics {
             element: element.into(),
             msg,
         };
-        let r = names::robot(&p.model, &m.robot)
+        let first = p.first();
+        let r = names::robot(&first.model, &m.robot)
             .map_err(|e| invalid("metrics.robot", e.to_string()))?;
-        let torso =
-            names::link(&p.model, &m.torso).map_err(|e| invalid("metrics.torso", e.to_string()))?;
+        let torso = names::link(&first.model, &m.torso)
+            .map_err(|e| invalid("metrics.torso", e.to_string()))?;
         let unit = |v: [f64; 3], el: &str| {
             let v = Vector3::from(v);
             if v.iter().all(|x| x.is_finite()) && v.norm() > 0.0 {
@@ -100,7 +101,7 @@ impl Metrics {
             }
         };
         let direction = unit(m.direction, "metrics.direction")?;
-        let up = match (m.up, &p.scene.spec.ground) {
+        let up = match (m.up, &first.scene.spec.ground) {
             (Some(u), _) => unit(u, "metrics.up")?,
             (None, Some(g)) => {
                 let axis = unit(g.slope_axis, "ground.slope_axis")?;
@@ -116,7 +117,7 @@ impl Metrics {
             ));
         }
         Ok(Some(Metrics {
-            links: p.model.robots[r].links.clone().collect(),
+            links: first.model.robots[r].links.clone().collect(),
             torso,
             direction,
             up,
@@ -124,22 +125,18 @@ impl Metrics {
         }))
     }
 
-    /// Simulates design `d` and controller `c` over the horizon and
-    /// measures (see the module docs).
+    /// Simulates design `d` and controller `c` over the horizon of the
+    /// (first) trajectory and measures (see the module docs).
     pub fn measure(
         &self,
         p: &Problem,
         d: &DVector<f64>,
         c: &DVector<f64>,
     ) -> Result<TaskMetrics, OptimizeError> {
-        let mut scene = p.scene.clone();
-        let mut model = p.model.clone();
-        p.design.apply(&mut model, d);
-        let mut controller = p.controller.clone();
-        p.controls.apply(&mut controller, c);
-        scene.model = model.clone();
-        scene.controller = controller;
-        let mut sim = p.simulator(&scene)?;
+        let t = p.first();
+        let scene = p.scene_at(t, d, c);
+        let model = scene.model.clone();
+        let mut sim = t.simulator(&scene)?;
         let com = |q: &DVector<f64>, charts: &[Matrix3<f64>]| {
             let poses = link_poses(&model, q, charts);
             let mass: f64 = self.links.iter().map(|&i| model.first_moment[i][3]).sum();
@@ -159,13 +156,13 @@ impl Metrics {
                 .to_degrees()
         };
         let (mut max_tilt, mut fall, mut last) = (0.0f64, None, (c0, 0.0));
-        for t in 1..=p.horizon {
+        for k in 1..=t.horizon {
             sim.step()?;
             let (x, r) = com(&sim.state.q, &sim.state.charts);
             let a = tilt(&r);
             max_tilt = max_tilt.max(a);
             if fall.is_none() && a > self.fall_tilt_deg {
-                fall = Some(t);
+                fall = Some(k);
             }
             last = (x, a);
         }
@@ -180,7 +177,7 @@ impl Metrics {
             first_fall_time: fall.map(|t| t as f64 * dt),
             first_fall_step: fall,
             fall_tilt_deg: self.fall_tilt_deg,
-            horizon_time: p.horizon as f64 * dt,
+            horizon_time: t.horizon as f64 * dt,
         })
     }
 }

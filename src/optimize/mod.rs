@@ -8,21 +8,21 @@ pub mod error;
 pub mod grasp;
 pub mod grasp_metrics;
 pub mod method;
+pub mod metric;
 pub mod metrics;
 pub mod multi;
 pub mod names;
 pub mod output;
-pub mod playback;
 pub mod report;
-pub mod shapes;
 pub mod task;
+pub mod trajectory;
 
 pub use controls::ControlSpace;
 pub use design::DesignSpace;
 pub use error::OptimizeError;
 pub use task::TaskSpec;
+pub use trajectory::Trajectory;
 
-use crate::control::Controller;
 use crate::diff::{Gradients, Loss, LossTerm, backward, record};
 use crate::model::Model;
 use crate::scene::Scene;
@@ -53,26 +53,22 @@ pub enum TaskError {
     Scene(#[from] crate::scene::SceneError),
 }
 
-/// A ready-to-run co-design problem.
+/// A ready-to-run co-design task: one design space and one controller
+/// space shared by a list of trajectories (one for a task with `scene:`,
+/// several for one with `trajectories:`; see [`multi`]). The loss and its
+/// gradients are sums over the trajectories.
 #[derive(Clone)]
 pub struct Problem {
     pub task_path: PathBuf,
+    /// The task as written.
     pub task: TaskSpec,
-    pub scene: Scene,
-    /// The model with connectivity vertices added.
-    pub model: Model,
-    pub controller: Controller,
-    pub loss: Loss,
+    /// The design variables `d` (names, bounds; the map into each
+    /// trajectory's model, the same in every trajectory: checked on load).
     pub design: DesignSpace,
+    /// The controller variables `c` (the same in every trajectory).
     pub controls: ControlSpace,
-    pub horizon: usize,
-    /// Further trajectories optimized collectively with this one (same
-    /// design and controller spaces; see [`multi`]).
-    pub others: Vec<Problem>,
-    /// Provider of the contact terms of a scene whose `contact.model` the
-    /// core does not implement (`ipc`: the baseline's factory, set by the
-    /// CLI); `None` runs SDRS scenes only.
-    pub contact_factory: Option<crate::scene::SharedContactFactory>,
+    /// The trajectories, in task order (at least one).
+    pub trajectories: Vec<Trajectory>,
 }
 
 impl Problem {
@@ -95,152 +91,56 @@ impl Problem {
     /// A problem from a parsed single-scene task (`path` names the task file
     /// in errors and anchors relative scene paths).
     pub fn from_spec(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
-        let invalid = |element: &str, msg: String| TaskError::Invalid {
-            path: path.into(),
-            element: element.into(),
-            msg,
-        };
-        if task.version != 1 {
-            return Err(invalid(
-                "version",
-                format!("unsupported task version {}", task.version),
-            ));
-        }
-        let scene_path = path.parent().unwrap_or(Path::new(".")).join(&task.scene);
-        let mut scene = Scene::load(&scene_path)?;
-        if let Some(t) = task.optimizer.newton_tol {
-            if !(t > 0.0 && t.is_finite()) {
-                return Err(invalid(
-                    "optimizer.newton_tol",
-                    format!("must be positive and finite, got {t}"),
-                ));
-            }
-            scene.settings.newton.tol = t;
-        }
-        let mut model = scene.model.clone();
-        let horizon = task.horizon.unwrap_or(scene.steps);
-        if horizon == 0 {
-            return Err(invalid("horizon", "must be at least 1".into()));
-        }
-        let o = &task.optimizer;
-        if !(o.step_design > 0.0 && o.step_controller > 0.0) {
-            return Err(invalid("optimizer", "steps must be positive".into()));
-        }
-        for (name, clip) in [
-            ("optimizer.clip_design", o.clip_design),
-            ("optimizer.clip_controller", o.clip_controller),
-            ("optimizer.clip_trajectory", o.clip_trajectory),
-        ] {
-            if let Some(v) = clip.filter(|v| !(*v > 0.0 && v.is_finite())) {
-                return Err(invalid(
-                    name,
-                    format!("must be positive and finite, got {v}"),
-                ));
-            }
-        }
-        if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
-            return Err(invalid(
-                "optimizer.init_noise",
-                format!("must be finite and non-negative, got {}", o.init_noise),
-            ));
-        }
-        let (design_space, controls) = {
-            let ds = match (&task.design, design) {
-                (Some(d), true) => {
-                    if d.bound.is_nan() || d.bound <= 0.0 {
-                        return Err(invalid(
-                            "design.bound",
-                            format!("must be positive, got {}", d.bound),
-                        ));
-                    }
-                    let ties = robot_ties(&scene, &model)
-                        .map_err(|e| invalid("robots[].design.ties", e))?;
-                    DesignSpace::build(&mut model, &d.attachments, &d.vertices, d.bound, &ties)
-                        .map_err(|e| invalid("design", e.to_string()))?
-                }
-                _ => DesignSpace::default(),
-            };
-            let cs = ControlSpace::build(
-                &model,
-                &scene.controller,
-                &task.controller.joints,
-                task.controller.gains,
-            )
-            .map_err(|e| invalid("controller", e.to_string()))?;
-            (ds, cs)
-        };
-        if design_space.is_empty() && controls.is_empty() && design {
-            // (With `--design off` and a preset controller the run is an
-            // evaluation of the initial design, the twin of a co-design run.)
-            return Err(invalid("design/controller", "nothing to optimize".into()));
-        }
-        let loss = build_loss(path, &model, &task.loss, horizon)?;
+        let (t, design_space, controls) = trajectory::build(path, &task, design)?;
         Ok(Problem {
             task_path: path.into(),
-            controller: scene.controller.clone(),
             task,
-            scene,
-            model,
-            loss,
             design: design_space,
             controls,
-            horizon,
-            others: Vec::new(),
-            contact_factory: None,
+            trajectories: vec![t],
         })
     }
 
+    /// The first trajectory (the only one of a single-scene task).
+    pub fn first(&self) -> &Trajectory {
+        &self.trajectories[0]
+    }
+
+    /// The first trajectory, to change it (its scene's settings, horizon).
+    pub fn first_mut(&mut self) -> &mut Trajectory {
+        &mut self.trajectories[0]
+    }
+
+    /// Gives every trajectory the provider of the contact terms its scene
+    /// needs when the core does not implement its `contact.model`.
+    pub fn set_contact_factory(&mut self, f: crate::scene::SharedContactFactory) {
+        for t in &mut self.trajectories {
+            t.contact_factory = Some(f.clone());
+        }
+    }
+
     /// Loss and gradients at design `d` and controller `c` (forward +
-    /// backward), with timings.
-    /// With several trajectories, the sum over them ([`multi::evaluate`]).
+    /// backward), with timings: the sum over the trajectories
+    /// ([`multi::evaluate`]); one trajectory's evaluation as is.
     pub fn evaluate(
         &self,
         d: &DVector<f64>,
         c: &DVector<f64>,
     ) -> Result<Evaluation, OptimizeError> {
-        if self.others.is_empty() {
-            self.evaluate_one(d, c)
-        } else {
-            multi::evaluate(self, d, c)
+        match self.trajectories.as_slice() {
+            [t] => self.evaluate_trajectory(t, d, c),
+            _ => multi::evaluate(self, d, c),
         }
     }
 
-    /// The factory `scene` needs: `None` for SDRS (or contact-free) scenes,
-    /// [`Problem::contact_factory`] otherwise (an error without one).
-    fn factory_for(
-        &self,
-        scene: &Scene,
-    ) -> Result<Option<&dyn crate::scene::ContactModelFactory>, OptimizeError> {
-        match scene.contact.as_ref().filter(|c| !c.model.is_sdrs()) {
-            None => Ok(None),
-            Some(c) => match &self.contact_factory {
-                Some(f) => Ok(Some(f.as_ref())),
-                None => Err(OptimizeError::NoContactProvider {
-                    path: scene.source.clone(),
-                    model: c.model.name().to_string(),
-                }),
-            },
-        }
-    }
-
-    /// The simulator of `scene` (a variant of this problem's scene) with
-    /// its contact model: [`Scene::simulator`] for SDRS scenes (unchanged),
-    /// the factory's terms otherwise.
-    pub fn simulator(&self, scene: &Scene) -> Result<crate::sim::Simulator, OptimizeError> {
-        Ok(match self.factory_for(scene)? {
-            None => scene.simulator(),
-            Some(f) => scene.simulator_with(f)?,
-        })
-    }
-
-    /// This trajectory's scene at design `d` and controller `c` (what
-    /// [`Problem::evaluate_one`] simulates).
-    pub fn scene_at(&self, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
-        let mut model = self.model.clone();
+    /// Trajectory `t`'s scene at design `d` and controller `c` (what
+    /// [`Problem::evaluate_trajectory`] simulates).
+    pub fn scene_at(&self, t: &Trajectory, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
+        let mut model = t.model.clone();
         self.design.apply(&mut model, d);
-        let mut controller = self.controller.clone();
+        let mut controller = t.controller.clone();
         self.controls.apply(&mut controller, c);
-        let mut scene = self.scene.clone();
+        let mut scene = t.scene.clone();
         scene.model = model;
         scene.controller = controller;
         scene
@@ -252,40 +152,41 @@ impl Problem {
     /// over the trajectories like [`Problem::evaluate`] (same order), and
     /// bitwise equal to its `loss`.
     pub fn loss_value(&self, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
-        if self.others.is_empty() {
-            self.loss_value_one(d, c)
-        } else {
-            multi::loss_value(self, d, c)
+        match self.trajectories.as_slice() {
+            [t] => self.trajectory_loss(t, d, c),
+            _ => multi::loss_value(self, d, c),
         }
     }
 
-    /// [`Problem::loss_value`] of this trajectory alone.
-    pub fn loss_value_one(&self, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
-        let scene = self.scene_at(d, c);
-        let mut sim = self.simulator(&scene)?;
-        let tape = record(&mut sim, self.horizon)?;
-        Ok(crate::diff::backward::loss_of(
-            &scene.model,
-            &tape,
-            &self.loss,
-        ))
+    /// [`Problem::loss_value`] of trajectory `t` alone.
+    pub fn trajectory_loss(
+        &self,
+        t: &Trajectory,
+        d: &DVector<f64>,
+        c: &DVector<f64>,
+    ) -> Result<f64, OptimizeError> {
+        let scene = self.scene_at(t, d, c);
+        let mut sim = t.simulator(&scene)?;
+        let tape = record(&mut sim, t.horizon)?;
+        Ok(crate::diff::backward::loss_of(&scene.model, &tape, &t.loss))
     }
 
-    /// [`Problem::evaluate`] of this trajectory alone.
-    pub fn evaluate_one(
+    /// [`Problem::evaluate`] of trajectory `t` alone.
+    pub fn evaluate_trajectory(
         &self,
+        t: &Trajectory,
         d: &DVector<f64>,
         c: &DVector<f64>,
     ) -> Result<Evaluation, OptimizeError> {
-        let scene = self.scene_at(d, c);
+        let scene = self.scene_at(t, d, c);
         let model = scene.model.clone();
-        let mut sim = self.simulator(&scene)?;
+        let mut sim = t.simulator(&scene)?;
         let t0 = Instant::now();
-        let tape = record(&mut sim, self.horizon)?;
+        let tape = record(&mut sim, t.horizon)?;
         let forward = t0.elapsed().as_secs_f64();
-        let grads = match self.factory_for(&scene)? {
-            None => backward(&mut sim, &tape, &self.loss)?,
-            Some(f) => backward(&mut scene.adjoint_simulator_with(f)?, &tape, &self.loss)?,
+        let grads = match t.factory_for(&scene)? {
+            None => backward(&mut sim, &tape, &t.loss)?,
+            Some(f) => backward(&mut scene.adjoint_simulator_with(f)?, &tape, &t.loss)?,
         };
         if !grads.unavailable.is_empty() {
             return Err(OptimizeError::Unavailable {
@@ -402,7 +303,7 @@ pub fn build_loss(
 }
 
 /// Tie groups of every robot's `design.ties`, as `(link, hull, vertex)`.
-fn robot_ties(scene: &Scene, model: &Model) -> Result<Vec<design::TieGroup>, String> {
+pub(crate) fn robot_ties(scene: &Scene, model: &Model) -> Result<Vec<design::TieGroup>, String> {
     let mut out = Vec::new();
     for r in &scene.spec.robots {
         let Some(d) = &r.design else { continue };
@@ -508,8 +409,8 @@ pub struct RunOptions {
 /// with the controller perturbed by `optimizer.init_noise` (uniform in
 /// `±init_noise`, ChaCha8 seeded by `seed`) when that is positive.
 pub fn start(p: &Problem, seed: u64) -> (DVector<f64>, DVector<f64>) {
-    let d = p.design.values(&p.model);
-    let mut c = p.controls.values(&p.controller);
+    let d = p.design.values(&p.first().model);
+    let mut c = p.controls.values(&p.first().controller);
     let noise = p.task.optimizer.init_noise;
     if noise > 0.0 {
         use rand::{RngExt, SeedableRng};

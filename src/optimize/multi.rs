@@ -2,8 +2,9 @@
 //! "the gripper sequentially grasps 4 objects … we optimize these 4
 //! trajectories collectively").
 //!
-//! A task with `trajectories:` is one problem per scene sharing one design
-//! vector `d` and one controller vector `c`; the loss and its gradients are
+//! A task with `trajectories:` is one [`Problem`] holding one
+//! [`Trajectory`] per scene, sharing one design vector `d` and one
+//! controller vector `c`; the loss and its gradients are
 //! sums over the trajectories,
 //! `L(d, c) = Σ_j L_j(θ_j^{1…H_j}(d, c))`, `∇L = Σ_j ∇L_j`.
 //! The trajectories run in parallel (rayon); the sum is taken afterwards in
@@ -12,7 +13,8 @@
 
 use super::grasp::GraspSpec;
 use super::task::{LossSpec, TaskSpec};
-use super::{Evaluation, OptimizeError, Problem, TaskError};
+use super::trajectory::{self, Trajectory};
+use super::{ControlSpace, DesignSpace, Evaluation, OptimizeError, Problem, TaskError};
 use crate::diff::When;
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -51,7 +53,9 @@ pub fn check_when(l: &LossSpec, horizon: usize) -> Result<(), String> {
     }
 }
 
-/// Loads a task with `trajectories:` (called by [`Problem::load`]).
+/// Loads a task with `trajectories:` (called by [`Problem::load`]): one
+/// [`super::Trajectory`] per entry, sharing the design and controller
+/// spaces of the first (each entry's must be the same, checked).
 pub fn load(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
     let invalid = |element: String, msg: String| TaskError::Invalid {
         path: path.into(),
@@ -70,7 +74,8 @@ pub fn load(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskEr
             "with `trajectories`, give `scene`, `loss` and `grasp` per trajectory only".into(),
         ));
     }
-    let mut problems = Vec::with_capacity(task.trajectories.len());
+    let mut trajectories = Vec::with_capacity(task.trajectories.len());
+    let mut shared: Option<(DesignSpace, ControlSpace)> = None;
     for (j, t) in task.trajectories.iter().enumerate() {
         let spec = TaskSpec {
             scene: t.scene.clone(),
@@ -80,30 +85,45 @@ pub fn load(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskEr
             grasp: t.grasp.clone(),
             ..task.clone()
         };
-        let p = Problem::from_spec(path, spec, design).map_err(|e| match e {
+        let (traj, ds, cs) = trajectory::build(path, &spec, design).map_err(|e| match e {
             TaskError::Invalid { element, msg, .. } => {
                 invalid(format!("trajectories[{j}].{element}"), msg)
             }
             e => e,
         })?;
-        if let Some(first) = problems.first() {
-            same_spaces(first, &p).map_err(|m| invalid(format!("trajectories[{j}]"), m))?;
+        if let Some(first) = &shared {
+            same_spaces(first, (&ds, &cs), &trajectories[0], &traj)
+                .map_err(|m| invalid(format!("trajectories[{j}]"), m))?;
+        } else {
+            shared = Some((ds, cs));
         }
-        problems.push(p);
+        trajectories.push(traj);
     }
-    let mut first = problems.remove(0);
-    first.others = problems;
-    Ok(first)
+    let (design_space, controls) = shared.expect("at least one trajectory");
+    Ok(Problem {
+        task_path: path.into(),
+        task,
+        design: design_space,
+        controls,
+        trajectories,
+    })
 }
 
 /// The shared design and controller spaces must be the same in every
-/// trajectory (same robot first in every scene, same designable links).
-fn same_spaces(a: &Problem, b: &Problem) -> Result<(), String> {
-    if a.design.vars.len() != b.design.vars.len()
-        || a.design
+/// trajectory (same robot first in every scene, same designable links):
+/// the same variables (names, bounds) mapped the same way into each model,
+/// and the same initial controller values.
+fn same_spaces(
+    (da, ca): &(DesignSpace, ControlSpace),
+    (db, cb): (&DesignSpace, &ControlSpace),
+    a: &Trajectory,
+    b: &Trajectory,
+) -> Result<(), String> {
+    if da.vars.len() != db.vars.len()
+        || da
             .vars
             .iter()
-            .zip(&b.design.vars)
+            .zip(&db.vars)
             .any(|(x, y)| x.name != y.name || x.lower != y.lower || x.upper != y.upper)
     {
         return Err(
@@ -111,15 +131,16 @@ fn same_spaces(a: &Problem, b: &Problem) -> Result<(), String> {
                 .into(),
         );
     }
-    if a.controls.values(&a.controller) != b.controls.values(&b.controller) {
+    if ca.values(&a.controller) != cb.values(&b.controller) {
         return Err("its controller parameters differ from trajectories[0]'s".into());
     }
+    if da != db || ca != cb {
+        return Err(
+            "its design or controller variables act on other links or joints than in trajectories[0] (the designed robot must be the same, listed first)"
+                .into(),
+        );
+    }
     Ok(())
-}
-
-/// Every trajectory of `p` (itself first).
-pub fn all(p: &Problem) -> Vec<&Problem> {
-    std::iter::once(p).chain(p.others.iter()).collect()
 }
 
 /// Runs `one` on every trajectory in parallel and folds the results with
@@ -127,10 +148,10 @@ pub fn all(p: &Problem) -> Vec<&Problem> {
 /// names its trajectory.
 fn sum_in_order<T: Send>(
     p: &Problem,
-    one: impl Fn(&Problem) -> Result<T, OptimizeError> + Sync,
+    one: impl Fn(&Trajectory) -> Result<T, OptimizeError> + Sync,
     mut add: impl FnMut(&mut T, T),
 ) -> Result<T, OptimizeError> {
-    let parts: Vec<Result<T, OptimizeError>> = all(p).par_iter().map(|q| one(q)).collect();
+    let parts: Vec<Result<T, OptimizeError>> = p.trajectories.par_iter().map(&one).collect();
     let mut out: Option<T> = None;
     for (j, r) in parts.into_iter().enumerate() {
         let x = r.map_err(|e| OptimizeError::Trajectory {
@@ -145,10 +166,10 @@ fn sum_in_order<T: Send>(
     out.ok_or(OptimizeError::NoTrajectories)
 }
 
-/// The summed loss alone ([`Problem::loss_value`] of every trajectory,
+/// The summed loss alone ([`Problem::trajectory_loss`] of every trajectory,
 /// summed in trajectory order as [`evaluate`] does).
 pub fn loss_value(p: &Problem, d: &DVector<f64>, c: &DVector<f64>) -> Result<f64, OptimizeError> {
-    sum_in_order(p, |q| q.loss_value_one(d, c), |s, l| *s += l)
+    sum_in_order(p, |t| p.trajectory_loss(t, d, c), |s, l| *s += l)
 }
 
 /// The summed evaluation (see the module docs). `grads` and `model` are the
@@ -160,8 +181,8 @@ pub fn evaluate(
 ) -> Result<Evaluation, OptimizeError> {
     sum_in_order(
         p,
-        |q| {
-            let mut e = q.evaluate_one(d, c)?;
+        |t| {
+            let mut e = p.evaluate_trajectory(t, d, c)?;
             e.parts_design = vec![e.grad_design.clone()];
             Ok(e)
         },

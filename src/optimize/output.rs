@@ -229,15 +229,16 @@ pub fn write_all(
     outcome: &Outcome,
     extra: serde_json::Value,
 ) -> Result<(), OptimizeError> {
-    let mut model = p.model.clone();
+    let first = p.first();
+    let mut model = first.model.clone();
     p.design.apply(&mut model, &outcome.design);
-    let mut controller = p.controller.clone();
+    let mut controller = first.controller.clone();
     p.controls.apply(&mut controller, &outcome.controller);
     write_atomic(
         &dir.join("history.csv"),
         history_csv(&outcome.history).as_bytes(),
     )?;
-    let spec = design_scene(&p.scene.spec, &model, &controller);
+    let spec = design_scene(&first.scene.spec, &model, &controller);
     let header = format!(
         "# Optimized by `sdrs optimize {}` — a complete scene: `sdrs simulate` runs it.\n",
         p.task_path.display()
@@ -278,7 +279,7 @@ pub fn write_all(
         "iterations": outcome.history.len() - 1,
         "design_variables": p.design.len(),
         "controller_variables": p.controls.len(),
-        "horizon": p.horizon,
+        "horizon": first.horizon,
         "initial_loss": outcome.initial_loss,
         "final_loss": outcome.loss,
         "relative_reduction": 1.0 - outcome.loss / outcome.initial_loss,
@@ -287,7 +288,7 @@ pub fn write_all(
         "mean_backward_seconds": bwd,
         "backward_over_forward": bwd / fwd,
         "design": p.design.vars.iter().zip(outcome.design.iter()).map(|(v, x)| (v.name.clone(), *x)).collect::<std::collections::BTreeMap<_, _>>(),
-        "controller": p.controls.names(&p.model, &p.controller).into_iter().zip(outcome.controller.iter().copied()).collect::<std::collections::BTreeMap<_, _>>(),
+        "controller": p.controls.names(&first.model, &first.controller).into_iter().zip(outcome.controller.iter().copied()).collect::<std::collections::BTreeMap<_, _>>(),
         "extra": extra,
     });
     write_atomic(

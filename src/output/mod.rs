@@ -1,6 +1,7 @@
 //! Run records: trajectory CSV and summary JSON, written atomically (to a
 //! temporary file in the same directory, renamed when complete).
 
+pub mod codesign;
 pub mod contacts;
 pub mod gltf;
 pub mod mjcf;

@@ -130,11 +130,6 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
     }
 }
 
-/// Default IPC activation distance `d̂` (m).
-pub const DEFAULT_DHAT: f64 = 1e-3;
-/// Default IPC friction smoothing speed `ε_v` (m/s).
-pub const DEFAULT_EPS_V: f64 = 1e-3;
-
 /// Validated contact settings with excluded link pairs resolved to indices.
 pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSettings, Invalid> {
     if !(c.s > 0.0 && c.s < 1.0) {
@@ -160,22 +155,6 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
         return Err(Invalid::new(
             "contact.eps",
             format!("must be positive and finite, got {}", c.eps),
-        ));
-    }
-    let dhat = c.dhat.unwrap_or(DEFAULT_DHAT);
-    if !(dhat > 0.0 && dhat.is_finite()) {
-        return Err(Invalid::new(
-            "contact.dhat",
-            format!("the IPC activation distance must be positive and finite (m), got {dhat}"),
-        ));
-    }
-    let eps_v = c.eps_v.unwrap_or(DEFAULT_EPS_V);
-    if !(eps_v > 0.0 && eps_v.is_finite()) {
-        return Err(Invalid::new(
-            "contact.eps_v",
-            format!(
-                "the IPC friction smoothing speed must be positive and finite (m/s), got {eps_v}"
-            ),
         ));
     }
     if let Some(msg) = c.ccd.problem() {
@@ -215,9 +194,7 @@ pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSetting
     }
     Ok(ContactSettings {
         model: c.model,
-        surface: c.surface,
-        dhat,
-        eps_v,
+        ipc: c.ipc.clone(),
         s: c.s,
         kappa,
         kappa_given: c.kappa.is_some(),

@@ -37,7 +37,7 @@
 //!           - vertices: [[0,0,0], [1,0,0], [0,1,0], [0,0,1]]   # ≥ 4, not coplanar
 //!           - box: {size: [0.1, 0.1, 1.0], center: [0, 0, -0.5]}
 //!         # collide: false   # no contact for this link (default true)
-//!         # surface_mesh: arm_meshes/upper.source.obj   # source mesh (IPC `contact.surface: source`)
+//!         # surface_mesh: arm_meshes/upper.source.obj   # source mesh (IPC `contact.ipc.surface: source`)
 //!     # chain: {links: 8, ...}   # generates `links` instead (see ChainSpec)
 //!     controller:
 //!       kp: 100              # default gains for every target (J/rad²; default 0)
@@ -144,7 +144,7 @@ pub struct ObjectSpec {
     /// relative to the scene file; coordinates in the body's frame, m): the
     /// mesh its hulls were made from. `sdrs import` writes one per link
     /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
-    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// with `contact.ipc.surface: source` (a closed, consistently oriented,
     /// non-self-intersecting triangle mesh is required then). Default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_mesh: Option<String>,
@@ -204,7 +204,7 @@ pub struct ObstacleSpec {
     /// relative to the scene file; coordinates in the body's frame, m): the
     /// mesh its hulls were made from. `sdrs import` writes one per link
     /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
-    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// with `contact.ipc.surface: source` (a closed, consistently oriented,
     /// non-self-intersecting triangle mesh is required then). Default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_mesh: Option<String>,
@@ -218,25 +218,18 @@ pub struct ContactSpec {
     /// separating-plane potential) or `ipc` (the mesh-based Incremental
     /// Potential Contact baseline in `baselines/ipc`, provided by the `sdrs`
     /// CLI through [`crate::scene::ContactModelFactory`]). With `sdrs` the
-    /// IPC keys below are ignored and nothing changes.
+    /// `ipc` section below is ignored and nothing changes.
     #[serde(default, skip_serializing_if = "ContactModelKind::is_sdrs")]
     pub model: ContactModelKind,
-    /// IPC only: which triangle mesh is each link's contact surface:
-    /// `hulls` (default: the triangulated boundaries of its convex hulls,
-    /// the shapes SDRS uses) or `source` (the link's `surface_mesh`, the
-    /// mesh its hulls were made from; links without one keep their hulls).
-    /// The SDRS model always uses the hulls.
-    #[serde(default, skip_serializing_if = "SurfaceKind::is_hulls")]
-    pub surface: SurfaceKind,
-    /// IPC only: barrier activation distance `d̂` (m, unsquared; the barrier
-    /// acts on squared distances below `d̂²`). Default 1e-3.
+    /// The IPC baseline's own settings, read and checked by the baseline
+    /// (`baselines/ipc/src/settings.rs`), not by the core:
+    /// `{surface: hulls|source, dhat: 1e-3, eps_v: 1e-3}` — each link's
+    /// contact surface (its hulls' triangulated boundaries, or its
+    /// `surface_mesh`), the barrier activation distance `d̂` (m) and the
+    /// friction smoothing speed `ε_v` (m/s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dhat: Option<f64>,
-    /// IPC only: friction smoothing velocity `ε_v` (m/s): below relative
-    /// tangential speeds of `ε_v` friction is smoothed (IPC's `f₁`).
-    /// Default 1e-3.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub eps_v: Option<f64>,
+    #[schemars(with = "Option<serde_json::Value>")]
+    pub ipc: Option<serde_yaml::Value>,
     /// Barrier support `s` (m, and the bound on `1 − ‖n‖`; `0 < s < 1`).
     /// Hulls interact within `2s/(1−s)`. Default 0.01.
     #[serde(default = "ContactSpec::default_s")]
@@ -277,7 +270,7 @@ pub struct ContactSpec {
     pub ccd: crate::contact::ccd::CcdOptions,
 }
 
-pub use crate::contact::settings::{ContactModelKind, SurfaceKind};
+pub use crate::contact::settings::ContactModelKind;
 
 impl ContactSpec {
     fn default_s() -> f64 {
@@ -299,9 +292,7 @@ impl Default for ContactSpec {
     fn default() -> Self {
         ContactSpec {
             model: ContactModelKind::Sdrs,
-            surface: SurfaceKind::Hulls,
-            dhat: None,
-            eps_v: None,
+            ipc: None,
             s: Self::default_s(),
             kappa: None,
             mu: 0.0,
@@ -385,7 +376,7 @@ pub struct LinkSpec {
     /// relative to the scene file; coordinates in the body's frame, m): the
     /// mesh its hulls were made from. `sdrs import` writes one per link
     /// (`<stem>_meshes/<link>.source.obj`). Used only by the IPC baseline
-    /// with `contact.surface: source` (a closed, consistently oriented,
+    /// with `contact.ipc.surface: source` (a closed, consistently oriented,
     /// non-self-intersecting triangle mesh is required then). Default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface_mesh: Option<String>,

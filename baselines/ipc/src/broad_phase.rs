@@ -7,48 +7,8 @@
 //! missed), deterministic (index order).
 
 use nalgebra::Vector3;
-
-/// An axis-aligned box.
-#[derive(Clone, Copy, Debug)]
-pub struct Aabb {
-    pub lo: Vector3<f64>,
-    pub hi: Vector3<f64>,
-}
-
-impl Aabb {
-    pub const EMPTY: Aabb = Aabb {
-        lo: Vector3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
-        hi: Vector3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
-    };
-
-    pub fn of_points<'a>(pts: impl IntoIterator<Item = &'a Vector3<f64>>) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for p in pts {
-            b.lo = b.lo.inf(p);
-            b.hi = b.hi.sup(p);
-        }
-        b
-    }
-
-    pub fn inflate(&self, m: f64) -> Aabb {
-        let d = Vector3::repeat(m);
-        Aabb {
-            lo: self.lo - d,
-            hi: self.hi + d,
-        }
-    }
-
-    pub fn intersects(&self, o: &Aabb) -> bool {
-        (0..3).all(|k| self.lo[k] <= o.hi[k] && o.lo[k] <= self.hi[k])
-    }
-
-    pub fn intersection(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            lo: self.lo.sup(&o.lo),
-            hi: self.hi.inf(&o.hi),
-        }
-    }
-}
+/// The core's axis-aligned box (one box type for core and baseline).
+pub use sdrs::geometry::Aabb;
 
 /// Primitive candidates of one link pair.
 #[derive(Clone, Debug, Default)]
@@ -96,34 +56,28 @@ impl PrimitiveBoxes {
     ) {
         let pt = |i: u32| -> Aabb {
             let i = i as usize;
-            let mut b = Aabb {
-                lo: x0[i],
-                hi: x0[i],
-            };
+            let mut b = Aabb::point(&x0[i]);
             if let Some(x1) = x1 {
                 b.lo = b.lo.inf(&x1[i]);
                 b.hi = b.hi.sup(&x1[i]);
             }
             b
         };
-        let join = |a: Aabb, b: Aabb| Aabb {
-            lo: a.lo.inf(&b.lo),
-            hi: a.hi.sup(&b.hi),
-        };
+        let join = |a: Aabb, b: Aabb| a.union(&b);
         self.vert.clear();
         self.vert
-            .extend((0..x0.len() as u32).map(|i| pt(i).inflate(m)));
+            .extend((0..x0.len() as u32).map(|i| pt(i).padded(m)));
         self.edge.clear();
         self.edge.extend(
             mesh.edges
                 .iter()
-                .map(|e| join(pt(e[0]), pt(e[1])).inflate(m)),
+                .map(|e| join(pt(e[0]), pt(e[1])).padded(m)),
         );
         self.tri.clear();
         self.tri.extend(
             mesh.tris
                 .iter()
-                .map(|t| join(join(pt(t[0]), pt(t[1])), pt(t[2])).inflate(m)),
+                .map(|t| join(join(pt(t[0]), pt(t[1])), pt(t[2])).padded(m)),
         );
         self.all = Some(self.vert.iter().fold(Aabb::EMPTY, |a, b| join(a, *b)));
     }

@@ -9,9 +9,10 @@ use crate::contact::{IpcContact, IpcParams};
 use crate::friction::{IpcFriction, IpcFrictionParams};
 use crate::line_search::CcdOptions;
 use crate::mesh::{LinkMesh, MeshOrigin};
+use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::energy::Energy;
 use sdrs::kinematics::{KinOrder, Kinematics};
-use sdrs::scene::schema::{ContactModelKind, SurfaceKind};
+use sdrs::scene::schema::ContactModelKind;
 use sdrs::scene::{ContactModelFactory, ContactSettings, Invalid, Scene};
 
 /// Provides the IPC baseline's terms.
@@ -104,12 +105,13 @@ pub fn link_meshes(scene: &Scene, surface: SurfaceKind) -> Result<Vec<LinkMesh>,
         .collect()
 }
 
-/// The IPC surface setting of a scene (hulls without a contact section).
-pub fn surface_kind(scene: &Scene) -> SurfaceKind {
-    scene
-        .contact
-        .as_ref()
-        .map_or(SurfaceKind::Hulls, |c| c.surface)
+/// The IPC surface setting of a scene (hulls without a contact section);
+/// an error names a malformed `contact.ipc` section.
+pub fn surface_kind(scene: &Scene) -> Result<SurfaceKind, Invalid> {
+    match &scene.contact {
+        None => Ok(SurfaceKind::Hulls),
+        Some(c) => Ok(IpcSettings::of(c)?.surface),
+    }
 }
 
 /// The frozen `topology` with vertex positions from the scene's hull
@@ -184,18 +186,19 @@ impl ContactModelFactory for IpcFactory {
                 format!("\"{}\" is not provided by the IPC baseline", c.model.name()),
             ));
         }
+        let ipc = IpcSettings::of(c)?;
         let model = &scene.model;
         let meshes = match &self.topology {
-            None => link_meshes(scene, c.surface)?,
+            None => link_meshes(scene, ipc.surface)?,
             Some(t) => meshes_with_topology(scene, t)?,
         };
         let kappa = if c.kappa_given {
             c.kappa
         } else {
-            adaptive_kappa(scene, c.dhat)
+            adaptive_kappa(scene, ipc.dhat)
         };
         let params = IpcParams {
-            dhat: c.dhat,
+            dhat: ipc.dhat,
             kappa,
             ccd: self.ccd.clone(),
         };
@@ -234,10 +237,10 @@ impl ContactModelFactory for IpcFactory {
                 meshes,
                 &c.excluded,
                 IpcFrictionParams {
-                    dhat: c.dhat,
+                    dhat: ipc.dhat,
                     kappa,
                     mu: c.mu,
-                    eps_v: c.eps_v,
+                    eps_v: ipc.eps_v,
                     dt: scene.settings.dt,
                 },
             );

@@ -21,7 +21,6 @@
 pub mod adjoint;
 pub mod adjoint_stencil;
 pub mod barrier;
-pub mod bench;
 pub mod broad_phase;
 pub mod cage;
 pub mod ccd;
@@ -35,6 +34,7 @@ pub mod mesh;
 pub mod mollifier;
 pub mod pair;
 pub mod primitive;
+pub mod settings;
 pub mod start_check;
 pub mod surface;
 

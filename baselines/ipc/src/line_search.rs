@@ -28,14 +28,18 @@
 //! the gap), the interval is halved (up to `max_depth` times). This is a
 //! **conservative bound with subdivision**: no trial point it admits has
 //! crossing or touching surfaces.
+//!
+//! The bounds `U_L`, `A_L` and the chord deviation are the core's
+//! ([`sdrs::kinematics::chord_speed_bounds`], [`sdrs::kinematics::chord_deviation`]:
+//! one module of articulated motion bounds for core and baseline).
 
 use crate::broad_phase::{Candidates, PrimitiveBoxes, candidates};
 use crate::ccd::{AccdOptions, additive_ccd};
 use crate::mesh::LinkMesh;
 use crate::pair::PairGeometry;
 use nalgebra::{DVector, Matrix3, Vector3};
-use sdrs::kinematics::{KinOrder, Kinematics};
-use sdrs::model::{JointKind, Model};
+use sdrs::kinematics::{KinOrder, Kinematics, chord_deviation, chord_speed_bounds};
+use sdrs::model::Model;
 
 /// CCD settings of the line search.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,97 +73,9 @@ pub struct CcdScratch {
     kin: Option<Kinematics>,
     q: DVector<f64>,
     speed: Vec<(f64, f64)>,
+    radius: Vec<f64>,
     boxes: Vec<PrimitiveBoxes>,
     cand: Candidates,
-}
-
-/// `(U_L, A_L)` for every link: bounds on the speed and the acceleration
-/// (per unit `α`) of the non-linear part of its vertex paths (see the module
-/// docs). With `s_j` the rotational speed bound of joint `j`, `t_j` its
-/// translation speed (when it has a moving ancestor), `R_j = R_{j,L}`,
-/// `W_j = Σ_{ancestors i of j} s_i` and `V_j = Σ_{i on the path at or below
-/// j} (s_i R_i + t_i)`: `U_L = Σ_j (s_j R_j + t_j)` and
-/// `A_L = Σ_j [s_j (W_j + s_j/2) R_j + s_j V_j + t_j W_j]`, from
-/// `Ẍ = Σ_j [ω̇_j × (X − c_j) + ω_j × (Ẋ − ċ_j)]` with `‖ω_j‖ ≤ s_j`,
-/// `‖ω̇_j‖ ≤ s_j (W_j + s_j/2)` (the axis turns with the ancestors; the
-/// rotation-vector Jacobian changes at rate ≤ ½‖Δφ‖) and
-/// `‖Ẋ − ċ_j‖ ≤ V_j`.
-pub fn nonlinear_speed_bounds(
-    model: &Model,
-    meshes: &[LinkMesh],
-    q: &DVector<f64>,
-    dq: &DVector<f64>,
-    out: &mut Vec<(f64, f64)>,
-) {
-    out.clear();
-    let trans_len = |l: usize, x: &DVector<f64>| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Prismatic { .. } => x[o].abs(),
-            JointKind::Free => Vector3::new(x[o], x[o + 1], x[o + 2]).norm(),
-            _ => 0.0,
-        }
-    };
-    let rot_speed = |l: usize| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Revolute { .. } => dq[o].abs(),
-            JointKind::Ball { .. } => dq[o].abs() + dq[o + 1].abs(),
-            JointKind::Spherical => Vector3::new(dq[o], dq[o + 1], dq[o + 2]).norm(),
-            JointKind::Free => Vector3::new(dq[o + 3], dq[o + 4], dq[o + 5]).norm(),
-            _ => 0.0,
-        }
-    };
-    let trans_speed = |l: usize| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Prismatic { .. } => dq[o].abs(),
-            JointKind::Free => Vector3::new(dq[o], dq[o + 1], dq[o + 2]).norm(),
-            _ => 0.0,
-        }
-    };
-    let q1 = q + dq;
-    for (l, mesh) in meshes.iter().enumerate().take(model.links.len()) {
-        // The path L → root: per joint, s (rotational speed), t (translation
-        // speed counted as non-linear) and R (centre-to-vertex bound).
-        let mut path: Vec<(f64, f64, f64)> = Vec::new();
-        let mut reach = mesh.radius;
-        let mut j = l;
-        loop {
-            let link = &model.links[j];
-            let has_moving_ancestor = link
-                .parent
-                .is_some_and(|p| !model.ancestor_dofs[p].is_empty());
-            let t = if has_moving_ancestor {
-                trans_speed(j)
-            } else {
-                0.0
-            };
-            path.push((rot_speed(j), t, reach));
-            let Some(p) = link.parent else { break };
-            reach += link.attach.column(3).norm() + trans_len(j, q).max(trans_len(j, &q1));
-            j = p;
-        }
-        let (mut u, mut acc, mut below) = (0.0, 0.0, 0.0);
-        let total_s: f64 = path.iter().map(|p| p.0).sum();
-        let mut anc = total_s;
-        for &(sp, tp, rp) in &path {
-            anc -= sp;
-            u += sp * rp + tp;
-            below += sp * rp + tp;
-            acc += sp * (anc + 0.5 * sp) * rp + sp * below + tp * anc;
-        }
-        out.push((u, acc));
-    }
-}
-
-/// Bound on the distance between a link's true vertex path and its chord
-/// over a sub-interval of length `h`: `min(U h/2, A h²/8)` (m).
-pub fn chord_deviation((u, a): (f64, f64), h: f64) -> f64 {
-    (u * h / 2.0).min(a * h * h / 8.0)
 }
 
 /// Largest `α ∈ [0, 1]` such that the surfaces of every link pair stay
@@ -180,7 +96,9 @@ pub fn max_collision_free_step(
     if link_pairs.is_empty() || dq.iter().all(|&v| v == 0.0) {
         return 1.0;
     }
-    nonlinear_speed_bounds(model, meshes, q, dq, &mut s.speed);
+    s.radius.clear();
+    s.radius.extend(meshes.iter().map(|m| m.radius));
+    chord_speed_bounds(model, &s.radius, q, dq, &mut s.speed);
     let world = |pose: &[sdrs::math::Pose]| -> Vec<Vec<Vector3<f64>>> {
         meshes
             .iter()

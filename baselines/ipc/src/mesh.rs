@@ -1,7 +1,7 @@
 //! Each link's surface as a closed triangle mesh in the link frame: the
 //! triangulated boundary of each of its convex hulls (the same shapes SDRS
 //! uses, for apples-to-apples comparisons), or the link's source mesh
-//! (`contact.surface: source`, [`crate::surface`]), with unique edges and
+//! (`contact.ipc.surface: source`, [`crate::surface`]), with unique edges and
 //! the per-link bounds the broad phase and the CCD step bound need.
 
 use nalgebra::Vector3;

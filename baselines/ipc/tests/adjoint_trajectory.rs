@@ -42,7 +42,7 @@ dt: 0.01
 gravity: [0, 0, -9.81]
 solver: {tol: 1.0e-12}
 ground: {height: 0}
-contact: {model: ipc, dhat: 1.0e-3, kappa: {KAPPA}, mu: 0.4, eps_v: 1.0e-2}
+contact: {model: ipc, kappa: {KAPPA}, mu: 0.4, ipc: {dhat: 1.0e-3, eps_v: 1.0e-2}}
 robots:
   - name: finger
     links:
@@ -239,7 +239,7 @@ fn ipc_trajectory_gradients_wrt_cage_vertices_match_finite_differences() {
 }
 
 /// The same run with the box's IPC surface its *source mesh*
-/// (`contact.surface: source`; the mesh has the hull's vertices and a fixed
+/// (`contact.ipc.surface: source`; the mesh has the hull's vertices and a fixed
 /// triangulation) and the cage deforming mesh and hull together: the
 /// gradient `dL/dc = Φᵀ dL/dx + Ψᵀ dL/ds` (hull vertices `x`, source-mesh
 /// vertices `s = Ψ c`, `Link::surface`) against central differences in the
@@ -285,8 +285,8 @@ fn ipc_cage_gradients_through_a_source_mesh_surface_match_finite_differences() {
     let text = PUSH
         .replace("{KAPPA}", &format!("{:e}", kappa()))
         .replace(
-            "contact: {model: ipc,",
-            "contact: {model: ipc, surface: source,",
+            "ipc: {dhat: 1.0e-3,",
+            "ipc: {surface: source, dhat: 1.0e-3,",
         )
         .replace(
             "    initial: {q: [0, 0, 0.1006, 0, 0, 0]}",
@@ -298,7 +298,7 @@ fn ipc_cage_gradients_through_a_source_mesh_surface_match_finite_differences() {
     let mut setup = ipc_setup(&text, 60);
     let bx = setup.link("box");
     let topology =
-        sdrs_ipc::factory::link_meshes(&setup.scene, sdrs::scene::schema::SurfaceKind::Source)
+        sdrs_ipc::factory::link_meshes(&setup.scene, sdrs_ipc::settings::SurfaceKind::Source)
             .unwrap();
     assert!(matches!(
         topology[bx].origin,

@@ -69,7 +69,7 @@ fn slope_text(mu: f64) -> String {
 version: 1
 dt: 0.002
 ground: {{height: 0, slope_deg: 30}}
-contact: {{model: ipc, dhat: 1.0e-3, mu: {mu}, eps_v: 1.0e-3}}
+contact: {{model: ipc, mu: {mu}, ipc: {{dhat: 1.0e-3, eps_v: 1.0e-3}}}}
 objects:
   - name: box
     mass: 1.0
@@ -140,7 +140,7 @@ fn fast_box_does_not_tunnel_through_a_thin_plate() {
 version: 1
 dt: 0.01
 gravity: [0, 0, 0]
-contact: {model: ipc, dhat: 1.0e-3}
+contact: {model: ipc, ipc: {dhat: 1.0e-3}}
 obstacles:
   - name: plate
     origin: {xyz: [0, 0, 0]}
@@ -174,7 +174,7 @@ fn bitwise_identical_for_one_and_two_threads() {
     .unwrap();
     let text = text.replace(
         "contact: {s: 0.01, kappa: 1.0, mu: 0.5}",
-        "contact: {model: ipc, dhat: 2.0e-2, mu: 0.5}",
+        "contact: {model: ipc, mu: 0.5, ipc: {dhat: 2.0e-2}}",
     );
     let s = scene(&text, "box_stack_ipc.yaml");
     let go = |n: usize| {
@@ -197,28 +197,53 @@ fn bitwise_identical_for_one_and_two_threads() {
 
 #[test]
 fn bad_inputs_name_the_file_and_the_element() {
-    let e = Scene::from_str(
+    // The core keeps `contact.ipc` as written; the baseline checks it when
+    // it builds the terms.
+    let ipc_error = |text: &str, name: &str| {
+        scene(text, name)
+            .simulator_with(&IpcFactory::default())
+            .err()
+            .expect("a bad contact.ipc section is an error")
+            .to_string()
+    };
+    let e = ipc_error(
         &slope_text(0.2).replace("dhat: 1.0e-3", "dhat: 0.0"),
-        Path::new("bad_dhat.yaml"),
-    )
-    .unwrap_err()
-    .to_string();
+        "bad_dhat.yaml",
+    );
     assert!(
-        e.contains("bad_dhat.yaml") && e.contains("contact.dhat"),
+        e.contains("bad_dhat.yaml") && e.contains("contact.ipc.dhat"),
+        "{e}"
+    );
+    let e = ipc_error(
+        &TWO_BOXES_APART
+            .replace("MODEL", "ipc")
+            .replace("mu: 0.3", "mu: 0.3, ipc: {eps_v: -1}"),
+        "bad_epsv.yaml",
+    );
+    assert!(
+        e.contains("bad_epsv.yaml") && e.contains("contact.ipc.eps_v"),
+        "{e}"
+    );
+    // A key the baseline does not know, and a key moved into `ipc:`.
+    let e = ipc_error(
+        &TWO_BOXES_APART
+            .replace("MODEL", "ipc")
+            .replace("mu: 0.3", "mu: 0.3, ipc: {d_hat: 0.01}"),
+        "bad_key.yaml",
+    );
+    assert!(
+        e.contains("bad_key.yaml") && e.contains("contact.ipc") && e.contains("d_hat"),
         "{e}"
     );
     let e = Scene::from_str(
         &TWO_BOXES_APART
             .replace("MODEL", "ipc")
-            .replace("mu: 0.3", "mu: 0.3, eps_v: -1"),
-        Path::new("bad_epsv.yaml"),
+            .replace("mu: 0.3", "mu: 0.3, dhat: 0.01"),
+        Path::new("old_key.yaml"),
     )
     .unwrap_err()
     .to_string();
-    assert!(
-        e.contains("bad_epsv.yaml") && e.contains("contact.eps_v"),
-        "{e}"
-    );
+    assert!(e.contains("old_key.yaml") && e.contains("dhat"), "{e}");
     // Intersecting start.
     let overlap = TWO_BOXES_APART
         .replace("MODEL", "ipc")

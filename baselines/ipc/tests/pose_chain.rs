@@ -96,7 +96,7 @@ fn step_objective_gradient_with_ipc_contact_and_friction_matches_finite_differen
     let text = "
 version: 1
 dt: 0.01
-contact: {model: ipc, dhat: 1.0e-3, kappa: 1.0e9, mu: 0.5, eps_v: 1.0e-2}
+contact: {model: ipc, kappa: 1.0e9, mu: 0.5, ipc: {dhat: 1.0e-3, eps_v: 1.0e-2}}
 obstacles:
   - name: table
     hulls: [{box: {size: [1, 1, 0.1], center: [0, 0, -0.05]}}]

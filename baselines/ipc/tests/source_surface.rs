@@ -1,4 +1,4 @@
-//! Source meshes as IPC contact surfaces (`contact.surface: source`): a box
+//! Source meshes as IPC contact surfaces (`contact.ipc.surface: source`): a box
 //! dropped over a U-shaped channel falls into the slot when the channel's
 //! surface is its (non-convex) source mesh and lands on top when it is its
 //! convex hull; the start check follows the surface; bad meshes are errors
@@ -18,7 +18,7 @@ use support::meshes::{Mesh, channel, cube, scratch, sphere, tetra, write_obj};
 /// at `at`.
 fn channel_scene(dir: &Path, surface: &str, at: [f64; 3], size: f64, mesh: &str) -> PathBuf {
     let text = format!(
-        "version: 1\ndt: 0.005\ncontact: {{model: ipc, surface: {surface}, mu: 0.3}}\n\
+        "version: 1\ndt: 0.005\ncontact: {{model: ipc, mu: 0.3, ipc: {{surface: {surface}}}}}\n\
 obstacles:\n  - name: channel\n    hulls: [{{box: {{size: [0.6, 0.6, 0.3], center: [0, 0, 0.15]}}}}]\n    surface_mesh: {mesh}\n\
 objects:\n  - name: box\n    mass: 1.0\n    hulls: [{{box: {{size: [{size}, {size}, {size}]}}}}]\n    initial: {{q: [{}, {}, {}, 0, 0, 0]}}\n",
         at[0], at[1], at[2]

@@ -30,9 +30,8 @@ pub fn run(
     let load = |design: bool| -> Result<Problem> {
         let mut p = Problem::load(&task, design)?;
         if let Some(h) = spec.horizon {
-            p.horizon = h;
-            for o in &mut p.others {
-                o.horizon = h;
+            for t in &mut p.trajectories {
+                t.horizon = h;
             }
         }
         Ok(p)
@@ -100,7 +99,7 @@ pub fn run(
         if design && cage.is_none() {
             let (d0, _) = sdrs::optimize::start(&p, 0);
             if let Some(svg) =
-                sdrs::optimize::shapes::initial_vs_optimized_svg(&p, &d0, &out.design)
+                sdrs::output::codesign::initial_vs_optimized_svg(&p, &d0, &out.design)
             {
                 std::fs::create_dir_all(out_dir.join("plots"))?;
                 sdrs::output::write_atomic(&out_dir.join(&shapes_rel), svg.as_bytes())?;
@@ -130,7 +129,7 @@ pub fn run(
     Ok(CodesignPart {
         name: spec.name.clone(),
         task: spec.task.display().to_string(),
-        horizon: p.horizon,
+        horizon: p.first().horizon,
         iters,
         runs,
         fd,
@@ -185,7 +184,7 @@ pub fn finished(
         Some(CodesignPart {
             name: spec.name.clone(),
             task: spec.task.display().to_string(),
-            horizon: spec.horizon.unwrap_or(p.horizon),
+            horizon: spec.horizon.unwrap_or(p.first().horizon),
             iters: spec.iters.unwrap_or(p.task.optimizer.iters),
             runs,
             fd,
@@ -210,12 +209,13 @@ fn min_distance(
     d: &nalgebra::DVector<f64>,
     c: &nalgebra::DVector<f64>,
 ) -> Result<Option<f64>> {
-    let mut scene = p.scene.clone();
-    scene.model = p.model.clone();
+    let t = p.first();
+    let mut scene = t.scene.clone();
+    scene.model = t.model.clone();
     p.design.apply(&mut scene.model, d);
     p.controls.apply(&mut scene.controller, c);
-    let mut sim = p.simulator(&scene)?;
-    let traj = sdrs::sim::run::run(&mut sim, p.horizon, |_| {})?;
+    let mut sim = t.simulator(&scene)?;
+    let traj = sdrs::sim::run::run(&mut sim, t.horizon, |_| {})?;
     Ok(
         Summary::new("compare", scene.settings.dt, &traj, 0.0, vec![])
             .contact
@@ -239,13 +239,12 @@ pub const FD_NEWTON_TOL: f64 = 1e-10;
 /// evaluations.
 fn fd_check(p: &Problem) -> Result<FdCheck> {
     let mut tight = p.clone();
-    tight.scene.settings.newton.tol = FD_NEWTON_TOL;
-    for o in &mut tight.others {
-        o.scene.settings.newton.tol = FD_NEWTON_TOL;
+    for t in &mut tight.trajectories {
+        t.scene.settings.newton.tol = FD_NEWTON_TOL;
     }
     let p = &tight;
-    let d0 = p.design.values(&p.model);
-    let c0 = p.controls.values(&p.controller);
+    let d0 = p.design.values(&p.first().model);
+    let c0 = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d0, &c0)?;
     let k = ev.grad_design.iamax();
     let h = 1e-6 * d0[k].abs().max(1.0);

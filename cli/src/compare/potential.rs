@@ -7,7 +7,9 @@ use super::suite::PotentialSpec;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use sdrs::contact::ContactParams;
-use sdrs_ipc::bench::{cases_json, median, potential_cases, time_case, time_friction_case};
+use sdrs_cli::potential_bench::{
+    cases_json, median, potential_cases, time_case, time_friction_case,
+};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;

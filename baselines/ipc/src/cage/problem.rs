@@ -3,14 +3,14 @@
 //! `design.vertices` links become the design (bounds `design.bound`), and
 //! the IPC surfaces keep the rest triangulation while the cage moves their
 //! vertices ([`crate::IpcFactory::topology`]) — the hull surfaces' or, with
-//! `contact.surface: source`, the source mesh's.
+//! `contact.ipc.surface: source`, the source mesh's.
 
 use super::{CageDesign, CageError, CageResolution, LinkCage};
 use crate::IpcFactory;
 use crate::mesh::MeshOrigin;
 use nalgebra::Vector3;
-use sdrs::optimize::Problem;
 use sdrs::optimize::design::Target;
+use sdrs::optimize::{Problem, Trajectory};
 use std::sync::Arc;
 
 /// Why a problem cannot be caged.
@@ -24,6 +24,12 @@ pub enum CageSetupError {
     Cage(#[from] CageError),
     #[error("{0}")]
     Mesh(String),
+    /// The cage design of trajectory `index` differs from the first's (the
+    /// caged robot must be the same in every trajectory).
+    #[error("trajectories[{index}]: its cage design differs from trajectories[0]'s")]
+    Differs { index: usize },
+    #[error("a task without trajectories")]
+    NoTrajectories,
 }
 
 /// The cages (one per designed link) and the number of design variables.
@@ -32,8 +38,8 @@ pub struct CageSummary {
     pub variables: usize,
 }
 
-/// Replaces `problem`'s design (and its other trajectories') by the cage
-/// vertices and gives it the IPC factory with frozen surfaces.
+/// Replaces `problem`'s design by the cage vertices and gives each of its
+/// trajectories the IPC factory with its frozen surfaces.
 pub fn cage_problem(
     problem: &mut Problem,
     res: CageResolution,
@@ -56,30 +62,38 @@ pub fn cage_problem(
         });
     }
     let bound = problem.task.design.as_ref().map_or(0.5, |d| d.bound);
-    let summary = cage_one(problem, &links, res, bound)?;
-    let mut others = std::mem::take(&mut problem.others);
-    let done: Result<(), CageSetupError> = others
-        .iter_mut()
-        .try_for_each(|o| cage_one(o, &links, res, bound).map(|_| ()));
-    problem.others = others;
-    done?;
+    let mut first: Option<(sdrs::optimize::DesignSpace, CageSummary)> = None;
+    for (index, t) in problem.trajectories.iter_mut().enumerate() {
+        let (design, summary) = cage_one(t, &links, res, bound)?;
+        match &first {
+            None => first = Some((design, summary)),
+            Some((d0, _)) if *d0 != design => {
+                return Err(CageSetupError::Differs { index });
+            }
+            Some(_) => {}
+        }
+    }
+    let (design, summary) = first.ok_or(CageSetupError::NoTrajectories)?;
+    problem.design = design;
     Ok(summary)
 }
 
-/// One trajectory's cage design and frozen-surface factory. A caged link
-/// whose IPC surface is its source mesh (`contact.surface: source`) gets
+/// One trajectory's frozen-surface factory (set on it) and cage design
+/// (returned: the same for every trajectory of a task, checked). A caged link
+/// whose IPC surface is its source mesh (`contact.ipc.surface: source`) gets
 /// the mesh's vertices as `Link::surface`, the cage around hulls and mesh,
 /// and the mesh's coordinates in the cage ([`LinkCage::with_surface`]), so
 /// the cage deforms the contact surface and the hulls (mass) together.
 fn cage_one(
-    p: &mut Problem,
+    p: &mut Trajectory,
     links: &[usize],
     res: CageResolution,
     bound: f64,
-) -> Result<CageSummary, CageSetupError> {
+) -> Result<(sdrs::optimize::DesignSpace, CageSummary), CageSetupError> {
     let mut scene = p.scene.clone();
     scene.model = p.model.clone();
-    let topology = crate::factory::link_meshes(&scene, crate::factory::surface_kind(&scene))
+    let topology = crate::factory::surface_kind(&scene)
+        .and_then(|kind| crate::factory::link_meshes(&scene, kind))
         .map_err(|e| CageSetupError::Mesh(e.at(&scene.source).to_string()))?;
     let mut cages = Vec::with_capacity(links.len());
     for &l in links {
@@ -101,9 +115,10 @@ fn cage_one(
         topology: Some(Arc::new(topology)),
         ..IpcFactory::default()
     }));
-    p.design = design.design_space(&p.model);
-    Ok(CageSummary {
+    let space = design.design_space(&p.model);
+    let summary = CageSummary {
         cage_vertices: design.cages.iter().map(|c| c.cage.vertices.len()).collect(),
         variables: design.len(),
-    })
+    };
+    Ok((space, summary))
 }

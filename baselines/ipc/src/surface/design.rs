@@ -6,16 +6,17 @@
 //! ([`crate::cage::cage_problem`]).
 
 use super::paths::surface_paths;
+use crate::settings::{IpcSettings, SurfaceKind};
 use sdrs::optimize::Problem;
 use sdrs::optimize::design::Target;
-use sdrs::scene::schema::{ContactModelKind, SurfaceKind};
+use sdrs::scene::schema::ContactModelKind;
 use std::path::PathBuf;
 
 /// Why a design cannot run with source-mesh surfaces.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceDesignError {
     #[error(
-        "{task}: the design moves hull vertices of link \"{link}\" (design.vertices), but under contact.surface: source its IPC contact surface is the source mesh {} (scene key {key}), which a hull edit does not move (the contact gradient would be zero); use --cage coarse|fine|K (the cage deforms the source mesh and the hulls together), contact.surface: hulls, or leave the link out of design.vertices",
+        "{task}: the design moves hull vertices of link \"{link}\" (design.vertices), but under contact.ipc.surface: source its IPC contact surface is the source mesh {} (scene key {key}), which a hull edit does not move (the contact gradient would be zero); use --cage coarse|fine|K (the cage deforms the source mesh and the hulls together), contact.ipc.surface: hulls, or leave the link out of design.vertices",
         mesh.display()
     )]
     HullEditOfSourceSurface {
@@ -31,18 +32,25 @@ pub enum SurfaceDesignError {
 /// Checks every trajectory of `problem` (see the module docs).
 pub fn check_vertex_design(problem: &Problem) -> Result<(), SurfaceDesignError> {
     let task = problem.task_path.display().to_string();
-    for p in std::iter::once(problem).chain(problem.others.iter()) {
+    for p in &problem.trajectories {
         let Some(c) = p.scene.contact.as_ref() else {
             continue;
         };
-        if c.model != ContactModelKind::Ipc || c.surface != SurfaceKind::Source {
+        if c.model != ContactModelKind::Ipc {
+            continue;
+        }
+        let ipc = IpcSettings::of(c).map_err(|e| SurfaceDesignError::Scene {
+            task: task.clone(),
+            msg: e.at(&p.scene.source).to_string(),
+        })?;
+        if ipc.surface != SurfaceKind::Source {
             continue;
         }
         let paths = surface_paths(&p.scene).map_err(|e| SurfaceDesignError::Scene {
             task: task.clone(),
             msg: e.at(&p.scene.source).to_string(),
         })?;
-        for t in p.design.vars.iter().flat_map(|v| &v.targets) {
+        for t in problem.design.vars.iter().flat_map(|v| &v.targets) {
             let link = match *t {
                 Target::Vertex { link, .. } | Target::Blend { link, .. } => link,
                 _ => continue,

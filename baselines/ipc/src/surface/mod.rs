@@ -1,4 +1,4 @@
-//! Source meshes as IPC contact surfaces (`contact.surface: source`): each
+//! Source meshes as IPC contact surfaces (`contact.ipc.surface: source`): each
 //! link's `surface_mesh` (the mesh its hulls were made from; `sdrs import`
 //! writes one per link) read, checked and turned into a [`LinkMesh`] in the
 //! link frame. Links without a `surface_mesh` keep their hull surfaces.

@@ -1,16 +1,16 @@
 //! One contact-potential evaluation (value + gradient + Hessian, pose space)
 //! of SDRS `U_c` vs the IPC baseline on the same pair of random convex hulls
 //! with 8 … 1024 vertices per hull, at half the interaction range of each
-//! model (see [`sdrs_ipc::bench`]). `sdrs compare` runs the same
+//! model (see [`sdrs_cli::potential_bench`]). `sdrs compare` runs the same
 //! measurement and writes it into its report.
 //!
 //! Optionally writes the cases to a JSON file for the ipctk timing script
 //! (`tools/bench_ipctk.py`).
 //!
-//! Run: `cargo run --release -p sdrs-ipc --example bench_potential [cases.json]`.
+//! Run: `cargo run --release -p sdrs-cli --example bench_potential [cases.json]`.
 
 use sdrs::contact::ContactParams;
-use sdrs_ipc::bench::{median, potential_cases, time_case};
+use sdrs_cli::potential_bench::{median, potential_cases, time_case};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args().nth(1);
@@ -48,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     if let Some(p) = out {
-        std::fs::write(&p, sdrs_ipc::bench::cases_json(&cases))?;
+        std::fs::write(&p, sdrs_cli::potential_bench::cases_json(&cases))?;
         println!("\ncases written to {p}");
     }
     Ok(())

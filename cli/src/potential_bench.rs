@@ -6,17 +6,18 @@
 //! of the same depth into their barrier zone (the paper's Fig. "cost-time").
 //!
 //! IPC's cost includes its primitive broad phase; the SDRS figure includes
-//! its separation test. Used by `examples/bench_potential.rs` and by
-//! `sdrs compare`.
+//! its separation test. Used by `cli/examples/bench_potential.rs` and by
+//! `sdrs compare` (benchmark code lives with the application, not in the
+//! baseline's library).
 
-use crate::broad_phase::{Candidates, PrimitiveBoxes, candidates};
-use crate::mesh::LinkMesh;
-use crate::pair::{PairGeometry, evaluate_pair};
 use nalgebra::{Matrix3x4, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use sdrs::contact::{ContactParams, ContactScratch, HullPose, Need, PairOutcome, contact_pair};
 use sdrs::geometry::sampling::{pose, random_rotation, sphere_points};
+use sdrs_ipc::broad_phase::{Candidates, PrimitiveBoxes, candidates};
+use sdrs_ipc::mesh::LinkMesh;
+use sdrs_ipc::pair::{PairGeometry, evaluate_pair};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -282,11 +283,11 @@ pub fn time_friction_case(
     params: &ContactParams,
     reps: usize,
 ) -> Result<FrictionTiming, BenchError> {
-    use crate::friction::{IpcFrictionParams, evaluate_pair_friction, lag_pair};
-    use crate::pair::PairHessian;
     use sdrs::contact::{
         FrictionNeed, FrictionParams, FrictionScratch, LaggedContact, friction_pair,
     };
+    use sdrs_ipc::friction::{IpcFrictionParams, evaluate_pair_friction, lag_pair};
+    use sdrs_ipc::pair::PairHessian;
     let m = case.vertices;
     let [ha, hb] = case.hull_poses();
     let mut sc = ContactScratch::new();
