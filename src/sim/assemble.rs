@@ -11,6 +11,13 @@
 //!   (composite-rigid-body style, O(|θ|²));
 //! - Hessian, second-order part: `⟨Q_b, S_k S_l⟩` when `k`'s joint is a proper
 //!   ancestor of `l`'s joint `b`, and `⟨Q_a, S_kl⟩` within one joint `a`.
+//!
+//! The structured first-order part and the second-order part are one inner
+//! product per entry (`⟨S_k, Z_l⟩`, see `add_tree_blocks`), written only
+//! along ancestor paths; with the contact pairs' blocks and the coordinate
+//! terms' entries they form the Hessian's envelope
+//! ([`crate::energy::HessEnvelope`]): the buffers are cleared and scanned
+//! there only, never over the tree's structural zeros.
 
 use crate::energy::{EnergyAccumulator, HessEnvelope, Need, PoseHessian};
 use crate::kinematics::Kinematics;

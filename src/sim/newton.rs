@@ -469,8 +469,9 @@ impl Solve<'_> {
         loop {
             let s = &mut *self.scratch;
             self.timers.time(Stage::LinearSolve, || {
-                s.linear.direction(
+                s.linear.direction_within(
                     &s.hess,
+                    self.obj.hessian_envelope(),
                     &s.grad,
                     opts.eig_clamp,
                     mode,
