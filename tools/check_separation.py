@@ -16,7 +16,11 @@ FCL's BVH–BVH distance (OBBRSS), and since a surface distance cannot see one
 solid inside another, a pair with a positive distance whose world boxes nest
 is also tested for containment (generalized winding number of one vertex).
 
-Usage: check_separation.py DIR [--every K]
+Several DIRs may be given (one Python start for many exports): the report is
+then a JSON list with one entry per DIR (its "dir" added), and the exit code
+the worst of them.
+
+Usage: check_separation.py DIR [DIR ...] [--every K]
 """
 import argparse
 import csv
@@ -69,24 +73,34 @@ def winding(x, tri, p):
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dir", type=Path)
+    ap.add_argument("dir", type=Path, nargs="+")
     ap.add_argument("--every", type=int, default=1, help="check every K-th step (default 1)")
     args = ap.parse_args()
+    results = [check(d, args.every) for d in args.dir]
+    if len(results) == 1:
+        print(json.dumps(results[0][1], indent=2))
+    else:
+        print(json.dumps([{"dir": str(d), **r} for d, (_, r) in zip(args.dir, results)], indent=2))
+    return max(code for code, _ in results)
+
+
+def check(dir: Path, every: int) -> tuple[int, dict]:
+    """The check of one export: (exit code, report)."""
     try:
-        hulls, poses = load(args.dir)
+        hulls, poses = load(dir)
     except (OSError, KeyError, ValueError) as e:
-        print(f"{args.dir}: cannot read the export: {e}", file=sys.stderr)
-        return 2
+        print(f"{dir}: cannot read the export: {e}", file=sys.stderr)
+        return 2, {"error": f"cannot read the export: {e}"}
     excluded = {tuple(sorted(p)) for p in hulls["excluded_pairs"]}
     surfaces = {}
-    if (args.dir / "surfaces.json").exists():
+    if (dir / "surfaces.json").exists():
         try:
-            for s in json.loads((args.dir / "surfaces.json").read_text())["links"]:
+            for s in json.loads((dir / "surfaces.json").read_text())["links"]:
                 surfaces[int(s["link"])] = (np.asarray(s["vertices"], dtype=float),
                                             np.asarray(s["triangles"], dtype=np.int64))
         except (OSError, KeyError, ValueError) as e:
-            print(f"{args.dir}: cannot read surfaces.json: {e}", file=sys.stderr)
-            return 2
+            print(f"{dir}: cannot read surfaces.json: {e}", file=sys.stderr)
+            return 2, {"error": f"cannot read surfaces.json: {e}"}
     # Local geometry: FCL convex shapes from Qhull triangles, and BVH models
     # (for pairs with a source-mesh surface).
     items = []  # (link, hull index (-1: surface mesh), local vertices, triangles, fcl convex, fcl BVH)
@@ -104,7 +118,7 @@ def main() -> int:
              if items[a][0] != items[b][0] and tuple(sorted((items[a][0], items[b][0]))) not in excluded]
     request = fcl.DistanceRequest(enable_nearest_points=False)
     min_d, min_at, checked, fcl_calls, mesh_calls, bad = np.inf, None, 0, 0, 0, []
-    for k in sorted(poses)[:: args.every]:
+    for k in sorted(poses)[::every]:
         world = []
         for li, hi, v, tri, geom, mesh in items:
             r, t = poses[k][li]
@@ -139,8 +153,7 @@ def main() -> int:
               "surface_links": sorted(surfaces), "mesh_distance_calls": mesh_calls,
               "min_distance": None if not np.isfinite(min_d) else float(min_d), "min_at_step": min_at,
               "violations": bad[:20], "violation_count": len(bad)}
-    print(json.dumps(report, indent=2))
-    return 1 if bad else 0
+    return (1 if bad else 0), report
 
 
 if __name__ == "__main__":

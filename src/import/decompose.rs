@@ -41,7 +41,7 @@ use parry3d_f64::transformation::vhacd::{VHACD, VHACDParameters};
 use serde::{Deserialize, Serialize};
 
 /// Which decomposition to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Decomposer {
     Vhacd,
@@ -97,6 +97,42 @@ impl std::str::FromStr for HullPoints {
             HullPoints::Voxels => "voxels",
             HullPoints::Mesh => "mesh",
         })
+    }
+}
+
+/// The decompositions made so far in one import, keyed by the mesh as
+/// placed in its link (vertex bits and triangles), the decomposer and the
+/// hull budget: a robot's repeated parts (a quadruped's four legs, a
+/// gripper's two fingers) are decomposed once. Every decomposer is
+/// deterministic (V-HACD runs sequentially, CoACD with a fixed seed), so a
+/// hit returns exactly what a new run would; failures are not kept.
+#[derive(Default)]
+pub struct Memo(std::collections::HashMap<MemoKey, Vec<Polytope>>);
+
+type MemoKey = (Decomposer, usize, Vec<[u64; 3]>, Vec<[usize; 3]>);
+
+impl Memo {
+    /// [`decompose`], or the stored result of the same call.
+    pub fn decompose(
+        &mut self,
+        mesh: &TriMesh,
+        opts: &ImportOptions,
+        max_hulls: usize,
+        ctx: &MeshContext,
+    ) -> Result<Vec<Polytope>, ImportError> {
+        let bits = |v: &Vector3<f64>| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let key = (
+            opts.decomposer,
+            max_hulls,
+            mesh.vertices.iter().map(bits).collect(),
+            mesh.triangles.clone(),
+        );
+        if let Some(parts) = self.0.get(&key) {
+            return Ok(parts.clone());
+        }
+        let parts = decompose(mesh, opts, max_hulls, ctx)?;
+        self.0.insert(key, parts.clone());
+        Ok(parts)
     }
 }
 

@@ -278,6 +278,7 @@ fn link_geometry(
     src: &SourceRobot,
     li: usize,
     opts: &ImportOptions,
+    memo: &mut decompose::Memo,
 ) -> Result<LinkGeometry, ImportError> {
     let t0 = Instant::now();
     let link = &src.links[li];
@@ -395,7 +396,7 @@ fn link_geometry(
                 g.element,
                 path.display()
             ));
-            match decompose::decompose(&m, opts, per_mesh, &ctx) {
+            match memo.decompose(&m, opts, per_mesh, &ctx) {
                 Ok(p) => p,
                 Err(e) if opts.decomposer != decompose::Decomposer::None => {
                     notes.push(format!(
@@ -407,7 +408,7 @@ fn link_geometry(
                 Err(e) => return Err(e),
             }
         } else {
-            decompose::decompose(&m, opts, per_mesh, &ctx)?
+            memo.decompose(&m, opts, per_mesh, &ctx)?
         };
         for p in parts {
             hulls.push(DesignHull::new(p));
@@ -453,9 +454,10 @@ fn build(
     let n = src.links.len();
     progress.start(n as u64, "links");
     let mut geoms = Vec::with_capacity(n);
+    let mut memo = decompose::Memo::default();
     for li in 0..n {
         progress.message(&src.links[li].name);
-        let g = link_geometry(&src, li, opts);
+        let g = link_geometry(&src, li, opts, &mut memo);
         if g.is_err() {
             progress.finish();
         }
