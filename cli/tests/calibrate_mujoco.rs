@@ -34,6 +34,7 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
     let opts = CalibrateOptions {
         scene: scene.to_path_buf(),
         measured: measured.to_path_buf(),
+        more_measured: Vec::new(),
         out: out.to_path_buf(),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,

@@ -7,6 +7,7 @@
 //!   to add one is in its module doc.
 //! - [`data`]: measured CSV files, validation, alignment by interpolation.
 //! - [`problem`]: the least-squares problem of a candidate on a window.
+//! - [`recordings`]: several recordings fitted with one parameter set.
 //! - [`candidates`]: the candidate list with bounds and starts.
 //! - [`adjoint`]: the exact gradient `Jᵀr` of a candidate's residuals.
 //! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
@@ -32,6 +33,7 @@ pub mod error;
 pub mod fit;
 pub mod floor;
 pub mod problem;
+pub mod recordings;
 pub mod report;
 pub mod residual;
 pub mod run;

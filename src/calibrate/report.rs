@@ -30,6 +30,11 @@
 //! residuals_before / residuals_after   per channel: RMS overall, train, held-out,
 //!                free/contact, moving/at rest, accelerating/braking, correlations
 //!                with sign θ̇, θ̇, θ̈; the three worst of ten time windows
+//! recordings     [{path, initial, samples, train_before, train_after, holdout_before,
+//!                  holdout_after}] each recording's RMS gaps (calibrate::recordings);
+//!                with several recordings gap_before/gap_after "overall" and the
+//!                ranking's RMS values are over all of them, the per-channel
+//!                values and residuals_* over the first
 //! holdout, split_time, samples, simulations
 //! ```
 
@@ -133,6 +138,8 @@ pub struct CalibrationResult {
     pub simulations: usize,
     /// The chosen effects as scene-file entries (also in `calibrated.yaml`).
     pub effects: Vec<EffectSpec>,
+    /// Each recording's gaps before and after ([`super::recordings`]).
+    pub recordings: Vec<super::recordings::RecordingGap>,
     /// Wall time (s); not written to the JSON (outputs are deterministic).
     #[serde(skip)]
     pub seconds: f64,
@@ -351,6 +358,7 @@ pub fn result(
             holdout: base.n_holdout,
         },
         simulations: sel.simulations,
+        recordings: super::recordings::gaps(pb, &effects),
         effects,
         seconds: 0.0,
     }

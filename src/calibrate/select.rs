@@ -80,12 +80,13 @@ fn deviance(rss: f64, n: usize) -> f64 {
     n * (rss.max(1e-300) / n).ln()
 }
 
-/// Scores a fitted candidate on the whole horizon.
+/// Scores a fitted candidate on the whole horizon (the held-out windows of
+/// every recording; `sim` is the first recording's).
 pub fn score(pb: &Problem, cand: Candidate, fit: Fit) -> Option<Scored> {
     let end = pb.measured.times.len();
-    let sim = pb.simulate(&cand.specs(&fit.params), end)?;
-    let mut r = Vec::new();
-    pb.residuals(&sim, pb.split..end, &mut r);
+    let specs = cand.specs(&fit.params);
+    let sim = pb.simulate(&specs, end)?;
+    let r = pb.holdout_residuals(&specs, &sim)?;
     let rss_holdout: f64 = r.iter().map(|x| x * x).sum();
     let k = fit.params.len() as f64;
     let criterion =
@@ -110,9 +111,7 @@ pub fn baseline(pb: &Problem) -> Option<Scored> {
         typical: Vec::new(),
         starts: vec![Vec::new()],
     };
-    let sim = pb.simulate(&[], pb.split)?;
-    let mut r = Vec::new();
-    pb.residuals(&sim, 0..pb.split, &mut r);
+    let r = pb.train_residuals(&cand, &[])?;
     let fit = Fit {
         params: Vec::new(),
         rss: r.iter().map(|x| x * x).sum(),
@@ -333,11 +332,7 @@ pub fn extrapolate_to_zero_dt(
     opts: &SelectOptions,
 ) -> (Option<Vec<f64>>, usize) {
     let sc = super::floor::refined_scene(pb.scene, 2);
-    let half = Problem {
-        scene: &sc,
-        measured: pb.measured,
-        split: pb.split,
-    };
+    let half = Problem { scene: &sc, ..*pb };
     let mut cand = s.candidate.clone();
     cand.starts = vec![s.fit.params.clone()];
     let Some(f) = fit(&half, &cand, &opts.fit) else {
