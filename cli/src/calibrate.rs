@@ -18,7 +18,7 @@ pub struct CalibrateArgs {
     /// held-out window (`--holdout`).
     #[arg(long, required = true)]
     pub measured: Vec<PathBuf>,
-    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
+    /// Output directory: calibrated.yaml, calibrated.xml (MuJoCo), calibration.json, report.md, plots.
     #[arg(long)]
     pub out: PathBuf,
     /// Candidate effects, comma separated (default: all applicable):
@@ -52,6 +52,7 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
     let hooks = sdrs::calibrate::Hooks {
         progress: &bar,
         plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+        model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
     };
     let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     eprintln!(

@@ -117,7 +117,7 @@ fn import_robot(
 }
 
 /// Names the physical effect missing from a scene given measured data,
-/// fits it and writes `calibrated.yaml`, `calibration.json`, `report.md` and
+/// fits it and writes `calibrated.yaml`, `calibrated.xml`, `calibration.json`, `report.md` and
 /// plots into `out`, exactly as `sdrs calibrate SCENE --measured CSV --out
 /// OUT` (`measured`: a path, or a list of paths for several recordings
 /// fitted with one parameter set, as `--measured` repeated; `effects`:
@@ -162,6 +162,7 @@ fn calibrate<'py>(
             opts.more_measured = more;
             let hooks = sdrs::calibrate::Hooks {
                 plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+                model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
                 ..Default::default()
             };
             let r = sdrs::calibrate::run_with(&opts, &hooks)?;

@@ -101,6 +101,18 @@ pub trait PlotWriter: Sync {
     ) -> Result<String, String>;
 }
 
+/// Writes the calibrated scene in another format: the application's
+/// (`calibrated.xml` for MuJoCo, `cli/src/calibrated_mjcf.rs`); the core
+/// writes only `calibrated.yaml`.
+pub trait ModelWriter: Sync {
+    /// The file name, its contents, and a `report.md` section (what was
+    /// mapped and what has no equivalent) for `scene`, the scene with the
+    /// fitted effects at their Δt → 0 values (`parameters` of
+    /// `calibration.json`: the physical estimate, for an engine with its
+    /// own step). Errors are messages (nothing is written).
+    fn write(&self, scene: &Scene) -> Result<(String, Vec<u8>, String), String>;
+}
+
 /// What a calibration run reports to and asks of its caller.
 #[derive(Clone, Copy)]
 pub struct Hooks<'a> {
@@ -109,6 +121,9 @@ pub struct Hooks<'a> {
     /// Draws `channel_<name>.svg` and `residuals.svg`; `None` (the default)
     /// writes no plots.
     pub plots: Option<&'a dyn PlotWriter>,
+    /// Writes the calibrated model in another format (`calibrated.xml`);
+    /// `None` (the default) writes none.
+    pub model: Option<&'a dyn ModelWriter>,
 }
 
 impl Default for Hooks<'_> {
@@ -116,6 +131,7 @@ impl Default for Hooks<'_> {
         Hooks {
             progress: &Silent,
             plots: None,
+            model: None,
         }
     }
 }
@@ -198,6 +214,9 @@ pub fn calibrate_with(
     let after = analyse(&measured, after_sim, split);
     let mut res = report::result(&pb, &sel, before, after, opts.holdout);
     let mut files = output_files(opts, &scene, &res)?;
+    if let Some(w) = hooks.model {
+        model_file(opts, &pb, &sel, w, &mut files)?;
+    }
     if let Some(plots) = hooks.plots {
         files.extend(plot_files(opts, plots, &measured, &sel, &res)?);
     }
@@ -213,6 +232,35 @@ pub fn calibrate_with(
     }
     res.seconds = t0.elapsed().as_secs_f64();
     Ok((res, files))
+}
+
+/// Appends the [`ModelWriter`]'s file (and its `report.md` section) for
+/// the scene with the chosen effects at their Δt → 0 values.
+fn model_file(
+    opts: &CalibrateOptions,
+    pb: &Problem,
+    sel: &super::select::Selection,
+    w: &dyn ModelWriter,
+    files: &mut Files,
+) -> Result<(), CalibrateError> {
+    let specs = sel.chosen.map_or_else(Vec::new, |i| {
+        let s = &sel.ranking[i];
+        s.candidate
+            .specs(sel.extrapolated.as_ref().unwrap_or(&s.fit.params))
+    });
+    let err = |msg: String| CalibrateError::Output {
+        path: opts.out.join("calibrated.xml"),
+        msg,
+    };
+    let sc = pb
+        .scene_with(&specs)
+        .ok_or_else(|| err("the fitted effects do not apply to the scene".into()))?;
+    let (name, bytes, section) = w.write(&sc).map_err(err)?;
+    if let Some(md) = files.iter_mut().find(|(n, _)| n == "report.md") {
+        md.1.extend_from_slice(section.as_bytes());
+    }
+    files.push((name, bytes));
+    Ok(())
 }
 
 /// The further recordings of `opts` ([`super::recordings::load`]); a file
@@ -274,6 +322,10 @@ fn output_files(
     files.push(("calibration.json".into(), json.into_bytes()));
     let mut md = report::markdown(res, &opts.scene.display().to_string(), &measured_list(opts));
     md.push_str(&super::recordings::markdown(&res.recordings));
+    md.push_str(&super::identifiability::markdown(
+        &res.identifiability,
+        res.candidate.as_deref(),
+    ));
     if let Some(r) = &res.residual_regression {
         md.push_str(&super::residual::markdown(r));
     }

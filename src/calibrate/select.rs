@@ -118,6 +118,7 @@ pub fn baseline(pb: &Problem) -> Option<Scored> {
         n: r.len(),
         half_width: Vec::new(),
         simulations: 1,
+        gauss_newton_start: None,
     };
     score(pb, cand, fit)
 }
@@ -143,6 +144,9 @@ pub struct Selection {
     /// The residual force regression of the scene as given
     /// ([`super::residual`]).
     pub residual: Option<super::residual::ResidualRegression>,
+    /// Identifiability of every candidate at its start, in `ranking`'s
+    /// order ([`super::identifiability`]).
+    pub identifiability: Vec<super::identifiability::Identifiability>,
 }
 
 /// Fits `cands` in parallel (order-preserving).
@@ -234,6 +238,7 @@ pub fn select(
         on_done();
     }
     sort(&mut ranking);
+    let identifiability = super::identifiability::assess(pb, &ranking, &base.sim);
     let inertia = super::verdict::joint_inertia(pb.scene);
     let bad: Vec<(String, String)> = ranking
         .iter()
@@ -289,6 +294,10 @@ pub fn select(
             None => break (floor, decision, refined, p),
         }
     };
+    let mut decision = decision;
+    if let Some(i) = decision.chosen {
+        super::identifiability::flag_reason(&mut decision.reason, &identifiability[i]);
+    }
     let chosen = decision.chosen;
     // + the refined runs (Δt/2, Δt/4) for the floors.
     let simulations =
@@ -302,6 +311,7 @@ pub fn select(
         decision,
         extrapolated,
         residual,
+        identifiability,
     })
 }
 
