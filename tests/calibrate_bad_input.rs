@@ -26,6 +26,7 @@ fn opts(measured: &Path, out: &Path) -> CalibrateOptions {
     CalibrateOptions {
         scene: scene(),
         measured: measured.to_path_buf(),
+        more_measured: Vec::new(),
         out: out.to_path_buf(),
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,

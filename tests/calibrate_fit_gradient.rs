@@ -30,6 +30,7 @@ fn check(robot: &str, hidden: &str) {
         scene: &scene,
         measured: &measured,
         split: measured.split(0.3),
+        others: &[],
     };
     let cands = candidates(&scene, &EffectKind::ALL);
     // Sensitivity scale of the problem: the largest |∂(½‖r‖²)/∂p|·typical

@@ -76,6 +76,7 @@ fn calibrate_on(name: &str, data: String) -> sdrs::calibrate::CalibrationResult 
     let opts = CalibrateOptions {
         scene,
         measured,
+        more_measured: Vec::new(),
         out: dir.join(format!("out_{name}")),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,

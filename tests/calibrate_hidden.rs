@@ -195,6 +195,7 @@ fn run_case(
     let opts = CalibrateOptions {
         scene,
         measured,
+        more_measured: Vec::new(),
         out: dir.join(format!("out_{name}")),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,

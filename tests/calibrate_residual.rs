@@ -43,6 +43,7 @@ fn regression(hidden: &[&str], seed: u64) -> ResidualRegression {
         scene: &scene,
         measured: &m,
         split,
+        others: &[],
     };
     let base = pb.simulate(&[], m.times.len()).unwrap();
     let r = regress(
@@ -146,6 +147,7 @@ fn own_step_lag_does_not_veto_a_damping_that_reproduces_the_data() {
         let opts = sdrs::calibrate::CalibrateOptions {
             scene: scene.clone(),
             measured,
+            more_measured: Vec::new(),
             out: dir.join(format!("out_{c}")),
             effects: vec![
                 sdrs::energy::effects::EffectKind::JointDamping,

@@ -4,7 +4,7 @@ and simulate it with MuJoCo, optionally with one effect switched on.
     python tools/mujoco_from_export.py SCENE.yaml EXPORT_DIR --out data.csv \
         [--damping C] [--frictionloss F] [--armature A] [--gain G] \
         [--duration 1.2] [--period 0.01] [--noise 1e-4] [--seed 1] [--timestep 1e-4] \
-        [--integrator implicitfast|implicit|RK4|Euler] [--mjcf model.xml]
+        [--integrator implicitfast|implicit|RK4|Euler] [--mjcf model.xml] [--model calibrated.xml]
 
 EXPORT_DIR is written by `sdrs simulate SCENE.yaml --export EXPORT_DIR`: the
 hull vertices of every link come from its `hulls.json`, and `poses.csv`
@@ -24,7 +24,9 @@ friction, N·m), `--armature` (kg·m²), `--gain` (the PD torque × G).
 
 With `--sdrs BIN`, the MJCF comes from `BIN export-mjcf SCENE` (the toolkit's
 own writer, src/output/mjcf.rs: same kinematics and mass model) and only the
-effects, actuators and integrator are added here (MuJoCo's MjSpec); without
+effects, actuators and integrator are added here (MuJoCo's MjSpec); with
+`--model XML` as well, from that file, whose joint attributes are kept (to
+simulate `sdrs calibrate`'s `calibrated.xml` under the scene's controller); without
 it, the model is built by this script from the export (kept as a second,
 independent construction).
 
@@ -180,13 +182,16 @@ def from_sdrs(scene_path, scene, args):
     hinge/slide joint and one motor per joint (MjSpec edits)."""
     import subprocess
     import tempfile
-    with tempfile.TemporaryDirectory() as tmp:
-        xml = os.path.join(tmp, "model.xml")
-        r = subprocess.run([args.sdrs, "export-mjcf", scene_path, "--out", xml],
-                           capture_output=True, text=True)
-        if r.returncode != 0:
-            fail(f"sdrs export-mjcf failed: {r.stderr.strip()}")
-        spec = mujoco.MjSpec.from_file(xml)
+    if args.model:
+        spec = mujoco.MjSpec.from_file(args.model)
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            xml = os.path.join(tmp, "model.xml")
+            r = subprocess.run([args.sdrs, "export-mjcf", scene_path, "--out", xml],
+                               capture_output=True, text=True)
+            if r.returncode != 0:
+                fail(f"sdrs export-mjcf failed: {r.stderr.strip()}")
+            spec = mujoco.MjSpec.from_file(xml)
     spec.option.timestep = args.timestep
     spec.option.integrator = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
                               "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
@@ -195,9 +200,10 @@ def from_sdrs(scene_path, scene, args):
     joints = []
     for j in spec.joints:
         if j.type in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
-            j.damping = [args.damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
-            j.frictionloss = args.frictionloss
-            j.armature = args.armature
+            if not args.model:  # --model keeps the file's own joint attributes
+                j.damping = [args.damping, 0.0, 0.0]  # MuJoCo 4: damping polynomial
+                j.frictionloss = args.frictionloss
+                j.armature = args.armature
             joints.append(j.name)
         else:
             fail(f"joint {j.name!r}: only revolute and prismatic joints are supported")
@@ -231,6 +237,9 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--mjcf")
     ap.add_argument("--sdrs", help="the sdrs binary: take the MJCF from `sdrs export-mjcf`")
+    ap.add_argument("--model", help="with --sdrs: take the MJCF from this file instead (e.g. "
+                    "`sdrs calibrate`'s calibrated.xml), keeping its joint attributes; "
+                    "--damping/--frictionloss/--armature are then not applied")
     for k in ("damping", "frictionloss", "armature"):
         ap.add_argument(f"--{k}", type=float, default=0.0)
     ap.add_argument("--gain", type=float, default=1.0)

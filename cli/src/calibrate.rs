@@ -12,9 +12,13 @@ pub struct CalibrateArgs {
     /// Scene YAML: the model to calibrate (its controller is the commanded one).
     pub scene: PathBuf,
     /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
-    #[arg(long)]
-    pub measured: PathBuf,
-    /// Output directory: calibrated.yaml, calibration.json, report.md, plots.
+    /// Repeat for several recordings fitted with one parameter set: the first is
+    /// simulated from the scene's initial state, each further one from its first
+    /// sample (at t = 0) with the scene's controller; each is validated on its own
+    /// held-out window (`--holdout`).
+    #[arg(long, required = true)]
+    pub measured: Vec<PathBuf>,
+    /// Output directory: calibrated.yaml, calibrated.xml (MuJoCo), calibration.json, report.md, plots.
     #[arg(long)]
     pub out: PathBuf,
     /// Candidate effects, comma separated (default: all applicable):
@@ -32,13 +36,14 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: &CalibrateArgs) -> Result<()> {
-    let opts = CalibrateOptions::new(
+    let mut opts = CalibrateOptions::new(
         a.scene.clone(),
-        a.measured.clone(),
+        a.measured[0].clone(),
         a.out.clone(),
         a.effects.as_deref(),
         a.holdout,
     )?;
+    opts.more_measured = a.measured[1..].to_vec();
     let bar = Bar::new(
         "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
         0,
@@ -47,11 +52,16 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
     let hooks = sdrs::calibrate::Hooks {
         progress: &bar,
         plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+        model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
     };
     let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     eprintln!(
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
-        a.measured.display(),
+        a.measured
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
         r.verdict,
         r.candidate
             .as_ref()

@@ -1,8 +1,10 @@
 //! The parts of the `sdrs` application that the Python package shares
-//! (`sdrs-py` depends on this library): the SVG plots ([`svg`]), and what
-//! the binary shares with its examples: the contact-potential benchmark
-//! ([`potential_bench`], `sdrs compare` and `examples/bench_potential.rs`). The command
-//! line itself is the `sdrs` binary (`main.rs`).
+//! (`sdrs-py` depends on this library): the SVG plots ([`svg`]),
+//! `calibrated.xml` ([`calibrated_mjcf`]), and what the binary shares with
+//! its examples: the contact-potential benchmark ([`potential_bench`],
+//! `sdrs compare` and `examples/bench_potential.rs`). The command line
+//! itself is the `sdrs` binary (`main.rs`).
 
+pub mod calibrated_mjcf;
 pub mod potential_bench;
 pub mod svg;

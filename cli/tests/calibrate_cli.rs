@@ -188,3 +188,54 @@ fn cli_reports_errors_with_exit_code_1() {
     );
     assert!(!out.exists());
 }
+
+/// `--measured` repeated: one parameter set fitted across two recordings
+/// (arm2 with a hidden damping 0.3 on both joints, the second started from
+/// shoulder −0.3, elbow 0.3 rad); `calibration.json` lists both
+/// recordings with their gaps before and after, and the fit recovers the
+/// damping (data from the scene's own step, noise 1e-4: within 2 %).
+#[test]
+fn calibrate_fits_one_model_across_repeated_measured_files() {
+    let dir = common::scratch_dir("calibrate-cli-two");
+    let scene = common::robots("calibrate/arm2.yaml");
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let hidden = ["{effect: joint_damping, on: all, values: [0.3]}"];
+    let from_a = "shoulder: {q: [0.2], qdot: [0]}\n      elbow: {q: [-0.3], qdot: [0]}";
+    let from_b = "shoulder: {q: [-0.3], qdot: [0]}\n      elbow: {q: [0.3], qdot: [0]}";
+    assert!(text.contains(from_a));
+    let (a, b) = (dir.join("a.csv"), dir.join("b.csv"));
+    let s = Sampling {
+        jitter: 0.0,
+        ..Default::default()
+    };
+    std::fs::write(&a, measured_csv(&with_effects(&text, &hidden), &s)).unwrap();
+    let text_b = text.replace(from_a, from_b);
+    std::fs::write(&b, measured_csv(&with_effects(&text_b, &hidden), &s)).unwrap();
+    let out = dir.join("out");
+    let o = common::sdrs()
+        .args(["calibrate", scene.to_str().unwrap()])
+        .args(["--measured", a.to_str().unwrap()])
+        .args(["--measured", b.to_str().unwrap()])
+        .args(["--out", out.to_str().unwrap()])
+        .args(["--effects", "joint_damping", "-q"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(j["candidate"], "joint_damping/all", "{}", j["reason"]);
+    let c = j["parameters"]["joint_damping/all"].as_f64().unwrap();
+    assert!((c / 0.3 - 1.0).abs() < 0.02, "fitted {c}");
+    let r = j["recordings"].as_array().unwrap();
+    assert_eq!(r.len(), 2);
+    assert!(r[1]["path"].as_str().unwrap().ends_with("b.csv"));
+    assert_eq!(r[1]["initial"], "first sample");
+    for g in r {
+        assert!(
+            g["holdout_after"].as_f64().unwrap() < 0.1 * g["holdout_before"].as_f64().unwrap(),
+            "{g}"
+        );
+    }
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## Recordings"), "{md}");
+}

@@ -34,6 +34,7 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
     let opts = CalibrateOptions {
         scene: scene.to_path_buf(),
         measured: measured.to_path_buf(),
+        more_measured: Vec::new(),
         out: out.to_path_buf(),
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
@@ -110,5 +111,157 @@ fn mujoco_damping_frictionloss_and_armature_are_named_and_close_the_gap() {
             r.gap_before.overall > 5.0 * clean.gap_before.overall,
             "{name}"
         );
+    }
+}
+
+/// RMS difference of two CSVs written at the same sample times
+/// (`t,<joint>…`).
+fn csv_rms(a: &Path, b: &Path) -> f64 {
+    let read = |p: &Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let (x, y) = (read(a), read(b));
+    assert_eq!(x.len(), y.len());
+    let (mut s, mut n) = (0.0, 0);
+    for (r, q) in x.iter().zip(&y) {
+        assert!((r[0] - q[0]).abs() < 1e-9);
+        for c in 1..r.len() {
+            s += (r[c] - q[c]).powi(2);
+            n += 1;
+        }
+    }
+    (s / n as f64).sqrt()
+}
+
+/// `calibrated.xml` (issue 33, Deliver 6): MuJoCo data with damping 0.3 on
+/// both joints of `arm2_fine`; `sdrs calibrate` writes `calibrated.xml`,
+/// MuJoCo loads it with the fitted damping as both joints' `damping`
+/// attribute, and MuJoCo's own simulation of it under the scene's
+/// controller is closer to the data than its simulation of the original
+/// export (threshold fixed before the run: ≤ ¼ of the original's RMS gap).
+/// Payload and link-mass-scale effects map to the bodies' inertials: the
+/// body mass and centre of mass MuJoCo reads are `σm + m_p` and
+/// `(σ m c + m_p p)/(σm + m_p)`.
+#[test]
+fn calibrated_xml_carries_the_fit_into_mujoco() {
+    if support::skip_without_venv() {
+        return;
+    }
+    let dir = common::scratch_dir("calibrate-mujoco-xml");
+    let scene = common::robots("calibrate/arm2_fine.yaml");
+    let export = dir.join("export");
+    let o = common::sdrs()
+        .args([
+            "simulate",
+            scene.to_str().unwrap(),
+            "--steps",
+            "2",
+            "-q",
+            "--export",
+        ])
+        .arg(&export)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let data = dir.join("damping.csv");
+    mujoco_data(&scene, &export, &data, &["--damping", "0.3"]);
+    let out = dir.join("out");
+    let o = common::sdrs()
+        .args(["calibrate", scene.to_str().unwrap(), "--measured"])
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
+        .args(["--effects", "joint_damping,armature", "-q"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(j["candidate"], "joint_damping/all", "{}", j["reason"]);
+    let c = j["parameters"]["joint_damping/all"].as_f64().unwrap();
+    let xml = out.join("calibrated.xml");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## MuJoCo model"), "{md}");
+    // MuJoCo reads the attributes.
+    let probe = "import json, sys, mujoco\n\
+        m = mujoco.MjModel.from_xml_path(sys.argv[1])\n\
+        print(json.dumps({'damping': [float(x) for x in m.dof_damping], \
+        'mass': [float(x) for x in m.body_mass], \
+        'ipos': [[float(v) for v in p] for p in m.body_ipos]}))";
+    let read = |p: &Path| -> serde_json::Value {
+        let o = common::python()
+            .args(["-c", probe])
+            .arg(p)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let m = read(&xml);
+    for d in m["damping"].as_array().unwrap() {
+        let d = d.as_f64().unwrap();
+        assert!(
+            (d - c).abs() <= 1e-9 * c,
+            "MuJoCo damping {d} vs fitted {c}"
+        );
+    }
+    // MuJoCo simulates calibrated.xml and the original export under the
+    // scene's controller, without noise.
+    let sim = |model: Option<&Path>, csv: &Path| {
+        let mut cmd = common::python();
+        cmd.arg(common::root().join("tools/mujoco_from_export.py"))
+            .arg(&scene)
+            .arg(&export)
+            .arg("--out")
+            .arg(csv)
+            .args(["--noise", "0", "--sdrs", env!("CARGO_BIN_EXE_sdrs")]);
+        if let Some(x) = model {
+            cmd.arg("--model").arg(x);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let (cal, orig) = (dir.join("cal.csv"), dir.join("orig.csv"));
+    sim(Some(&xml), &cal);
+    sim(None, &orig);
+    let (gc, go) = (csv_rms(&cal, &data), csv_rms(&orig, &data));
+    eprintln!("MuJoCo vs data: calibrated.xml {gc:.3e}, original {go:.3e} (fitted damping {c})");
+    assert!(gc <= 0.25 * go, "calibrated {gc} vs original {go}");
+    // Payload and mass scale in the inertial.
+    let text = std::fs::read_to_string(&scene).unwrap()
+        + "effects:\n  - {effect: link_mass_scale, on: fore, values: [1.5]}\n  \
+           - {effect: payload, on: fore, values: [0.2, 0.01, 0.0, -0.3]}\n";
+    let with = dir.join("with_mass.yaml");
+    std::fs::write(&with, text).unwrap();
+    let x2 = dir.join("with_mass.xml");
+    let o = common::sdrs()
+        .args([
+            "export-mjcf",
+            with.to_str().unwrap(),
+            "--out",
+            x2.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (m0, m1) = (read(&xml), read(&x2));
+    let b = m0["mass"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .rposition(|v| (v.as_f64().unwrap() - 0.5).abs() < 1e-9)
+        .expect("the forearm body (0.5 kg)");
+    let mass = m1["mass"][b].as_f64().unwrap();
+    assert!((mass - (1.5 * 0.5 + 0.2)).abs() < 1e-9, "mass {mass}");
+    for (k, p) in [0.01, 0.0, -0.3].iter().enumerate() {
+        let c0 = m0["ipos"][b][k].as_f64().unwrap();
+        let want = (0.75 * c0 + 0.2 * p) / 0.95;
+        let got = m1["ipos"][b][k].as_f64().unwrap();
+        assert!((got - want).abs() < 1e-9, "com[{k}] {got} vs {want}");
     }
 }

@@ -117,10 +117,12 @@ fn import_robot(
 }
 
 /// Names the physical effect missing from a scene given measured data,
-/// fits it and writes `calibrated.yaml`, `calibration.json`, `report.md` and
+/// fits it and writes `calibrated.yaml`, `calibrated.xml`, `calibration.json`, `report.md` and
 /// plots into `out`, exactly as `sdrs calibrate SCENE --measured CSV --out
-/// OUT` (`effects`: candidate names, default all applicable; `holdout`: the
-/// fraction of the data, at the end, held out for scoring). Returns the
+/// OUT` (`measured`: a path, or a list of paths for several recordings
+/// fitted with one parameter set, as `--measured` repeated; `effects`:
+/// candidate names, default all applicable; `holdout`: the fraction of
+/// each recording, at the end, held out for scoring). Returns the
 /// contents of `calibration.json` as a dict (verdict, effect, parameters,
 /// gaps before/after, ranking …). GIL released.
 #[pyfunction]
@@ -128,22 +130,39 @@ fn import_robot(
 fn calibrate<'py>(
     py: Python<'py>,
     scene: PathBuf,
-    measured: PathBuf,
+    measured: &Bound<'py, PyAny>,
     out: PathBuf,
     effects: Option<Vec<String>>,
     holdout: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // A single path (str or os.PathLike) or a non-empty list of them.
+    let measured: Vec<PathBuf> = match measured.extract::<PathBuf>() {
+        Ok(p) => vec![p],
+        Err(_) => measured.extract::<Vec<PathBuf>>().map_err(|_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "calibrate(): measured must be a path or a list of paths",
+            )
+        })?,
+    };
+    let Some((first, more)) = measured.split_first() else {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "calibrate(): measured is an empty list (give at least one recording)",
+        ));
+    };
+    let (first, more) = (first.clone(), more.to_vec());
     let json = py
         .detach(|| {
-            let opts = sdrs::calibrate::CalibrateOptions::new(
+            let mut opts = sdrs::calibrate::CalibrateOptions::new(
                 scene,
-                measured,
+                first,
                 out,
                 effects.as_deref(),
                 holdout,
             )?;
+            opts.more_measured = more;
             let hooks = sdrs::calibrate::Hooks {
                 plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
+                model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
                 ..Default::default()
             };
             let r = sdrs::calibrate::run_with(&opts, &hooks)?;

@@ -18,8 +18,28 @@ use crate::diff::{Loss, LossTerm, backward, record};
 use crate::energy::effects::{self, EffectKind, Target};
 use std::collections::BTreeMap;
 
-/// Training residuals and their exact gradient `Jᵀr` at `p`.
+/// Training residuals and their exact gradient `Jᵀr` at `p`; with several
+/// recordings ([`Problem::others`]) the residuals are concatenated in the
+/// order of [`Problem::train_residuals`] and the gradients summed (one
+/// forward and one backward pass per recording).
 pub fn residual_gradient(
+    pb: &Problem,
+    cand: &Candidate,
+    p: &[f64],
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let (mut r, mut g) = own_residual_gradient(pb, cand, p)?;
+    for o in pb.others {
+        let (ro, go) = pb.with_other(o, |q| own_residual_gradient(q, cand, p))?;
+        r.extend(ro);
+        for (a, b) in g.iter_mut().zip(go) {
+            *a += b;
+        }
+    }
+    Some((r, g))
+}
+
+/// [`residual_gradient`] of the first recording alone.
+fn own_residual_gradient(
     pb: &Problem,
     cand: &Candidate,
     p: &[f64],

@@ -50,6 +50,8 @@ pub enum CalibrateError {
         t: f64,
         prev: f64,
     },
+    #[error("{}: {msg}", path.display())]
+    Recording { path: PathBuf, msg: String },
     #[error("{}: too short: {what}", path.display())]
     TooShort { path: PathBuf, what: String },
     #[error(transparent)]

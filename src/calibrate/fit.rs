@@ -64,6 +64,9 @@ pub struct Fit {
     pub half_width: Vec<Option<f64>>,
     /// Simulations run.
     pub simulations: usize,
+    /// The Gauss–Newton matrix `JᵀJ` at the first start, before any step
+    /// (for [`super::identifiability`]; `None` when it could not be built).
+    pub gauss_newton_start: Option<DMatrix<f64>>,
 }
 
 fn jacobian(
@@ -112,6 +115,7 @@ fn fit_from(
     start: &[f64],
     opts: &FitOptions,
     sims: &mut usize,
+    gn_start: &mut Option<DMatrix<f64>>,
 ) -> Option<(Vec<f64>, f64, Vec<f64>)> {
     let mut p = start.to_vec();
     clamp(cand, &mut p);
@@ -124,6 +128,9 @@ fn fit_from(
             break;
         };
         let a = j.transpose() * &j;
+        if gn_start.is_none() {
+            *gn_start = Some(a.clone());
+        }
         let exact = if opts.adjoint_gradient {
             *sims += 1;
             super::adjoint::residual_gradient(pb, cand, &p).map(|(_, g)| DVector::from_vec(g))
@@ -192,8 +199,11 @@ fn fit_from(
 pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
     let mut sims = 0;
     let mut best: Option<(Vec<f64>, f64, Vec<f64>)> = None;
+    let mut gn_start = None;
     for s in &cand.starts {
-        if let Some(res) = fit_from(pb, cand, s, opts, &mut sims)
+        // `JᵀJ` is kept at the first start only (a later start's is not
+        // overwritten onto it: `gn_start` is filled once).
+        if let Some(res) = fit_from(pb, cand, s, opts, &mut sims, &mut gn_start)
             .filter(|res| best.as_ref().is_none_or(|b| res.1 < b.1))
         {
             best = Some(res);
@@ -206,6 +216,7 @@ pub fn fit(pb: &Problem, cand: &Candidate, opts: &FitOptions) -> Option<Fit> {
         params,
         rss,
         simulations: sims,
+        gauss_newton_start: gn_start,
     })
 }
 

@@ -44,6 +44,7 @@
 //! `Δt_s = Δt (σ/E)^{1/p}` (when `E > σ`): the step at which effects of the
 //! size of the noise become resolvable.
 
+use super::data::Measured;
 use super::problem::{Problem, Simulated};
 use serde::Serialize;
 
@@ -105,11 +106,7 @@ pub fn with_model(
     base: &ErrorFloor,
 ) -> Option<ErrorFloor> {
     let sc = pb.scene_with(extra)?;
-    let model_pb = Problem {
-        scene: &sc,
-        measured: pb.measured,
-        split: pb.split,
-    };
+    let model_pb = Problem { scene: &sc, ..*pb };
     let m = estimate(&model_pb, sim)?;
     let mut out = base.clone();
     if m.floor > base.floor {
@@ -145,6 +142,17 @@ pub fn refined_scene(scene: &crate::scene::Scene, factor: usize) -> crate::scene
 /// `σ̂` from third divided differences of the residual `r` (rows: samples
 /// of one channel, `None` where unmeasured).
 pub fn noise(times: &[f64], channels: &[Vec<Option<f64>>]) -> f64 {
+    let (sum, count) = noise_sums(times, channels);
+    if count == 0 {
+        0.0
+    } else {
+        (sum / count as f64).sqrt()
+    }
+}
+
+/// The sum of `(Σ c_j r_j)² / Σ c_j²` over the windows of [`noise`] and
+/// their count (pooled over several recordings by [`estimate`]).
+fn noise_sums(times: &[f64], channels: &[Vec<Option<f64>>]) -> (f64, usize) {
     let mut gaps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_by(f64::total_cmp);
     let median = gaps.get(gaps.len() / 2).copied().unwrap_or(0.0);
@@ -174,22 +182,16 @@ pub fn noise(times: &[f64], channels: &[Vec<Option<f64>>]) -> f64 {
             }
         }
     }
-    if count == 0 {
-        0.0
-    } else {
-        (sum / count as f64).sqrt()
-    }
+    (sum, count)
 }
 
-/// Per channel, the baseline residual at every sample (`None` where
+/// Per channel of `m`, the residual of `sim` at every sample (`None` where
 /// unmeasured).
-fn residual_rows(pb: &Problem, sim: &Simulated) -> Vec<Vec<Option<f64>>> {
-    pb.measured
-        .channels
+fn residual_rows(m: &Measured, sim: &Simulated) -> Vec<Vec<Option<f64>>> {
+    m.channels
         .iter()
         .map(|ch| {
-            pb.measured
-                .times
+            m.times
                 .iter()
                 .zip(&ch.values)
                 .map(|(t, y)| y.map(|y| sim.at(ch.dof, *t) - y))
@@ -198,24 +200,56 @@ fn residual_rows(pb: &Problem, sim: &Simulated) -> Vec<Vec<Option<f64>>> {
         .collect()
 }
 
+/// One recording's data, first held-out sample and simulations at Δt,
+/// Δt/2 and Δt/4 over the whole data.
+struct Runs<'m> {
+    m: &'m Measured,
+    split: usize,
+    sims: [Simulated; 3],
+}
+
+/// The runs of every recording of `pb` (`base`: the first one's at Δt).
+fn runs<'m>(pb: &Problem<'m>, base: &Simulated) -> Option<Vec<Runs<'m>>> {
+    let mut out = vec![Runs {
+        m: pb.measured,
+        split: pb.split,
+        sims: [base.clone(), refined(pb, 2)?, refined(pb, 4)?],
+    }];
+    for o in pb.others {
+        let sims = pb.with_other(o, |q| {
+            let at_dt = q.simulate(&[], q.measured.times.len())?;
+            Some([at_dt, refined(q, 2)?, refined(q, 4)?])
+        })?;
+        out.push(Runs {
+            m: &o.measured,
+            split: o.split,
+            sims,
+        });
+    }
+    Some(out)
+}
+
 /// Measures the floor for the scene as given (`base`: its simulation at Δt
-/// over the whole data). `None` when a refined simulation fails.
+/// over the whole data of the first recording). With several recordings
+/// ([`Problem::others`]) every RMS is over the held-out windows of all of
+/// them and the noise is pooled. `None` when a refined simulation fails.
 pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
-    let half = refined(pb, 2)?;
-    let quarter = refined(pb, 4)?;
-    let m = pb.measured;
+    let runs = runs(pb, base)?;
     let (mut d1, mut d2, mut n) = (0.0, 0.0, 0usize);
-    for i in pb.split..m.times.len() {
-        let t = m.times[i];
-        for ch in m.channels.iter().filter(|c| c.values[i].is_some()) {
-            let (a, b, c) = (
-                base.at(ch.dof, t),
-                half.at(ch.dof, t),
-                quarter.at(ch.dof, t),
-            );
-            d1 += (a - b).powi(2);
-            d2 += (b - c).powi(2);
-            n += 1;
+    for Runs { m, split, sims } in &runs {
+        let [base, half, quarter] = sims;
+        for i in *split..m.times.len() {
+            let t = m.times[i];
+            for ch in m.channels.iter().filter(|c| c.values[i].is_some()) {
+                let (a, b, c) = (
+                    base.at(ch.dof, t),
+                    half.at(ch.dof, t),
+                    quarter.at(ch.dof, t),
+                );
+                d1 += (a - b).powi(2);
+                d2 += (b - c).powi(2);
+                n += 1;
+            }
         }
     }
     let order = if d2 > 0.0 && d1 > 0.0 {
@@ -225,26 +259,37 @@ pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
     };
     let scale = 1.0 / (1.0 - 2f64.powf(-order));
     let (mut g, mut gh, mut gq, mut gx, mut e) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for i in pb.split..m.times.len() {
-        let t = m.times[i];
-        for ch in &m.channels {
-            let Some(y) = ch.values[i] else { continue };
-            let (a, b, c) = (
-                base.at(ch.dof, t),
-                half.at(ch.dof, t),
-                quarter.at(ch.dof, t),
-            );
-            let err = scale * (a - b);
-            g += (a - y).powi(2);
-            gh += (b - y).powi(2);
-            gq += (c - y).powi(2);
-            gx += (a - err - y).powi(2);
-            e += err * err;
+    let (mut noise_sum, mut noise_n) = (0.0, 0usize);
+    for Runs { m, split, sims } in &runs {
+        let [base, half, quarter] = sims;
+        for i in *split..m.times.len() {
+            let t = m.times[i];
+            for ch in &m.channels {
+                let Some(y) = ch.values[i] else { continue };
+                let (a, b, c) = (
+                    base.at(ch.dof, t),
+                    half.at(ch.dof, t),
+                    quarter.at(ch.dof, t),
+                );
+                let err = scale * (a - b);
+                g += (a - y).powi(2);
+                gh += (b - y).powi(2);
+                gq += (c - y).powi(2);
+                gx += (a - err - y).powi(2);
+                e += err * err;
+            }
         }
+        let (s, k) = noise_sums(&m.times, &residual_rows(m, base));
+        noise_sum += s;
+        noise_n += k;
     }
     let rms = |x: f64| (x / n.max(1) as f64).sqrt();
     let (g, gh, gq, gx, e) = (rms(g), rms(gh), rms(gq), rms(gx), rms(e));
-    let sigma = noise(&m.times, &residual_rows(pb, base));
+    let sigma = if noise_n == 0 {
+        0.0
+    } else {
+        (noise_sum / noise_n as f64).sqrt()
+    };
     let e_gap = (g * g - gx * gx).clamp(0.0, e * e).sqrt();
     let floor = FLOOR_MARGIN * (sigma * sigma + e_gap * e_gap).sqrt();
     let dt = pb.scene.settings.dt;

@@ -7,9 +7,12 @@
 //!   to add one is in its module doc.
 //! - [`data`]: measured CSV files, validation, alignment by interpolation.
 //! - [`problem`]: the least-squares problem of a candidate on a window.
+//! - [`recordings`]: several recordings fitted with one parameter set.
 //! - [`candidates`]: the candidate list with bounds and starts.
 //! - [`adjoint`]: the exact gradient `Jᵀr` of a candidate's residuals.
 //! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
+//! - [`identifiability`]: each candidate's scaled Gauss–Newton matrix at
+//!   its start: condition number, near-singular parameters, what to excite.
 //! - [`floor`]: the model's own error on the data (noise, integrator error
 //!   by Richardson extrapolation), measured before attributing anything.
 //! - [`select`]: fits in parallel, pairs, the criterion.
@@ -31,7 +34,9 @@ pub mod data;
 pub mod error;
 pub mod fit;
 pub mod floor;
+pub mod identifiability;
 pub mod problem;
+pub mod recordings;
 pub mod report;
 pub mod residual;
 pub mod run;
@@ -41,5 +46,6 @@ pub mod verdict;
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
 pub use run::{
-    CalibrateOptions, Hooks, PlotWriter, calibrate, calibrate_with, effect_kinds, run, run_with,
+    CalibrateOptions, Hooks, ModelWriter, PlotWriter, calibrate, calibrate_with, effect_kinds, run,
+    run_with,
 };

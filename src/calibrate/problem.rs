@@ -112,16 +112,41 @@ impl Simulated {
     }
 }
 
+/// A further recording fitted together with the first one (issue 33,
+/// item 4; [`Problem::others`]): its data, its first held-out sample, and
+/// its initial coordinates `θ^0` (the scene's, with every measured
+/// coordinate set to the recording's first sample,
+/// [`super::recordings::initial_coordinates`]; the initial velocities are
+/// the scene's).
+#[derive(Clone, Debug)]
+pub struct Recording {
+    pub measured: Measured,
+    pub split: usize,
+    pub q0: DVector<f64>,
+}
+
 /// Everything fixed while fitting: the scene (without the candidate), the
 /// data and the training window.
+///
+/// With several recordings, `measured` is the first (simulated from the
+/// scene's own initial state, as a single recording always is) and
+/// `others` the further ones (each from its own initial state, the
+/// scene's controller). One parameter set is fitted to the training
+/// windows of all of them ([`Problem::train_residuals`] concatenates) and
+/// scored on the held-out window of each ([`Problem::holdout_residuals`]).
+/// The floor sums over all recordings; the residual force regression and
+/// the per-regime analysis use the first.
+#[derive(Clone, Copy)]
 pub struct Problem<'a> {
     pub scene: &'a Scene,
     pub measured: &'a Measured,
     /// First held-out sample.
     pub split: usize,
+    /// Further recordings (empty for a single one).
+    pub others: &'a [Recording],
 }
 
-impl Problem<'_> {
+impl<'a> Problem<'a> {
     /// Steps needed to reach sample `end − 1`.
     pub fn steps_to(&self, end: usize) -> usize {
         let t = self.measured.times[end - 1];
@@ -181,11 +206,60 @@ impl Problem<'_> {
         }
     }
 
-    /// Training residuals of the candidate at `p` (`None`: simulation failed).
+    /// Training residuals of the candidate at `p`, of the first recording
+    /// then of each of [`Problem::others`] (`None`: a simulation failed).
     pub fn train_residuals(&self, cand: &Candidate, p: &[f64]) -> Option<Vec<f64>> {
+        let mut r = self.own_train_residuals(cand, p)?;
+        for o in self.others {
+            r.extend(self.with_other(o, |q| q.own_train_residuals(cand, p))?);
+        }
+        Some(r)
+    }
+
+    /// Training residuals of the first recording alone.
+    fn own_train_residuals(&self, cand: &Candidate, p: &[f64]) -> Option<Vec<f64>> {
         let sim = self.simulate(&cand.specs(p), self.split)?;
         let mut r = Vec::new();
         self.residuals(&sim, 0..self.split, &mut r);
         r.iter().all(|x| x.is_finite()).then_some(r)
+    }
+
+    /// This problem's first recording alone (no [`Problem::others`]).
+    pub fn first(&self) -> Problem<'a> {
+        Problem {
+            others: &[],
+            ..*self
+        }
+    }
+
+    /// `f` applied to the problem of recording `o` alone: this problem's
+    /// scene (with whatever Δt and effects it has) started from `o`'s
+    /// initial coordinates.
+    pub fn with_other<R>(&self, o: &Recording, f: impl FnOnce(&Problem) -> R) -> R {
+        let mut sc = self.scene.clone();
+        sc.q0 = o.q0.clone();
+        f(&Problem {
+            scene: &sc,
+            measured: &o.measured,
+            split: o.split,
+            others: &[],
+        })
+    }
+
+    /// Held-out residuals of every recording with `extra` effects: the first
+    /// recording's from `first` (its simulation over the whole data), the
+    /// others' simulated here. `None` when a simulation fails.
+    pub fn holdout_residuals(&self, extra: &[EffectSpec], first: &Simulated) -> Option<Vec<f64>> {
+        let mut r = Vec::new();
+        self.residuals(first, self.split..self.measured.times.len(), &mut r);
+        for o in self.others {
+            self.with_other(o, |q| {
+                let end = q.measured.times.len();
+                let sim = q.simulate(extra, end)?;
+                q.residuals(&sim, q.split..end, &mut r);
+                Some(())
+            })?;
+        }
+        Some(r)
     }
 }

@@ -30,6 +30,15 @@
 //! residuals_before / residuals_after   per channel: RMS overall, train, held-out,
 //!                free/contact, moving/at rest, accelerating/braking, correlations
 //!                with sign θ̇, θ̇, θ̈; the three worst of ten time windows
+//! recordings     [{path, initial, samples, train_before, train_after, holdout_before,
+//!                  holdout_after}] each recording's RMS gaps (calibrate::recordings);
+//!                with several recordings gap_before/gap_after "overall" and the
+//!                ranking's RMS values are over all of them, the per-channel
+//!                values and residuals_* over the first
+//! identifiability [{candidate, condition, min_relative_eigenvalue, unidentifiable,
+//!                  suggestion}] each candidate's scaled Gauss–Newton matrix at its start
+//!                (calibrate::identifiability); the ranking's entries carry
+//!                `unidentifiable` too
 //! holdout, split_time, samples, simulations
 //! ```
 
@@ -68,6 +77,9 @@ pub struct Ranked {
     pub delta_criterion: f64,
     /// `1 − RSS_train(fit)/RSS_train(none)`.
     pub explained: f64,
+    /// Parameters not identifiable from the data at the start
+    /// ([`super::identifiability`]); empty when all are.
+    pub unidentifiable: Vec<String>,
 }
 
 /// The baseline's scores.
@@ -133,6 +145,11 @@ pub struct CalibrationResult {
     pub simulations: usize,
     /// The chosen effects as scene-file entries (also in `calibrated.yaml`).
     pub effects: Vec<EffectSpec>,
+    /// Each recording's gaps before and after ([`super::recordings`]).
+    pub recordings: Vec<super::recordings::RecordingGap>,
+    /// Each candidate's identifiability at its start, in the ranking's
+    /// order ([`super::identifiability`]).
+    pub identifiability: Vec<super::identifiability::Identifiability>,
     /// Wall time (s); not written to the JSON (outputs are deterministic).
     #[serde(skip)]
     pub seconds: f64,
@@ -231,7 +248,8 @@ pub fn result(
     let ranking = sel
         .ranking
         .iter()
-        .map(|s| Ranked {
+        .zip(&sel.identifiability)
+        .map(|(s, id)| Ranked {
             candidate: s.candidate.label.clone(),
             effects: s
                 .candidate
@@ -245,6 +263,7 @@ pub fn result(
             criterion: s.criterion,
             delta_criterion: base.criterion - s.criterion,
             explained: 1.0 - s.fit.rss / base.fit.rss.max(1e-300),
+            unidentifiable: id.unidentifiable.clone(),
         })
         .collect();
     let mut parameters_at_dt = BTreeMap::new();
@@ -351,6 +370,8 @@ pub fn result(
             holdout: base.n_holdout,
         },
         simulations: sel.simulations,
+        recordings: super::recordings::gaps(pb, &effects),
+        identifiability: sel.identifiability.clone(),
         effects,
         seconds: 0.0,
     }
@@ -562,11 +583,17 @@ fn md_ranking(s: &mut String, r: &CalibrationResult) {
     w(s, "\n## Ranking\n\nCriterion `C = BIC(train) + n_ho ln(RSS_ho/n_ho)`; ΔC > 0 is better than the model as given.\n".into());
     w(s, "| # | candidate | ΔC | held-out RMS | train RMS | explained | parameters |\n|---:|---|---:|---:|---:|---:|---|".into());
     for (i, c) in r.ranking.iter().enumerate() {
-        let p: Vec<String> = c
+        let mut p: Vec<String> = c
             .parameters
             .iter()
             .map(|(k, v)| format!("{k} = {v:.4e}"))
             .collect();
+        if !c.unidentifiable.is_empty() {
+            p.push(format!(
+                "**not identifiable: {}**",
+                c.unidentifiable.join(", ")
+            ));
+        }
         w(
             s,
             format!(

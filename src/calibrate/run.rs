@@ -2,7 +2,7 @@
 //! are the application's, `cli/src/calibrate.rs`).
 
 use super::analysis::analyse;
-use super::data::{MIN_SAMPLES, Measured};
+use super::data::Measured;
 use super::problem::Problem;
 use super::problem::Simulated;
 use super::report::{self, CalibrationResult};
@@ -18,7 +18,12 @@ use std::time::Instant;
 #[derive(Clone, Debug)]
 pub struct CalibrateOptions {
     pub scene: PathBuf,
+    /// The (first) measured recording, simulated from the scene's initial
+    /// state.
     pub measured: PathBuf,
+    /// Further recordings fitted with the same parameters, each simulated
+    /// from its first sample ([`super::recordings`]). Default none.
+    pub more_measured: Vec<PathBuf>,
     /// Output directory (created; files in it are replaced atomically; no
     /// file is written when the run fails).
     pub out: PathBuf,
@@ -44,6 +49,7 @@ impl CalibrateOptions {
         Ok(CalibrateOptions {
             scene,
             measured,
+            more_measured: Vec::new(),
             out,
             effects: effect_kinds(effects)?,
             holdout,
@@ -95,6 +101,18 @@ pub trait PlotWriter: Sync {
     ) -> Result<String, String>;
 }
 
+/// Writes the calibrated scene in another format: the application's
+/// (`calibrated.xml` for MuJoCo, `cli/src/calibrated_mjcf.rs`); the core
+/// writes only `calibrated.yaml`.
+pub trait ModelWriter: Sync {
+    /// The file name, its contents, and a `report.md` section (what was
+    /// mapped and what has no equivalent) for `scene`, the scene with the
+    /// fitted effects at their Δt → 0 values (`parameters` of
+    /// `calibration.json`: the physical estimate, for an engine with its
+    /// own step). Errors are messages (nothing is written).
+    fn write(&self, scene: &Scene) -> Result<(String, Vec<u8>, String), String>;
+}
+
 /// What a calibration run reports to and asks of its caller.
 #[derive(Clone, Copy)]
 pub struct Hooks<'a> {
@@ -103,6 +121,9 @@ pub struct Hooks<'a> {
     /// Draws `channel_<name>.svg` and `residuals.svg`; `None` (the default)
     /// writes no plots.
     pub plots: Option<&'a dyn PlotWriter>,
+    /// Writes the calibrated model in another format (`calibrated.xml`);
+    /// `None` (the default) writes none.
+    pub model: Option<&'a dyn ModelWriter>,
 }
 
 impl Default for Hooks<'_> {
@@ -110,6 +131,7 @@ impl Default for Hooks<'_> {
         Hooks {
             progress: &Silent,
             plots: None,
+            model: None,
         }
     }
 }
@@ -155,19 +177,7 @@ pub fn calibrate_with(
     }
     let scene = Scene::load(&opts.scene)?;
     let measured = Measured::load(&opts.measured, &scene.model)?;
-    let split = measured.split(opts.holdout);
-    let n = measured.times.len();
-    if split < MIN_SAMPLES / 2 || n - split < 3 {
-        return Err(CalibrateError::TooShort {
-            path: opts.measured.clone(),
-            what: format!(
-                "{split} training and {} held-out sample time(s) with --holdout {}; at least {} and 3 needed",
-                n - split,
-                opts.holdout,
-                MIN_SAMPLES / 2
-            ),
-        });
-    }
+    let split = super::recordings::split_of(&measured, opts.holdout)?;
     // The scene as given must simulate over the whole data.
     let steps = (measured.duration() / scene.settings.dt).ceil() as usize + 1;
     crate::sim::run::run(&mut scene.simulator(), steps, |_| {}).map_err(|source| {
@@ -176,10 +186,12 @@ pub fn calibrate_with(
             source,
         }
     })?;
+    let others = load_others(opts, &scene)?;
     let pb = Problem {
         scene: &scene,
         measured: &measured,
         split,
+        others: &others,
     };
     let cands = candidates::candidates(&scene, &opts.effects);
     let sel = select(
@@ -201,8 +213,92 @@ pub fn calibrate_with(
     let before = analyse(&measured, &sel.baseline.sim, split);
     let after = analyse(&measured, after_sim, split);
     let mut res = report::result(&pb, &sel, before, after, opts.holdout);
+    let mut files = output_files(opts, &scene, &res)?;
+    if let Some(w) = hooks.model {
+        model_file(opts, &pb, &sel, w, &mut files)?;
+    }
+    if let Some(plots) = hooks.plots {
+        files.extend(plot_files(opts, plots, &measured, &sel, &res)?);
+    }
+    let inputs: Vec<&PathBuf> = [&opts.scene, &opts.measured]
+        .into_iter()
+        .chain(&opts.more_measured)
+        .collect();
+    for (name, _) in &files {
+        let p = opts.out.join(name);
+        if inputs.iter().any(|i| same_file(&p, i)) {
+            return Err(CalibrateError::WouldOverwriteInput { path: p });
+        }
+    }
+    res.seconds = t0.elapsed().as_secs_f64();
+    Ok((res, files))
+}
 
-    // Files.
+/// Appends the [`ModelWriter`]'s file (and its `report.md` section) for
+/// the scene with the chosen effects at their Δt → 0 values.
+fn model_file(
+    opts: &CalibrateOptions,
+    pb: &Problem,
+    sel: &super::select::Selection,
+    w: &dyn ModelWriter,
+    files: &mut Files,
+) -> Result<(), CalibrateError> {
+    let specs = sel.chosen.map_or_else(Vec::new, |i| {
+        let s = &sel.ranking[i];
+        s.candidate
+            .specs(sel.extrapolated.as_ref().unwrap_or(&s.fit.params))
+    });
+    let err = |msg: String| CalibrateError::Output {
+        path: opts.out.join("calibrated.xml"),
+        msg,
+    };
+    let sc = pb
+        .scene_with(&specs)
+        .ok_or_else(|| err("the fitted effects do not apply to the scene".into()))?;
+    let (name, bytes, section) = w.write(&sc).map_err(err)?;
+    if let Some(md) = files.iter_mut().find(|(n, _)| n == "report.md") {
+        md.1.extend_from_slice(section.as_bytes());
+    }
+    files.push((name, bytes));
+    Ok(())
+}
+
+/// The further recordings of `opts` ([`super::recordings::load`]); a file
+/// given twice is an error.
+fn load_others(
+    opts: &CalibrateOptions,
+    scene: &Scene,
+) -> Result<Vec<super::problem::Recording>, CalibrateError> {
+    let mut seen = vec![&opts.measured];
+    let mut out = Vec::new();
+    for p in &opts.more_measured {
+        if seen.iter().any(|q| *q == p || same_file(q, p)) {
+            return Err(CalibrateError::Recording {
+                path: p.clone(),
+                msg: "given twice as --measured (each recording counts once)".into(),
+            });
+        }
+        seen.push(p);
+        out.push(super::recordings::load(p, scene, opts.holdout)?);
+    }
+    Ok(out)
+}
+
+/// The measured files of `opts`, comma separated (for headers).
+fn measured_list(opts: &CalibrateOptions) -> String {
+    std::iter::once(&opts.measured)
+        .chain(&opts.more_measured)
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `calibrated.yaml`, `calibration.json` and `report.md`.
+fn output_files(
+    opts: &CalibrateOptions,
+    scene: &Scene,
+    res: &CalibrationResult,
+) -> Result<Files, CalibrateError> {
     let mut files: Files = Vec::new();
     let mut spec = scene.spec.clone();
     spec.effects.extend(res.effects.iter().cloned());
@@ -213,51 +309,59 @@ pub fn calibrate_with(
     let header = format!(
         "# Written by `sdrs calibrate` from {} and {}: the scene plus the fitted effects.\n",
         opts.scene.display(),
-        opts.measured.display()
+        measured_list(opts)
     );
     files.push((
         "calibrated.yaml".into(),
         format!("{header}{yaml}").into_bytes(),
     ));
-    let json = serde_json::to_string_pretty(&res).map_err(|e| CalibrateError::Output {
+    let json = serde_json::to_string_pretty(res).map_err(|e| CalibrateError::Output {
         path: opts.out.join("calibration.json"),
         msg: e.to_string(),
     })?;
     files.push(("calibration.json".into(), json.into_bytes()));
-    let mut md = report::markdown(
-        &res,
-        &opts.scene.display().to_string(),
-        &opts.measured.display().to_string(),
-    );
+    let mut md = report::markdown(res, &opts.scene.display().to_string(), &measured_list(opts));
+    md.push_str(&super::recordings::markdown(&res.recordings));
+    md.push_str(&super::identifiability::markdown(
+        &res.identifiability,
+        res.candidate.as_deref(),
+    ));
     if let Some(r) = &res.residual_regression {
         md.push_str(&super::residual::markdown(r));
     }
     files.push(("report.md".into(), md.into_bytes()));
+    Ok(files)
+}
+
+/// The SVG plots (of the first recording).
+fn plot_files(
+    opts: &CalibrateOptions,
+    plots: &dyn PlotWriter,
+    measured: &Measured,
+    sel: &super::select::Selection,
+    res: &CalibrationResult,
+) -> Result<Files, CalibrateError> {
     let plot_err = |name: &str, msg: String| CalibrateError::Output {
         path: opts.out.join(name),
         msg,
     };
-    if let Some(plots) = hooks.plots {
-        for c in 0..measured.channels.len() {
-            let name = format!("channel_{}.svg", file_stem(&measured.channels[c].name));
-            let svg = plots
-                .channel_svg(&measured, c, &sel.baseline.sim, after_sim, res.split_time)
-                .map_err(|m| plot_err(&name, m))?;
-            files.push((name, svg.into_bytes()));
-        }
+    let after_sim = sel
+        .chosen
+        .map(|i| &sel.ranking[i].sim)
+        .unwrap_or(&sel.baseline.sim);
+    let mut files = Files::new();
+    for c in 0..measured.channels.len() {
+        let name = format!("channel_{}.svg", file_stem(&measured.channels[c].name));
         let svg = plots
-            .residuals_svg(&measured, &sel.baseline.sim, after_sim)
-            .map_err(|m| plot_err("residuals.svg", m))?;
-        files.push(("residuals.svg".into(), svg.into_bytes()));
+            .channel_svg(measured, c, &sel.baseline.sim, after_sim, res.split_time)
+            .map_err(|m| plot_err(&name, m))?;
+        files.push((name, svg.into_bytes()));
     }
-    for (name, _) in &files {
-        let p = opts.out.join(name);
-        if same_file(&p, &opts.scene) || same_file(&p, &opts.measured) {
-            return Err(CalibrateError::WouldOverwriteInput { path: p });
-        }
-    }
-    res.seconds = t0.elapsed().as_secs_f64();
-    Ok((res, files))
+    let svg = plots
+        .residuals_svg(measured, &sel.baseline.sim, after_sim)
+        .map_err(|m| plot_err("residuals.svg", m))?;
+    files.push(("residuals.svg".into(), svg.into_bytes()));
+    Ok(files)
 }
 
 /// Writes `files` into `dir`: a new directory is filled under a temporary

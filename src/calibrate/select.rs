@@ -80,12 +80,13 @@ fn deviance(rss: f64, n: usize) -> f64 {
     n * (rss.max(1e-300) / n).ln()
 }
 
-/// Scores a fitted candidate on the whole horizon.
+/// Scores a fitted candidate on the whole horizon (the held-out windows of
+/// every recording; `sim` is the first recording's).
 pub fn score(pb: &Problem, cand: Candidate, fit: Fit) -> Option<Scored> {
     let end = pb.measured.times.len();
-    let sim = pb.simulate(&cand.specs(&fit.params), end)?;
-    let mut r = Vec::new();
-    pb.residuals(&sim, pb.split..end, &mut r);
+    let specs = cand.specs(&fit.params);
+    let sim = pb.simulate(&specs, end)?;
+    let r = pb.holdout_residuals(&specs, &sim)?;
     let rss_holdout: f64 = r.iter().map(|x| x * x).sum();
     let k = fit.params.len() as f64;
     let criterion =
@@ -110,15 +111,14 @@ pub fn baseline(pb: &Problem) -> Option<Scored> {
         typical: Vec::new(),
         starts: vec![Vec::new()],
     };
-    let sim = pb.simulate(&[], pb.split)?;
-    let mut r = Vec::new();
-    pb.residuals(&sim, 0..pb.split, &mut r);
+    let r = pb.train_residuals(&cand, &[])?;
     let fit = Fit {
         params: Vec::new(),
         rss: r.iter().map(|x| x * x).sum(),
         n: r.len(),
         half_width: Vec::new(),
         simulations: 1,
+        gauss_newton_start: None,
     };
     score(pb, cand, fit)
 }
@@ -144,6 +144,9 @@ pub struct Selection {
     /// The residual force regression of the scene as given
     /// ([`super::residual`]).
     pub residual: Option<super::residual::ResidualRegression>,
+    /// Identifiability of every candidate at its start, in `ranking`'s
+    /// order ([`super::identifiability`]).
+    pub identifiability: Vec<super::identifiability::Identifiability>,
 }
 
 /// Fits `cands` in parallel (order-preserving).
@@ -235,6 +238,7 @@ pub fn select(
         on_done();
     }
     sort(&mut ranking);
+    let identifiability = super::identifiability::assess(pb, &ranking, &base.sim);
     let inertia = super::verdict::joint_inertia(pb.scene);
     let bad: Vec<(String, String)> = ranking
         .iter()
@@ -290,6 +294,10 @@ pub fn select(
             None => break (floor, decision, refined, p),
         }
     };
+    let mut decision = decision;
+    if let Some(i) = decision.chosen {
+        super::identifiability::flag_reason(&mut decision.reason, &identifiability[i]);
+    }
     let chosen = decision.chosen;
     // + the refined runs (Δt/2, Δt/4) for the floors.
     let simulations =
@@ -303,6 +311,7 @@ pub fn select(
         decision,
         extrapolated,
         residual,
+        identifiability,
     })
 }
 
@@ -333,11 +342,7 @@ pub fn extrapolate_to_zero_dt(
     opts: &SelectOptions,
 ) -> (Option<Vec<f64>>, usize) {
     let sc = super::floor::refined_scene(pb.scene, 2);
-    let half = Problem {
-        scene: &sc,
-        measured: pb.measured,
-        split: pb.split,
-    };
+    let half = Problem { scene: &sc, ..*pb };
     let mut cand = s.candidate.clone();
     cand.starts = vec![s.fit.params.clone()];
     let Some(f) = fit(&half, &cand, &opts.fit) else {

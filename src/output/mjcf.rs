@@ -22,16 +22,22 @@
 //! - the initial state as keyframe `initial`, limits as `range`, the joint
 //!   effects `joint_damping`, `armature`, `joint_friction`, `joint_spring`
 //!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`;
-//!   contact `μ` as the geoms' sliding friction.
+//!   contact `μ` (with a `contact_mu` effect applied) as the geoms' sliding
+//!   friction; `payload` and `link_mass_scale` effects in the bodies'
+//!   `inertial` (second moments `M₂ ← σ M₂ + m_p [p pᵀ, p; pᵀ, 1]`:
+//!   mass, centre of mass and inertia of the link with its point payload
+//!   `m_p` at `p`, link frame).
 //!
 //! Not translated (MuJoCo has its own): the SDRS barrier and friction
-//! smoothing, PD controllers, mimic ties, the other calibration effects.
+//! smoothing, PD controllers, mimic ties, the calibration effects listed
+//! by [`untranslated`] (actuator gain and delay: no actuators are written;
+//! encoder offsets; the barrier's `κ` and `s`).
 
-use crate::energy::effects::EffectKind;
+use crate::energy::effects::{EffectKind, Target};
 use crate::math::{Pose, rot};
 use crate::model::{Inertial, JointKind};
 use crate::scene::Scene;
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Matrix4, UnitQuaternion, Vector3};
 use std::fmt::Write;
 
 /// Mass (kg) and principal moments (kg m²) written for a massless link:
@@ -107,7 +113,11 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
             }
         }
     }
-    let mu = scene.contact.as_ref().map(|c| c.mu).unwrap_or(0.0);
+    let mu = scene
+        .contact
+        .as_ref()
+        .map(|c| crate::scene::contact_settings(&scene.effects, c.clone()).mu)
+        .unwrap_or(0.0);
     // Meshes.
     let _ = writeln!(x, "  <asset>");
     for (i, l) in model.links.iter().enumerate() {
@@ -157,6 +167,57 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
     let _ = writeln!(x, "  </keyframe>");
     let _ = writeln!(x, "</mujoco>");
     x
+}
+
+/// Link `i`'s second moments (link frame) with the scene's
+/// `link_mass_scale` (`σ`, factors multiply) and `payload` (`m_p` at `p`)
+/// effects: `σ M₂ + Σ m_p [p pᵀ, p; pᵀ, 1]`.
+fn second_moment_with_effects(scene: &Scene, i: usize) -> Matrix4<f64> {
+    let mut scale = 1.0;
+    let mut extra = Matrix4::zeros();
+    for e in &scene.effects {
+        let Target::Links(l) = &e.target else {
+            continue;
+        };
+        if !l.contains(&i) {
+            continue;
+        }
+        match e.kind {
+            EffectKind::LinkMassScale => scale *= e.values[0],
+            EffectKind::Payload => {
+                let p = nalgebra::Vector4::new(e.values[1], e.values[2], e.values[3], 1.0);
+                extra += e.values[0] * p * p.transpose();
+            }
+            _ => {}
+        }
+    }
+    scene.model.second_moment[i] * scale + extra
+}
+
+/// The scene's effects that have no MuJoCo equivalent in this writer, each
+/// as `(effect/on, why)`.
+pub fn untranslated(scene: &Scene) -> Vec<(String, String)> {
+    scene
+        .spec
+        .effects
+        .iter()
+        .filter_map(|e| {
+            let why = match e.effect {
+                EffectKind::ActuatorGain => {
+                    "the PD controller is not written (no actuators); scale the controller's gains by this factor"
+                }
+                EffectKind::ActuationDelay => {
+                    "no actuators are written; MuJoCo has no actuation delay attribute"
+                }
+                EffectKind::JointOffset => "an encoder offset is on the measurement side, not the model",
+                EffectKind::ContactKappa | EffectKind::ContactS => {
+                    "a parameter of the SDRS contact barrier; MuJoCo's contacts are soft constraints (solref/solimp)"
+                }
+                _ => return None,
+            };
+            Some((format!("{}/{}", e.effect.name(), e.on), why.to_string()))
+        })
+        .collect()
 }
 
 /// MuJoCo body name of link `i`: `robot/link` when the scene has several
@@ -276,7 +337,7 @@ fn write_body(
             key_qpos.extend([u.w, u.i, u.j, u.k]);
         }
     }
-    let m2 = model.second_moment[i];
+    let m2 = second_moment_with_effects(scene, i);
     if m2[(3, 3)] > 0.0 {
         let inr = Inertial::from_second_moment(&m2);
         let t = &inr.inertia;
