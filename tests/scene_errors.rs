@@ -241,3 +241,24 @@ fn bad_ccd_options_name_the_key() {
     let (path, msg) = load("ccd_typo.yaml", &text);
     assert_names(&msg, &path, &["enable"]);
 }
+
+/// The IPC baseline's keys moved from `contact:` into `contact: {ipc: ...}`
+/// (2026-11-26): a file written before says where each key now lives,
+/// instead of a bare "unknown field".
+#[test]
+fn ipc_keys_at_their_old_place_are_refused_with_their_new_one() {
+    for key in ["surface: source", "dhat: 0.001", "eps_v: 0.001"] {
+        let name = key.split(':').next().unwrap();
+        let text =
+            format!("dt: 0.01\nrobots:\n  - name: r\n    links:{GOOD_LINK}\ncontact: {{{key}}}\n");
+        let (path, msg) = load(&format!("moved_{name}.yaml"), &text);
+        assert_names(
+            &msg,
+            &path,
+            &[
+                &format!("contact.{name}"),
+                &format!("contact: {{ipc: {{{name}:"),
+            ],
+        );
+    }
+}

@@ -132,6 +132,19 @@ fn fixed_or_free(kind: JointType, origin: Origin) -> JointSpec {
 
 /// Validated contact settings with excluded link pairs resolved to indices.
 pub fn contact_settings(c: &ContactSpec, model: &Model) -> Result<ContactSettings, Invalid> {
+    let moved = [
+        ("surface", &c.moved_surface),
+        ("dhat", &c.moved_dhat),
+        ("eps_v", &c.moved_eps_v),
+    ];
+    if let Some((key, _)) = moved.iter().find(|(_, v)| v.is_some()) {
+        return Err(Invalid::new(
+            format!("contact.{key}"),
+            format!(
+                "the IPC baseline's `{key}` now lives in its own section: write it as `contact: {{ipc: {{{key}: ...}}}}` (moved on 2026-11-26, with `surface`, `dhat` and `eps_v`)"
+            ),
+        ));
+    }
     if !(c.s > 0.0 && c.s < 1.0) {
         return Err(Invalid::new(
             "contact.s",

@@ -230,6 +230,20 @@ pub struct ContactSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schemars(with = "Option<serde_json::Value>")]
     pub ipc: Option<serde_yaml::Value>,
+    /// `surface`, `dhat` and `eps_v` directly under `contact:` — where the
+    /// IPC baseline's keys were before they moved into `ipc` (2026-11-26).
+    /// Read only to be refused with their new place
+    /// ([`super::environment::contact_settings`]), instead of serde's bare
+    /// "unknown field".
+    #[serde(default, rename = "surface", skip_serializing)]
+    #[schemars(skip)]
+    pub moved_surface: Option<serde_yaml::Value>,
+    #[serde(default, rename = "dhat", skip_serializing)]
+    #[schemars(skip)]
+    pub moved_dhat: Option<serde_yaml::Value>,
+    #[serde(default, rename = "eps_v", skip_serializing)]
+    #[schemars(skip)]
+    pub moved_eps_v: Option<serde_yaml::Value>,
     /// Barrier support `s` (m, and the bound on `1 − ‖n‖`; `0 < s < 1`).
     /// Hulls interact within `2s/(1−s)`. Default 0.01.
     #[serde(default = "ContactSpec::default_s")]
@@ -293,6 +307,9 @@ impl Default for ContactSpec {
         ContactSpec {
             model: ContactModelKind::Sdrs,
             ipc: None,
+            moved_surface: None,
+            moved_dhat: None,
+            moved_eps_v: None,
             s: Self::default_s(),
             kappa: None,
             mu: 0.0,
