@@ -240,3 +240,23 @@ fn a_planted_back_edge_is_reported() {
         vec!["model -> sim (model/mod.rs)".to_string()]
     );
 }
+
+/// Issue 34, item 7: every script in `tools/` has its line in
+/// `tools/README.md` (a script added without one fails here), and the
+/// README stays a user's page (≤ 12 KB; results live in `docs/`).
+#[test]
+fn every_tool_is_listed_and_the_readme_is_short() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let index = std::fs::read_to_string(root.join("tools/README.md")).unwrap();
+    let missing: Vec<String> = std::fs::read_dir(root.join("tools"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|f| f != "README.md" && !index.contains(&format!("`{f}")))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "tools/README.md has no line for {missing:?}"
+    );
+    let readme = std::fs::metadata(root.join("README.md")).unwrap().len();
+    assert!(readme <= 12 * 1024, "README.md is {readme} bytes");
+}
