@@ -43,27 +43,28 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
     calibrate(&opts).unwrap().0
 }
 
+/// `arm2_fine.yaml` and its `sdrs simulate --export` in `dir/export`
+/// (what `tools/mujoco_from_export.py` builds the MuJoCo robot from).
+fn arm2_fine_export(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let scene = common::robots("calibrate/arm2_fine.yaml");
+    let export = dir.join("export");
+    let o = common::sdrs()
+        .args(["simulate", scene.to_str().unwrap(), "--steps", "2", "-q"])
+        .arg("--export")
+        .arg(&export)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (scene, export)
+}
+
 #[test]
 fn mujoco_damping_frictionloss_and_armature_are_named_and_close_the_gap() {
     if support::skip_without_venv() {
         return;
     }
     let dir = common::scratch_dir("calibrate-mujoco");
-    let scene = common::robots("calibrate/arm2_fine.yaml");
-    let export = dir.join("export");
-    let o = common::sdrs()
-        .args([
-            "simulate",
-            scene.to_str().unwrap(),
-            "--steps",
-            "2",
-            "-q",
-            "--export",
-        ])
-        .arg(&export)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (scene, export) = arm2_fine_export(&dir);
     let cases: [(&str, &[&str], &str); 4] = [
         ("clean", &[], ""),
         ("damping", &["--damping", "0.3"], "joint_damping/all"),
@@ -153,21 +154,7 @@ fn calibrated_xml_carries_the_fit_into_mujoco() {
         return;
     }
     let dir = common::scratch_dir("calibrate-mujoco-xml");
-    let scene = common::robots("calibrate/arm2_fine.yaml");
-    let export = dir.join("export");
-    let o = common::sdrs()
-        .args([
-            "simulate",
-            scene.to_str().unwrap(),
-            "--steps",
-            "2",
-            "-q",
-            "--export",
-        ])
-        .arg(&export)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (scene, export) = arm2_fine_export(&dir);
     let data = dir.join("damping.csv");
     mujoco_data(&scene, &export, &data, &["--damping", "0.3"]);
     let out = dir.join("out");
