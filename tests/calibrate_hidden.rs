@@ -215,13 +215,15 @@ fn hidden_effects_are_named_fitted_and_close_the_gap() {
         .par_iter()
         .enumerate()
         .map(|(i, c)| {
+            let t = std::time::Instant::now();
             let r = run_case(&dir, &format!("case{i}"), c.robot, &[c.effect], 100 + i as u64);
+            let secs = t.elapsed().as_secs_f64();
             let named = r.candidate.as_deref() == Some(c.label);
             let fitted = r.ranking.iter().find(|x| x.candidate == c.label).and_then(|x| x.parameters.get(c.key).copied());
             let within = named && fitted.is_some_and(|v| (v - c.value).abs() <= 0.1 * c.value.abs());
             let shrink = r.gap_reduction >= 0.9;
             let line = format!(
-                "{:<15} {:<26} -> {:<40} {} = {:<12.5e} (true {}) gap {:.3e} -> {:.3e} ({:.1} %) [{}]",
+                "{:<15} {:<26} -> {:<40} {} = {:<12.5e} (true {}) gap {:.3e} -> {:.3e} ({:.1} %) [{}] {secs:.1} s",
                 c.robot,
                 c.label,
                 r.candidate.clone().unwrap_or("none".into()),
