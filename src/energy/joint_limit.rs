@@ -101,7 +101,7 @@ impl Energy for JointLimits {
                 acc.dof_grad[d.dof] += d.stiffness * (da - db);
             }
             if need >= Need::Hessian {
-                acc.add_dof_hess(d.dof, d.dof, d.stiffness * (ha + hb));
+                acc.dof_hess[(d.dof, d.dof)] += d.stiffness * (ha + hb);
             }
         }
         Ok(())

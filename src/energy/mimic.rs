@@ -55,10 +55,10 @@ impl Energy for MimicTies {
                 acc.dof_grad[m] -= a * k * e;
             }
             if need >= Need::Hessian {
-                acc.add_dof_hess(d, d, k);
-                acc.add_dof_hess(m, m, a * a * k);
-                acc.add_dof_hess(d, m, -(a * k));
-                acc.add_dof_hess(m, d, -(a * k));
+                acc.dof_hess[(d, d)] += k;
+                acc.dof_hess[(m, m)] += a * a * k;
+                acc.dof_hess[(d, m)] -= a * k;
+                acc.dof_hess[(m, d)] -= a * k;
             }
         }
         Ok(())

@@ -12,7 +12,6 @@
 
 pub mod contact;
 pub mod effects;
-pub mod envelope;
 pub mod friction;
 pub mod gravity;
 pub mod inertia;
@@ -25,7 +24,6 @@ pub mod vjp;
 
 pub use crate::control::PdTarget;
 pub use contact::ContactEnergy;
-pub use envelope::HessEnvelope;
 pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
@@ -102,12 +100,8 @@ pub struct EnergyAccumulator {
     pub pair_hess: Vec<(usize, usize, PoseHessian)>,
     /// `∂E/∂θ` from terms written directly in coordinates.
     pub dof_grad: DVector<f64>,
-    /// `∂²E/∂θ²` from terms written directly in coordinates; written only
-    /// through [`EnergyAccumulator::add_dof_hess`], so that `dof_env` covers
-    /// every non-zero and [`EnergyAccumulator::reset`] clears only those.
-    dof_hess: DMatrix<f64>,
-    /// Envelope of the non-zeros of `dof_hess`.
-    dof_env: HessEnvelope,
+    /// `∂²E/∂θ²` from terms written directly in coordinates.
+    pub dof_hess: DMatrix<f64>,
 }
 
 impl EnergyAccumulator {
@@ -124,34 +118,7 @@ impl EnergyAccumulator {
             pair_hess: Vec::new(),
             dof_grad: DVector::zeros(m),
             dof_hess: DMatrix::zeros(m, m),
-            dof_env: HessEnvelope::empty(m),
         }
-    }
-
-    /// `∂²E/∂θ_k∂θ_l += v` (one entry: a symmetric term adds `(l, k)` too).
-    #[inline]
-    pub fn add_dof_hess(&mut self, k: usize, l: usize, v: f64) {
-        self.dof_hess[(k, l)] += v;
-        self.dof_env.cover(k, l);
-    }
-
-    /// `∂²E/∂θ²` of the coordinate terms so far.
-    pub fn dof_hess(&self) -> &DMatrix<f64> {
-        &self.dof_hess
-    }
-
-    /// Envelope of the non-zeros of [`EnergyAccumulator::dof_hess`].
-    pub fn dof_env(&self) -> &HessEnvelope {
-        &self.dof_env
-    }
-
-    /// Exchanges the coordinate Hessian with `other`, whose non-zeros
-    /// `other_env` covers (the envelopes are exchanged too): the buffer
-    /// handed back is cleared by the next [`EnergyAccumulator::reset`]
-    /// over that envelope only.
-    pub fn swap_dof_hess(&mut self, other: &mut DMatrix<f64>, other_env: &mut HessEnvelope) {
-        std::mem::swap(&mut self.dof_hess, other);
-        std::mem::swap(&mut self.dof_env, other_env);
     }
 
     /// Clears the buffers for an evaluation with the given needs.
@@ -173,10 +140,7 @@ impl EnergyAccumulator {
                 self.link_moment_set = false;
             }
             self.pair_hess.clear();
-            // Only the envelope can hold non-zeros (structural zeros of the
-            // tree are never touched; a full envelope clears everything).
-            self.dof_env.zero(&mut self.dof_hess);
-            self.dof_env.reset(self.dof_hess.ncols());
+            self.dof_hess.fill(0.0);
         }
     }
 

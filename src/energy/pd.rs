@@ -48,7 +48,7 @@ impl Energy for PdController {
                 acc.dof_grad[k] += -2.0 * t.kp * ep - 2.0 * t.kd * ev * inv_dt;
             }
             if need >= Need::Hessian {
-                acc.add_dof_hess(k, k, 2.0 * t.kp + 2.0 * t.kd * inv_dt * inv_dt);
+                acc.dof_hess[(k, k)] += 2.0 * t.kp + 2.0 * t.kd * inv_dt * inv_dt;
             }
         }
         super::pd_pose::accumulate(ctx, kin, need, acc);

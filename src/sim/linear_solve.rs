@@ -25,7 +25,6 @@
 //!    steps (it grows only when the problem does).
 
 use super::small_cholesky::SMALL_CHOLESKY_MAX;
-use crate::energy::HessEnvelope;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor as llt;
 use faer::linalg::evd;
@@ -222,7 +221,7 @@ impl BlockSolver {
     /// exact zero only together with its mirror). Halving the scan matters:
     /// at 256 coordinates the matrix is 512 kB, read once per Newton
     /// iteration, and the scan is memory-bound.
-    fn partition(&mut self, h: &DMatrix<f64>, env: Option<&HessEnvelope>) {
+    fn partition(&mut self, h: &DMatrix<f64>) {
         let n = h.nrows();
         let p = &mut self.parent;
         p.clear();
@@ -234,7 +233,7 @@ impl BlockSolver {
         // grouping below is the same whatever the order.
         // (Plain slices: nalgebra's generic matrix iterator does not
         // vectorize and cost more than the scan itself.)
-        join_nonzeros(h.as_slice(), n, env, p);
+        join_nonzeros(h.as_slice(), n, p);
         // Roots are the smallest index of their block; count sizes per root.
         self.cursor.clear();
         self.cursor.resize(n + 1, 0);
@@ -312,26 +311,7 @@ impl BlockSolver {
         settled: f64,
         dir: &mut DVector<f64>,
     ) {
-        self.direction_within(h, None, g, clamp, mode, settled, dir);
-    }
-
-    /// [`BlockSolver::direction`] for a matrix whose non-zeros all lie in
-    /// `env` (when given, and of `h`'s order): the partition scan reads only
-    /// the envelope (the skipped entries are exact zeros, which join
-    /// nothing: the same blocks, bitwise the same direction).
-    // Arguments kept separate: `direction`'s, plus the envelope of `h`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn direction_within(
-        &mut self,
-        h: &DMatrix<f64>,
-        env: Option<&HessEnvelope>,
-        g: &DVector<f64>,
-        clamp: f64,
-        mode: Mode,
-        settled: f64,
-        dir: &mut DVector<f64>,
-    ) {
-        self.partition(h, env.filter(|e| e.len() == h.ncols()));
+        self.partition(h);
         self.stats.solves += 1;
         let nb = self.starts.len() - 1;
         let cubes = |b: usize| (self.starts[b + 1] - self.starts[b]).pow(3);
@@ -487,7 +467,7 @@ impl BlockSolver {
     /// not positive definite (`x` is then unspecified; the caller falls
     /// back to a pivoted LU).
     pub fn spd_solve(&mut self, h: &DMatrix<f64>, b: &DVector<f64>, x: &mut DVector<f64>) -> bool {
-        self.partition(h, None);
+        self.partition(h);
         let sc = &mut self.main;
         sc.reserve(b.len());
         for k in 0..self.starts.len() - 1 {
@@ -830,47 +810,40 @@ fn find(c: &mut [usize], mut i: usize) -> usize {
 /// has them (only comparisons: the same unions on every path; measured at
 /// N = 32: 16.2 µs per call for the previous scan, 6.2 µs with AVX2, about
 /// a fifth less again with AVX-512).
-fn join_nonzeros(h: &[f64], n: usize, env: Option<&HessEnvelope>, p: &mut [usize]) {
+fn join_nonzeros(h: &[f64], n: usize, p: &mut [usize]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the CPU supports AVX-512F (checked above).
-        unsafe { join_nonzeros_avx512(h, n, env, p) };
+        unsafe { join_nonzeros_avx512(h, n, p) };
         return;
     }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked above).
-        unsafe { join_nonzeros_avx2(h, n, env, p) };
+        unsafe { join_nonzeros_avx2(h, n, p) };
         return;
     }
-    join_nonzeros_generic(h, n, env, p);
+    join_nonzeros_generic(h, n, p);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn join_nonzeros_avx512(h: &[f64], n: usize, env: Option<&HessEnvelope>, p: &mut [usize]) {
-    join_nonzeros_generic(h, n, env, p);
+unsafe fn join_nonzeros_avx512(h: &[f64], n: usize, p: &mut [usize]) {
+    join_nonzeros_generic(h, n, p);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn join_nonzeros_avx2(h: &[f64], n: usize, env: Option<&HessEnvelope>, p: &mut [usize]) {
-    join_nonzeros_generic(h, n, env, p);
+unsafe fn join_nonzeros_avx2(h: &[f64], n: usize, p: &mut [usize]) {
+    join_nonzeros_generic(h, n, p);
 }
 
 #[inline(always)]
-fn join_nonzeros_generic(h: &[f64], n: usize, env: Option<&HessEnvelope>, p: &mut [usize]) {
+fn join_nonzeros_generic(h: &[f64], n: usize, p: &mut [usize]) {
     if n == 0 {
         return;
     }
     for (j, col) in h.chunks_exact(n).enumerate() {
-        // Rows `j..n` (lower triangle), within the envelope when given.
-        let (start, end) = env.map_or((j, n), |e| {
-            let r = e.rows(j);
-            (r.start.max(j), r.end.max(j))
-        });
-        let col = &col[..end];
-        let j_start = start;
         let mut rj = find(p, j);
         // Entry `(i, j)` needs a union only when non-zero and `i` is not
         // already known to be in `j`'s component (`p[i] == rj`: path
@@ -878,8 +851,8 @@ fn join_nonzeros_generic(h: &[f64], n: usize, env: Option<&HessEnvelope>, p: &mu
         // Fixed chunks of 8 are tested branch-free first: all zero (most of
         // the matrix when robots are apart), then none needing a union (the
         // rest); both tests vectorize.
-        let mut chunks = col[j_start..].chunks_exact(8);
-        let mut base = j_start;
+        let mut chunks = col[j..].chunks_exact(8);
+        let mut base = j;
         for c in &mut chunks {
             let c: &[f64; 8] = c.try_into().expect("chunk of 8");
             if !c.iter().fold(false, |b, &v| b | (v != 0.0)) {

@@ -203,12 +203,6 @@ impl Objective for StepObjective<'_> {
         Ok(self.acc.value)
     }
 
-    /// The envelope of the Hessian the assembler last wrote (into the
-    /// solver's buffer: the only one [`Objective::eval`] is given).
-    fn hessian_envelope(&self) -> Option<&crate::energy::HessEnvelope> {
-        Some(self.assemble.hess_env())
-    }
-
     /// Gravity's `Σ ρ g·X` dominates the round-off of the step objective
     /// near rest: each link contributes `m_i ‖g‖ ε (‖x_i‖ + 1)` (J), with
     /// `x_i` its position at the last evaluation; a safety factor of 64

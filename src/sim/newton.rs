@@ -33,7 +33,7 @@
 use super::linear_solve::{BlockSolver, Mode};
 pub use crate::counters::NewtonReport;
 use crate::counters::{Stage, StageTimers};
-use crate::energy::{EnergyError, HessEnvelope, Need};
+use crate::energy::{EnergyError, Need};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -193,13 +193,6 @@ pub trait Objective {
         hess: &mut DMatrix<f64>,
         timers: &mut StageTimers,
     ) -> Result<f64, EnergyError>;
-
-    /// Where the Hessian last written by [`Objective::eval`] can be
-    /// non-zero (every entry outside is exactly zero), letting the solver's
-    /// scans skip the structural zeros; `None` (the default): anywhere.
-    fn hessian_envelope(&self) -> Option<&crate::energy::HessEnvelope> {
-        None
-    }
 
     /// Absolute round-off of the value at the point last evaluated (J): two
     /// values closer than this cannot be ranked. It comes from the terms'
@@ -433,20 +426,16 @@ impl Solve<'_> {
         self.report.grad_inf = grad_inf;
         self.report.value = value;
         let s = &mut *self.scratch;
-        // One pass over H: a NaN or infinite entry makes its row's sum of
-        // |H_ij| NaN or +∞, so the entries are scanned one by one only when
-        // some row sum is not finite (finite entries can overflow a sum).
-        let h_inf = max_row_sum(&s.hess, self.obj.hessian_envelope(), &mut s.row_sums);
-        let sums_finite = s.row_sums.iter().all(|v| v.is_finite());
-        if !grad_inf.is_finite()
-            || (!sums_finite && s.hess.as_slice().iter().any(|v| !v.is_finite()))
-        {
+        if !grad_inf.is_finite() || s.hess.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(NewtonError::NonFinite { iter });
         }
         if grad_inf < self.opts.tol {
             return Ok(Some(self.report));
         }
-        self.report.grad_floor = 64.0 * f64::EPSILON * h_inf * (q.amax() + self.obj.length_scale());
+        self.report.grad_floor = 64.0
+            * f64::EPSILON
+            * max_row_sum(&s.hess, &mut s.row_sums)
+            * (q.amax() + self.obj.length_scale());
         Ok(None)
     }
 
@@ -469,9 +458,8 @@ impl Solve<'_> {
         loop {
             let s = &mut *self.scratch;
             self.timers.time(Stage::LinearSolve, || {
-                s.linear.direction_within(
+                s.linear.direction(
                     &s.hess,
-                    self.obj.hessian_envelope(),
                     &s.grad,
                     opts.eig_clamp,
                     mode,
@@ -652,20 +640,16 @@ impl Solve<'_> {
 /// strides by `n` and was 10 % of a step at `n = 256`): each row's sum still
 /// adds its entries in the order `j = 0, 1, …` from the same start, so the
 /// result is bitwise the row-wise one. `sums` is scratch.
-fn max_row_sum(h: &DMatrix<f64>, env: Option<&HessEnvelope>, sums: &mut Vec<f64>) -> f64 {
+fn max_row_sum(h: &DMatrix<f64>, sums: &mut Vec<f64>) -> f64 {
     let n = h.nrows();
     sums.clear();
-    // `Sum for f64` folds from −0.0; the same start keeps every bit (the
-    // exact zeros outside `env` add nothing but the sign of an empty row's
-    // zero sum).
+    // `Sum for f64` folds from −0.0; the same start keeps every bit.
     sums.resize(n, -0.0);
     if n == 0 {
         return 0.0;
     }
-    let env = env.filter(|e| e.len() == h.ncols());
-    for (j, col) in h.as_slice().chunks_exact(n).enumerate() {
-        let rows = env.map_or(0..n, |e| e.rows(j));
-        for (s, v) in sums[rows.clone()].iter_mut().zip(&col[rows]) {
+    for col in h.as_slice().chunks_exact(n) {
+        for (s, v) in sums.iter_mut().zip(col) {
             *s += v.abs();
         }
     }

@@ -63,7 +63,7 @@ impl Energy for JointFriction {
                 acc.dof_grad[k] += f * da;
             }
             if need >= Need::Hessian {
-                acc.add_dof_hess(k, k, f * dda * inv_dt);
+                acc.dof_hess[(k, k)] += f * dda * inv_dt;
             }
         }
         Ok(())

@@ -317,7 +317,7 @@ impl JointCoeffs {
                 acc.dof_grad[k] += c * s * w;
             }
             if need >= Need::Hessian {
-                acc.add_dof_hess(k, k, c * w);
+                acc.dof_hess[(k, k)] += c * w;
             }
         }
     }
