@@ -809,7 +809,17 @@ fn main() {
         .nth(1)
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("robots"));
-    let o = Out { dir };
+    write_all(&dir);
+    println!("robots written to {}", dir.display());
+}
+
+/// Writes every robot under `dir`. `tests/import_robots.rs` includes this
+/// file as a module and calls it in-process (a nested `cargo run` would build
+/// the crate again with the root package's feature set).
+pub fn write_all(dir: &Path) {
+    let o = Out {
+        dir: dir.to_path_buf(),
+    };
     rotating_chains(&o);
     chains_8link(&o);
     spider(&o);
@@ -817,5 +827,4 @@ fn main() {
     single_jaw_gripper(&o);
     parallel_jaw_gripper(&o);
     three_finger_hand(&o);
-    println!("robots written to {}", o.dir.display());
 }
