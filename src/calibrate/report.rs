@@ -4,8 +4,8 @@
 //! verdict        "effect" | "none" | "unexplained"  (rule: calibrate::verdict)
 //! reason         why, in words (the floor, the share explained, where the gap sits)
 //! error_floor    {dt, noise, integrator, integrator_in_gap, order, gap, gap_half_dt,
-//!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, floor, suggested_dt,
-//!                 floor_of, floor_baseline}
+//!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, contact, contact_in_gap,
+//!                 contact_s, floor, suggested_dt, floor_of, floor_baseline}
 //!                the model's own error on the held-out window (calibrate::floor);
 //!                floor_of: "none", or the chosen candidate when its own floor is higher
 //! residual_regression  {joints: [{joint, rms_force, terms: [{term, meaning, unit,
@@ -386,7 +386,8 @@ fn floor_section(s: &mut String, f: &ErrorFloor) {
          | gap extrapolated to Δt → 0 (Richardson, order {:.2}) | {:.3e} |\n\
          | noise σ (third differences of the residual) | {:.3e} |\n\
          | integrator error at Δt (estimated / in the gap) | {:.3e} / {:.3e} |\n\
-         | error floor F = {}·√(σ² + E_gap²) | {:.3e} |\n\n",
+         | contact resolution E_c (estimated / in the gap; s halved{}) | {:.3e} / {:.3e} |\n\
+         | error floor F = {}·√(σ² + E_gap² + E_c,gap²) | {:.3e} |\n\n",
         f.dt,
         f.gap,
         f.gap_half_dt,
@@ -396,6 +397,12 @@ fn floor_section(s: &mut String, f: &ErrorFloor) {
         f.noise,
         f.integrator,
         f.integrator_in_gap,
+        match f.contact_s {
+            Some(s) => format!(", from s = {s} m"),
+            None => "; no contact".to_string(),
+        },
+        f.contact,
+        f.contact_in_gap,
         super::floor::FLOOR_MARGIN,
         f.floor
     ));

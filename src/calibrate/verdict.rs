@@ -314,10 +314,26 @@ pub fn decide(
 
 fn within_floor_reason(fl: &ErrorFloor) -> String {
     let base = format!(
-        "the held-out gap {:.3e} is within the model's error floor {:.3e} (noise {:.2e}, integrator error in the gap {:.2e} of {:.2e} estimated at Δt = {} s)",
-        fl.gap, fl.floor, fl.noise, fl.integrator_in_gap, fl.integrator, fl.dt
+        "the held-out gap {:.3e} is within the model's error floor {:.3e} (noise {:.2e}, integrator error in the gap {:.2e} of {:.2e} estimated at Δt = {} s{})",
+        fl.gap,
+        fl.floor,
+        fl.noise,
+        fl.integrator_in_gap,
+        fl.integrator,
+        fl.dt,
+        match fl.contact_s {
+            Some(s) => format!(
+                ", contact resolution in the gap {:.2e} of {:.2e} estimated at s = {s} m",
+                fl.contact_in_gap, fl.contact
+            ),
+            None => String::new(),
+        }
     );
-    if fl.integrator_in_gap > fl.noise {
+    if fl.contact_in_gap > fl.noise.max(fl.integrator_in_gap) {
+        format!(
+            "{base}: the remaining gap is the contact model's own resolution (the barrier keeps surfaces up to s apart; the data are closer to its s → 0 limit), not a missing effect"
+        )
+    } else if fl.integrator_in_gap > fl.noise {
         format!(
             "{base}: the remaining gap is the integrator's: it shrinks ×{:.2} at Δt/2 ({:.3e}) and extrapolates to {:.3e} at Δt → 0",
             fl.shrink_half_dt, fl.gap_half_dt, fl.gap_extrapolated
