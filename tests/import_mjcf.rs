@@ -3,7 +3,7 @@
 //! (joint anchors, several joints per body, `ref`, ball and free joints,
 //! full inertias, a mesh geom) import; their joint-space mass matrices match
 //! MuJoCo's `mj_fullM` (rigid-body part, armature apart) to 1e-9 relative at
-//! 20 random configurations (tools/check_mass_matrix_mujoco.py); bad files give
+//! 20 random configurations (tools/check/check_mass_matrix_mujoco.py); bad files give
 //! MuJoCo's message naming the element and line.
 
 mod import_support;
@@ -338,7 +338,7 @@ fn gymnasium_mjcf(name: &str) -> PathBuf {
     ));
     assert!(
         p.is_file(),
-        "{} not found (tools/requirements.txt pins gymnasium)",
+        "{} not found (tools/setup/requirements.txt pins gymnasium)",
         p.display()
     );
     p
