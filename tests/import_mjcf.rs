@@ -430,6 +430,9 @@ fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
 /// without it read 0.3° = 5.236e-3 rad, as MuJoCo compiles it.)
 #[test]
 fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("mjcf-spring");
     let xml = dir.join("spring.xml");
     std::fs::write(
@@ -509,6 +512,9 @@ fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
 /// float (the swimmer's root is on slide joints) gets no ground.
 #[test]
 fn ground_on_a_robot_without_colliding_hulls_is_a_clear_error() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let xml = gymnasium_mjcf("swimmer.xml");
     let imp = import(&xml, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
     let ready = |ground: Option<bool>| {
