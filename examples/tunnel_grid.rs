@@ -5,7 +5,7 @@
 //! a spherical arm, at dt 0.005 and 0.01. Every run is checked for
 //! crossings (same-side check, `tests/common/tunnel.rs`); with `--fcl DIR`
 //! every CCD run is also exported to `DIR/<case>` for
-//! `tools/check_separation.py` (see `tools/tunnel_grid.sh`).
+//! `tools/check/check_separation.py` (see `tools/bench/tunnel_grid.sh`).
 //!
 //! `cargo run --release --example tunnel_grid [-- --fcl DIR]`
 

@@ -4,7 +4,7 @@
 //! effect on one joint is found on that joint as the right basis term, with
 //! its coefficient's interval containing the truth; the other joint keeps
 //! no term of comparable size. The data from MuJoCo (delay, velocity-squared
-//! drag) are the acceptance script's (`tools/calib_acceptance.py`).
+//! drag) are the acceptance script's (`tools/check/calib_acceptance.py`).
 
 mod calibrate_support;
 mod common;

@@ -161,7 +161,7 @@ fn separation_checker_reports_overlapping_hulls() {
     csv.push_str("0,0,0,1,0,0,0,1,0,0,0,1,0,0,0\n0,0,1,1,0,0,0,1,0,0,0,1,0.9,0,0\n");
     std::fs::write(dir.join("poses.csv"), csv).unwrap();
     let check = python()
-        .arg(common::root().join("tools/check_separation.py"))
+        .arg(common::root().join("tools/check/check_separation.py"))
         .arg(&dir)
         .output()
         .unwrap();

@@ -9,7 +9,7 @@
 //!
 //! CI runs [`ci_cases`] cases per reader (about a minute in all); the long
 //! run is `SDRS_FUZZ_CASES=100000 cargo test --release --test fuzz_inputs`
-//! (`tools/fuzz.sh`). Failing inputs are saved under
+//! (`tools/bench/fuzz.sh`). Failing inputs are saved under
 //! `target/fuzz-failures/` and proptest shrinks them.
 
 use proptest::prelude::*;

@@ -2,7 +2,7 @@
 //! spaces against central differences, bitwise determinism of the collective
 //! (multi-trajectory) evaluation for 1 and 2 threads, and ties/bounds after
 //! optimizer iterations. Horizons are shortened here (CI cost); the full
-//! horizons are checked by `tools/bench_grasping.sh` and `FULL=1` below.
+//! horizons are checked by `tools/bench/bench_grasping.sh` and `FULL=1` below.
 
 mod common;
 

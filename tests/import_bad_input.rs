@@ -279,7 +279,7 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     unsafe { std::env::set_var("SDRS_PYTHON", dir.join("no-such-python")) };
     let e = sdrs::import::import(&inp, &opts).unwrap_err().to_string();
     assert!(
-        e.contains("tools/setup_python.sh") && e.contains("cannot run Python"),
+        e.contains("tools/setup/setup_python.sh") && e.contains("cannot run Python"),
         "{e}"
     );
     // An interpreter without the package: a venv-less python with an empty
@@ -295,7 +295,7 @@ fn coacd_without_python_or_package_gives_the_install_command() {
     let e = sdrs::import::import(&inp, &opts).unwrap_err().to_string();
     unsafe { std::env::remove_var("SDRS_PYTHON") };
     assert!(
-        e.contains("missing Python package") && e.contains("tools/setup_python.sh"),
+        e.contains("missing Python package") && e.contains("tools/setup/setup_python.sh"),
         "{e}"
     );
     cleanup(&dir);

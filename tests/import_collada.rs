@@ -83,7 +83,7 @@ fn dae_meshes_match_trimesh_and_pycollada() {
         .unwrap();
     assert!(
         out.status.success(),
-        "trimesh/pycollada failed (run tools/setup_python.sh): {}",
+        "trimesh/pycollada failed (run tools/setup/setup_python.sh): {}",
         String::from_utf8_lossy(&out.stderr)
     );
     let reference: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();

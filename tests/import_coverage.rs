@@ -1,7 +1,7 @@
 //! Coverage: for every authored robot (and object), ≥ 95 % of points sampled
 //! on each source mesh lie inside, or within 2 % of the mesh's bounding-box
 //! diagonal of, the link's hulls — checked independently with trimesh
-//! (tools/check_coverage.py through the project venv) and by our report.
+//! (tools/check/check_coverage.py through the project venv) and by our report.
 
 mod import_support;
 

@@ -1,4 +1,4 @@
-//! Both decomposers (V-HACD in Rust, CoACD through tools/coacd_decompose.py)
+//! Both decomposers (V-HACD in Rust, CoACD through tools/helpers/coacd_decompose.py)
 //! and the `hull` / `none` modes.
 
 mod import_support;

@@ -1,6 +1,6 @@
 //! Forward kinematics of imported URDFs equal Pinocchio's at 20 random
-//! configurations to 1e-9 (tools/check_fk_pinocchio.py through the project
-//! venv: `bash tools/setup_python.sh`).
+//! configurations to 1e-9 (tools/check/check_fk_pinocchio.py through the project
+//! venv: `bash tools/setup/setup_python.sh`).
 
 mod import_support;
 

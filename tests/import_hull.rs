@@ -1,6 +1,6 @@
 //! The convex hull (`src/import/polytope.rs`) succeeds on every point set
 //! with volume and agrees with an independent hull (Qhull through
-//! `tools/check_hull_qhull.py`); only flat input is refused, with a plain
+//! `tools/check/check_hull_qhull.py`); only flat input is refused, with a plain
 //! message. Reproducers: `shared/repro/hull_valid_mesh_open_surface/` (two
 //! watertight example-robot-data meshes refused with "open surface").
 //!

@@ -1,7 +1,7 @@
 //! The joint-space mass matrix of imported URDFs (default mass setting:
 //! the URDF `<inertial>` as a `given` inertial) equals Pinocchio's CRBA on
 //! the URDF to 1e-9 relative at 20 random configurations
-//! (tools/check_mass_matrix_pinocchio.py through the project venv).
+//! (tools/check/check_mass_matrix_pinocchio.py through the project venv).
 
 mod import_support;
 

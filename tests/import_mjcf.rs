@@ -3,7 +3,7 @@
 //! (joint anchors, several joints per body, `ref`, ball and free joints,
 //! full inertias, a mesh geom) import; their joint-space mass matrices match
 //! MuJoCo's `mj_fullM` (rigid-body part, armature apart) to 1e-9 relative at
-//! 20 random configurations (tools/check_mass_matrix_mujoco.py); bad files give
+//! 20 random configurations (tools/check/check_mass_matrix_mujoco.py); bad files give
 //! MuJoCo's message naming the element and line.
 
 mod import_support;
@@ -338,7 +338,7 @@ fn gymnasium_mjcf(name: &str) -> PathBuf {
     ));
     assert!(
         p.is_file(),
-        "{} not found (tools/requirements.txt pins gymnasium)",
+        "{} not found (tools/setup/requirements.txt pins gymnasium)",
         p.display()
     );
     p
@@ -430,6 +430,9 @@ fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
 /// without it read 0.3° = 5.236e-3 rad, as MuJoCo compiles it.)
 #[test]
 fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let dir = temp_dir("mjcf-spring");
     let xml = dir.join("spring.xml");
     std::fs::write(
@@ -509,6 +512,9 @@ fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
 /// float (the swimmer's root is on slide joints) gets no ground.
 #[test]
 fn ground_on_a_robot_without_colliding_hulls_is_a_clear_error() {
+    if import_support::skip_without_venv() {
+        return;
+    }
     let xml = gymnasium_mjcf("swimmer.xml");
     let imp = import(&xml, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
     let ready = |ground: Option<bool>| {

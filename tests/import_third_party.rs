@@ -1,5 +1,5 @@
 //! A real third-party robot (KUKA iiwa, URDF + STL meshes from the
-//! `pybullet` package installed by tools/setup_python.sh; not committed)
+//! `pybullet` package installed by tools/setup/setup_python.sh; not committed)
 //! imports with V-HACD into a connected design and simulates.
 
 mod import_support;

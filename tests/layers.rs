@@ -241,22 +241,110 @@ fn a_planted_back_edge_is_reported() {
     );
 }
 
-/// Issue 34, item 7: every script in `tools/` has its line in
-/// `tools/README.md` (a script added without one fails here), and the
-/// README stays a user's page (≤ 12 KB; results live in `docs/`).
+/// Every file under `tools/`, as paths relative to it (`check/check_glb.py`),
+/// less `README.md`, Python's caches and hidden files.
+fn tool_files(dir: &Path, rel: &str, out: &mut Vec<String>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let e = e.unwrap();
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') || name == "__pycache__" || name.ends_with(".pyc") {
+            continue;
+        }
+        let path = format!("{rel}{name}");
+        if e.file_type().unwrap().is_dir() {
+            tool_files(&e.path(), &format!("{path}/"), out);
+        } else if path != "README.md" {
+            out.push(path);
+        }
+    }
+}
+
+/// The scripts `tools/README.md` lists, by folder: a section `## `…`/` …`
+/// lists that folder's scripts (`` `name`` opening a table row or a line);
+/// the text before the first section lists those of `tools/` itself.
+fn listed_tools(index: &str) -> BTreeSet<String> {
+    let mut listed = BTreeSet::new();
+    let mut folder = String::new();
+    for line in index.lines() {
+        if let Some(heading) = line.strip_prefix("## ") {
+            folder = heading
+                .split('`')
+                .nth(1)
+                .filter(|f| f.ends_with('/'))
+                .unwrap_or("?/")
+                .to_string();
+            continue;
+        }
+        // A table row's first cell, or a line (or list item) of text.
+        let first = line.strip_prefix('|').unwrap_or(line).trim_start();
+        let first = first.strip_prefix("- ").unwrap_or(first);
+        if let Some(name) = first
+            .strip_prefix('`')
+            .and_then(|c| c.split(['`', ' ']).next())
+        {
+            listed.insert(format!("{folder}{name}"));
+        }
+    }
+    listed
+}
+
+/// The files under `tools/` that `tools/README.md` does not list in their
+/// folder's section.
+fn unlisted_tools(tools: &Path) -> Vec<String> {
+    let index = std::fs::read_to_string(tools.join("README.md")).unwrap();
+    let listed = listed_tools(&index);
+    let mut files = Vec::new();
+    tool_files(tools, "", &mut files);
+    files.sort();
+    files.retain(|f| !listed.contains(f));
+    files
+}
+
+/// Issue 34, item 7: every script under `tools/` (sorted into folders by
+/// kind) has its line in its folder's section of `tools/README.md` (a script
+/// added without one, or put in another folder than its line says, fails
+/// here), and the README stays a user's page (≤ 12 KB; results live in
+/// `docs/`).
 #[test]
 fn every_tool_is_listed_and_the_readme_is_short() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let index = std::fs::read_to_string(root.join("tools/README.md")).unwrap();
-    let missing: Vec<String> = std::fs::read_dir(root.join("tools"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|f| f != "README.md" && !index.contains(&format!("`{f}")))
-        .collect();
+    let missing = unlisted_tools(&root.join("tools"));
     assert!(
         missing.is_empty(),
-        "tools/README.md has no line for {missing:?}"
+        "tools/README.md has no line for {missing:?} in their folders' sections"
     );
     let readme = std::fs::metadata(root.join("README.md")).unwrap().len();
     assert!(readme <= 12 * 1024, "README.md is {readme} bytes");
+}
+
+/// The listing check itself: in a copy of `tools/README.md` beside planted
+/// files, a script in a folder's section is found only in that folder.
+#[test]
+fn the_tool_listing_check_sees_unlisted_and_misplaced_scripts() {
+    let dir = std::env::temp_dir().join(format!("sdrs-layers-tools-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("check")).unwrap();
+    std::fs::create_dir_all(dir.join("bench/__pycache__")).unwrap();
+    std::fs::write(
+        dir.join("README.md"),
+        "# tools/\n\n`test.sh` runs it all.\n\n## Checks (`check/`)\n\n| script | what |\n|---|---|\n| `a.py X` | a |\n\n## Benchmarks (`bench/`)\n\n| `b.sh` | b |\n",
+    )
+    .unwrap();
+    for f in [
+        "test.sh",
+        "check/a.py",
+        "bench/b.sh",
+        "bench/__pycache__/x.pyc",
+    ] {
+        std::fs::write(dir.join(f), "").unwrap();
+    }
+    assert!(unlisted_tools(&dir).is_empty());
+    for f in ["check/new.py", "check/b.sh", "loose.sh"] {
+        std::fs::write(dir.join(f), "").unwrap();
+    }
+    assert_eq!(
+        unlisted_tools(&dir),
+        ["check/b.sh", "check/new.py", "loose.sh"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

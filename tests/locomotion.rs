@@ -1,6 +1,6 @@
 //! The paper's locomotion benchmarks (issue 11): spider on a 15° slope and
 //! biped. CI runs smoke versions (2 optimizer iterations, shortened-horizon
-//! gradient checks); the full benchmarks are `tools/bench_locomotion.sh`.
+//! gradient checks); the full benchmarks are `tools/bench/bench_locomotion.sh`.
 
 mod common;
 

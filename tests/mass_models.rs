@@ -1,5 +1,5 @@
 //! Mass models (`crate::model::mass`): the `solid` model's mass, centre of
-//! mass and inertia against trimesh (tools/check_mass_trimesh.py through the
+//! mass and inertia against trimesh (tools/check/check_mass_trimesh.py through the
 //! project venv), its vertex derivatives against finite differences
 //! (including a vertex moving from inside a hull through a face), and the
 //! `given` model against the scene's inertial.

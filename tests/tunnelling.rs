@@ -4,7 +4,7 @@
 //! a thin plate, a prismatic slider and a spherical arm; each run must keep
 //! every body on its side of the obstacle (`tunnel::side_violations`) and
 //! pass the independent python-fcl check of its exported states
-//! (`tools/check_separation.py`). With CCD off the same side check must
+//! (`tools/check/check_separation.py`). With CCD off the same side check must
 //! catch tunnelling in part of the grid (the test can fail). The full grid
 //! is `cargo run --release --example tunnel_grid`.
 
@@ -65,7 +65,7 @@ fn run(scene: &Scene, sides: &Case, export: Option<&Path>) -> Outcome {
 
 fn fcl_check(dir: &Path) {
     let out = common::python()
-        .arg(common::root().join("tools/check_separation.py"))
+        .arg(common::root().join("tools/check/check_separation.py"))
         .arg(dir)
         .output()
         .unwrap();

@@ -7,8 +7,8 @@
 # `.ci/run` calls exactly this.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tools/setup_system.sh
-bash tools/setup_python.sh
+bash tools/setup/setup_system.sh
+bash tools/setup/setup_python.sh
 # The release profile: the same build as the README's main command
 # (`cargo run --release`), so a fresh clone compiles the project once.
 # The workspace includes the Python package's crate (python/): give cargo

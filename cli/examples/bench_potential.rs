@@ -5,7 +5,7 @@
 //! measurement and writes it into its report.
 //!
 //! Optionally writes the cases to a JSON file for the ipctk timing script
-//! (`tools/bench_ipctk.py`).
+//! (`tools/bench/bench_ipctk.py`).
 //!
 //! Run: `cargo run --release -p sdrs-cli --example bench_potential [cases.json]`.
 

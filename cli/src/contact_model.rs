@@ -71,7 +71,7 @@ impl ContactArgs {
 
 /// With `--export` under IPC with `contact.ipc.surface: source`: writes
 /// `DIR/surfaces.json` (the source-mesh surfaces, link frame), which
-/// `tools/check_separation.py` uses instead of those links' hulls.
+/// `tools/check/check_separation.py` uses instead of those links' hulls.
 pub fn export_surfaces(dir: &std::path::Path, scene: &Scene) -> Result<()> {
     let Some(c) = scene.contact.as_ref() else {
         return Ok(());

@@ -1,5 +1,5 @@
 //! The Python helper scripts this binary carries (`include_str!` of
-//! `tools/mjcf_dump.py` and `tools/coacd_decompose.py` at build time), so an
+//! `tools/helpers/mjcf_dump.py` and `tools/helpers/coacd_decompose.py` at build time), so an
 //! installed `sdrs` (`cargo install --path cli`) imports MJCF and runs CoACD
 //! without a source tree. On first use a script is written to
 //! `<temp>/sdrs-helpers-<content hash>/<name>`; an existing file there is
@@ -13,10 +13,13 @@ use std::path::{Path, PathBuf};
 
 /// The carried scripts.
 const SCRIPTS: [(&str, &str); 2] = [
-    ("mjcf_dump.py", include_str!("../../tools/mjcf_dump.py")),
+    (
+        "mjcf_dump.py",
+        include_str!("../../tools/helpers/mjcf_dump.py"),
+    ),
     (
         "coacd_decompose.py",
-        include_str!("../../tools/coacd_decompose.py"),
+        include_str!("../../tools/helpers/coacd_decompose.py"),
     ),
 ];
 

@@ -401,7 +401,7 @@ pub fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-/// The cases as JSON for `tools/bench_ipctk.py`: world vertices and
+/// The cases as JSON for `tools/bench/bench_ipctk.py`: world vertices and
 /// triangles of both hulls and `d̂`.
 pub fn cases_json(cases: &[PotentialCase]) -> String {
     let pts = |w: &[Vector3<f64>]| w.iter().map(|v| [v.x, v.y, v.z]).collect::<Vec<_>>();

@@ -34,7 +34,7 @@ pub struct SimulateArgs {
     pub json: Option<PathBuf>,
     /// Also write every hull (link frame, `hulls.json`) and every link pose
     /// per step (`poses.csv`) into this directory, for viewers and
-    /// independent checks (`tools/check_separation.py`).
+    /// independent checks (`tools/check/check_separation.py`).
     #[arg(long)]
     pub export: Option<PathBuf>,
     /// With `--export`: also write the active contact pairs and their

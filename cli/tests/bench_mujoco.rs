@@ -1,5 +1,5 @@
 //! Smoke test of the SDRS-vs-MuJoCo benchmark harness
-//! (`tools/bench_vs_mujoco.sh`, `tools/bench_mujoco.py`): a few steps at
+//! (`tools/bench/bench_vs_mujoco.sh`, `tools/bench/bench_mujoco.py`): a few steps at
 //! small N. The harness's output is well formed (one row per N and engine,
 //! a ratio per N, stage shares), and — a physics check, not only "it runs"
 //! — the MuJoCo model integrates the same rigid bodies as SDRS: every
@@ -30,7 +30,7 @@ fn harness_is_well_formed_and_mujoco_bodies_match_sdrs_links() {
     let dir = scratch_dir("bench-mujoco");
     let rows_path = dir.join("rows.jsonl");
     let o = std::process::Command::new("bash")
-        .arg(root().join("tools/bench_vs_mujoco.sh"))
+        .arg(root().join("tools/bench/bench_vs_mujoco.sh"))
         .args(["--links", "2,3", "--steps", "15", "--sdrs"])
         .arg(env!("CARGO_BIN_EXE_sdrs"))
         .arg("--out")

@@ -1,7 +1,7 @@
 //! Calibration acceptance on a robot nobody here wrote (issue 33, item 3),
 //! CI size: gymnasium's `reacher.xml` imported with `sdrs import`, data from
 //! MuJoCo (RK4, 0.1 ms) on the original MJCF with 1e-3 noise at 100 Hz
-//! (`tools/calib_acceptance.py --cases quick`): clean data must give `none`
+//! (`tools/check/calib_acceptance.py --cases quick`): clean data must give `none`
 //! with the error floor explaining the gap, and a hidden joint damping on
 //! every joint must be named alone and fitted within 10 %. The full set
 //! (two robots, clean, one and two effects) is the script without
@@ -16,7 +16,7 @@ fn reacher_clean_is_none_and_damping_is_named_alone() {
     }
     let dir = support::scratch_dir("calibrate-acceptance");
     let o = support::python()
-        .arg(support::root().join("tools/calib_acceptance.py"))
+        .arg(support::root().join("tools/check/calib_acceptance.py"))
         .args(["--cases", "quick", "--duration", "2.0", "--sdrs"])
         .arg(env!("CARGO_BIN_EXE_sdrs"))
         .arg("--out")

@@ -1,7 +1,7 @@
 //! Calibration against an independent engine: MuJoCo simulates the arm of
 //! `robots/calibrate/arm2_fine.yaml` (written by `sdrs export-mjcf`, with the
 //! same lumped vertex masses, and given its effects by
-//! `tools/mujoco_from_export.py --sdrs`; the script's own construction from
+//! `tools/check/mujoco_from_export.py --sdrs`; the script's own construction from
 //! `sdrs simulate --export` gives the same data to 6e-16 rad) with joint damping, dry friction (`frictionloss`)
 //! or armature switched on; `calibrate` must name the matching effect first
 //! and shrink the held-out gap by ≥ 80 %. Clean MuJoCo data measure what the
@@ -17,7 +17,7 @@ use std::path::Path;
 
 fn mujoco_data(scene: &Path, export: &Path, out: &Path, effect: &[&str]) {
     let o = common::python()
-        .arg(common::root().join("tools/mujoco_from_export.py"))
+        .arg(common::root().join("tools/check/mujoco_from_export.py"))
         .arg(scene)
         .arg(export)
         .arg("--out")
@@ -44,7 +44,7 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
 }
 
 /// `arm2_fine.yaml` and its `sdrs simulate --export` in `dir/export`
-/// (what `tools/mujoco_from_export.py` builds the MuJoCo robot from).
+/// (what `tools/check/mujoco_from_export.py` builds the MuJoCo robot from).
 fn arm2_fine_export(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
     let scene = common::robots("calibrate/arm2_fine.yaml");
     let export = dir.join("export");
@@ -201,7 +201,7 @@ fn calibrated_xml_carries_the_fit_into_mujoco() {
     // scene's controller, without noise.
     let sim = |model: Option<&Path>, csv: &Path| {
         let mut cmd = common::python();
-        cmd.arg(common::root().join("tools/mujoco_from_export.py"))
+        cmd.arg(common::root().join("tools/check/mujoco_from_export.py"))
             .arg(&scene)
             .arg(&export)
             .arg("--out")

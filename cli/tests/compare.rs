@@ -516,7 +516,7 @@ fn paper_suite_mesh_baseline_rows_of_chain_reach_and_hand_run_two_iterations() {
 }
 
 /// The results page `docs/results/` is generated from its `results.json`
-/// (`tools/render_results.sh`), never edited by hand: rendering the stored
+/// (`tools/gen/render_results.sh`), never edited by hand: rendering the stored
 /// results again gives the committed `report.md` byte for byte, and the
 /// rendering writes nothing but the report's own files.
 #[test]
@@ -533,7 +533,7 @@ fn results_page_is_rendered_from_its_results_json() {
     let rendered = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(
         committed == rendered,
-        "docs/results/report.md differs from what `sdrs compare --render` makes of docs/results/results.json: run tools/render_results.sh (first differing line: {:?})",
+        "docs/results/report.md differs from what `sdrs compare --render` makes of docs/results/results.json: run tools/gen/render_results.sh (first differing line: {:?})",
         committed
             .lines()
             .zip(rendered.lines())

@@ -65,7 +65,7 @@ fn import_and_run(dir: &Path, urdf: &Path, name: &str) -> Run {
         assert!(d > 0.0, "{name}: min distance {d}");
     }
     let check = python()
-        .arg(support::root().join("tools/check_separation.py"))
+        .arg(support::root().join("tools/check/check_separation.py"))
         .arg(&export)
         .args(["--every", "10"])
         .output()

@@ -2,7 +2,7 @@
 //! task and its `--design off` twin through the binary; the summary holds
 //! the grasp and topology metrics, the optimized scenes keep every tie, and
 //! every design variable stays within its bounds. Full runs:
-//! `tools/bench_grasping.sh`.
+//! `tools/bench/bench_grasping.sh`.
 
 mod support;
 

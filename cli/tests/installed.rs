@@ -36,7 +36,7 @@ fn a_binary_outside_the_source_tree_imports_mjcf_with_its_own_helpers() {
     let dir = scratch_dir("installed-ok");
     assert!(
         !dir.ancestors()
-            .any(|d| d.join("tools/mjcf_dump.py").is_file()),
+            .any(|d| d.join("tools/helpers/mjcf_dump.py").is_file()),
         "the scratch folder must not be inside a source tree"
     );
     let out = installed(&dir)

@@ -1,6 +1,6 @@
 //! MJCF round trip (issue 32, item 6): `sdrs import model.xml` → `sdrs
 //! export-mjcf` → MuJoCo, compared with the original model in MuJoCo by
-//! `tools/mjcf_roundtrip.py`.
+//! `tools/check/mjcf_roundtrip.py`.
 //!
 //! - Static, four of gymnasium's models (one with a floor and contact,
 //!   half_cheetah, which also has joint springs): every body's mass, centre
@@ -57,7 +57,7 @@ fn import_export(dir: &Path, name: &str, args: &[&str]) -> (PathBuf, PathBuf) {
 /// Runs the comparison; returns its JSON report (asserting it ran).
 fn compare(name: &str, exported: &Path, extra: &[&str]) -> serde_json::Value {
     let out = python()
-        .arg(root().join("tools/mjcf_roundtrip.py"))
+        .arg(root().join("tools/check/mjcf_roundtrip.py"))
         .arg(gymnasium(name))
         .arg(exported)
         .args(extra)

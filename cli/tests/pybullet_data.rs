@@ -107,7 +107,7 @@ fn run_all(base: &str) {
     // python-fcl on every 20th step of every export, in one Python process
     // (a start per file was half of this test's time).
     let check = python()
-        .arg(root().join("tools/check_separation.py"))
+        .arg(root().join("tools/check/check_separation.py"))
         .args(exports.iter().map(|(_, e)| e))
         .args(["--every", "20"])
         .output()

@@ -1,4 +1,4 @@
-//! Smoke version of `tools/swing_vs_mujoco.py`: the KUKA iiwa imported with
+//! Smoke version of `tools/check/swing_vs_mujoco.py`: the KUKA iiwa imported with
 //! default masses (its URDF inertials), swinging freely (hanging, small
 //! amplitude) for 0.3 s, against MuJoCo's RK4: the joint-angle error
 //! shrinks at first order with Δt (SDRS's implicit scheme). The full table
@@ -8,12 +8,12 @@ mod support;
 
 use support::{pybullet_data, python, root, scratch_dir, sdrs};
 
-/// Runs a convergence script of `tools/` (`--sdrs`, `--work`, `--json` added)
+/// Runs a convergence script of `tools/check/` (`--sdrs`, `--work`, `--json` added)
 /// with `args`, asserts it succeeded and returns its JSON table.
 fn table(dir: &std::path::Path, script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
     let json = dir.join("table.json");
     let o = python()
-        .arg(root().join("tools").join(script))
+        .arg(root().join("tools/check").join(script))
         .args(args)
         .arg("--sdrs")
         .arg(env!("CARGO_BIN_EXE_sdrs"))
@@ -72,7 +72,7 @@ fn imported_iiwa_free_swing_converges_to_mujoco_at_first_order() {
     assert!((0.8..1.3).contains(&order), "order {order} (errors {e:?})");
 }
 
-/// Smoke version of `tools/pd_vs_mujoco.py`: the spider (free base, eight
+/// Smoke version of `tools/check/pd_vs_mujoco.py`: the spider (free base, eight
 /// two-hinge legs) tracking its sine PD targets in the air for 0.5 s, in
 /// SDRS and in MuJoCo (the robot from `sdrs export-mjcf`, the same PD law,
 /// MuJoCo's implicit integrator at 1e-5 s): joint angles, base position and

@@ -1,7 +1,7 @@
 //! `sdrs view` end to end: the viewer of a four-chain run opens in headless
 //! Chromium without a console error, draws every hull, and two screenshots
 //! at different slider positions differ; the `.glb` of the same run
-//! validates (trimesh + `tools/check_glb.py`: node count, animation length
+//! validates (trimesh + `tools/check/check_glb.py`: node count, animation length
 //! = trajectory length, last keyframe = last recorded pose); an optimize
 //! result shows both designs; bad input is a clear error.
 
@@ -128,7 +128,7 @@ fn four_chain_viewer_plays_and_glb_validates() {
     let glb = dir.join("run.glb");
     run_ok(sdrs().arg("view").arg(&exp).arg("--out").arg(&glb));
     let o = python()
-        .arg(root().join("tools/check_glb.py"))
+        .arg(root().join("tools/check/check_glb.py"))
         .arg(&glb)
         .arg("--poses")
         .arg(exp.join("poses.csv"))

@@ -8,7 +8,7 @@ Local (this machine):     .venv/bin/python examples/python/ray_sweep.py
 Multi-node cluster:       ray start --head                      (head node)
                           ray start --address=HEAD_IP:6379      (each worker)
                           .venv/bin/python examples/python/ray_sweep.py --address auto
-Every node needs this repository (same path) with `bash tools/setup_python.sh`
+Every node needs this repository (same path) with `bash tools/setup/setup_python.sh`
 run, or a shared file system: the tasks read their files by path.
 """
 

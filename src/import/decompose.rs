@@ -7,7 +7,7 @@
 //!   within half a voxel. parry does not merge parts, so when it returns more
 //!   than `max_hulls` parts we merge the pair whose merged hull adds the
 //!   least volume until `max_hulls` remain.
-//! - `coacd`: CoACD through `tools/coacd_decompose.py` (Python `coacd`
+//! - `coacd`: CoACD through `tools/helpers/coacd_decompose.py` (Python `coacd`
 //!   package), `threshold` is its concavity threshold, `max_hulls` its
 //!   `max_convex_hull`, `resolution` its `resolution`.
 //! - `hull`: one convex hull of the whole mesh.
@@ -345,7 +345,7 @@ fn coacd(
         let out = python::run_tool("coacd_decompose.py", &args)?;
         if out.code != Some(0) {
             return Err(fail(format!(
-                "tools/coacd_decompose.py failed ({:?}): {}",
+                "tools/helpers/coacd_decompose.py failed ({:?}): {}",
                 out.code,
                 out.stderr.trim()
             )));

@@ -1,5 +1,5 @@
 //! Forward-kinematics samples of an imported robot, for comparison with an
-//! independent implementation (`tools/check_fk_pinocchio.py`, Pinocchio).
+//! independent implementation (`tools/check/check_fk_pinocchio.py`, Pinocchio).
 //!
 //! Each sample gives the input (URDF) joint values and our world pose of
 //! every link. Coordinates are drawn (seeded) within the URDF limits

@@ -1,18 +1,18 @@
-//! Finding and running the project's Python helpers (`tools/*.py`).
+//! Finding and running the project's Python helpers (`tools/helpers/*.py`).
 //!
 //! Helper scripts, in this order:
 //! 1. a [`HelperSource`] the embedding program registered
 //!    ([`set_helper_source`]): the `sdrs` binary registers the scripts it
 //!    carries (`include_str!`, written to a per-user temporary folder), so an
 //!    installed binary (`cargo install --path cli`) needs no source tree;
-//! 2. `$SDRS_ROOT/tools/<name>` when `SDRS_ROOT` is set;
-//! 3. `tools/<name>` in the current directory or one of its parents, or
+//! 2. `$SDRS_ROOT/tools/helpers/<name>` when `SDRS_ROOT` is set;
+//! 3. `tools/helpers/<name>` in the current directory or one of its parents, or
 //!    above the running program (a source checkout: the library's own
 //!    tests, `target/release/sdrs`).
 //!
 //! Interpreter: `$SDRS_PYTHON` if set, else `<root>/.venv/bin/python` when
 //! a source tree `<root>` is known (2 or 3 above) and has one, else
-//! `python3` on the `PATH`. `bash tools/setup_python.sh` creates the venv in
+//! `python3` on the `PATH`. `bash tools/setup/setup_python.sh` creates the venv in
 //! a checkout; elsewhere `python3 -m pip install <package>` the package an
 //! error names.
 
@@ -22,7 +22,7 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 /// The command that installs the Python helpers' packages in a checkout.
-pub const SETUP_COMMAND: &str = "bash tools/setup_python.sh";
+pub const SETUP_COMMAND: &str = "bash tools/setup/setup_python.sh";
 
 /// Exit code the helpers use when a package is missing (they print
 /// `missing Python package: NAME` on stderr).
@@ -30,7 +30,7 @@ pub const EXIT_MISSING_PACKAGE: i32 = 3;
 
 /// Where the embedding program keeps runnable copies of the helpers.
 pub trait HelperSource: Send + Sync {
-    /// A path of a runnable copy of `tools/<name>`, or why there is none.
+    /// A path of a runnable copy of `tools/helpers/<name>`, or why there is none.
     fn script(&self, name: &str) -> Result<PathBuf, String>;
 }
 
@@ -113,7 +113,7 @@ pub fn set_helper_source(source: Box<dyn HelperSource>) -> bool {
 
 /// The source tree, if one is known: `$SDRS_ROOT`, else the first of the
 /// current directory's and then the running program's ancestors that holds
-/// `tools/mjcf_dump.py` (a checkout, or `target/release/` inside one).
+/// `tools/helpers/mjcf_dump.py` (a checkout, or `target/release/` inside one).
 pub fn source_root() -> Option<PathBuf> {
     if let Some(r) = std::env::var_os("SDRS_ROOT") {
         return Some(PathBuf::from(r));
@@ -122,7 +122,7 @@ pub fn source_root() -> Option<PathBuf> {
     starts.into_iter().flatten().find_map(|start| {
         start
             .ancestors()
-            .find(|d| d.join("tools/mjcf_dump.py").is_file())
+            .find(|d| d.join("tools/helpers/mjcf_dump.py").is_file())
             .map(Path::to_path_buf)
     })
 }
@@ -143,12 +143,12 @@ pub fn tool(name: &str) -> Result<PathBuf, ImportError> {
     if let Some(s) = SOURCE.get() {
         return s.script(name).map_err(|msg| ImportError::Python { msg });
     }
-    let found = source_root().map(|r| r.join("tools").join(name));
+    let found = source_root().map(|r| r.join("tools/helpers").join(name));
     match found {
         Some(p) if p.is_file() => Ok(p),
         _ => Err(ImportError::Python {
             msg: format!(
-                "helper tools/{name} not found: this program carries no helpers and no sdrs source tree is known (set SDRS_ROOT to one, or use the `sdrs` binary, which carries them)"
+                "helper tools/helpers/{name} not found: this program carries no helpers and no sdrs source tree is known (set SDRS_ROOT to one, or use the `sdrs` binary, which carries them)"
             ),
         }),
     }
@@ -161,7 +161,7 @@ pub struct ToolOutput {
     pub code: Option<i32>,
 }
 
-/// Runs `tools/<script> args…` with the project interpreter. Fails with the
+/// Runs `tools/helpers/<script> args…` with the project interpreter. Fails with the
 /// install command when the interpreter or a package is missing.
 pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput, ImportError> {
     let py = interpreter();
@@ -189,7 +189,7 @@ pub fn run_tool(script: &str, args: &[std::ffi::OsString]) -> Result<ToolOutput,
             .to_string();
         return Err(ImportError::Python {
             msg: format!(
-                "{} (interpreter {}); install it with `{} -m pip install {package}` (in a source tree: `{SETUP_COMMAND}`, which installs the pinned versions of tools/requirements.txt)",
+                "{} (interpreter {}); install it with `{} -m pip install {package}` (in a source tree: `{SETUP_COMMAND}`, which installs the pinned versions of tools/setup/requirements.txt)",
                 res.stderr.trim(),
                 py.display(),
                 py.display()

@@ -18,7 +18,7 @@
 
 pub mod motion_bound;
 
-pub use motion_bound::{SegmentMotion, chord_deviation, chord_speed_bounds, hull_radii};
+pub use motion_bound::{SegmentMotion, hull_radii};
 
 use crate::math::{Pose, compose, pose_from, rot, trans, twist_apply};
 use crate::model::{JointDerivatives, Model};

@@ -52,28 +52,34 @@
 //! computes a *rate bound* from the exact rates at the start and keeps the
 //! smaller of the two.
 //!
-//! # The chord bound (the IPC baseline's line search)
+//! # Chords (the IPC baseline's line search)
 //!
 //! The IPC baseline certifies a line-search step by additive CCD on the
-//! *chords* between exactly computed vertex positions, so it needs how far
-//! a vertex path strays from its chord rather than a drift plus spread.
-//! Split `X(α) = X_lin(α) + X_nl(α)`: `X_lin` collects the translations of
-//! joints without moving ancestors (exactly linear in `α`) and `X_nl` has
-//! speed at most
+//! *chords* between exactly computed vertex positions, so it needs how far a
+//! vertex path strays from its chord over a sub-interval `[α₀, α₀ + h]`. It
+//! uses this same bound: the drift `c_i` is constant, so it cancels between
+//! the path and its chord, and what is left moves at most at `E_i`; with
+//! `s = (α − α₀)/h` the deviation is
+//! `‖∫_{α₀}^{α} e − s ∫_{α₀}^{α₀+h} e‖ ≤ 2 s (1 − s) h E_i ≤ E_i h/2`.
+//! For short sub-intervals a bound on the acceleration does better: a path
+//! whose acceleration is at most `A_i` deviates from its chord by at most
+//! `A_i h²/8`, so [`SegmentMotion::chord_deviation`] is
+//! `min(E_i h/2, A_i h²/8)`. `A_i` ([`SegmentMotion::update_chord`]) comes
+//! from the same joint rates `w_j`, lever arms and travel rates as the lever
+//! bound: `Ẍ = Σ_j [ω̇_j × (X − o_j) + ω_j × (Ẋ − ȯ_j)] + …` over the joints
+//! `j` on the path to the link, with `‖ω_j‖ ≤ w_j`,
+//! `‖ω̇_j‖ ≤ w_j W_λ(j) + κ_j` (the joint's axes turn with its parent; `κ_j`
+//! the joint's own turning: 0 for a hinge, `|Δq₁||Δq₂|` for a ball, whose
+//! second axis turns about the first, `C ‖Δφ‖²` for a rotation vector,
+//! `C = CHART_TURN`), `‖X − o_j‖ ≤ R_j` (the hull radius plus the lever arms
+//! below `j`) and `‖Ẋ − ȯ_j‖ ≤ Σ_{k at or below j} (w_k R_k + t_k)`, where
+//! `t_k = ‖τ̇_k‖` counts a translation only when the parent turns (else it
+//! is drift, exactly linear); a translation in a turning frame adds
+//! `t_j W_λ(j)`:
 //!
 //! ```text
-//! U_L = Σ_{joints j on the path to L} (‖Δθ_j^rot‖ R_{j,L} + [j has a moving ancestor] ‖Δθ_j^trans‖)
+//! A_i = Σ_j [(w_j W_λ(j) + κ_j) R_j + w_j Σ_{k at or below j} (w_k R_k + t_k) + t_j W_λ(j)]
 //! ```
-//!
-//! (m per unit `α`; `R_{L,L} = max ‖x̃‖` and, for the child `c` of `j` on
-//! the path, `R_{j,L} = ‖t(C_c)‖ + max_α ‖t(J_c)‖ + R_{c,L}`) and acceleration at most
-//! `A_L` ([`chord_speed_bounds`]). A path with speed ≤ `U` and acceleration
-//! ≤ `A` deviates from its chord over a sub-interval of length `h` by at
-//! most `min(U h/2, A h²/8)` ([`chord_deviation`]). Its joint rates differ
-//! from the lever bound's above (a ball joint counts `|Δq₁| + |Δq₂|`, not
-//! the exact norm), so the two bounds are kept side by side: making the
-//! baseline use the lever bound would change its step sizes, and so its
-//! trajectories.
 
 use crate::math::{Pose, rot};
 use crate::model::{JointKind, Model};
@@ -119,6 +125,9 @@ pub struct SegmentMotion {
     origin_change: Vec<f64>,
     /// `dT_i/dα` at the start (rotation rate | origin rate), world frame.
     pose_rate: Vec<Pose>,
+    /// `A_i`: bound on a hull point's acceleration (m per unit α²), set by
+    /// [`SegmentMotion::update_chord`] (the chords of the IPC baseline).
+    accel: Vec<f64>,
 }
 
 /// `sup ‖d/dα (J_l(φ + αΔφ) Δφ)‖ / ‖Δφ‖²` for the rotation-vector chart,
@@ -405,6 +414,57 @@ impl SegmentMotion {
     pub fn reach_upper(&self, link: usize) -> f64 {
         self.drift[link].norm() + self.spread_upper[link]
     }
+
+    /// The acceleration bounds `A_i` of the module docs' chord section,
+    /// after [`SegmentMotion::update`] on the same segment (`dq` its step).
+    /// Only the chords need them; [`SegmentMotion::update`] does not compute
+    /// them.
+    pub fn update_chord(&mut self, model: &Model, dq: &DVector<f64>) {
+        self.accel.clear();
+        // Per joint on the path from the link up: (w_j, κ_j, t_j, R_j, W_λ(j)).
+        let mut path: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+        for l in 0..model.links.len() {
+            path.clear();
+            let mut reach = self.radius[l];
+            let mut j = l;
+            loop {
+                let link = &model.links[j];
+                let w = self.joint_rate[j];
+                let parent_w = link.parent.map_or(0.0, |p| self.angular[p]);
+                let t = if parent_w > 0.0 {
+                    self.travel_rate[j]
+                } else {
+                    0.0
+                };
+                let o = link.dof_offset;
+                let turn = match &link.joint {
+                    JointKind::Fixed | JointKind::Prismatic { .. } | JointKind::Revolute { .. } => {
+                        0.0
+                    }
+                    JointKind::Ball { .. } => dq[o].abs() * dq[o + 1].abs(),
+                    JointKind::Spherical | JointKind::Free => CHART_TURN * w * w,
+                };
+                path.push((w, turn, t, reach, parent_w));
+                let Some(p) = link.parent else { break };
+                reach += self.arm[j];
+                j = p;
+            }
+            let (mut acc, mut below) = (0.0, 0.0);
+            for &(w, turn, t, r, parent_w) in &path {
+                below += w * r + t;
+                acc += (w * parent_w + turn) * r + w * below + t * parent_w;
+            }
+            self.accel.push(acc);
+        }
+    }
+
+    /// How far a hull point of link `i` can stray from the chord between its
+    /// exact positions at the ends of any sub-interval of length `h` of the
+    /// segment: `min(E_i h/2, A_i h²/8)` (m; after
+    /// [`SegmentMotion::update_chord`]).
+    pub fn chord_deviation(&self, link: usize, h: f64) -> f64 {
+        (self.spread[link] * h / 2.0).min(self.accel[link] * h * h / 8.0)
+    }
 }
 
 /// `ω` from `[ω]× + E`: the axial vector of a matrix's skew part
@@ -448,96 +508,6 @@ pub fn hull_radii(model: &Model, out: &mut Vec<f64>) {
             .fold(0.0, f64::max)
             .sqrt()
     }));
-}
-
-/// `(U_L, A_L)` for every link: bounds on the speed and the acceleration
-/// (per unit `α`) of the non-linear part of its vertex paths (the chord
-/// bound of the module docs); `radius[L]` is `max ‖x̃‖` over the link's
-/// vertices (m). With `s_j` the rotational speed bound of joint `j`, `t_j` its
-/// translation speed (when it has a moving ancestor), `R_j = R_{j,L}`,
-/// `W_j = Σ_{ancestors i of j} s_i` and `V_j = Σ_{i on the path at or below
-/// j} (s_i R_i + t_i)`: `U_L = Σ_j (s_j R_j + t_j)` and
-/// `A_L = Σ_j [s_j (W_j + s_j/2) R_j + s_j V_j + t_j W_j]`, from
-/// `Ẍ = Σ_j [ω̇_j × (X − c_j) + ω_j × (Ẋ − ċ_j)]` with `‖ω_j‖ ≤ s_j`,
-/// `‖ω̇_j‖ ≤ s_j (W_j + s_j/2)` (the axis turns with the ancestors; the
-/// rotation-vector Jacobian changes at rate ≤ ½‖Δφ‖) and
-/// `‖Ẋ − ċ_j‖ ≤ V_j`.
-pub fn chord_speed_bounds(
-    model: &Model,
-    radius: &[f64],
-    q: &DVector<f64>,
-    dq: &DVector<f64>,
-    out: &mut Vec<(f64, f64)>,
-) {
-    out.clear();
-    let trans_len = |l: usize, x: &DVector<f64>| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Prismatic { .. } => x[o].abs(),
-            JointKind::Free => Vector3::new(x[o], x[o + 1], x[o + 2]).norm(),
-            _ => 0.0,
-        }
-    };
-    let rot_speed = |l: usize| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Revolute { .. } => dq[o].abs(),
-            JointKind::Ball { .. } => dq[o].abs() + dq[o + 1].abs(),
-            JointKind::Spherical => Vector3::new(dq[o], dq[o + 1], dq[o + 2]).norm(),
-            JointKind::Free => Vector3::new(dq[o + 3], dq[o + 4], dq[o + 5]).norm(),
-            _ => 0.0,
-        }
-    };
-    let trans_speed = |l: usize| -> f64 {
-        let link = &model.links[l];
-        let o = link.dof_offset;
-        match link.joint {
-            JointKind::Prismatic { .. } => dq[o].abs(),
-            JointKind::Free => Vector3::new(dq[o], dq[o + 1], dq[o + 2]).norm(),
-            _ => 0.0,
-        }
-    };
-    let q1 = q + dq;
-    for (l, r) in radius.iter().enumerate().take(model.links.len()) {
-        // The path L → root: per joint, s (rotational speed), t (translation
-        // speed counted as non-linear) and R (centre-to-vertex bound).
-        let mut path: Vec<(f64, f64, f64)> = Vec::new();
-        let mut reach = *r;
-        let mut j = l;
-        loop {
-            let link = &model.links[j];
-            let has_moving_ancestor = link
-                .parent
-                .is_some_and(|p| !model.ancestor_dofs[p].is_empty());
-            let t = if has_moving_ancestor {
-                trans_speed(j)
-            } else {
-                0.0
-            };
-            path.push((rot_speed(j), t, reach));
-            let Some(p) = link.parent else { break };
-            reach += link.attach.column(3).norm() + trans_len(j, q).max(trans_len(j, &q1));
-            j = p;
-        }
-        let (mut u, mut acc, mut below) = (0.0, 0.0, 0.0);
-        let total_s: f64 = path.iter().map(|p| p.0).sum();
-        let mut anc = total_s;
-        for &(sp, tp, rp) in &path {
-            anc -= sp;
-            u += sp * rp + tp;
-            below += sp * rp + tp;
-            acc += sp * (anc + 0.5 * sp) * rp + sp * below + tp * anc;
-        }
-        out.push((u, acc));
-    }
-}
-
-/// Bound on the distance between a link's true vertex path and its chord
-/// over a sub-interval of length `h`: `min(U h/2, A h²/8)` (m).
-pub fn chord_deviation((u, a): (f64, f64), h: f64) -> f64 {
-    (u * h / 2.0).min(a * h * h / 8.0)
 }
 
 #[cfg(test)]

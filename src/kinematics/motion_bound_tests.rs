@@ -394,3 +394,173 @@ fn the_lever_half_bounds_the_spread_from_above_exactly() {
     // The rate bound is the tighter one for most links.
     assert!(tighter > 500, "{tighter}");
 }
+
+/// A chain of ball joints with axes at 60° (`a₁·a₂ = ½`) and nearly
+/// opposite (`a₁·a₂ ≈ −0.98`), where the exact joint rate
+/// `√(Δq₁² + Δq₂² + 2 Δq₁Δq₂ a₁·a₂)` is far below `|Δq₁| + |Δq₂|`, under a
+/// free root and a revolute.
+fn skew_ball_model(rng: &mut impl rand::Rng) -> Model {
+    let mut at = |v: f64| {
+        pose_from(
+            &rpy_to_matrix(&[
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ]),
+            &Vector3::new(v, -0.1, 0.2),
+        )
+    };
+    let a = Vector3::new(0.2, 0.4, -0.9).normalize();
+    let sixty = Vector3::new(0.5, 0.75f64.sqrt(), 0.0);
+    // a₁·a₂ = −0.98 with a₁ = x.
+    let opposite = Vector3::new(-0.98, (1.0f64 - 0.98 * 0.98).sqrt(), 0.0);
+    let links = vec![
+        link("base", None, JointKind::Free, at(0.4)),
+        link(
+            "b60",
+            Some(0),
+            JointKind::Ball {
+                axes: [Vector3::x(), sixty],
+            },
+            at(0.3),
+        ),
+        link("rev", Some(1), JointKind::Revolute { axis: a }, at(0.3)),
+        link(
+            "b180",
+            Some(2),
+            JointKind::Ball {
+                axes: [Vector3::x(), opposite],
+            },
+            at(0.25),
+        ),
+        link(
+            "tip",
+            Some(3),
+            JointKind::Ball {
+                axes: [sixty, Vector3::z()],
+            },
+            at(0.2),
+        ),
+    ];
+    let n = links.len();
+    Model::new(
+        links,
+        vec![crate::model::RobotInfo {
+            name: "r".into(),
+            links: 0..n,
+        }],
+    )
+}
+
+/// Ball joints whose axes are not perpendicular (the bound uses their exact
+/// rate, not `|Δq₁| + |Δq₂|`): every hull vertex, sampled along random
+/// segments, including turns that nearly cancel, stays within the reach
+/// from every sampled start.
+#[test]
+fn sampled_paths_of_skewed_ball_joints_stay_within_the_bound() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+    let mut worst: f64 = 0.0;
+    for case in 0..60 {
+        let model = skew_ball_model(&mut rng);
+        let n = model.ndof();
+        let charts = random_charts(&mut rng, &model);
+        let scale = [0.05, 0.5, 2.0][case % 3];
+        let q = DVector::from_fn(n, |_, _| rng.random_range(-1.5..1.5));
+        let mut dq = DVector::from_fn(n, |_, _| scale * rng.random_range(-1.0..1.0));
+        if case % 2 == 0 {
+            // Turns that nearly cancel on the 60° and near-opposite joints.
+            let (b60, b180) = (model.links[1].dof_offset, model.links[3].dof_offset);
+            dq[b60 + 1] = -dq[b60];
+            dq[b180 + 1] = dq[b180];
+        }
+        let steps = 200;
+        let (m, _, poses) = bound_and_path(&model, &q, &dq, &charts, steps);
+        for (i, l) in model.links.iter().enumerate() {
+            for x in &l.hulls[0].x_local {
+                let pts: Vec<Vector3<f64>> =
+                    poses.iter().map(|p| transform_point(&p[i], x)).collect();
+                for k0 in [0, steps / 3] {
+                    for k in k0 + 1..=steps {
+                        let da = (k - k0) as f64 / steps as f64;
+                        let moved = (pts[k] - pts[k0]).norm();
+                        let bound = da * m.reach(i);
+                        assert!(
+                            moved <= bound * (1.0 + 1e-9) + 1e-12,
+                            "case {case} link {i}: moved {moved} > bound {bound}"
+                        );
+                        worst = worst.max(moved / bound.max(1e-300));
+                    }
+                }
+            }
+        }
+    }
+    assert!(worst > 0.3, "bound never approached: {worst}");
+}
+
+/// The chords of the IPC baseline's line search: on random sub-intervals
+/// `[α₀, α₀ + h]` of random segments, of every joint kind and of skewed
+/// ball joints, every hull vertex stays within
+/// [`SegmentMotion::chord_deviation`] of the chord between its exact end
+/// positions; both halves of the bound (`E h/2` and `A h²/8`) are the
+/// smaller one somewhere, and the bound is approached.
+#[test]
+fn sampled_paths_stay_within_the_chord_deviation() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(59);
+    let (mut worst, mut by_speed, mut by_accel) = (0.0f64, 0, 0);
+    for case in 0..80 {
+        let model = if case % 2 == 0 {
+            every_joint_model(&mut rng)
+        } else {
+            skew_ball_model(&mut rng)
+        };
+        let n = model.ndof();
+        let charts = random_charts(&mut rng, &model);
+        let scale = [0.05, 0.5, 2.0, 4.0][case % 4];
+        let q = DVector::from_fn(n, |_, _| rng.random_range(-1.5..1.5));
+        let dq = DVector::from_fn(n, |_, _| scale * rng.random_range(-1.0..1.0));
+        let mut kin = Kinematics::new(&model);
+        kin.update(&model, &q, &charts, KinOrder::Pose);
+        let mut radius = Vec::new();
+        hull_radii(&model, &mut radius);
+        let mut m = SegmentMotion::default();
+        m.update(&model, &kin.pre, &kin.pose, &charts, &radius, &q, &dq);
+        m.update_chord(&model, &dq);
+        for h in [1.0, 0.3, 0.05, 0.004] {
+            let a0 = if h < 1.0 {
+                rng.random_range(0.0..1.0 - h)
+            } else {
+                0.0
+            };
+            let steps = 60;
+            let poses: Vec<Vec<Pose>> = (0..=steps)
+                .map(|k| {
+                    let a = a0 + h * k as f64 / steps as f64;
+                    crate::kinematics::link_poses(&model, &(&q + &dq * a), &charts)
+                })
+                .collect();
+            for (i, l) in model.links.iter().enumerate() {
+                let bound = m.chord_deviation(i, h);
+                if m.spread[i] * h / 2.0 <= m.accel[i] * h * h / 8.0 {
+                    by_speed += 1;
+                } else {
+                    by_accel += 1;
+                }
+                for x in &l.hulls[0].x_local {
+                    let start = transform_point(&poses[0][i], x);
+                    let end = transform_point(&poses[steps][i], x);
+                    for (k, p) in poses.iter().enumerate() {
+                        let s = k as f64 / steps as f64;
+                        let off = (transform_point(&p[i], x) - (start + (end - start) * s)).norm();
+                        assert!(
+                            off <= bound * (1.0 + 1e-9) + 1e-12,
+                            "case {case} h {h} link {i}: {off} off the chord > {bound}"
+                        );
+                        worst = worst.max(off / bound.max(1e-300));
+                    }
+                }
+            }
+        }
+    }
+    assert!(by_speed > 0 && by_accel > 0, "{by_speed} {by_accel}");
+    assert!(worst > 0.1, "chord bound never approached: {worst}");
+}

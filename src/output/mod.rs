@@ -507,7 +507,7 @@ impl RunStats {
 
 /// Writes `dir/hulls.json` ([`HullExport`]) and `dir/poses.csv`
 /// ([`poses_csv`]) of a run recorded with link poses: what viewers and the
-/// independent check `tools/check_separation.py` read.
+/// independent check `tools/check/check_separation.py` read.
 pub fn export_run(
     dir: &Path,
     model: &Model,

@@ -62,7 +62,7 @@ impl Drop for Scratch {
 
 /// Test tiers (docs/testing.md). Tier 1 is hermetic: a bare `cargo test`
 /// on a fresh clone needs only the Rust toolchain. Tier 2 needs the
-/// project's Python environment `.venv` (made by `tools/setup_python.sh`:
+/// project's Python environment `.venv` (made by `tools/setup/setup_python.sh`:
 /// MuJoCo, Pinocchio, python-fcl, ipctk, trimesh, CoACD, pybullet's robot
 /// files) or Chromium. A tier-2 test starts with
 /// `if skip_without_venv() { return; }`: without `.venv` it writes a visible
@@ -75,7 +75,7 @@ pub fn skip_without_venv() -> bool {
     if venv_present() {
         return false;
     }
-    skip_tier2("the project's Python environment .venv (run `bash tools/setup_python.sh`)")
+    skip_tier2("the project's Python environment .venv (run `bash tools/setup/setup_python.sh`)")
 }
 
 /// [`skip_without_venv`] for tests that drive headless Chromium.
@@ -89,7 +89,7 @@ pub fn skip_without_chromium() -> bool {
     if found && venv_present() {
         return false;
     }
-    skip_tier2("Chromium (run `bash tools/setup_system.sh`) and .venv")
+    skip_tier2("Chromium (run `bash tools/setup/setup_system.sh`) and .venv")
 }
 
 /// Whether `.venv` is there (and not hidden by `SDRS_TEST_PRETEND_NO_VENV=1`).
@@ -112,14 +112,14 @@ fn skip_tier2(what: &str) -> bool {
     true
 }
 
-/// The project's Python (`.venv`, made by `tools/setup_python.sh`). Panics
+/// The project's Python (`.venv`, made by `tools/setup/setup_python.sh`). Panics
 /// with the setup command when it is missing: a test that needs it starts
 /// with [`skip_without_venv`], so a missing environment is never silent.
 pub fn python() -> Command {
     let py = root().join(".venv/bin/python");
     assert!(
         venv_present(),
-        "{} is missing: run `bash tools/setup_python.sh` (tools/test.sh does it)",
+        "{} is missing: run `bash tools/setup/setup_python.sh` (tools/test.sh does it)",
         py.display()
     );
     Command::new(py)

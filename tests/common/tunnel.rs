@@ -3,7 +3,7 @@
 //!
 //! A body that tunnels through a thin obstacle in one step is separated at
 //! every recorded step, so a distance check at the steps (python-fcl,
-//! `tools/check_separation.py`) cannot see it; the side check can: for a
+//! `tools/check/check_separation.py`) cannot see it; the side check can: for a
 //! thin "sheet" hull (a wall, a plate, a spinning bar) and a point of
 //! another body (its hull centroid), the point's signed offset along the
 //! sheet's thin axis must not change sign between two consecutive steps

@@ -53,16 +53,16 @@ pub fn venv_python() -> PathBuf {
     let pretend = std::env::var_os("SDRS_TEST_PRETEND_NO_VENV").is_some_and(|v| v == "1");
     assert!(
         py.exists() && !pretend,
-        "the Python helpers' environment is missing ({}): run `bash tools/setup_python.sh` from the repository root first",
+        "the Python helpers' environment is missing ({}): run `bash tools/setup/setup_python.sh` from the repository root first",
         py.display()
     );
     py
 }
 
-/// Runs `tools/<script>` with the venv Python; returns (status ok, stdout, stderr).
+/// Runs the check `tools/check/<script>` with the venv Python; returns (status ok, stdout, stderr).
 pub fn run_tool(script: &str, args: &[&Path]) -> (bool, String, String) {
     let out = Command::new(venv_python())
-        .arg(root().join("tools").join(script))
+        .arg(root().join("tools/check").join(script))
         .args(args)
         .output()
         .expect("run the Python helper");
@@ -74,7 +74,7 @@ pub fn run_tool(script: &str, args: &[&Path]) -> (bool, String, String) {
 }
 
 /// The third-party robot: KUKA iiwa (URDF + STL meshes) from `pybullet_data`
-/// in the venv (installed by tools/setup_python.sh).
+/// in the venv (installed by tools/setup/setup_python.sh).
 pub fn third_party_urdf() -> PathBuf {
     let out = Command::new(venv_python())
         .args([
@@ -85,7 +85,7 @@ pub fn third_party_urdf() -> PathBuf {
         .expect("run Python");
     assert!(
         out.status.success(),
-        "pybullet_data is not installed in .venv: run `bash tools/setup_python.sh` ({})",
+        "pybullet_data is not installed in .venv: run `bash tools/setup/setup_python.sh` ({})",
         String::from_utf8_lossy(&out.stderr)
     );
     let dir = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());

@@ -3,42 +3,29 @@
 //!
 //! Along the Newton step `θ(α) = θ + α Δθ`, a vertex of link `L` moves on
 //! `X(α) = A_L(θ(α)) x̃`, which is not a straight line when rotational
-//! coordinates change. We split `X(α) = X_lin(α) + X_nl(α)`: `X_lin` collects
-//! the translations of joints without moving ancestors (exactly linear in
-//! `α`), and `X_nl` has speed at most
+//! coordinates change. The bound is the core's articulated motion bound
+//! ([`sdrs::kinematics::SegmentMotion`], the one the core's own CCD uses):
+//! a point of link `L` moves at a constant drift (translations of joints
+//! whose frame does not turn, exactly linear in `α`) plus at most `E_L`, and
+//! accelerates at most at `A_L`, so on a sub-interval of length `h` it
+//! deviates from its chord by at most
+//! `δ_L = min(E_L h/2, A_L h²/8)` ([`sdrs::kinematics::SegmentMotion::chord_deviation`]).
 //!
-//! `U_L = Σ_{joints j on the path to L} (‖Δθ_j^rot‖ · R_{j,L} + [j has a
-//! moving ancestor] ‖Δθ_j^trans‖)` (m per unit `α`),
-//!
-//! because each rotational coordinate of `j` turns the subtree at angular
-//! speed at most `|Δθ_k|` (hinges: exactly; rotation vectors: the SO(3)
-//! Jacobian has norm ≤ 1, so `‖ω‖ ≤ ‖Δφ‖`) about joint `j`'s centre, and
-//! `R_{j,L}` bounds the distance from that centre to any vertex of `L` in
-//! every configuration: `R_{L,L} = max ‖x̃‖` and `R_{j,L} = ‖t(C_c)‖ +
-//! max_α ‖t(J_c)‖ + R_{c,L}` for the child `c` of `j` on the path (rigid
-//! attachments; prismatic/free translations bounded at the segment ends,
-//! where a linear coordinate is extremal). A path with speed ≤ `U` deviates
-//! from its chord on a sub-interval of length `h` by at most `U h / 2`.
-//!
-//! So on `[α₀, α₁]` the true paths stay within `δ_L = U_L (α₁ − α₀)/2` of
-//! the chords between the exactly computed end positions, and additive CCD
-//! on the chords ([`crate::ccd`]) with minimum separation `ξ = δ_a + δ_b`
-//! proves the true surfaces disjoint up to the returned time. When the
+//! So on `[α₀, α₁]` the true paths stay within `δ_L` of the chords between
+//! the exactly computed end positions, and additive CCD on the chords
+//! ([`crate::ccd`]) with minimum separation `ξ = δ_a + δ_b` proves the true
+//! surfaces disjoint up to the returned time. When the
 //! deviation bound, not the approach, limits the step (`ξ` not small next to
 //! the gap), the interval is halved (up to `max_depth` times). This is a
 //! **conservative bound with subdivision**: no trial point it admits has
 //! crossing or touching surfaces.
-//!
-//! The bounds `U_L`, `A_L` and the chord deviation are the core's
-//! ([`sdrs::kinematics::chord_speed_bounds`], [`sdrs::kinematics::chord_deviation`]:
-//! one module of articulated motion bounds for core and baseline).
 
 use crate::broad_phase::{Candidates, PrimitiveBoxes, candidates};
 use crate::ccd::{AccdOptions, additive_ccd};
 use crate::mesh::LinkMesh;
 use crate::pair::PairGeometry;
 use nalgebra::{DVector, Matrix3, Vector3};
-use sdrs::kinematics::{KinOrder, Kinematics, chord_deviation, chord_speed_bounds};
+use sdrs::kinematics::{KinOrder, Kinematics, SegmentMotion};
 use sdrs::model::Model;
 
 /// CCD settings of the line search.
@@ -72,7 +59,7 @@ impl Default for CcdOptions {
 pub struct CcdScratch {
     kin: Option<Kinematics>,
     q: DVector<f64>,
-    speed: Vec<(f64, f64)>,
+    motion: SegmentMotion,
     radius: Vec<f64>,
     boxes: Vec<PrimitiveBoxes>,
     cand: Candidates,
@@ -98,7 +85,9 @@ pub fn max_collision_free_step(
     }
     s.radius.clear();
     s.radius.extend(meshes.iter().map(|m| m.radius));
-    chord_speed_bounds(model, &s.radius, q, dq, &mut s.speed);
+    s.motion
+        .update(model, &kin.pre, &kin.pose, charts, &s.radius, q, dq);
+    s.motion.update_chord(model, dq);
     let world = |pose: &[sdrs::math::Pose]| -> Vec<Vec<Vector3<f64>>> {
         meshes
             .iter()
@@ -158,7 +147,7 @@ fn piece(
                 m,
                 &x0[i],
                 Some(&x1[i]),
-                chord_deviation(s.speed[i], h) + 1e-12,
+                s.motion.chord_deviation(i, h) + 1e-12,
             );
         }
     }
@@ -169,7 +158,7 @@ fn piece(
         if s.cand.is_empty() {
             continue;
         }
-        let xi = chord_deviation(s.speed[a], h) + chord_deviation(s.speed[b], h);
+        let xi = s.motion.chord_deviation(a, h) + s.motion.chord_deviation(b, h);
         let g0 = PairGeometry {
             mesh: [&meshes[a], &meshes[b]],
             world: [&x0[a], &x0[b]],

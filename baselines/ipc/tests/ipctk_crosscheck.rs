@@ -1,5 +1,5 @@
 //! Cross-check against IPC Toolkit (`ipctk` 1.6.1 from the project's
-//! `.venv`, see `tools/setup_python.sh`) through `tools/ipctk_crosscheck.py`:
+//! `.venv`, see `tools/setup/setup_python.sh`) through `tools/check/ipctk_crosscheck.py`:
 //!
 //! - 400 random primitive stencils (200 point–triangle, 200 edge–edge, a
 //!   quarter of those near-parallel so the mollifier acts): barrier potential
@@ -38,14 +38,14 @@ fn ipctk(job: &Value) -> Value {
     let py = root().join(".venv/bin/python");
     assert!(
         py.exists(),
-        "{} missing: run tools/setup_python.sh (installs ipctk)",
+        "{} missing: run tools/setup/setup_python.sh (installs ipctk)",
         py.display()
     );
     let dir = std::env::temp_dir().join(format!("sdrs_ipctk_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let result = dir.join(format!("out_{}.json", job.to_string().len()));
     let mut child = Command::new(py)
-        .arg(root().join("tools/ipctk_crosscheck.py"))
+        .arg(root().join("tools/check/ipctk_crosscheck.py"))
         .arg(&result)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -1,7 +1,7 @@
 //! The four rotating chains: ms/step of each contact model vs links per
 //! chain, the stage breakdown, the SDRS adjoint over the same horizon, and
 //! the minimum hull distance over every run, checked by python-fcl when it
-//! is installed (`tools/check_separation.py`).
+//! is installed (`tools/check/check_separation.py`).
 
 use super::results::{ChainRow, ChainsPart};
 use super::suite::ChainsSpec;

@@ -59,7 +59,7 @@ pub struct CompareArgs {
     /// Run nothing: write the report (`report.md`, `report.html`, tables,
     /// plots) into `--out` from this `results.json` of an earlier run. The
     /// results page `docs/results/` is made this way
-    /// (`tools/render_results.sh`), never edited by hand.
+    /// (`tools/gen/render_results.sh`), never edited by hand.
     #[arg(long, value_name = "RESULTS_JSON", conflicts_with_all = ["force", "report_only", "check"])]
     pub render: Option<PathBuf>,
 }

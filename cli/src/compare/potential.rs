@@ -80,12 +80,12 @@ pub fn run(spec: &PotentialSpec, work: &Path, pb: &ProgressBar) -> Result<Potent
     })
 }
 
-/// Runs `tools/bench_ipctk.py` on the cases; µs per vertex count.
+/// Runs `tools/bench/bench_ipctk.py` on the cases; µs per vertex count.
 fn ipctk(cases: &str, reps: usize, work: &Path) -> Result<BTreeMap<usize, f64>> {
     let py = crate::util::bundled(".venv/bin/python").context(
-        "ipc-toolkit not timed: no project Python environment (run tools/setup_python.sh)",
+        "ipc-toolkit not timed: no project Python environment (run tools/setup/setup_python.sh)",
     )?;
-    let script = crate::util::bundled("tools/bench_ipctk.py")?;
+    let script = crate::util::bundled("tools/bench/bench_ipctk.py")?;
     let file = work.join("ipctk_cases.json");
     std::fs::write(&file, cases).with_context(|| format!("writing {}", file.display()))?;
     let out = std::process::Command::new(py)
@@ -93,15 +93,15 @@ fn ipctk(cases: &str, reps: usize, work: &Path) -> Result<BTreeMap<usize, f64>> 
         .arg(&file)
         .args(["--reps", &reps.to_string(), "--json"])
         .output()
-        .context("running tools/bench_ipctk.py")?;
+        .context("running tools/bench/bench_ipctk.py")?;
     if !out.status.success() {
         anyhow::bail!(
-            "tools/bench_ipctk.py failed: {}",
+            "tools/bench/bench_ipctk.py failed: {}",
             String::from_utf8_lossy(&out.stderr).trim()
         );
     }
     let v: BTreeMap<String, f64> = serde_json::from_slice(&out.stdout)
-        .context("tools/bench_ipctk.py printed no JSON table")?;
+        .context("tools/bench/bench_ipctk.py printed no JSON table")?;
     v.into_iter()
         .map(|(k, t)| Ok((k.parse::<usize>()?, t)))
         .collect()

@@ -1,5 +1,5 @@
 //! The self-contained viewer HTML: the vendored three.js
-//! (`cli/assets/three/`, see `tools/vendor_three.sh`) and OrbitControls as
+//! (`cli/assets/three/`, see `tools/setup/vendor_three.sh`) and OrbitControls as
 //! `data:` URLs in an import map, the viewer module (`cli/assets/viewer.js`)
 //! inline, and the run as JSON in `<script id="sdrs-data">`. Nothing is
 //! fetched at view time.

@@ -1,5 +1,5 @@
 //! Headless Chromium for the CLI tests (Debian's `chromium`, installed by
-//! `tools/setup_system.sh`): the DOM after scripts ran, screenshots, and
+//! `tools/setup/setup_system.sh`): the DOM after scripts ran, screenshots, and
 //! the console log. WebGL runs on SwiftShader (`--use-angle=swiftshader
 //! --enable-unsafe-swiftshader`: the CPU rasteriser, no GPU needed; without
 //! the opt-in flag Chromium falls back to it with a deprecation warning on
@@ -38,7 +38,7 @@ pub fn chromium(url: &str, profile: &Path, extra: &[&str]) -> (String, String) {
         .args(extra)
         .arg(url)
         .output()
-        .expect("chromium is not installed: run tools/setup_system.sh");
+        .expect("chromium is not installed: run tools/setup/setup_system.sh");
     (
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),

@@ -15,7 +15,7 @@ pub fn sdrs() -> std::process::Command {
 }
 
 /// pybullet's robot files (`pybullet_data`, installed in `.venv` by
-/// `tools/setup_python.sh`).
+/// `tools/setup/setup_python.sh`).
 pub fn pybullet_data() -> std::path::PathBuf {
     let out = python()
         .args([
@@ -26,7 +26,7 @@ pub fn pybullet_data() -> std::path::PathBuf {
         .unwrap();
     assert!(
         out.status.success(),
-        "pybullet_data missing: run tools/setup_python.sh"
+        "pybullet_data missing: run tools/setup/setup_python.sh"
     );
     std::path::PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
 }
@@ -63,12 +63,12 @@ pub fn simulate_export(
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
-/// The independent non-interpenetration check (`tools/check_separation.py`,
+/// The independent non-interpenetration check (`tools/check/check_separation.py`,
 /// python-fcl) of an `sdrs simulate --export DIR` run: asserts that it
 /// found every pair separated and returns its JSON report.
 pub fn python_fcl_check(dir: &std::path::Path) -> serde_json::Value {
     let check = python()
-        .arg(root().join("tools/check_separation.py"))
+        .arg(root().join("tools/check/check_separation.py"))
         .arg(dir)
         .output()
         .unwrap();

@@ -1,4 +1,4 @@
-//! The compiled MJCF model as `tools/mjcf_dump.py` prints it (MuJoCo's own
+//! The compiled MJCF model as `tools/helpers/mjcf_dump.py` prints it (MuJoCo's own
 //! compiler resolves defaults, frames, `fromto`, inertias from geoms and
 //! mesh re-centring; see the script's docstring for every field).
 

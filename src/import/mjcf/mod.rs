@@ -1,8 +1,8 @@
 //! MJCF (MuJoCo XML) input.
 //!
-//! **Reader.** The model is compiled by MuJoCo itself (`tools/mjcf_dump.py`
+//! **Reader.** The model is compiled by MuJoCo itself (`tools/helpers/mjcf_dump.py`
 //! through the project's Python, the `mujoco` package that
-//! `tools/setup_python.sh` installs), not by a second MJCF parser here:
+//! `tools/setup/setup_python.sh` installs), not by a second MJCF parser here:
 //! MJCF leaves much implicit (default classes and `childclass`, `<compiler
 //! angle eulerseq meshdir inertiafromgeom>`, `fromto`, `<include>`,
 //! `<frame>`, mesh scaling and re-centring, inertias computed from geoms),

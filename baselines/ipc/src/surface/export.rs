@@ -1,6 +1,6 @@
 //! `surfaces.json` next to an `--export` run's `hulls.json`: the IPC
 //! contact surface of every link whose surface is a source mesh (link
-//! frame), so the independent checker (`tools/check_separation.py`) tests
+//! frame), so the independent checker (`tools/check/check_separation.py`) tests
 //! those links' meshes instead of their hulls.
 //!
 //! ```json

@@ -1,0 +1,331 @@
+"""Calibration acceptance on robots nobody here wrote (issue 33, item 3).
+
+For each third-party MJCF model (gymnasium's bundled models by default):
+
+1. `sdrs import MODEL.xml` makes the scene a user would start from; the
+   script only replaces the controller targets by a sine excitation per
+   joint, sets the step, the duration and turns contact off (contact-free
+   cases), and writes it as `<case>/scene.yaml`.
+2. MuJoCo simulates the *original* MJCF (its own integrator, default RK4 at
+   1e-4 s, contact disabled) under the scene's stable-PD law in SDRS's
+   convention, τ = 2k_p(θ* − θ) + (2k_d/Δt_sdrs)(θ̇* − θ̇), applied as a
+   generalized force, with hidden effects switched on in the MJCF model:
+   joint damping (`dof_damping`), dry friction (`dof_frictionloss`),
+   armature (`dof_armature`) and a point payload on a body (its mass,
+   centre of mass and inertia updated by the parallel-axis rule).
+3. Samples at 100 Hz with Gaussian noise (1e-3), `sdrs calibrate` on the
+   imported scene, and the verdict compared with the truth:
+   clean → `none`; one effect → that effect alone, within 10 %;
+   two → both, each within 15 %; an effect outside the library (an
+   actuation delay, a velocity-squared drag; `cases_for`) → `unexplained`
+   or the new effect, never a wrong library effect, with the residual
+   regression naming the joint and term.
+
+    python tools/check/calib_acceptance.py --sdrs target/release/sdrs --out out/acc \
+        [--cases quick|all] [--robots reacher,inverted_double_pendulum]
+
+Prints one line per case and writes `<out>/summary.json`. Exit status 1 if
+a target is missed (the table says which). `--cases quick` (CI size) runs
+the clean and one-effect damping cases of the first robot.
+"""
+
+import argparse
+import copy
+import json
+import os
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+import yaml
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from scene_signals import signal  # noqa: E402
+
+ASSETS = os.path.join(os.path.dirname(mujoco.__file__), "..", "gymnasium", "envs", "mujoco", "assets")
+
+# Robot: joints to excite (sine amplitude rad or m, frequency Hz), the SDRS
+# step, and hidden effects per case: (sdrs key, true value, mujoco setter).
+ROBOTS = {
+    # Planar arm; the MJCF's own damping 1 and armature 1 per joint come in
+    # through the import. Hidden values are fractions of those (a damping
+    # and an armature scaled by the same factor would be one actuator gain).
+    "reacher": {
+        "file": "reacher.xml",
+        "excite": {"joint0": (0.8, 0.7), "joint1": (0.7, 1.1)},
+        "dt": 1e-3,
+        "gain_scale": 1.0,
+        "hidden": {"damping": 0.5, "friction": 0.3, "armature": 0.3, "delay": 0.02, "drag": 1.0},
+        # Armature + damping is degenerate here (see `cases_for`).
+        "pair": ("damping", "friction"),
+    },
+    # Cart and two poles upright. The imported PD gains (from the motors'
+    # gear) make a damping of 0.5 invisible (the PD's own damping is
+    # 2k_d/Δt ≈ 290 N·m·s/rad): the gains are scaled by 0.05 (still
+    # holding the poles up) and the hidden values sized to them.
+    "inverted_double_pendulum": {
+        "file": "inverted_double_pendulum.xml",
+        "excite": {"slider": (0.2, 0.6), "hinge": (0.3, 0.9), "hinge2": (0.3, 1.3)},
+        "dt": 1e-3,
+        "gain_scale": 0.05,
+        "hidden": {"damping": 5.0, "friction": 5.0, "armature": 0.5, "delay": 0.02, "drag": 2.0},
+        "pair": ("damping", "armature"),
+    },
+}
+
+
+def cases_for(spec):
+    """(name, hidden effects, expected structure outside the library or None).
+
+    Hidden effects are (sdrs key, true value, (mujoco setting, joint or None
+    for all)). The two-effect case is the robot's `pair`: on the reacher the
+    MJCF's armature 1 per joint dominates the links' inertia (1e-3), so an
+    added armature a with a damping c is, to 0.1 %, an actuator gain
+    1/(1 + a) with a damping (1 + c)/(1 + a) − 1 (measured: a = 0.3, c = 0.5
+    fitted as gain 0.767, damping 0.128; predicted 0.769, 0.154): the
+    question has no answer from these data, and the reacher's pair is
+    damping + dry friction instead (issue 33 session 3).
+
+    Effects outside the library: an actuation delay on the first joint (the
+    library's new `actuation_delay`, or `unexplained` with the residual
+    regression naming the joint's `u̇`) and a velocity-squared drag
+    τ = −c₂ θ̇|θ̇| on the last joint (`unexplained`, the regression naming
+    `θ̇|θ̇|` on that joint). The reacher's drag was first 0.1 (chosen to
+    match the damping case's torque); its gap came out 2.9e-3, 2.5× the
+    noise and about the model's own floor, too small to test the rule, and
+    it is now 1.0.
+    """
+    joints = list(spec["excite"])
+    j0, jl = joints[0], joints[-1]
+    h = spec["hidden"]
+    one = {
+        "damping": ("joint_damping/all", h["damping"], ("damping", None)),
+        "armature": ("armature/all", h["armature"], ("armature", None)),
+        "friction": ("joint_friction/" + j0, h["friction"], ("frictionloss", j0)),
+    }
+    a, b = spec["pair"]
+    return [
+        ("clean", [], None),
+        ("damping_all", [one["damping"]], None),
+        ("friction_" + j0, [one["friction"]], None),
+        ("armature_all", [one["armature"]], None),
+        (f"{a}+{b}", [one[a], one[b]], None),
+        ("delay_" + j0, [("actuation_delay/" + j0, h["delay"], ("delay", j0))], (j0, "u̇")),
+        ("drag_" + jl, [("drag/" + jl, h["drag"], ("drag", jl))], (jl, "θ̇|θ̇|")),
+    ]
+
+
+def fail(msg):
+    print(f"calib_acceptance: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def make_scene(args, robot, spec, case_dir):
+    src = os.path.join(ASSETS, spec["file"])
+    raw = os.path.join(case_dir, "imported.yaml")
+    r = subprocess.run([args.sdrs, "import", src, "--out", raw, "--decomposer", "hull", "--force"],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        fail(f"sdrs import {src}: {r.stderr.strip()}")
+    with open(raw) as f:
+        sc = yaml.safe_load(f)
+    # PyYAML reads the key `on:` as the boolean true (YAML 1.1).
+    for e in sc.get("effects", []):
+        if True in e:
+            e["on"] = e.pop(True)
+    sc["dt"] = spec["dt"]
+    sc["steps"] = int(round(args.duration / spec["dt"]))
+    for key in ("contact", "ground", "obstacles"):
+        sc.pop(key, None)
+    rob = sc["robots"][0]
+    ctrl = rob["controller"]
+    targets = {}
+    for j, (amp, freq) in spec["excite"].items():
+        targets[j] = {"type": "sine", "terms": [{"amplitude": amp, "frequency": freq}]}
+    ctrl["targets"] = targets
+    for g in ctrl.get("gains", {}).values():
+        g["kp"] *= spec["gain_scale"]
+        g["kd"] *= spec["gain_scale"]
+    ctrl["kp"] = ctrl.get("kp", 0.0) * spec["gain_scale"]
+    ctrl["kd"] = ctrl.get("kd", 0.0) * spec["gain_scale"]
+    path = os.path.join(case_dir, "scene.yaml")
+    with open(path, "w") as f:
+        yaml.safe_dump(sc, f, sort_keys=False)
+    return path, sc
+
+
+def simulate_mujoco(args, spec, sc, hidden, out_csv, seed):
+    model = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, spec["file"]))
+    model.opt.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + args.integrator.upper())
+    model.opt.timestep = args.timestep
+    model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    rob = sc["robots"][0]
+    ctrl = rob["controller"]
+    joints = list(spec["excite"])
+    delay, drag = {}, {}
+    for _key, value, (what, on) in hidden:
+        names = joints if on is None else [on]
+        for j in names:
+            d = model.joint(j).dofadr[0]
+            if what == "damping":
+                model.dof_damping[d] += value
+            elif what == "frictionloss":
+                model.dof_frictionloss[d] += value
+            elif what == "armature":
+                model.dof_armature[d] += value
+            elif what == "delay":
+                delay[j] = value
+            elif what == "drag":
+                drag[j] = value
+    if args.solreffriction:
+        model.dof_solref[:] = [float(x) for x in args.solreffriction.split(",")]
+    data = mujoco.MjData(model)
+    init = rob.get("initial", {})
+    for j in joints:
+        q = init.get(j, {}).get("q", [0.0])[0]
+        data.qpos[model.joint(j).qposadr[0]] = q
+    mujoco.mj_forward(model, data)
+    dt_sdrs = spec["dt"]
+    gains = ctrl.get("gains", {})
+    rng = np.random.default_rng(seed)
+    rows, next_sample = [], 0.0
+    steps = int(round(args.duration / args.timestep))
+    for k in range(steps + 1):
+        t = k * args.timestep
+        if t >= next_sample - 1e-12:
+            rows.append([t] + [data.qpos[model.joint(j).qposadr[0]] + args.noise * rng.standard_normal()
+                               for j in joints])
+            next_sample += args.period
+        if k == steps:
+            break
+        data.qfrc_applied[:] = 0.0
+        for j in joints:
+            kp = gains.get(j, {}).get("kp", ctrl.get("kp", 0.0))
+            kd = gains.get(j, {}).get("kd", ctrl.get("kd", 0.0))
+            # SDRS's delay convention: the channel reads its signal at t − d.
+            qs, vs = signal(ctrl["targets"][j], t + args.timestep - delay.get(j, 0.0))
+            q = data.qpos[model.joint(j).qposadr[0]]
+            v = data.qvel[model.joint(j).dofadr[0]]
+            data.qfrc_applied[model.joint(j).dofadr[0]] = (2 * kp * (qs - q) + 2 * kd / dt_sdrs * (vs - v)
+                                                           - drag.get(j, 0.0) * v * abs(v))
+        mujoco.mj_step(model, data)
+    with open(out_csv, "w") as f:
+        f.write(",".join(["t"] + joints) + "\n")
+        for r in rows:
+            f.write(",".join(repr(float(x)) for x in r) + "\n")
+
+
+def judge_outside(res, hidden, expect):
+    """An effect outside the library: `unexplained` (or the library's new
+    effect, named alone within 10 %), never a wrong library effect, never
+    `none` while the gap stands far above the floor; the residual regression
+    names the right joint and term."""
+    joint, term = expect
+    reg = res.get("residual_regression") or {}
+    strongest = reg.get("strongest")
+    found = strongest == f"{joint}: {term}"
+    fl = res["error_floor"]
+    far = fl["gap"] > 2 * fl["floor"]
+    why = f"regression: {strongest}"
+    if res["verdict"] == "none":
+        return not far, f"verdict none with gap {fl['gap'] / fl['floor']:.1f}× the floor; {why}"
+    if res["verdict"] == "effect":
+        key, value, _ = hidden[0]
+        named = sorted(set(k.split(":")[0] for k in res["parameters"]))
+        if named != [key]:
+            return False, f"wrong library effect {named}; {why}"
+        err = abs(res["parameters"][key] / value - 1)
+        return err <= 0.10 and found, f"named {key} error {100 * err:.1f} %; {why}"
+    return found, f"verdict unexplained; {why}"
+
+
+def judge(res, hidden, expect=None):
+    """(ok, why) against the targets of issue 33."""
+    if expect is not None:
+        return judge_outside(res, hidden, expect)
+    if not hidden:
+        return res["verdict"] == "none", f"verdict {res['verdict']}"
+    tol = 0.10 if len(hidden) == 1 else 0.15
+    if res["verdict"] != "effect":
+        return False, f"verdict {res['verdict']}"
+    want = sorted(k for k, _, _ in hidden)
+    got = sorted(k.split(":")[0] for k in res["parameters"])
+    got = sorted(set(got))
+    if got != want:
+        return False, f"named {got}, want {want}"
+    errs = []
+    for k, v, _ in hidden:
+        fit = res["parameters"][k]
+        errs.append(abs(fit / v - 1))
+    return max(errs) <= tol, "errors " + ", ".join(f"{100 * e:.1f} %" for e in errs)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sdrs", required=True)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--cases", default="all", choices=["quick", "all"])
+    ap.add_argument("--robots", default=",".join(ROBOTS))
+    ap.add_argument("--duration", type=float, default=3.0)
+    ap.add_argument("--period", type=float, default=0.01)
+    ap.add_argument("--noise", type=float, default=1e-3)
+    ap.add_argument("--timestep", type=float, default=1e-4)
+    ap.add_argument("--dt", type=float, help="override the SDRS step of every robot (s)")
+    ap.add_argument("--only", help="run only the case with this name (e.g. friction_joint0)")
+    ap.add_argument("--integrator", default="RK4", choices=["RK4", "implicitfast", "implicit", "Euler"])
+    ap.add_argument("--effects", help="candidate effects passed to `sdrs calibrate --effects` (isolating runs)")
+    ap.add_argument("--solreffriction", help="MuJoCo dof_frictionloss solref 'timeconst,dampratio' "
+                    "(default: the model's; a smaller time constant makes the dry friction harder)")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    summary, missed = [], 0
+    robots = [r for r in args.robots.split(",") if r]
+    if args.cases == "quick":
+        robots = robots[:1]
+    for robot in robots:
+        if robot not in ROBOTS:
+            fail(f"unknown robot {robot!r} (robots: {', '.join(ROBOTS)})")
+        spec = dict(ROBOTS[robot])
+        if args.dt:
+            spec["dt"] = args.dt
+        cases = cases_for(spec)
+        if args.cases == "quick":
+            cases = cases[:2]
+        for i, (name, hidden, expect) in enumerate(cases):
+            if args.only and name != args.only:
+                continue
+            case_dir = os.path.join(args.out, f"{robot}_{name}")
+            os.makedirs(case_dir, exist_ok=True)
+            scene_path, sc = make_scene(args, robot, spec, case_dir)
+            data = os.path.join(case_dir, "measured.csv")
+            simulate_mujoco(args, spec, sc, hidden, data, seed=1 + i)
+            cal = os.path.join(case_dir, "cal")
+            cmd = [args.sdrs, "calibrate", scene_path, "--measured", data, "--out", cal, "-q"]
+            if args.effects:
+                cmd += ["--effects", args.effects]
+            r = subprocess.run(cmd, capture_output=True, text=True)
+            if r.returncode != 0:
+                fail(f"sdrs calibrate ({robot} {name}): {r.stderr.strip()}")
+            with open(os.path.join(cal, "calibration.json")) as f:
+                res = json.load(f)
+            ok, why = judge(res, hidden, expect)
+            missed += not ok
+            fl = res["error_floor"]
+            line = (f"{'PASS' if ok else 'MISS'} {robot:<26} {name:<28} verdict {res['verdict']:<11} "
+                    f"{res['candidate'] or '-':<40} gap {fl['gap']:.2e} floor {fl['floor']:.2e} "
+                    f"(noise {fl['noise']:.1e}, integrator {fl['integrator_in_gap']:.1e}/{fl['integrator']:.1e}) {why}")
+            print(line, flush=True)
+            summary.append({"robot": robot, "case": name, "ok": ok, "why": why,
+                            "hidden": {k: v for k, v, _ in hidden}, "verdict": res["verdict"],
+                            "candidate": res["candidate"], "parameters": res["parameters"],
+                            "reason": res["reason"], "error_floor": fl,
+                            "strongest": (res.get("residual_regression") or {}).get("strongest")})
+    with open(os.path.join(args.out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=1)
+    print(f"{len(summary) - missed}/{len(summary)} cases meet the targets")
+    sys.exit(1 if missed else 0)
+
+
+if __name__ == "__main__":
+    main()
