@@ -9,7 +9,7 @@
 //! from `calibration.json` ([`CalibrationResult`]); no timing is shown
 //! (the page is deterministic).
 
-use crate::html::{Cell, Page, escape, table, table_cells};
+use crate::html::{Cell, Page, escape, table, table_cells, text};
 use sdrs::calibrate::{CalibrationResult, ReportWriter};
 
 /// The page `sdrs calibrate` (and the Python `calibrate`) writes.
@@ -27,7 +27,7 @@ impl ReportWriter for CalibrationReport {
     }
 }
 
-const CSS: &str = ".meta{color:#555}.verdict{border-radius:8px;padding:.8em 1.2em;margin:1em 0;border:2px solid}.verdict h2{margin:.2em 0}.v-effect{background:#e8f5e9;border-color:#2e7d32}.v-none{background:#e3f2fd;border-color:#1565c0}.v-unexplained{background:#fff3e0;border-color:#e65100}.big{font-size:1.15em}.bars{margin:1em 0;max-width:900px}.bar{display:grid;grid-template-columns:16em 1fr 7em;align-items:center;gap:.6em;margin:3px 0}.track{position:relative;background:#f3f3f3;height:18px}.fill{height:18px}.floorline{position:absolute;top:-3px;bottom:-3px;border-left:2px dashed #333}.num{text-align:right;font-family:monospace}tr.chosen td{background:#e8f5e9;font-weight:bold}tr.implausible td{color:#999}.rms{display:inline-block;height:10px;background:#1565c0;vertical-align:middle;margin-right:6px}.flag{color:#b00}code{background:#f3f3f3;padding:0 3px}figure svg{max-width:100%;height:auto}td{font-variant-numeric:tabular-nums}";
+const CSS: &str = ".meta{color:#555}.verdict{border-radius:8px;padding:.8em 1.2em;margin:1em 0;border:2px solid}.verdict h2{margin:.2em 0}.v-effect{background:#e8f5e9;border-color:#2e7d32}.v-none{background:#e3f2fd;border-color:#1565c0}.v-unexplained{background:#fff3e0;border-color:#e65100}.big{font-size:1.15em}.bars{margin:1em 0;max-width:900px}.bar{display:grid;grid-template-columns:16em 1fr 7em;align-items:center;gap:.6em;margin:3px 0}.track{position:relative;background:#f3f3f3;height:18px}.fill{height:18px}.floorline{position:absolute;top:-3px;bottom:-3px;border-left:2px dashed #333}.num{text-align:right;font-family:monospace}tr.chosen td{background:#e8f5e9;font-weight:bold}#ranking{width:100%}#ranking td{white-space:nowrap}#ranking td:nth-child(2){text-align:left;white-space:normal}#ranking td:nth-child(7),#ranking td:nth-child(8){white-space:normal;text-align:left;font-size:.85em;max-width:16em}.wide{overflow-x:auto}.flag li{color:#b00}summary{cursor:pointer;color:#1565c0}tr.implausible td{color:#999}.rms{display:inline-block;height:10px;background:#1565c0;vertical-align:middle;margin-right:6px}.flag{color:#b00}code{background:#f3f3f3;padding:0 3px}figure svg{max-width:100%;height:auto}td{font-variant-numeric:tabular-nums}";
 
 /// A number for a table: 4 significant digits.
 fn g(x: f64) -> String {
@@ -87,12 +87,16 @@ fn verdict(p: &mut Page, r: &CalibrationResult) {
         ));
     }
     s.push_str(&format!(
-        "<p class=\"big\">held-out RMS gap {} → {} ({:+.1} %); the model's error floor {}</p><p>Why: {}.</p>",
+        "<p class=\"big\">held-out RMS gap {} → {} ({}); the model's error floor {}</p><p>Why: {}.</p>",
         g(r.gap_before.overall),
         g(r.gap_after.overall),
-        -100.0 * r.gap_reduction,
+        if r.gap_reduction >= 0.0 {
+            format!("reduced by {:.1} %", 100.0 * r.gap_reduction)
+        } else {
+            format!("increased by {:.1} %", -100.0 * r.gap_reduction)
+        },
         g(r.error_floor.floor),
-        escape(&r.reason)
+        text(&r.reason)
     ));
     if !r.indistinguishable.is_empty() {
         s.push_str(&format!(
@@ -243,7 +247,7 @@ fn parameters(p: &mut Page, r: &CalibrationResult) {
         let items: Vec<String> = r
             .implausible
             .iter()
-            .map(|i| format!("{}: {}", i.candidate, i.reason))
+            .map(|i| format!("`{}`: {}", i.candidate, i.reason))
             .collect();
         p.list(&items);
     }
@@ -310,6 +314,7 @@ fn ranking(p: &mut Page, r: &CalibrationResult) {
         "notes",
     ]
     .map(String::from);
+    p.raw("<div class=\"wide\">");
     p.raw(&table_cells("ranking", &header, &rows, |k| {
         let c = &r.ranking[k].candidate;
         if r.candidate.as_deref() == Some(c.as_str()) {
@@ -320,6 +325,7 @@ fn ranking(p: &mut Page, r: &CalibrationResult) {
             ""
         }
     }));
+    p.raw("</div>");
 }
 
 /// One line per candidate: condition number, or what is not identifiable
@@ -339,31 +345,45 @@ fn identifiability(p: &mut Page, r: &CalibrationResult) {
         r.identifiability.len() - bad,
         r.identifiability.len()
     ));
-    let lines: Vec<String> = r
+    let flagged: Vec<String> = r
+        .identifiability
+        .iter()
+        .filter(|i| !i.unidentifiable.is_empty())
+        .map(|i| {
+            format!(
+                "`{}`: not identifiable: {}{}",
+                i.candidate,
+                i.unidentifiable.join(", "),
+                i.suggestion
+                    .as_ref()
+                    .map(|s| format!(". {s}"))
+                    .unwrap_or_default()
+            )
+        })
+        .collect();
+    p.raw("<div id=\"identifiability\" class=\"flag\">");
+    p.list(&flagged);
+    p.raw("</div>");
+    let rows: Vec<Vec<String>> = r
         .identifiability
         .iter()
         .map(|i| {
-            let cond = i
-                .condition
-                .map_or("not computed".to_string(), |c| format!("condition {c:.2e}"));
-            if i.unidentifiable.is_empty() {
-                format!("{}: identifiable ({cond})", i.candidate)
-            } else {
-                format!(
-                    "{}: NOT identifiable: {} ({cond}){}",
-                    i.candidate,
-                    i.unidentifiable.join(", "),
-                    i.suggestion
-                        .as_ref()
-                        .map(|s| format!("; {s}"))
-                        .unwrap_or_default()
-                )
-            }
+            vec![
+                i.candidate.clone(),
+                i.condition.map_or("—".to_string(), |c| format!("{c:.2e}")),
+                format!("{:.1e}", i.min_relative_eigenvalue),
+                if i.unidentifiable.is_empty() {
+                    "identifiable".to_string()
+                } else {
+                    format!("not identifiable: {}", i.unidentifiable.join(", "))
+                },
+            ]
         })
         .collect();
-    p.raw("<div id=\"identifiability\">");
-    p.list(&lines);
-    p.raw("</div>");
+    let header = ["candidate", "condition κ", "λ_min/λ_ref", "status"].map(String::from);
+    p.raw("<details><summary>Every candidate's condition number</summary>");
+    p.raw(&table("identifiability-all", &header, &rows));
+    p.raw("</details>");
 }
 
 /// The residual generalized force regression's named terms per joint.

@@ -14,6 +14,25 @@ pub fn escape(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
+/// Escapes text for element content, rendering `` `…` `` spans (as the
+/// Markdown reports write names) as `<code>` (unbalanced backticks are
+/// left as they are).
+pub fn text(s: &str) -> String {
+    let e = escape(s);
+    if !e.matches('`').count().is_multiple_of(2) {
+        return e;
+    }
+    let mut out = String::new();
+    for (k, part) in e.split('`').enumerate() {
+        if k % 2 == 1 {
+            out.push_str(&format!("<code>{part}</code>"));
+        } else {
+            out.push_str(part);
+        }
+    }
+    out
+}
+
 /// Escapes text for a double-quoted attribute value.
 pub fn attr(s: &str) -> String {
     escape(s).replace('"', "&quot;")
@@ -114,16 +133,16 @@ impl Page {
         self.html.push_str(&format!("<h3>{}</h3>", escape(text)));
     }
 
-    /// A paragraph of text.
-    pub fn p(&mut self, text: &str) {
-        self.html.push_str(&format!("<p>{}</p>", escape(text)));
+    /// A paragraph of text (`` `…` `` spans as code, [`text`]).
+    pub fn p(&mut self, t: &str) {
+        self.html.push_str(&format!("<p>{}</p>", text(t)));
     }
 
-    /// A bulleted list of text items.
+    /// A bulleted list of text items (`` `…` `` spans as code).
     pub fn list(&mut self, items: &[String]) {
         self.html.push_str("<ul>");
         for i in items {
-            self.html.push_str(&format!("<li>{}</li>", escape(i)));
+            self.html.push_str(&format!("<li>{}</li>", text(i)));
         }
         self.html.push_str("</ul>");
     }
@@ -151,7 +170,7 @@ mod tests {
     #[test]
     fn text_is_escaped_and_svg_inlined_for_the_check() {
         let mut p = Page::new("a < b", "");
-        p.p("x & y");
+        p.p("x & `y`");
         p.figure(
             "<?xml version=\"1.0\"?>\n<svg width=\"2\"><line/></svg>",
             "c",
@@ -159,7 +178,9 @@ mod tests {
         let t = table("t", &["h".into()], &[vec!["<i>".into()]]);
         p.raw(&t);
         let h = p.finish();
-        assert!(h.contains("<title>a &lt; b</title>") && h.contains("<p>x &amp; y</p>"));
+        assert!(
+            h.contains("<title>a &lt; b</title>") && h.contains("<p>x &amp; <code>y</code></p>")
+        );
         assert!(h.contains("<figure><svg class=\"plot\" width=\"2\">") && !h.contains("<?xml"));
         assert!(h.contains("<td>&lt;i&gt;</td>") && h.contains("id=\"render-check\""));
     }
