@@ -224,7 +224,7 @@ fn mcap_bytes(
 }
 
 fn model() -> sdrs::model::Model {
-    Scene::load(&scene_path()).unwrap().model
+    Scene::load(scene_path()).unwrap().model
 }
 
 fn assert_same(a: &Measured, b: &Measured) {

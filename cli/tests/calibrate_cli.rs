@@ -335,3 +335,78 @@ fn report_html_shows_the_verdict_every_candidate_and_the_plots() {
         std::fs::copy(&shot, keep).unwrap();
     }
 }
+
+/// `--measured log.mcap` through the command line: a JSON JointState log
+/// on another topic with the joints named as a ROS driver names them and
+/// a gripper the scene lacks, read with `--topic` and `--rename`; the
+/// calibration finds what the CSV of the same samples finds. Without the
+/// renames it fails with exit code 1, naming the file, topic, message and
+/// joint, and writes nothing.
+#[test]
+fn calibrate_reads_an_mcap_log_with_topic_and_renames() {
+    let (dir, scene, m) = setup("calibrate-cli-mcap");
+    let csv = std::fs::read_to_string(&m).unwrap();
+    let log = dir.join("run.mcap");
+    {
+        let f = std::io::BufWriter::new(std::fs::File::create(&log).unwrap());
+        let mut w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .create(f)
+            .unwrap();
+        let ch = w
+            .add_channel(0, "/robot/joint_states", "json", &Default::default())
+            .unwrap();
+        for (k, line) in csv.lines().skip(1).enumerate() {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let ns = (v[0] * 1e9).round() as u64 + 1_700_000_000_000_000_000;
+            let msg = serde_json::json!({
+                "header": {"stamp": {"sec": ns / 1_000_000_000, "nanosec": ns % 1_000_000_000}, "frame_id": ""},
+                "name": ["j_elbow", "j_shoulder", "gripper"],
+                "position": [v[2], v[1], 0.0],
+                "velocity": [],
+                "effort": [],
+            });
+            let h = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: k as u32,
+                log_time: ns,
+                publish_time: ns,
+            };
+            w.write_to_known_channel(&h, &serde_json::to_vec(&msg).unwrap())
+                .unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let run = |out: &std::path::Path, renames: &[&str]| {
+        let mut c = common::sdrs();
+        c.args(["calibrate", scene.to_str().unwrap()])
+            .args(["--measured", log.to_str().unwrap()])
+            .args(["--out", out.to_str().unwrap()])
+            .args(["--topic", "/robot/joint_states"])
+            .args(["--effects", "joint_damping,joint_friction", "-q"]);
+        for r in renames {
+            c.args(["--rename", r]);
+        }
+        c.output().unwrap()
+    };
+    let bad = dir.join("bad");
+    let o = run(&bad, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("run.mcap")
+            && err.contains("topic \"/robot/joint_states\", message 1 (log time")
+            && err.contains("joint \"j_elbow\" is not a coordinate"),
+        "{err}"
+    );
+    assert!(!bad.exists());
+    let out = dir.join("out");
+    let o = run(&out, &["j_shoulder=shoulder", "j_elbow=elbow", "gripper="]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(j["candidate"], "joint_friction/all", "{}", j["reason"]);
+    let f = j["parameters"]["joint_friction/all"].as_f64().unwrap();
+    assert!((f - 0.4).abs() < 0.02, "fitted {f}");
+    assert!(out.join("report.html").exists());
+}
