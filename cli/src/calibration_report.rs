@@ -90,7 +90,9 @@ fn verdict(p: &mut Page, r: &CalibrationResult) {
         "<p class=\"big\">held-out RMS gap {} → {} ({}); the model's error floor {}</p><p>Why: {}.</p>",
         g(r.gap_before.overall),
         g(r.gap_after.overall),
-        if r.gap_reduction >= 0.0 {
+        if r.candidate.is_none() {
+            "unchanged: nothing fitted".to_string()
+        } else if r.gap_reduction >= 0.0 {
             format!("reduced by {:.1} %", 100.0 * r.gap_reduction)
         } else {
             format!("increased by {:.1} %", -100.0 * r.gap_reduction)
