@@ -564,3 +564,41 @@ fn finish(
         .collect();
     Measured::from_samples(path, times, channels, &format!("topic \"{topic}\", joint"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A JointState in big-endian CDR, written by hand: stamp 3 s + 7 ns,
+    /// frame "b", one joint "j" at 0.5, velocity [1.5], no effort.
+    #[test]
+    fn big_endian_cdr_decodes_with_alignment() {
+        let mut d = vec![0u8, 0, 0, 0];
+        d.extend_from_slice(&3u32.to_be_bytes());
+        d.extend_from_slice(&7u32.to_be_bytes());
+        d.extend_from_slice(&2u32.to_be_bytes());
+        d.extend_from_slice(b"b\0");
+        d.extend_from_slice(&[0, 0]); // pad to 4
+        d.extend_from_slice(&1u32.to_be_bytes());
+        d.extend_from_slice(&2u32.to_be_bytes());
+        d.extend_from_slice(b"j\0");
+        d.extend_from_slice(&[0, 0]);
+        // Payload offsets: position count at 28, its double at 32 (8-aligned
+        // already); velocity count at 40, padding to 48, its double; effort
+        // count at 56.
+        d.extend_from_slice(&1u32.to_be_bytes());
+        d.extend_from_slice(&0.5f64.to_be_bytes());
+        d.extend_from_slice(&1u32.to_be_bytes());
+        d.extend_from_slice(&[0; 4]);
+        d.extend_from_slice(&1.5f64.to_be_bytes());
+        d.extend_from_slice(&0u32.to_be_bytes());
+        let js = decode_cdr(&d).unwrap();
+        assert_eq!(js.stamp_ns, Some(3_000_000_007));
+        assert_eq!(js.name, vec!["j".to_string()]);
+        assert_eq!((js.position, js.velocity), (vec![0.5], vec![1.5]));
+        assert!(js.effort.is_empty());
+        // An unknown encapsulation is named.
+        let e = decode_cdr(&[0, 9, 0, 0, 1, 2]).unwrap_err();
+        assert!(e.contains("unknown CDR encapsulation"), "{e}");
+    }
+}
