@@ -31,6 +31,7 @@ fn opts(measured: &Path, out: &Path) -> CalibrateOptions {
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     }
 }
 

@@ -81,6 +81,7 @@ fn calibrate_on(name: &str, data: String) -> sdrs::calibrate::CalibrationResult 
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     };
     calibrate(&opts).unwrap().0
 }

@@ -200,6 +200,7 @@ fn run_case(
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     };
     calibrate(&opts).unwrap().0
 }

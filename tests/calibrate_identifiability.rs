@@ -72,6 +72,7 @@ fn a_joint_held_still_makes_its_damping_unidentifiable_and_it_is_not_named() {
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     };
     let (r, files) = calibrate(&opts).unwrap();
     for i in &r.identifiability {

@@ -97,6 +97,7 @@ fn opts(scene: &Path, measured: &Path, more: &[&Path], out: PathBuf) -> Calibrat
         effects: vec![EffectKind::JointDamping],
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     }
 }
 

@@ -11,14 +11,16 @@ use std::path::PathBuf;
 pub struct CalibrateArgs {
     /// Scene YAML: the model to calibrate (its controller is the commanded one).
     pub scene: PathBuf,
-    /// Measured CSV: a `t` column and any subset of the columns `sdrs simulate` writes.
-    /// Repeat for several recordings fitted with one parameter set: the first is
+    /// Measured data: a CSV (a `t` column and any subset of the columns `sdrs simulate`
+    /// writes) or an MCAP robot log (`.mcap`: sensor_msgs/JointState messages, CDR or
+    /// JSON, on `--topic`; joints matched to coordinates by name, see `--rename`). Repeat for several recordings fitted with one parameter set: the first is
     /// simulated from the scene's initial state, each further one from its first
     /// sample (at t = 0) with the scene's controller; each is validated on its own
     /// held-out window (`--holdout`).
     #[arg(long, required = true)]
     pub measured: Vec<PathBuf>,
-    /// Output directory: calibrated.yaml, calibrated.xml (MuJoCo), calibration.json, report.md, plots.
+    /// Output directory: calibrated.yaml, calibrated.xml (MuJoCo), calibration.json, report.md,
+    /// report.html (the report with its plots, self-contained), plots (SVG).
     #[arg(long)]
     pub out: PathBuf,
     /// Candidate effects, comma separated (default: all applicable):
@@ -27,6 +29,14 @@ pub struct CalibrateArgs {
     /// actuation_delay.
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
+    /// MCAP logs: the JointState topic to read.
+    #[arg(long, default_value = sdrs::calibrate::mcap_log::DEFAULT_TOPIC)]
+    pub topic: String,
+    /// MCAP logs: LOG_NAME=COORDINATE maps a joint name of the log to a scene
+    /// coordinate (as named in `sdrs simulate`'s CSV); LOG_NAME= ignores that joint.
+    /// Repeatable; names not renamed must be coordinates of the scene.
+    #[arg(long, value_parser = sdrs::calibrate::mcap_log::LogMapping::parse_rename)]
+    pub rename: Vec<(String, String)>,
     /// Fraction of the data (by time, at the end) held out for scoring.
     #[arg(long, default_value_t = 0.3)]
     pub holdout: f64,
@@ -44,6 +54,10 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         a.holdout,
     )?;
     opts.more_measured = a.measured[1..].to_vec();
+    opts.log = sdrs::calibrate::mcap_log::LogMapping {
+        topic: Some(a.topic.clone()),
+        rename: a.rename.clone(),
+    };
     let bar = Bar::new(
         "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
         0,
@@ -53,6 +67,7 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         progress: &bar,
         plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
         model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
+        report: Some(&sdrs_cli::calibration_report::CalibrationReport),
     };
     let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     eprintln!(

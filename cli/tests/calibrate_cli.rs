@@ -52,6 +52,7 @@ fn calibrate_writes_a_runnable_scene_and_the_documented_json() {
         "calibrated.yaml",
         "calibration.json",
         "report.md",
+        "report.html",
         "residuals.svg",
         "channel_shoulder.svg",
         "channel_elbow.svg",
@@ -134,6 +135,7 @@ fn calibration_is_bitwise_deterministic_across_thread_counts() {
         "calibration.json",
         "calibrated.yaml",
         "report.md",
+        "report.html",
         "residuals.svg",
     ] {
         assert_eq!(
@@ -238,4 +240,173 @@ fn calibrate_fits_one_model_across_repeated_measured_files() {
     }
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("## Recordings"), "{md}");
+}
+
+/// `report.html`: self-contained (no network: no external source, link or
+/// URL but the SVG namespace), with the verdict and its reason, the floor
+/// against the gap, every candidate of the ranking, the fitted parameter
+/// with its interval, the identifiability and residual regression
+/// sections and every plot inline; in Chromium (tier 2), every plot
+/// draws, the console stays silent, and a screenshot is taken.
+#[test]
+fn report_html_shows_the_verdict_every_candidate_and_the_plots() {
+    let (dir, scene, m) = setup("calibrate-html");
+    let out = dir.join("out");
+    calibrate(&scene, &m, &out, "2");
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    assert!(
+        html.contains("data-verdict=\"effect\"")
+            && html.contains("Verdict: Missing effect: joint_friction"),
+        "verdict missing"
+    );
+    let reason = j["reason"].as_str().unwrap();
+    let first_words: String = reason.replace('`', "").chars().take(30).collect();
+    assert!(
+        html.replace("<code>", "")
+            .replace("</code>", "")
+            .contains(&first_words),
+        "reason missing: {first_words}"
+    );
+    for c in j["ranking"].as_array().unwrap() {
+        let c = c["candidate"].as_str().unwrap();
+        assert!(
+            html.contains(&format!("<td>{c}</td>")),
+            "candidate {c} missing"
+        );
+    }
+    for s in [
+        "id=\"floor\"",
+        "error floor F",
+        "gap as given",
+        "gap calibrated",
+        "id=\"parameters\"",
+        "<td>joint_friction/all</td>",
+        "id=\"identifiability\"",
+        "Residual force regression",
+        "<tr class=\"chosen\">",
+    ] {
+        assert!(html.contains(s), "missing {s}");
+    }
+    let f = j["parameters"]["joint_friction/all"].as_f64().unwrap();
+    assert!(html.contains(&format!("{f:.3e}")), "fitted value missing");
+    // The three plots, inline.
+    assert_eq!(html.matches("<svg class=\"plot\"").count(), 3);
+    for bad in ["src=", "href=", "<link", "@import", "url("] {
+        assert!(!html.contains(bad), "external reference {bad}");
+    }
+    let without_ns = html.replace("http://www.w3.org/2000/svg", "");
+    assert!(!without_ns.contains("http"), "a URL in the page");
+
+    if common::skip_without_chromium() {
+        return;
+    }
+    use support::browser::{chromium, console_messages, file_url};
+    let page = out.join("report.html");
+    let (dom, log) = chromium(&file_url(&page, ""), &dir.join("chrome1"), &["--dump-dom"]);
+    assert!(
+        dom.contains("plots rendered: 3 of 3"),
+        "render check failed: {}",
+        dom.split("render-check")
+            .nth(1)
+            .unwrap_or("(no check element)")
+    );
+    let console = console_messages(&log);
+    assert!(console.is_empty(), "console messages: {console:?}");
+    let shot = dir.join("report.png");
+    chromium(
+        &file_url(&page, ""),
+        &dir.join("chrome2"),
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1200,3000",
+        ],
+    );
+    let png = std::fs::read(&shot).expect("no screenshot");
+    assert_eq!(&png[1..4], b"PNG");
+    assert!(
+        png.len() > 100_000,
+        "a near-empty screenshot ({} bytes)",
+        png.len()
+    );
+    if let Some(keep) = std::env::var_os("SDRS_KEEP_SCREENSHOT") {
+        std::fs::copy(&shot, keep).unwrap();
+    }
+}
+
+/// `--measured log.mcap` through the command line: a JSON JointState log
+/// on another topic with the joints named as a ROS driver names them and
+/// a gripper the scene lacks, read with `--topic` and `--rename`; the
+/// calibration finds what the CSV of the same samples finds. Without the
+/// renames it fails with exit code 1, naming the file, topic, message and
+/// joint, and writes nothing.
+#[test]
+fn calibrate_reads_an_mcap_log_with_topic_and_renames() {
+    let (dir, scene, m) = setup("calibrate-cli-mcap");
+    let csv = std::fs::read_to_string(&m).unwrap();
+    let log = dir.join("run.mcap");
+    {
+        let f = std::io::BufWriter::new(std::fs::File::create(&log).unwrap());
+        let mut w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .create(f)
+            .unwrap();
+        let ch = w
+            .add_channel(0, "/robot/joint_states", "json", &Default::default())
+            .unwrap();
+        for (k, line) in csv.lines().skip(1).enumerate() {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let ns = (v[0] * 1e9).round() as u64 + 1_700_000_000_000_000_000;
+            let msg = serde_json::json!({
+                "header": {"stamp": {"sec": ns / 1_000_000_000, "nanosec": ns % 1_000_000_000}, "frame_id": ""},
+                "name": ["j_elbow", "j_shoulder", "gripper"],
+                "position": [v[2], v[1], 0.0],
+                "velocity": [],
+                "effort": [],
+            });
+            let h = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: k as u32,
+                log_time: ns,
+                publish_time: ns,
+            };
+            w.write_to_known_channel(&h, &serde_json::to_vec(&msg).unwrap())
+                .unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let run = |out: &std::path::Path, renames: &[&str]| {
+        let mut c = common::sdrs();
+        c.args(["calibrate", scene.to_str().unwrap()])
+            .args(["--measured", log.to_str().unwrap()])
+            .args(["--out", out.to_str().unwrap()])
+            .args(["--topic", "/robot/joint_states"])
+            .args(["--effects", "joint_damping,joint_friction", "-q"]);
+        for r in renames {
+            c.args(["--rename", r]);
+        }
+        c.output().unwrap()
+    };
+    let bad = dir.join("bad");
+    let o = run(&bad, &[]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("run.mcap")
+            && err.contains("topic \"/robot/joint_states\", message 1 (log time")
+            && err.contains("joint \"j_elbow\" is not a coordinate"),
+        "{err}"
+    );
+    assert!(!bad.exists());
+    let out = dir.join("out");
+    let o = run(&out, &["j_shoulder=shoulder", "j_elbow=elbow", "gripper="]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap();
+    assert_eq!(j["candidate"], "joint_friction/all", "{}", j["reason"]);
+    let f = j["parameters"]["joint_friction/all"].as_f64().unwrap();
+    assert!((f - 0.4).abs() < 0.02, "fitted {f}");
+    assert!(out.join("report.html").exists());
 }

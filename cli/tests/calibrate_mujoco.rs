@@ -39,6 +39,7 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
         effects: EffectKind::ALL.to_vec(),
         holdout: 0.3,
         select: Default::default(),
+        log: Default::default(),
     };
     calibrate(&opts).unwrap().0
 }

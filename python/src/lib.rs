@@ -163,6 +163,7 @@ fn calibrate<'py>(
             let hooks = sdrs::calibrate::Hooks {
                 plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
                 model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),
+                report: Some(&sdrs_cli::calibration_report::CalibrationReport),
                 ..Default::default()
             };
             let r = sdrs::calibrate::run_with(&opts, &hooks)?;

@@ -1,4 +1,4 @@
-//! Measured trajectories: a CSV with a time column `t` (s) and any subset of
+//! Measured trajectories: an MCAP robot log ([`super::mcap_log`]) or a CSV with a time column `t` (s) and any subset of
 //! the columns `sdrs simulate` writes (joint coordinates named as in the
 //! trajectory CSV: `hinge`, `arm/elbow`, `box/box:x`), at its own sampling
 //! times. An empty cell is a gap (that channel has no sample at that time);
@@ -8,6 +8,7 @@
 //! ([`Measured::align`]).
 
 use super::CalibrateError;
+use super::mcap_log::LogMapping;
 use crate::model::Model;
 use std::path::{Path, PathBuf};
 
@@ -35,7 +36,24 @@ pub struct Measured {
 }
 
 impl Measured {
-    /// Reads and validates `path` against the scene's coordinates.
+    /// Reads and validates `path` against the scene's coordinates: an MCAP
+    /// robot log when its name ends in `.mcap` (any case; read as
+    /// `mapping` says, [`super::mcap_log`]), else CSV.
+    pub fn load_with(
+        path: &Path,
+        model: &Model,
+        mapping: &LogMapping,
+    ) -> Result<Measured, CalibrateError> {
+        let is_mcap = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+        if is_mcap {
+            return super::mcap_log::load(path, model, mapping);
+        }
+        Self::load(path, model)
+    }
+
+    /// Reads and validates the CSV file `path` against the scene's coordinates.
     pub fn load(path: &Path, model: &Model) -> Result<Measured, CalibrateError> {
         let text = std::fs::read_to_string(path).map_err(|source| CalibrateError::Io {
             path: path.to_path_buf(),
@@ -154,6 +172,22 @@ impl Measured {
                 ch.values.push(v);
             }
         }
+        let channels = cols.into_iter().map(|(_, c)| c).collect();
+        Self::from_samples(path, times, channels, "column")
+    }
+
+    /// A measured data set from samples already read and checked (times
+    /// strictly increasing from ≥ 0, finite values), by the CSV reader or
+    /// [`super::mcap_log`]: refuses fewer than [`MIN_SAMPLES`] sample
+    /// times or values of a channel; `what` names a channel in messages
+    /// (`column`, `topic "/joint_states", joint`).
+    pub fn from_samples(
+        path: &Path,
+        times: Vec<f64>,
+        channels: Vec<Channel>,
+        what: &str,
+    ) -> Result<Measured, CalibrateError> {
+        let p = || path.to_path_buf();
         if times.len() < MIN_SAMPLES {
             return Err(CalibrateError::TooShort {
                 path: p(),
@@ -163,13 +197,13 @@ impl Measured {
                 ),
             });
         }
-        for (_, ch) in &cols {
+        for ch in &channels {
             let n = ch.values.iter().flatten().count();
             if n < MIN_SAMPLES {
                 return Err(CalibrateError::TooShort {
                     path: p(),
                     what: format!(
-                        "column \"{}\" has {n} value(s), at least {MIN_SAMPLES} needed",
+                        "{what} \"{}\" has {n} value(s), at least {MIN_SAMPLES} needed",
                         ch.name
                     ),
                 });
@@ -178,7 +212,7 @@ impl Measured {
         Ok(Measured {
             path: path.to_path_buf(),
             times,
-            channels: cols.into_iter().map(|(_, c)| c).collect(),
+            channels,
         })
     }
 

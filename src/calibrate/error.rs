@@ -1,5 +1,5 @@
 //! Errors of `sdrs calibrate`; each names the file and, for measured data,
-//! the column and line.
+//! the column and line (CSV) or the topic and message (MCAP logs).
 
 use std::path::PathBuf;
 
@@ -49,6 +49,23 @@ pub enum CalibrateError {
         line: u64,
         t: f64,
         prev: f64,
+    },
+    #[error("{}: MCAP: {msg}", path.display())]
+    Mcap { path: PathBuf, msg: String },
+    #[error("{}: topic \"{topic}\": {msg}", path.display())]
+    LogTopic {
+        path: PathBuf,
+        topic: String,
+        msg: String,
+    },
+    #[error("{}: topic \"{topic}\", message {index} (log time {log_time} ns): {msg}", path.display())]
+    LogMessage {
+        path: PathBuf,
+        topic: String,
+        /// 1-based index of the message among the topic's.
+        index: usize,
+        log_time: u64,
+        msg: String,
     },
     #[error("{}: {msg}", path.display())]
     Recording { path: PathBuf, msg: String },

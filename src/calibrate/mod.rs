@@ -6,6 +6,7 @@
 //!   the step objective or parameters), each with its adjoint gradient; how
 //!   to add one is in its module doc.
 //! - [`data`]: measured CSV files, validation, alignment by interpolation.
+//! - [`mcap_log`]: MCAP robot logs (`sensor_msgs/JointState`, CDR or JSON) as measured data.
 //! - [`problem`]: the least-squares problem of a candidate on a window.
 //! - [`recordings`]: several recordings fitted with one parameter set.
 //! - [`candidates`]: the candidate list with bounds and starts.
@@ -35,6 +36,7 @@ pub mod error;
 pub mod fit;
 pub mod floor;
 pub mod identifiability;
+pub mod mcap_log;
 pub mod problem;
 pub mod recordings;
 pub mod report;
@@ -46,6 +48,6 @@ pub mod verdict;
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
 pub use run::{
-    CalibrateOptions, Hooks, ModelWriter, PlotWriter, calibrate, calibrate_with, effect_kinds, run,
-    run_with,
+    CalibrateOptions, Hooks, ModelWriter, PlotWriter, ReportWriter, calibrate, calibrate_with,
+    effect_kinds, run, run_with,
 };

@@ -28,6 +28,7 @@
 
 use super::CalibrateError;
 use super::data::{MIN_SAMPLES, Measured};
+use super::mcap_log::LogMapping;
 use super::problem::{Problem, Recording};
 use crate::energy::effects::EffectSpec;
 use crate::scene::Scene;
@@ -93,10 +94,15 @@ pub fn initial_coordinates(scene: &Scene, m: &Measured) -> Result<DVector<f64>, 
 }
 
 /// Loads a further recording for `scene`: its data, split and initial
-/// coordinates; the scene must simulate from that state over the whole
+/// coordinates (an MCAP log is read as `log` says); the scene must simulate from that state over the whole
 /// recording.
-pub fn load(path: &Path, scene: &Scene, holdout: f64) -> Result<Recording, CalibrateError> {
-    let measured = Measured::load(path, &scene.model)?;
+pub fn load(
+    path: &Path,
+    scene: &Scene,
+    holdout: f64,
+    log: &LogMapping,
+) -> Result<Recording, CalibrateError> {
+    let measured = Measured::load_with(path, &scene.model, log)?;
     let split = split_of(&measured, holdout)?;
     let q0 = initial_coordinates(scene, &measured)?;
     let mut sc = scene.clone();

@@ -3,6 +3,7 @@
 
 use super::analysis::analyse;
 use super::data::Measured;
+use super::mcap_log::LogMapping;
 use super::problem::Problem;
 use super::problem::Simulated;
 use super::report::{self, CalibrationResult};
@@ -33,6 +34,9 @@ pub struct CalibrateOptions {
     pub holdout: f64,
     /// Fitting and selection options (defaults: [`SelectOptions::default`]).
     pub select: SelectOptions,
+    /// How MCAP logs among the measured files map to the scene (topic,
+    /// joint renames; default `/joint_states`, names as they are).
+    pub log: LogMapping,
 }
 
 impl CalibrateOptions {
@@ -54,6 +58,7 @@ impl CalibrateOptions {
             effects: effect_kinds(effects)?,
             holdout,
             select: SelectOptions::default(),
+            log: LogMapping::default(),
         })
     }
 }
@@ -113,6 +118,21 @@ pub trait ModelWriter: Sync {
     fn write(&self, scene: &Scene) -> Result<(String, Vec<u8>, String), String>;
 }
 
+/// Writes `report.html`: the application's
+/// (`cli/src/calibration_report.rs`); the core writes only `report.md`.
+pub trait ReportWriter: Sync {
+    /// The page of result `r` (scene file `scene`, measured files
+    /// `measured`), with `plots` (`(file name, SVG)`, the plots written
+    /// beside it) inline. Errors are messages (nothing is written).
+    fn html(
+        &self,
+        r: &CalibrationResult,
+        scene: &str,
+        measured: &str,
+        plots: &[(String, String)],
+    ) -> Result<String, String>;
+}
+
 /// What a calibration run reports to and asks of its caller.
 #[derive(Clone, Copy)]
 pub struct Hooks<'a> {
@@ -124,6 +144,9 @@ pub struct Hooks<'a> {
     /// Writes the calibrated model in another format (`calibrated.xml`);
     /// `None` (the default) writes none.
     pub model: Option<&'a dyn ModelWriter>,
+    /// Writes `report.html` (with the plots, when `plots` draws them);
+    /// `None` (the default) writes none.
+    pub report: Option<&'a dyn ReportWriter>,
 }
 
 impl Default for Hooks<'_> {
@@ -132,6 +155,7 @@ impl Default for Hooks<'_> {
             progress: &Silent,
             plots: None,
             model: None,
+            report: None,
         }
     }
 }
@@ -176,7 +200,7 @@ pub fn calibrate_with(
         return Err(CalibrateError::Holdout(opts.holdout));
     }
     let scene = Scene::load(&opts.scene)?;
-    let measured = Measured::load(&opts.measured, &scene.model)?;
+    let measured = Measured::load_with(&opts.measured, &scene.model, &opts.log)?;
     let split = super::recordings::split_of(&measured, opts.holdout)?;
     // The scene as given must simulate over the whole data.
     let steps = (measured.duration() / scene.settings.dt).ceil() as usize + 1;
@@ -219,6 +243,21 @@ pub fn calibrate_with(
     }
     if let Some(plots) = hooks.plots {
         files.extend(plot_files(opts, plots, &measured, &sel, &res)?);
+    }
+    if let Some(w) = hooks.report {
+        let svgs: Vec<(String, String)> = files
+            .iter()
+            .filter(|(n, _)| n.ends_with(".svg"))
+            .map(|(n, b)| (n.clone(), String::from_utf8_lossy(b).into_owned()))
+            .collect();
+        let scene_name = opts.scene.display().to_string();
+        let html = w
+            .html(&res, &scene_name, &measured_list(opts), &svgs)
+            .map_err(|msg| CalibrateError::Output {
+                path: opts.out.join("report.html"),
+                msg,
+            })?;
+        files.push(("report.html".into(), html.into_bytes()));
     }
     let inputs: Vec<&PathBuf> = [&opts.scene, &opts.measured]
         .into_iter()
@@ -279,7 +318,7 @@ fn load_others(
             });
         }
         seen.push(p);
-        out.push(super::recordings::load(p, scene, opts.holdout)?);
+        out.push(super::recordings::load(p, scene, opts.holdout, &opts.log)?);
     }
     Ok(out)
 }

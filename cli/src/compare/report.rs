@@ -6,6 +6,7 @@ use super::gate::{Verdict, markdown as gate_markdown};
 use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
 use anyhow::Result;
 use sdrs::output::write_atomic;
+use sdrs_cli::html::{self, Page};
 use sdrs_cli::svg::{Axes, Series, line_plot};
 use std::path::Path;
 
@@ -70,27 +71,13 @@ impl Table {
         s
     }
     fn html(&self) -> String {
-        let e = html_escape;
-        let mut s = format!("<table id=\"{}\"><thead><tr>", self.name);
-        for h in &self.header {
-            s.push_str(&format!("<th>{}</th>", e(h)));
-        }
-        s.push_str("</tr></thead><tbody>");
-        for r in &self.rows {
-            s.push_str("<tr>");
-            for c in r {
-                s.push_str(&format!("<td>{}</td>", e(&c.replace('`', ""))));
-            }
-            s.push_str("</tr>");
-        }
-        s + "</tbody></table>"
+        let rows: Vec<Vec<String>> = self
+            .rows
+            .iter()
+            .map(|r| r.iter().map(|c| c.replace('`', "")).collect())
+            .collect();
+        html::table(self.name, &self.header, &rows)
     }
-}
-
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 fn g(x: f64) -> String {
@@ -598,21 +585,16 @@ pub fn write(dir: &Path, r: &Results, gate: Option<&[Verdict]>) -> Result<()> {
         r.suite, r.threads
     );
     let mut md = format!("# {title}\n\n{intro}\n\n");
-    let mut html = format!(
-        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}th{{background:#eee}}td:first-child{{text-align:left}}figure{{margin:1em 0}}.regressed{{color:#b00;font-weight:bold}}</style></head><body><h1>{}</h1><p>{}</p>",
-        html_escape(&title),
-        html_escape(&title),
-        html_escape(&intro)
-    );
+    let mut page = Page::new(&title, "");
+    page.p(&intro);
     if !r.not_measured.is_empty() {
         md.push_str("**Not measured in this run:**\n\n");
-        html.push_str("<p><b>Not measured in this run:</b></p><ul>");
+        page.raw("<p><b>Not measured in this run:</b></p>");
         for n in &r.not_measured {
             md.push_str(&format!("- {n}\n"));
-            html.push_str(&format!("<li>{}</li>", html_escape(n)));
         }
         md.push('\n');
-        html.push_str("</ul>");
+        page.list(&r.not_measured);
     }
     if let Some(v) = gate {
         let bad = v.iter().filter(|v| v.regressed).count();
@@ -625,57 +607,56 @@ pub fn write(dir: &Path, r: &Results, gate: Option<&[Verdict]>) -> Result<()> {
             },
             gate_markdown(v)
         ));
-        html.push_str(&format!(
-            "<h2>Regression gate: {}</h2><table id=\"gate\"><tr><th>metric</th><th>baseline</th><th>this run</th><th>limit</th><th>verdict</th></tr>",
-            if bad == 0 { "passed".to_string() } else { format!("{bad} regression(s)") }
+        page.h2(&format!(
+            "Regression gate: {}",
+            if bad == 0 {
+                "passed".to_string()
+            } else {
+                format!("{bad} regression(s)")
+            }
         ));
-        for x in v {
-            let f = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{x:.4e}"));
-            html.push_str(&format!(
-                "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                if x.regressed {
-                    " class=\"regressed\""
-                } else {
-                    ""
-                },
-                html_escape(&x.metric),
-                f(x.baseline),
-                f(x.now),
-                f(x.limit),
-                if x.regressed { "REGRESSED" } else { "ok" }
-            ));
-        }
-        html.push_str("</table>");
+        let f = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{x:.4e}"));
+        let rows: Vec<Vec<String>> = v
+            .iter()
+            .map(|x| {
+                vec![
+                    x.metric.clone(),
+                    f(x.baseline),
+                    f(x.now),
+                    f(x.limit),
+                    if x.regressed { "REGRESSED" } else { "ok" }.to_string(),
+                ]
+            })
+            .collect();
+        let header = ["metric", "baseline", "this run", "limit", "verdict"].map(String::from);
+        page.raw(&html::table_with("gate", &header, &rows, |k| {
+            if v[k].regressed { "regressed" } else { "" }
+        }));
     }
     std::fs::create_dir_all(dir.join("plots"))?;
     std::fs::create_dir_all(dir.join("tables"))?;
     for s in &sections {
         md.push_str(&format!("## {}\n\n", s.heading));
-        html.push_str(&format!("<h2>{}</h2>", html_escape(&s.heading)));
+        page.h2(&s.heading);
         for p in &s.text {
             md.push_str(&format!("{p}\n\n"));
-            html.push_str(&format!("<p>{}</p>", html_escape(p)));
+            page.p(p);
         }
         for t in &s.tables {
             let file = format!("tables/{}_{}.csv", t.name, slug(&t.title));
             write_atomic(&dir.join(&file), t.csv().as_bytes())?;
             md.push_str(&format!("**{}** ([csv]({file}))\n\n{}\n", t.title, t.md()));
-            html.push_str(&format!("<h3>{}</h3>{}", html_escape(&t.title), t.html()));
+            page.h3(&t.title);
+            page.raw(&t.html());
         }
         for (stem, caption, svg) in &s.plots {
             let file = format!("plots/{stem}.svg");
             write_atomic(&dir.join(&file), svg.as_bytes())?;
             md.push_str(&format!("![{caption}]({file})\n\n"));
-            let body = svg.find("<svg").map_or(svg.as_str(), |i| &svg[i..]);
-            let body = body.replacen("<svg", "<svg class=\"plot\"", 1);
-            html.push_str(&format!(
-                "<figure>{body}<figcaption>{}</figcaption></figure>",
-                html_escape(caption)
-            ));
+            page.figure(svg, caption);
         }
     }
-    // A self-check the browser test reads back: every plot has drawn content.
-    html.push_str("<p id=\"render-check\">plots not checked</p><script>(function(){var s=document.querySelectorAll('svg.plot');var ok=0;s.forEach(function(e){var b=e.getBBox();if(e.querySelectorAll('polyline,polygon,path,line,circle').length>0&&b.width>0&&b.height>0)ok++;});document.getElementById('render-check').textContent='plots rendered: '+ok+' of '+s.length;})();</script></body></html>\n");
+    let html = page.finish();
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("report.html"), html.as_bytes())?;
     Ok(())

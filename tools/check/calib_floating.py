@@ -19,7 +19,7 @@ gymnasium's ant (MJCF, a quadruped on a free joint, nobody here wrote it):
    noise (1e-3), runs `sdrs calibrate`, and judges the verdict:
    clean → `none`; one effect → that effect alone, within 15 %.
 
-    python tools/calib_floating.py --sdrs target/release/sdrs --out out/ant \
+    python tools/check/calib_floating.py --sdrs target/release/sdrs --out out/ant \
         [--cases clean,payload,mu] [--duration 3]
 
 Every setting below was fixed before the first run of the case it serves;
