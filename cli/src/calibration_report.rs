@@ -125,11 +125,12 @@ fn bar(label: &str, v: f64, color: &str, lo: f64, hi: f64, floor_at: f64) -> Str
     )
 }
 
-/// The gap next to the noise, the integrator error and the floor.
+/// The gap next to the noise, the integrator error, the contact resolution
+/// (scenes with contact) and the floor.
 fn floor(p: &mut Page, r: &CalibrationResult) {
     let f = &r.error_floor;
     p.h2("The gap against the model's own error");
-    let rows: [(&str, f64, &str); 7] = [
+    let mut rows: Vec<(&str, f64, &str)> = vec![
         ("noise σ", f.noise, "#90a4ae"),
         ("integrator error at Δt", f.integrator, "#90a4ae"),
         (
@@ -142,6 +143,10 @@ fn floor(p: &mut Page, r: &CalibrationResult) {
         ("gap as given, Δt/2", f.gap_half_dt, "#ef9a9a"),
         ("gap calibrated", r.gap_after.overall, "#2e7d32"),
     ];
+    if f.contact_s.is_some() {
+        rows.insert(3, ("contact resolution (s halved)", f.contact, "#b0bec5"));
+        rows.insert(4, ("contact resolution in the gap", f.contact_in_gap, "#b0bec5"));
+    }
     let pos: Vec<f64> = rows
         .iter()
         .map(|x| x.1)

@@ -15,8 +15,15 @@
 //!    plausible (below), its criterion beats the baseline by
 //!    `ΔC > min_delta` (10), its held-out RMS is at least `min_gain` (5 %)
 //!    below the baseline's, and it explains at least [`SHARE_SINGLE`] (half)
-//!    of the baseline's excess: `X_c ≤ (1 − SHARE_SINGLE) X_base`. The
-//!    eligible single with the lowest criterion is chosen.
+//!    of the baseline's excess: `X_c ≤ (1 − SHARE_SINGLE) X_base`, and it
+//!    lowers the held-out gap itself by at least [`MIN_GAP_SHARE`] (a
+//!    quarter): `RMS_c ≤ (1 − MIN_GAP_SHARE) G`. The eligible single with
+//!    the lowest criterion is chosen. (`MIN_GAP_SHARE` was added in
+//!    session 5 after an outcome: on clean MuJoCo data of gymnasium's ant,
+//!    a gap 1.11× the floor — the two contact models' difference — was
+//!    named `contact_s/all` because it lowered the gap by 14 %, all of the
+//!    sliver above the floor; the issue's diagnosis: "≥ 5 % held-out
+//!    improvement is passed by any such absorption".)
 //! 3. **A second effect** is added (a pair replaces the chosen single) only
 //!    when the pair is plausible and, against the chosen single *and* each
 //!    of its own members fitted alone, the single leaves a held-out gap
@@ -72,6 +79,9 @@ use serde::Serialize;
 pub const SHARE_SINGLE: f64 = 0.5;
 /// Share of the single's remaining excess a second effect must explain.
 pub const SHARE_PAIR: f64 = 0.5;
+/// Share of the held-out gap itself an effect (or a pair, against the
+/// baseline) must remove to be named: materiality, beyond the floor test.
+pub const MIN_GAP_SHARE: f64 = 0.25;
 /// A gap above this multiple of the floor that no candidate explains is
 /// `unexplained`.
 pub const UNEXPLAINED_FACTOR: f64 = 2.0;
@@ -234,7 +244,7 @@ pub fn decide(
     let beats_base = |s: &Scored| {
         !is_bad(s)
             && base.criterion - s.criterion > opts.min_delta
-            && s.rms_holdout() <= (1.0 - opts.min_gain) * g
+            && s.rms_holdout() <= (1.0 - opts.min_gain.max(MIN_GAP_SHARE)) * g
             && excess(s.rms_holdout(), f) <= (1.0 - SHARE_SINGLE) * x_base
     };
     let single = ranking
@@ -273,7 +283,8 @@ pub fn decide(
                 Verdict::None,
                 None,
                 format!(
-                    "the held-out gap {g:.3e} is slightly above the model's error floor {f:.3e} (less than {UNEXPLAINED_FACTOR}×) and no candidate explains half of the excess"
+                    "the held-out gap {g:.3e} is slightly above the model's error floor {f:.3e} (less than {UNEXPLAINED_FACTOR}×) and no candidate explains half of the excess while lowering the gap itself by {:.0} %",
+                    100.0 * MIN_GAP_SHARE
                 ),
             )
         };
