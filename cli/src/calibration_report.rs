@@ -145,7 +145,10 @@ fn floor(p: &mut Page, r: &CalibrationResult) {
     ];
     if f.contact_s.is_some() {
         rows.insert(3, ("contact resolution (s halved)", f.contact, "#b0bec5"));
-        rows.insert(4, ("contact resolution in the gap", f.contact_in_gap, "#b0bec5"));
+        rows.insert(
+            4,
+            ("contact resolution in the gap", f.contact_in_gap, "#b0bec5"),
+        );
     }
     let pos: Vec<f64> = rows
         .iter()

@@ -361,8 +361,8 @@ pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
     };
     let e_gap = (g * g - gx * gx).clamp(0.0, e * e).sqrt();
     let (contact, contact_in_gap, contact_s) = contact_resolution(pb, base)?;
-    let floor = FLOOR_MARGIN
-        * (sigma * sigma + e_gap * e_gap + contact_in_gap * contact_in_gap).sqrt();
+    let floor =
+        FLOOR_MARGIN * (sigma * sigma + e_gap * e_gap + contact_in_gap * contact_in_gap).sqrt();
     let dt = pb.scene.settings.dt;
     let suggested_dt = (e > sigma && sigma > 0.0).then(|| dt * (sigma / e).powf(1.0 / order));
     Some(ErrorFloor {
