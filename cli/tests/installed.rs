@@ -33,6 +33,9 @@ fn installed(dir: &std::path::Path) -> std::process::Command {
 
 #[test]
 fn a_binary_outside_the_source_tree_imports_mjcf_with_its_own_helpers() {
+    if support::skip_without_venv() {
+        return;
+    }
     let dir = scratch_dir("installed-ok");
     assert!(
         !dir.ancestors()

@@ -28,6 +28,9 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
+#[path = "../../../tests/common/mod.rs"]
+mod common;
+
 const DHAT: f64 = 1e-3;
 
 fn root() -> PathBuf {
@@ -140,6 +143,9 @@ fn kind_of(pt: bool, x: &[V3<f64>; 4]) -> PrimitiveKind {
 
 #[test]
 fn primitives_friction_and_ccd_agree_with_ipctk() {
+    if common::skip_without_venv() {
+        return;
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(77);
     let mut stencils = Vec::new();
     for k in 0..400 {
@@ -316,6 +322,9 @@ fn scatter(grad: &mut [f64], ids: &[(usize, u32); 4], g: &[f64], na: usize) {
 
 #[test]
 fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
+    if common::skip_without_venv() {
+        return;
+    }
     let dhat = 0.02;
     let mut jobs = Vec::new();
     let mut ours = Vec::new();
@@ -370,6 +379,9 @@ fn whole_mesh_pair_potential_and_gradient_agree_with_ipctk() {
 /// both above `ε` (sliding) and below it (the smoothed sticking branch).
 #[test]
 fn whole_mesh_pair_friction_agrees_with_ipctk() {
+    if common::skip_without_venv() {
+        return;
+    }
     use sdrs_ipc::friction::{IpcFrictionParams, lag_pair};
     let (dhat, kappa, mu, eps) = (0.02, 1e3, 0.4, 1e-4);
     let params = IpcFrictionParams {
