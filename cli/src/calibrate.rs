@@ -26,9 +26,16 @@ pub struct CalibrateArgs {
     /// Candidate effects, comma separated (default: all applicable):
     /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
     /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s,
-    /// actuation_delay.
+    /// actuation_delay. With contact, contact_s and contact_kappa are the
+    /// contact model's resolution, fitted before the selection and never
+    /// named (see --contact-resolution-as-given).
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
+    /// Keep the contact model's resolution (barrier support s, stiffness κ)
+    /// as the scene gives it and let contact_s, contact_kappa compete as
+    /// effects, instead of fitting them first as settings of the simulator.
+    #[arg(long)]
+    pub contact_resolution_as_given: bool,
     /// MCAP logs: the JointState topic to read.
     #[arg(long, default_value = sdrs::calibrate::mcap_log::DEFAULT_TOPIC)]
     pub topic: String,
@@ -54,6 +61,13 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         a.holdout,
     )?;
     opts.more_measured = a.measured[1..].to_vec();
+    opts.fit_contact_resolution = !a.contact_resolution_as_given;
+    let named = |k: &str| a.effects.iter().flatten().any(|e| e == k);
+    if opts.fit_contact_resolution && (named("contact_s") || named("contact_kappa")) {
+        anyhow::bail!(
+            "--effects names contact_s or contact_kappa, the contact model's resolution: it is fitted before the selection and never named as an effect; add --contact-resolution-as-given to treat it as a candidate effect"
+        );
+    }
     opts.log = sdrs::calibrate::mcap_log::LogMapping {
         topic: Some(a.topic.clone()),
         rename: a.rename.clone(),
@@ -70,6 +84,17 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         report: Some(&sdrs_cli::calibration_report::CalibrationReport),
     };
     let r = sdrs::calibrate::run_with(&opts, &hooks)?;
+    if let Some(c) = &r.contact_resolution {
+        eprintln!(
+            "contact resolution fitted first (a setting of the simulator, not an effect): s {:.4e} -> {:.4e} m, kappa {:.4e} -> {:.4e}; training RMS {:.4e} -> {:.4e}",
+            c.s_given,
+            c.s_fitted,
+            c.kappa_given,
+            c.kappa_fitted,
+            c.rms_train_given,
+            c.rms_train_fitted
+        );
+    }
     eprintln!(
         "{}: verdict {}{}; held-out RMS {:.4e} -> {:.4e}; {} candidates, {} simulations in {:.2} s; wrote {}",
         a.measured

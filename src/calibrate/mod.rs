@@ -14,6 +14,8 @@
 //! - [`fit`]: bounded Levenberg–Marquardt, Gauss–Newton confidence.
 //! - [`identifiability`]: each candidate's scaled Gauss–Newton matrix at
 //!   its start: condition number, near-singular parameters, what to excite.
+//! - [`nuisance`]: the contact model's resolution (`s`, `κ`) fitted before
+//!   the selection: a setting of our contact model, never named as an effect.
 //! - [`floor`]: the model's own error on the data (noise, integrator error
 //!   by Richardson extrapolation), measured before attributing anything.
 //! - [`select`]: fits in parallel, pairs, the criterion.
@@ -37,6 +39,7 @@ pub mod fit;
 pub mod floor;
 pub mod identifiability;
 pub mod mcap_log;
+pub mod nuisance;
 pub mod problem;
 pub mod recordings;
 pub mod report;

@@ -21,6 +21,7 @@
 //! confidence     {key: {value, low, high}}  95 % from the Gauss–Newton Hessian
 //!                (low/high null when the parameter is not identifiable)
 //! gap_before     {"channels": {name: held-out RMS}, "overall": RMS}  the scene as given
+//!                (with contact: with its resolution fitted, see contact_resolution)
 //! gap_after      same, with the chosen effect (= gap_before for "none")
 //! gap_reduction  1 − overall_after/overall_before
 //! indistinguishable  single candidates within ΔC < 2 of the chosen one
@@ -39,6 +40,9 @@
 //!                  suggestion}] each candidate's scaled Gauss–Newton matrix at its start
 //!                (calibrate::identifiability); the ranking's entries carry
 //!                `unidentifiable` too
+//! contact_resolution  {s_given, s_fitted, kappa_given, kappa_fitted, rms_train_given,
+//!                rms_train_fitted, simulations} the contact model's resolution fitted
+//!                before the selection (calibrate::nuisance); null without contact
 //! holdout, split_time, samples, simulations
 //! ```
 
@@ -150,6 +154,10 @@ pub struct CalibrationResult {
     /// Each candidate's identifiability at its start, in the ranking's
     /// order ([`super::identifiability`]).
     pub identifiability: Vec<super::identifiability::Identifiability>,
+    /// The contact model's resolution fitted before the selection
+    /// ([`super::nuisance`]); `null` without contact or when the fit did not
+    /// lower the training RSS (or was switched off).
+    pub contact_resolution: Option<super::nuisance::ResolutionFit>,
     /// Wall time (s); not written to the JSON (outputs are deterministic).
     #[serde(skip)]
     pub seconds: f64,
@@ -373,6 +381,7 @@ pub fn result(
         recordings: super::recordings::gaps(pb, &effects),
         identifiability: sel.identifiability.clone(),
         effects,
+        contact_resolution: None,
         seconds: 0.0,
     }
 }
@@ -622,6 +631,21 @@ fn md_ranking(s: &mut String, r: &CalibrationResult) {
             r.baseline.rms_train, r.baseline.rms_holdout, r.simulations
         ),
     );
+    if let Some(c) = &r.contact_resolution {
+        w(
+            s,
+            format!(
+                "Contact resolution fitted before the selection (a setting of the simulator's contact model, never named as an effect): s {:.4e} → {:.4e} m, κ {:.4e} → {:.4e}; training RMS {:.3e} → {:.3e} ({} simulations).\n",
+                c.s_given,
+                c.s_fitted,
+                c.kappa_given,
+                c.kappa_fitted,
+                c.rms_train_given,
+                c.rms_train_fitted,
+                c.simulations
+            ),
+        );
+    }
     w(
         s,
         "Plots: `channel_<name>.svg` (measured, simulated, calibrated) and `residuals.svg`.".into(),

@@ -37,6 +37,12 @@ pub struct CalibrateOptions {
     /// How MCAP logs among the measured files map to the scene (topic,
     /// joint renames; default `/joint_states`, names as they are).
     pub log: LogMapping,
+    /// With contact, fit the contact model's resolution (`s`, `κ`) before
+    /// the selection and never offer it as an effect
+    /// ([`super::nuisance`]). Default `true`; `false` keeps them as given
+    /// and lets `contact_s`, `contact_kappa` compete as candidates (the
+    /// behaviour before 2026-11-28).
+    pub fit_contact_resolution: bool,
 }
 
 impl CalibrateOptions {
@@ -59,6 +65,7 @@ impl CalibrateOptions {
             holdout,
             select: SelectOptions::default(),
             log: LogMapping::default(),
+            fit_contact_resolution: true,
         })
     }
 }
@@ -217,7 +224,19 @@ pub fn calibrate_with(
         split,
         others: &others,
     };
-    let cands = candidates::candidates(&scene, &opts.effects);
+    let fitted = match opts.fit_contact_resolution {
+        true => super::nuisance::fit_resolution(&pb, &opts.select.fit),
+        false => None,
+    };
+    let (scene, resolution) = match &fitted {
+        Some((sc, r)) => (sc, Some(r.clone())),
+        None => (&scene, None),
+    };
+    let pb = Problem { scene, ..pb };
+    let kinds: Vec<EffectKind> = (opts.effects.iter().copied())
+        .filter(|k| !(opts.fit_contact_resolution && super::nuisance::KINDS.contains(k)))
+        .collect();
+    let cands = candidates::candidates(scene, &kinds);
     let sel = select(
         &pb,
         cands,
@@ -237,7 +256,9 @@ pub fn calibrate_with(
     let before = analyse(&measured, &sel.baseline.sim, split);
     let after = analyse(&measured, after_sim, split);
     let mut res = report::result(&pb, &sel, before, after, opts.holdout);
-    let mut files = output_files(opts, &scene, &res)?;
+    res.simulations += resolution.as_ref().map_or(0, |c| c.simulations);
+    res.contact_resolution = resolution;
+    let mut files = output_files(opts, scene, &res)?;
     if let Some(w) = hooks.model {
         model_file(opts, &pb, &sel, w, &mut files)?;
     }
