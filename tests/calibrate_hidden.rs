@@ -351,15 +351,9 @@ fn contact_resolution_is_fitted_first_and_never_named() {
     let (on, off) = (&results[0], &results[1]);
     let c = on.contact_resolution.as_ref().expect("resolution fitted");
     eprintln!(
-        "fitted: verdict {} ({:?}); s {:.4e} -> {:.4e} (true 7.5e-3), kappa {:.3e} -> {:.3e}, train RMS {:.3e} -> {:.3e}; as given: verdict {} ({:?})",
+        "fitted: verdict {} ({:?}); {c} (true s 7.5e-3); as given: verdict {} ({:?})",
         on.verdict,
         on.candidate,
-        c.s_given,
-        c.s_fitted,
-        c.kappa_given,
-        c.kappa_fitted,
-        c.rms_train_given,
-        c.rms_train_fitted,
         off.verdict,
         off.candidate
     );

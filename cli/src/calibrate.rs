@@ -86,13 +86,7 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
     let r = sdrs::calibrate::run_with(&opts, &hooks)?;
     if let Some(c) = &r.contact_resolution {
         eprintln!(
-            "contact resolution fitted first (a setting of the simulator, not an effect): s {:.4e} -> {:.4e} m, kappa {:.4e} -> {:.4e}; training RMS {:.4e} -> {:.4e}",
-            c.s_given,
-            c.s_fitted,
-            c.kappa_given,
-            c.kappa_fitted,
-            c.rms_train_given,
-            c.rms_train_fitted
+            "contact resolution fitted first (a setting of the simulator, not an effect): {c}"
         );
     }
     eprintln!(

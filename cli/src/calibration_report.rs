@@ -190,6 +190,11 @@ fn floor(p: &mut Page, r: &CalibrationResult) {
             " Effects of the size of the noise become resolvable at Δt ≤ {dt:.2e} s."
         ));
     }
+    if let Some(c) = &r.contact_resolution {
+        text.push_str(&format!(
+            " The contact model's resolution was fitted first (a setting of the simulator, never named as an effect; \"as given\" above is with it): {c}."
+        ));
+    }
     p.p(&text);
 }
 

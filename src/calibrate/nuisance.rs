@@ -59,6 +59,22 @@ pub struct ResolutionFit {
     pub simulations: usize,
 }
 
+impl std::fmt::Display for ResolutionFit {
+    /// `s a → b m, κ c → d; training RMS e → f` (for reports and logs).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "s {:.4e} → {:.4e} m, κ {:.4e} → {:.4e}; training RMS {:.3e} → {:.3e}",
+            self.s_given,
+            self.s_fitted,
+            self.kappa_given,
+            self.kappa_fitted,
+            self.rms_train_given,
+            self.rms_train_fitted
+        )
+    }
+}
+
 /// Fits `s` and `κ` of `pb`'s scene (see the module doc). Returns the
 /// scene with the fitted values as effects and what was found; `None`
 /// without contact, or when the fit does not lower the training RSS (the

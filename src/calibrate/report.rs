@@ -635,13 +635,7 @@ fn md_ranking(s: &mut String, r: &CalibrationResult) {
         w(
             s,
             format!(
-                "Contact resolution fitted before the selection (a setting of the simulator's contact model, never named as an effect): s {:.4e} → {:.4e} m, κ {:.4e} → {:.4e}; training RMS {:.3e} → {:.3e} ({} simulations).\n",
-                c.s_given,
-                c.s_fitted,
-                c.kappa_given,
-                c.kappa_fitted,
-                c.rms_train_given,
-                c.rms_train_fitted,
+                "Contact resolution fitted before the selection (a setting of the simulator's contact model, never named as an effect): {c} ({} simulations).\n",
                 c.simulations
             ),
         );
