@@ -32,7 +32,7 @@ fn opts(measured: &Path, out: &Path) -> CalibrateOptions {
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
-        fit_contact_resolution: true,
+        fit_contact_resolution: false,
     }
 }
 

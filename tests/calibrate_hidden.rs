@@ -201,7 +201,7 @@ fn run_case(
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
-        fit_contact_resolution: true,
+        fit_contact_resolution: false,
     };
     calibrate(&opts).unwrap().0
 }

@@ -345,7 +345,7 @@ fn opts(measured: &Path, out: &Path, log: LogMapping) -> CalibrateOptions {
         holdout: 0.3,
         select: Default::default(),
         log,
-        fit_contact_resolution: true,
+        fit_contact_resolution: false,
     }
 }
 

@@ -98,7 +98,7 @@ fn opts(scene: &Path, measured: &Path, more: &[&Path], out: PathBuf) -> Calibrat
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
-        fit_contact_resolution: true,
+        fit_contact_resolution: false,
     }
 }
 

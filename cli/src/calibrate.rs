@@ -26,16 +26,15 @@ pub struct CalibrateArgs {
     /// Candidate effects, comma separated (default: all applicable):
     /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
     /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s,
-    /// actuation_delay. With contact, contact_s and contact_kappa are the
-    /// contact model's resolution, fitted before the selection and never
-    /// named (see --contact-resolution-as-given).
+    /// actuation_delay.
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
-    /// Keep the contact model's resolution (barrier support s, stiffness κ)
-    /// as the scene gives it and let contact_s, contact_kappa compete as
-    /// effects, instead of fitting them first as settings of the simulator.
+    /// Fit the contact model's resolution (barrier support s, stiffness κ)
+    /// first, as settings of the simulator, and never name them as effects
+    /// (experimental: on contact-rich data it also absorbs part of real
+    /// effects; notes/calibration.md, session 6).
     #[arg(long)]
-    pub contact_resolution_as_given: bool,
+    pub fit_contact_resolution: bool,
     /// MCAP logs: the JointState topic to read.
     #[arg(long, default_value = sdrs::calibrate::mcap_log::DEFAULT_TOPIC)]
     pub topic: String,
@@ -61,17 +60,8 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
         a.holdout,
     )?;
     opts.more_measured = a.measured[1..].to_vec();
-    opts.fit_contact_resolution = !a.contact_resolution_as_given;
-    let named = |k: &str| a.effects.iter().flatten().any(|e| e == k);
-    if opts.fit_contact_resolution && (named("contact_s") || named("contact_kappa")) {
-        anyhow::bail!(
-            "--effects names contact_s or contact_kappa, the contact model's resolution: it is fitted before the selection and never named as an effect; add --contact-resolution-as-given to treat it as a candidate effect"
-        );
-    }
-    opts.log = sdrs::calibrate::mcap_log::LogMapping {
-        topic: Some(a.topic.clone()),
-        rename: a.rename.clone(),
-    };
+    opts.fit_contact_resolution = a.fit_contact_resolution;
+    sdrs::calibrate::check_resolution_names(a.effects.as_deref(), opts.fit_contact_resolution)?;
     let bar = Bar::new(
         "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
         0,

@@ -185,8 +185,14 @@ def calibrate(
     *,
     effects: Sequence[str] | None = None,
     holdout: float = 0.3,
+    topic: str | None = None,
+    rename: Mapping[str, str] | None = None,
+    fit_contact_resolution: bool = False,
 ) -> dict[str, Any]:
-    """``sdrs calibrate SCENE --measured CSV --out OUT`` as a function; returns ``calibration.json``."""
+    """``sdrs calibrate SCENE --measured CSV --out OUT`` as a function; returns ``calibration.json``.
+    ``topic``, ``rename`` ({log joint: scene coordinate, "" ignores it}) and
+    ``fit_contact_resolution`` are ``--topic``, ``--rename`` and
+    ``--fit-contact-resolution``."""
 
 def num_threads() -> int:
     """Threads of the core's rayon pool."""

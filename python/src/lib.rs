@@ -122,11 +122,16 @@ fn import_robot(
 /// OUT` (`measured`: a path, or a list of paths for several recordings
 /// fitted with one parameter set, as `--measured` repeated; `effects`:
 /// candidate names, default all applicable; `holdout`: the fraction of
-/// each recording, at the end, held out for scoring). Returns the
+/// each recording, at the end, held out for scoring; `topic`: the MCAP
+/// logs' JointState topic, default `/joint_states`; `rename`: a dict
+/// mapping a log's joint name to a scene coordinate, `""` to ignore it, as
+/// `--rename LOG=COORD`; `fit_contact_resolution`: fit the contact model's `s`,
+/// `κ` first and never name them, as `--fit-contact-resolution`). Returns the
 /// contents of `calibration.json` as a dict (verdict, effect, parameters,
 /// gaps before/after, ranking …). GIL released.
 #[pyfunction]
-#[pyo3(signature = (scene, measured, out, *, effects=None, holdout=0.3))]
+#[pyo3(signature = (scene, measured, out, *, effects=None, holdout=0.3, topic=None, rename=None, fit_contact_resolution=false))]
+#[allow(clippy::too_many_arguments)] // Python keyword arguments, one per CLI option
 fn calibrate<'py>(
     py: Python<'py>,
     scene: PathBuf,
@@ -134,6 +139,9 @@ fn calibrate<'py>(
     out: PathBuf,
     effects: Option<Vec<String>>,
     holdout: f64,
+    topic: Option<String>,
+    rename: Option<std::collections::BTreeMap<String, String>>,
+    fit_contact_resolution: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     // A single path (str or os.PathLike) or a non-empty list of them.
     let measured: Vec<PathBuf> = match measured.extract::<PathBuf>() {
@@ -160,6 +168,12 @@ fn calibrate<'py>(
                 holdout,
             )?;
             opts.more_measured = more;
+            opts.fit_contact_resolution = fit_contact_resolution;
+            sdrs::calibrate::check_resolution_names(effects.as_deref(), opts.fit_contact_resolution)?;
+            opts.log = sdrs::calibrate::mcap_log::LogMapping {
+                topic,
+                rename: rename.unwrap_or_default().into_iter().collect(),
+            };
             let hooks = sdrs::calibrate::Hooks {
                 plots: Some(&sdrs_cli::svg::calibration::CalibrationPlots),
                 model: Some(&sdrs_cli::calibrated_mjcf::CalibratedMjcf),

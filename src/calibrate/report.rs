@@ -21,7 +21,7 @@
 //! confidence     {key: {value, low, high}}  95 % from the Gauss–Newton Hessian
 //!                (low/high null when the parameter is not identifiable)
 //! gap_before     {"channels": {name: held-out RMS}, "overall": RMS}  the scene as given
-//!                (with contact: with its resolution fitted, see contact_resolution)
+//!                (with --fit-contact-resolution: with the contact resolution fitted)
 //! gap_after      same, with the chosen effect (= gap_before for "none")
 //! gap_reduction  1 − overall_after/overall_before
 //! indistinguishable  single candidates within ΔC < 2 of the chosen one
@@ -42,7 +42,7 @@
 //!                `unidentifiable` too
 //! contact_resolution  {s_given, s_fitted, kappa_given, kappa_fitted, rms_train_given,
 //!                rms_train_fitted, simulations} the contact model's resolution fitted
-//!                before the selection (calibrate::nuisance); null without contact
+//!                before the selection (calibrate::nuisance, opt-in); null otherwise
 //! holdout, split_time, samples, simulations
 //! ```
 
