@@ -21,7 +21,7 @@ import sdrs
 DAMPING = 0.05
 # The log's joint names → the scene's coordinates (arm2's CSV columns);
 # "gripper" is in the log but not in the scene: ignored by an empty rename.
-RENAME = {"shoulder_joint": "arm/shoulder", "elbow_joint": "arm/elbow", "gripper": ""}
+RENAME = {"shoulder_joint": "shoulder", "elbow_joint": "elbow", "gripper": ""}
 
 
 def _samples(root, tmp_path):
