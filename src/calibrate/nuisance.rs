@@ -36,7 +36,7 @@
 //! default, after an outcome: on the slider of the hidden-effect suite
 //! (data from this model, `tests/calibrate_hidden.rs`) the fitted `s`, `κ`
 //! took up part of a joint damping, a joint friction, an armature, gains,
-//! a mass scale and μ, and 10 of 16 effects were named (16 of 16 without
+//! a mass scale and μ, and 10 of 16 effects were named (15 of 16 without
 //! it): `s` and `κ` shape the normal force's build-up, so they are not
 //! orthogonal to the effects that act through it.
 
