@@ -82,6 +82,7 @@ fn calibrate_on(name: &str, data: String) -> sdrs::calibrate::CalibrationResult 
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
+        fit_contact_resolution: false,
     };
     calibrate(&opts).unwrap().0
 }

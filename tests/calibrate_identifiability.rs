@@ -73,6 +73,7 @@ fn a_joint_held_still_makes_its_damping_unidentifiable_and_it_is_not_named() {
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
+        fit_contact_resolution: false,
     };
     let (r, files) = calibrate(&opts).unwrap();
     for i in &r.identifiability {

@@ -156,6 +156,7 @@ fn own_step_lag_does_not_veto_a_damping_that_reproduces_the_data() {
             holdout: 0.3,
             select: Default::default(),
             log: Default::default(),
+            fit_contact_resolution: false,
         };
         let r = sdrs::calibrate::calibrate(&opts).unwrap().0;
         assert_eq!(

@@ -40,6 +40,7 @@ fn run(scene: &Path, measured: &Path, out: &Path) -> CalibrationResult {
         holdout: 0.3,
         select: Default::default(),
         log: Default::default(),
+        fit_contact_resolution: false,
     };
     calibrate(&opts).unwrap().0
 }
