@@ -62,6 +62,10 @@ pub fn run(a: &CalibrateArgs) -> Result<()> {
     opts.more_measured = a.measured[1..].to_vec();
     opts.fit_contact_resolution = a.fit_contact_resolution;
     sdrs::calibrate::check_resolution_names(a.effects.as_deref(), opts.fit_contact_resolution)?;
+    opts.log = sdrs::calibrate::mcap_log::LogMapping {
+        topic: Some(a.topic.clone()),
+        rename: a.rename.clone(),
+    };
     let bar = Bar::new(
         "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} candidate fits ({eta} left)",
         0,
