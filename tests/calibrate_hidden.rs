@@ -352,10 +352,7 @@ fn contact_resolution_is_fitted_first_and_never_named() {
     let c = on.contact_resolution.as_ref().expect("resolution fitted");
     eprintln!(
         "fitted: verdict {} ({:?}); {c} (true s 7.5e-3); as given: verdict {} ({:?})",
-        on.verdict,
-        on.candidate,
-        off.verdict,
-        off.candidate
+        on.verdict, on.candidate, off.verdict, off.candidate
     );
     assert_eq!(on.verdict, "none", "{}", on.reason);
     assert!(
@@ -364,12 +361,18 @@ fn contact_resolution_is_fitted_first_and_never_named() {
             .all(|r| !r.candidate.contains("contact_s") && !r.candidate.contains("contact_kappa")),
         "a resolution setting was offered as an effect"
     );
-    assert!((c.s_fitted - 0.0075).abs() <= 0.15 * 0.0075, "s {}", c.s_fitted);
+    assert!(
+        (c.s_fitted - 0.0075).abs() <= 0.15 * 0.0075,
+        "s {}",
+        c.s_fitted
+    );
     assert!(c.rms_train_fitted <= 0.5 * c.rms_train_given);
     assert!(off.contact_resolution.is_none());
     assert_eq!(off.verdict, "effect", "{}", off.reason);
     assert!(
-        off.candidate.as_deref().is_some_and(|l| l.contains("contact_")),
+        off.candidate
+            .as_deref()
+            .is_some_and(|l| l.contains("contact_")),
         "{:?}",
         off.candidate
     );

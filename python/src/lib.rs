@@ -169,7 +169,10 @@ fn calibrate<'py>(
             )?;
             opts.more_measured = more;
             opts.fit_contact_resolution = fit_contact_resolution;
-            sdrs::calibrate::check_resolution_names(effects.as_deref(), opts.fit_contact_resolution)?;
+            sdrs::calibrate::check_resolution_names(
+                effects.as_deref(),
+                opts.fit_contact_resolution,
+            )?;
             opts.log = sdrs::calibrate::mcap_log::LogMapping {
                 topic,
                 rename: rename.unwrap_or_default().into_iter().collect(),

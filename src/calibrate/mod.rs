@@ -51,6 +51,6 @@ pub mod verdict;
 pub use error::CalibrateError;
 pub use report::CalibrationResult;
 pub use run::{
-    CalibrateOptions, Hooks, check_resolution_names, ModelWriter, PlotWriter, ReportWriter, calibrate, calibrate_with,
-    effect_kinds, run, run_with,
+    CalibrateOptions, Hooks, ModelWriter, PlotWriter, ReportWriter, calibrate, calibrate_with,
+    check_resolution_names, effect_kinds, run, run_with,
 };

@@ -76,7 +76,11 @@ impl CalibrateOptions {
 /// candidate effects is an error saying how to make them candidates.
 pub fn check_resolution_names(names: Option<&[String]>, fit: bool) -> Result<(), CalibrateError> {
     let kinds = super::nuisance::KINDS.map(|k| k.name());
-    match names.into_iter().flatten().find(|n| fit && kinds.contains(&n.as_str())) {
+    match names
+        .into_iter()
+        .flatten()
+        .find(|n| fit && kinds.contains(&n.as_str()))
+    {
         Some(n) => Err(CalibrateError::Effects {
             msg: format!(
                 "`{n}` is the contact model's resolution: it is fitted before the selection and never named as an effect; drop --fit-contact-resolution (Python: fit_contact_resolution=False) to make it a candidate"
