@@ -11,8 +11,8 @@ or `simulate` (the failing step, with the first line of its message), the
 steps run and the wall time. A table on stdout, all rows in
 OUT/summary.json; exit 1 when any file with a link fails.
 
-The package is not in tools/setup/requirements.txt (it is ~400 MB of
-meshes and CI does not run this sweep): install it by hand into the venv,
+The package is not in tools/setup/requirements.txt (its meshes are large
+and CI does not run this sweep): install it by hand into the venv,
 `.venv/bin/python -m pip install example-robot-data`, or pass `--root`
 with a checkout's `robots/` folder. `package://` mesh paths resolve
 through ROS_PACKAGE_PATH, set here to the folder above `robots/`.
