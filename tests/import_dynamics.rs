@@ -95,3 +95,74 @@ fn urdf_dynamics_become_effects_and_damp_as_viscous_torque() {
     assert!(worst < 1e-3, "{worst}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// URDF `<limit effort velocity>` and `<transmission>` are not simulated;
+/// each gets a report line, never a silent drop. `lift` (revolute, limits
+/// [−1, 1] around its initial 0) keeps its scene limit, which carries the
+/// URDF's effort 5 N·m and velocity 2 rad/s; `wheel` (continuous, no
+/// scene limit) has its effort 3 and velocity 4 listed as left out; the
+/// transmission is listed as ignored.
+#[test]
+fn urdf_effort_velocity_and_transmissions_are_reported() {
+    let dir = temp_dir("urdf-effort");
+    let urdf = dir.join("lim.urdf");
+    std::fs::write(
+        &urdf,
+        r#"<robot name="lim">
+  <link name="base"/>
+  <link name="arm"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="rim"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><origin xyz="0 0 0.3"/><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <joint name="lift" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint>
+  <joint name="wheel" type="continuous"><parent link="arm"/><child link="rim"/><origin xyz="0 0 0.2"/><axis xyz="0 0 1"/>
+    <limit effort="3" velocity="4"/></joint>
+  <transmission name="t_lift"><type>transmission_interface/SimpleTransmission</type>
+    <joint name="lift"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
+    <actuator name="m_lift"><mechanicalReduction>50</mechanicalReduction></actuator></transmission>
+</robot>"#,
+    )
+    .unwrap();
+    let imp = import(&urdf, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
+    let notes = &imp.report.notes;
+    let line = |start: &str| {
+        notes
+            .iter()
+            .find(|n| n.starts_with(start))
+            .unwrap_or_else(|| panic!("no line {start:?}: {notes:?}"))
+            .clone()
+    };
+    let lift = line("joint \"lift\": <limit");
+    assert!(
+        lift.contains(r#"effort="5""#)
+            && lift.contains(r#"velocity="2""#)
+            && lift.contains("carried"),
+        "{lift}"
+    );
+    let wheel = line("joint \"wheel\": <limit");
+    assert!(
+        wheel.contains(r#"effort="3""#)
+            && wheel.contains(r#"velocity="4""#)
+            && wheel.contains("left out"),
+        "{wheel}"
+    );
+    assert!(
+        notes.iter().any(|n| n.contains("<transmission>")),
+        "{notes:?}"
+    );
+    let r = &imp.scene.robots[0];
+    let lim = |j: &str| {
+        r.links
+            .iter()
+            .find(|l| l.joint.name.as_deref().unwrap_or(&l.name) == j)
+            .unwrap_or_else(|| panic!("no joint {j}"))
+            .joint
+            .limit
+            .clone()
+    };
+    let l = lim("lift").expect("lift keeps its limit");
+    assert_eq!((l.effort, l.velocity), (Some(5.0), Some(2.0)));
+    assert!(lim("wheel").is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}

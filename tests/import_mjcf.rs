@@ -541,3 +541,74 @@ fn ground_on_a_robot_without_colliding_hulls_is_a_clear_error() {
     assert!(!r.base.starts_with("floating"), "{}", r.base);
     assert!(r.ground_lift.is_none());
 }
+
+/// `<contact><exclude>` reaches the scene's exclusions. Two sibling spheres
+/// `a`, `b` overlap in the rest pose (centres 0.05 m apart, radius 0.1 m);
+/// MuJoCo does not filter siblings, so without the element the import finds
+/// the overlap itself and lists the pair in `ready.excluded_pairs`. With
+/// `<exclude body1="a" body2="b"/>` the pair MuJoCo compiled
+/// (`exclude_signature`, read through the dump) is an input exclusion, not
+/// a reported overlap; `<exclude body1="world" body2="c"/>` takes `c` off
+/// the ground (and only `c`).
+#[test]
+fn mjcf_contact_exclude_becomes_scene_exclusions() {
+    if import_support::skip_without_venv() {
+        return;
+    }
+    let dir = temp_dir("mjcf-exclude");
+    let model = |contact: &str| {
+        format!(
+            r#"<mujoco model="ex"><worldbody>
+  <geom name="floor" type="plane" size="5 5 0.1"/>
+  <body name="base" pos="0 0 1"><freejoint/><geom type="box" size="0.1 0.1 0.1"/>
+    <body name="a" pos="0.3 0 0"><joint name="ja" axis="0 1 0"/><geom type="sphere" size="0.1"/></body>
+    <body name="b" pos="0.35 0 0"><joint name="jb" axis="0 1 0"/><geom type="sphere" size="0.1"/></body>
+    <body name="c" pos="-0.5 0 0"><joint name="jc" axis="0 1 0"/><geom type="sphere" size="0.1"/></body>
+  </body></worldbody>{contact}</mujoco>"#
+        )
+    };
+    let run = |name: &str, contact: &str| {
+        let xml = dir.join(name);
+        std::fs::write(&xml, model(contact)).unwrap();
+        let mut imp = import(&xml, &hull_options()).unwrap_or_else(|e| panic!("{e}"));
+        let opts = sdrs::import::ready::ReadyOptions::default();
+        let ready = sdrs::import::ready::make_ready(&mut imp.scene, &xml, imp.root_static, &opts)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let exclude = imp.scene.contact.as_ref().unwrap().exclude.clone();
+        (xml, exclude, ready.excluded_pairs)
+    };
+    let ab: [String; 2] = ["ex/a".into(), "ex/b".into()];
+    let env = sdrs::scene::environment::ENVIRONMENT;
+    let ground_c: [String; 2] = [format!("{env}/ground"), "ex/c".into()];
+    let ground_a: [String; 2] = [format!("{env}/ground"), "ex/a".into()];
+
+    // Control: no <exclude>: the overlap is found and reported.
+    let (_, exclude, overlaps) = run("plain.xml", "");
+    assert!(overlaps.contains(&ab), "{overlaps:?}");
+    assert!(!exclude.contains(&ground_c), "{exclude:?}");
+
+    let (xml, exclude, overlaps) = run(
+        "exclude.xml",
+        r#"<contact><exclude body1="a" body2="b"/><exclude body1="world" body2="c"/></contact>"#,
+    );
+    // MuJoCo's compiled exclusions, through the dump: exactly these two.
+    let d = sdrs::import::mjcf::dump::dump(&xml).unwrap();
+    let idx = |n: &str| d.bodies.iter().position(|b| b.name == n).unwrap() as i64;
+    let mut compiled: Vec<[i64; 2]> = d
+        .exclude
+        .iter()
+        .map(|&[x, y]| [x.min(y), x.max(y)])
+        .collect();
+    compiled.sort();
+    let mut want = vec![[idx("a"), idx("b")], [-1, idx("c")]];
+    want.sort();
+    assert_eq!(compiled, want);
+    assert!(exclude.contains(&ab), "{exclude:?}");
+    assert!(
+        !overlaps.contains(&ab),
+        "reported as an overlap: {overlaps:?}"
+    );
+    assert!(exclude.contains(&ground_c), "{exclude:?}");
+    assert!(!exclude.contains(&ground_a), "{exclude:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -186,7 +186,11 @@ pub(super) fn link_outputs(
                 axis: l.joint.axis,
                 axes: l.joint.axes,
                 origin: l.joint.origin.clone(),
-                limit: super::joint_limit(l, src.initial.get(&l.joint.name), notes),
+                limit: super::effort_velocity_note(
+                    l,
+                    super::joint_limit(l, src.initial.get(&l.joint.name), notes),
+                    notes,
+                ),
                 mimic: super::mimic(l, src, notes),
             },
             mass: None,

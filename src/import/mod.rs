@@ -513,6 +513,40 @@ fn build(
     })
 }
 
+/// Adds a report line for every input joint of `l` with a URDF `<limit
+/// effort velocity>` (N·m or N, rad/s or m/s): the simulation enforces
+/// neither; the values stay in the scene's `limit` (for reference) when
+/// that limit is kept, and are left out otherwise (continuous joints,
+/// limits not containing the initial pose, joints merged into a ball).
+/// Returns `limit` unchanged.
+fn effort_velocity_note(
+    l: &source::SourceLink,
+    limit: Option<JointLimitSpec>,
+    notes: &mut Vec<String>,
+) -> Option<JointLimitSpec> {
+    for j in &l.joint.input_joints {
+        if j.effort.is_none() && j.velocity.is_none() {
+            continue;
+        }
+        let what: Vec<String> = [("effort", j.effort), ("velocity", j.velocity)]
+            .iter()
+            .filter_map(|(k, v)| v.map(|v| format!("{k}=\"{v}\"")))
+            .collect();
+        let kept = limit.is_some() && l.joint.input_joints.len() == 1;
+        notes.push(format!(
+            "joint \"{}\": <limit {}> not simulated (no effort or velocity limits in the scene); {}",
+            j.name,
+            what.join(" "),
+            if kept {
+                "carried in the scene's joint limit for reference"
+            } else {
+                "left out (the joint has no scene limit)"
+            }
+        ));
+    }
+    limit
+}
+
 /// The scene limit of an imported 1-DOF joint whose input limits position.
 /// Enforced only when the initial coordinate (`initial`, default 0) lies
 /// strictly inside; otherwise the limit is noted and left out (the barrier

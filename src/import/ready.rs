@@ -182,7 +182,17 @@ pub fn make_ready(
     .poses;
     hulls.update(model, &poses);
     if opts.contact {
-        report.excluded_pairs = rest_pose_exclusions(model, &hulls, range);
+        // Pairs the input already excludes (MJCF's contact filter and
+        // `<contact><exclude>`) are not reported again as overlaps.
+        let given = scene.contact.as_ref().map(|c| c.exclude.clone());
+        report.excluded_pairs = rest_pose_exclusions(model, &hulls, range)
+            .into_iter()
+            .filter(|[a, b]| {
+                !given.as_ref().is_some_and(|g| {
+                    g.contains(&[a.clone(), b.clone()]) || g.contains(&[b.clone(), a.clone()])
+                })
+            })
+            .collect();
         add_contact(scene, &report.excluded_pairs, contact);
     }
     let ground = opts.ground.unwrap_or(floating && scene.ground.is_none());

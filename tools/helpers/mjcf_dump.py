@@ -21,6 +21,9 @@ the numbers printed here are the model MuJoCo simulates:
   gain/bias types and parameters), the joint it drives (null for other
   transmissions), gear, kp, kv, ctrlrange (null when not limited), for the
   import notes;
+- `exclude`: MuJoCo's compiled `<contact><exclude>` body pairs (body
+  indices as in `bodies`, -1 = world), decoded from `exclude_signature`
+  (`(body1 << 16) + body2`);
 - `option`: gravity and timestep; `unsupported`: counts of what the
   importer leaves out (tendons, equality constraints, actuators, sites with
   sensors are not needed), for the import notes.
@@ -143,6 +146,7 @@ def main():
             "kv": float(-bp[2]) + 0.0 if kind == "position" else (float(gp[0]) if kind == "velocity" else None),
             "ctrlrange": floats(m.actuator_ctrlrange[a]) if m.actuator_ctrllimited[a] else None,
         })
+    exclude = [[int(sig) >> 16, int(sig) & 0xFFFF] for sig in m.exclude_signature]
     out = {
         "file": path,
         "model": m.names[:m.names.index(b"\0")].decode() if m.names else "",
@@ -150,7 +154,9 @@ def main():
         "bodies": bodies,
         "geoms": geoms,
         "actuators": actuators,
+        "exclude": [[a - 1, b - 1] for a, b in exclude],
         "unsupported": {
+            "explicit contact pairs (<contact><pair>)": int(m.npair),
             "tendons": int(m.ntendon),
             "equality constraints": int(m.neq),
             "height fields": int(m.nhfield),

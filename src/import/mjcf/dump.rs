@@ -19,6 +19,10 @@ pub struct Dump {
     /// Every actuator (listed in the import notes).
     #[serde(default)]
     pub actuators: Vec<DumpActuator>,
+    /// `<contact><exclude>` body pairs (indices into `bodies`, −1 the
+    /// world), as MuJoCo compiled them.
+    #[serde(default)]
+    pub exclude: Vec<[i64; 2]>,
     pub unsupported: std::collections::BTreeMap<String, usize>,
 }
 

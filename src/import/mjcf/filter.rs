@@ -1,7 +1,9 @@
 //! MuJoCo's contact filter as exclusions: geoms whose `contype`/
 //! `conaffinity` masks never match, bodies welded together (`body_weldid`),
 //! a weld group and its parent group (`filterparent`, unless the parent is
-//! the world), and the world's geoms against bodies welded to the world.
+//! the world), the world's geoms against bodies welded to the world, and
+//! the body pairs of `<contact><exclude>` (MuJoCo's `exclude_signature`,
+//! bodies as written, world = −1).
 
 use super::super::error::ImportError;
 use super::bodies::Bodies;
@@ -41,6 +43,14 @@ pub(super) fn masks_meet(a: &[&DumpGeom], b: &[&DumpGeom]) -> bool {
     })
 }
 
+/// Whether `<contact><exclude>` names the bodies `a` and `b` (either order;
+/// −1 is the world).
+pub(super) fn listed(d: &Dump, a: i64, b: i64) -> bool {
+    d.exclude
+        .iter()
+        .any(|&[x, y]| (x, y) == (a, b) || (x, y) == (b, a))
+}
+
 /// Excluded pairs of geometry links (names) between bodies.
 pub(super) fn body_pairs(
     d: &Dump,
@@ -68,7 +78,10 @@ pub(super) fn body_pairs(
             // unless the parent is the world.
             let parent_child =
                 wa.is_some() && wb.is_some() && (weld_parent(wa) == wb || weld_parent(wb) == wa);
-            let filtered = wa == wb || parent_child || !masks_meet(&geoms_of[a], &geoms_of[b]);
+            let filtered = wa == wb
+                || parent_child
+                || listed(d, a as i64, b as i64)
+                || !masks_meet(&geoms_of[a], &geoms_of[b]);
             if filtered {
                 exclude.push([
                     links[geometry_link[a]].name.clone(),
@@ -84,6 +97,7 @@ pub(super) fn body_pairs(
 /// Per body that collides: excluded against the ground (link names) and
 /// against each obstacle (obstacle, link).
 pub(super) fn world_pairs(
+    d: &Dump,
     weld: &[Option<usize>],
     geoms_of: &[Vec<&DumpGeom>],
     bodies: &Bodies,
@@ -100,13 +114,14 @@ pub(super) fn world_pairs(
             continue;
         }
         let name = &links[geometry_link[b]].name;
+        let off = weld[b].is_none() || listed(d, -1, b as i64);
         if let Some(g) = ground_geom
-            && (weld[b].is_none() || !masks_meet(&geoms_of[b], &[g]))
+            && (off || !masks_meet(&geoms_of[b], &[g]))
         {
             exclude_ground.push(name.clone());
         }
         for (o, g) in obstacles.iter().zip(obstacle_geoms.iter()) {
-            if weld[b].is_none() || !masks_meet(&geoms_of[b], &[*g]) {
+            if off || !masks_meet(&geoms_of[b], &[*g]) {
                 exclude_obstacle.push([o.name.clone(), name.clone()]);
             }
         }

@@ -38,7 +38,9 @@
 //!   colliding world geoms become obstacles;
 //! - contact filtering as MuJoCo's: pairs whose `contype`/`conaffinity`
 //!   masks never match, bodies welded together, and parent–child weld groups
-//!   are excluded;
+//!   are excluded, and so are the body pairs of `<contact><exclude>`
+//!   (with the world body: against the ground and obstacles);
+//!   `<contact><pair>` (explicit pairs) is counted in the notes and left out;
 //! - joint ranges → limits, `damping`/`armature`/`frictionloss` → the
 //!   scene's `joint_damping`/`armature`/`joint_friction` effects,
 //!   `stiffness` with `springref` → a `joint_spring` effect (hinge and
@@ -214,7 +216,8 @@ pub fn read_mjcf(
     let bodies = bodies::body_links(path, &d, &geoms_of, opts, &mut notes)?;
     let exclude = filter::body_pairs(&d, &weld, &geoms_of, &bodies);
     let world = world::world(path, &world_geoms, &mut notes)?;
-    let (exclude_ground, exclude_obstacle) = filter::world_pairs(&weld, &geoms_of, &bodies, &world);
+    let (exclude_ground, exclude_obstacle) =
+        filter::world_pairs(&d, &weld, &geoms_of, &bodies, &world);
     let bodies::Bodies {
         links,
         initial,
