@@ -314,7 +314,10 @@ fn clean_data_gives_no_missing_effect() {
 /// 0.005 m) give `none`, the fit recovers `s` within 15 % and halves the
 /// training RMS at least; with the fit switched off, the old behaviour
 /// names a contact parameter as the effect. (Settings and bounds chosen
-/// before the first run, 2026-11-28.)
+/// before the first run, 2026-11-28. That run offered every effect kind
+/// and passed in 162 s of CI time with the rest of this file; the
+/// candidates were then cut to the joint and contact kinds for CI's time
+/// budget — notes/calibration.md, session 6.)
 #[test]
 fn contact_resolution_is_fitted_first_and_never_named() {
     let dir = common::scratch_dir("calibrate-resolution");
@@ -339,7 +342,14 @@ fn contact_resolution_is_fitted_first_and_never_named() {
                 measured,
                 more_measured: Vec::new(),
                 out: dir.join(format!("out_resolution_{fit}")),
-                effects: EffectKind::ALL.to_vec(),
+                effects: vec![
+                    EffectKind::JointDamping,
+                    EffectKind::JointFriction,
+                    EffectKind::ActuatorGain,
+                    EffectKind::ContactMu,
+                    EffectKind::ContactKappa,
+                    EffectKind::ContactS,
+                ],
                 holdout: 0.3,
                 select: Default::default(),
                 log: Default::default(),

@@ -24,4 +24,6 @@ export SDRS_TEST_ALL_TIERS=1
 cargo test --release --workspace --all-targets
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
-.venv/bin/python -m pytest python/tests -q -p no:cacheprovider
+# `cargo test` above built the CLI the Python tests compare against.
+SDRS_CLI="$PWD/${CARGO_TARGET_DIR:-target}/release/sdrs" \
+  .venv/bin/python -m pytest python/tests -q -p no:cacheprovider

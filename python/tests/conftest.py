@@ -25,7 +25,15 @@ def data() -> Path:
 
 @pytest.fixture(scope="session")
 def cli() -> Path:
-    """The `sdrs` binary of this checkout (release), built if needed."""
+    """The `sdrs` binary of this checkout (release): `$SDRS_CLI` when set
+    (`tools/test.sh` sets it to the binary its `cargo test` just built: a
+    `cargo build -p sdrs-cli` here resolves that package's features alone
+    and rebuilt the core, 118 s of CI), else built here."""
+    given = os.environ.get("SDRS_CLI")
+    if given:
+        exe = Path(given)
+        assert exe.is_file(), f"SDRS_CLI={given} is not a file"
+        return exe
     subprocess.run(
         ["cargo", "build", "--release", "--quiet", "-p", "sdrs-cli", "--bin", "sdrs"],
         cwd=ROOT,
