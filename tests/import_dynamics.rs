@@ -133,20 +133,17 @@ fn urdf_effort_velocity_and_transmissions_are_reported() {
             .unwrap_or_else(|| panic!("no line {start:?}: {notes:?}"))
             .clone()
     };
-    let lift = line("joint \"lift\": <limit");
-    assert!(
-        lift.contains(r#"effort="5""#)
-            && lift.contains(r#"velocity="2""#)
-            && lift.contains("carried"),
-        "{lift}"
-    );
-    let wheel = line("joint \"wheel\": <limit");
-    assert!(
-        wheel.contains(r#"effort="3""#)
-            && wheel.contains(r#"velocity="4""#)
-            && wheel.contains("left out"),
-        "{wheel}"
-    );
+    // Each joint's line: its effort and velocity, and what was done.
+    for (joint, effort, velocity, done) in [("lift", 5, 2, "carried"), ("wheel", 3, 4, "left out")]
+    {
+        let l = line(&format!("joint \"{joint}\": <limit"));
+        assert!(
+            l.contains(&format!("effort=\"{effort}\""))
+                && l.contains(&format!("velocity=\"{velocity}\""))
+                && l.contains(done),
+            "{l}"
+        );
+    }
     assert!(
         notes.iter().any(|n| n.contains("<transmission>")),
         "{notes:?}"
