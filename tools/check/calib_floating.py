@@ -20,7 +20,7 @@ gymnasium's ant (MJCF, a quadruped on a free joint, nobody here wrote it):
    clean → `none`; one effect → that effect alone, within 15 %.
 
     python tools/check/calib_floating.py --sdrs target/release/sdrs --out out/ant \
-        [--cases clean,payload,mu] [--duration 3]
+        [--cases clean,payload,mu] [--duration 3] [--excitation pushups|scissor]
 
 Every setting below was fixed before the first run of the case it serves;
 changes after an outcome are listed in notes/calibration.md with it.
@@ -51,6 +51,17 @@ ANKLE0 = {"ankle_1": 1.0, "ankle_2": -1.0, "ankle_3": -1.0, "ankle_4": 1.0}
 # drift depended on MuJoCo's own contact settings (cone, noslip) by more than
 # its size (notes/calibration.md, session 5).
 ANKLE_SIGN = {"1": 1.0, "2": -1.0, "3": -1.0, "4": 1.0}
+# `--excitation scissor` (issue 33, chosen 2026-11-29 before any run with it, for
+# the μ case): the same push-ups, but the hips sweep in alternating sense
+# (hip_1, hip_3 +; hip_2, hip_4 −). The legs sit at 45°, 135°, 225° and 315°
+# about the torso (ant.xml), so the four feet's tangential motions sum to no
+# net force and no net yaw torque: the torso cannot follow them and the feet
+# must slide whenever the hips move — Coulomb's sliding law, which MuJoCo
+# follows (tools/check/mujoco_friction_box.py), instead of the stick–slip
+# and creep the in-phase sweep excites (fitted μ 0.232 for 0.3,
+# notes/calibration.md, session 6).
+HIP_SIGN = {"pushups": {"1": 1.0, "2": 1.0, "3": 1.0, "4": 1.0},
+            "scissor": {"1": 1.0, "2": -1.0, "3": 1.0, "4": -1.0}}
 TORSO_Z0 = 0.62  # lowest hull ≈ 0.06 m above the ground at the start: a short drop
 # MuJoCo's friction cone for the data. The model's default, the pyramidal
 # cone, bounds the friction force by |f₁| + |f₂| ≤ μ f_n in the contact
@@ -107,7 +118,7 @@ def make_scene(args, case_dir):
         if j.startswith("ankle"):
             term = {"amplitude": 0.15 * ANKLE_SIGN[j[-1]], "frequency": 1.0}
         else:
-            term = {"amplitude": 0.2, "frequency": 0.7}
+            term = {"amplitude": 0.2 * HIP_SIGN[args.excitation][j[-1]], "frequency": 0.7}
         targets[j] = {"type": "sine", "offset": q0, "terms": [term]}
     rob["initial"] = init
     rob["controller"]["targets"] = targets
@@ -213,6 +224,8 @@ def main():
     ap.add_argument("--timestep", type=float, default=1e-4)
     ap.add_argument("--integrator", default="RK4", choices=["RK4", "implicitfast", "implicit", "Euler"])
     ap.add_argument("--effects", help="candidate effects passed to `sdrs calibrate --effects`")
+    ap.add_argument("--excitation", default="pushups", choices=sorted(HIP_SIGN),
+                    help="hips in phase (pushups) or alternating (scissor: the feet slide)")
     ap.add_argument("--data-only", action="store_true", help="write scenes and data, do not calibrate")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
