@@ -169,12 +169,16 @@ def simulate_mujoco(args, sc, hidden, out_csv, seed):
     gains = ctrl["gains"]
     rng = np.random.default_rng(seed)
     cols = ["t", "ant/root:x", "ant/root:y", "ant/root:z"] + ["ant/" + j for j in JOINTS]
+    if args.orientation:
+        cols += ["ant/root:rx", "ant/root:ry", "ant/root:rz"]
     rows, next_sample = [], 0.0
     steps = int(round(args.duration / args.timestep))
     for k in range(steps + 1):
         t = k * args.timestep
         if t >= next_sample - 1e-12:
             vals = list(data.qpos[:3]) + [data.qpos[model.joint(j).qposadr[0]] for j in JOINTS]
+            if args.orientation:
+                vals += list(rotation_vector(data.qpos[3:7]))
             rows.append([t] + [x + args.noise * rng.standard_normal() for x in vals])
             next_sample += args.period
         if k == steps:
@@ -191,6 +195,17 @@ def simulate_mujoco(args, sc, hidden, out_csv, seed):
         for r in rows:
             f.write(",".join(repr(float(x)) for x in r) + "\n")
     return rows
+
+
+def rotation_vector(quat):
+    """The torso's orientation as SDRS reports a free joint's (an absolute
+    rotation vector φ, R = exp([φ]×); `docs/usage.md`), from MuJoCo's unit
+    quaternion (w, x, y, z)."""
+    w, v = quat[0], np.asarray(quat[1:])
+    if w < 0:
+        w, v = -w, -v
+    s = np.linalg.norm(v)
+    return v * (2.0 * np.arctan2(s, w) / s) if s > 1e-12 else 2.0 * v
 
 
 def judge(res, hidden):
@@ -226,6 +241,8 @@ def main():
     ap.add_argument("--effects", help="candidate effects passed to `sdrs calibrate --effects`")
     ap.add_argument("--excitation", default="pushups", choices=sorted(HIP_SIGN),
                     help="hips in phase (pushups) or alternating (scissor: the feet slide)")
+    ap.add_argument("--orientation", action="store_true",
+                    help="also measure the torso's orientation (rotation vector), as an IMU would")
     ap.add_argument("--data-only", action="store_true", help="write scenes and data, do not calibrate")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
