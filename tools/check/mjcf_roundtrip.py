@@ -3,7 +3,8 @@
 export-mjcf`, both compiled by MuJoCo (issue 32, item 6, static part).
 
 Usage: mjcf_roundtrip.py ORIGINAL.xml EXPORTED.xml [--tol 1e-9]
-           [--trajectory SDRS.csv [--qpos joint=value,...] [--mj-timestep 1e-5] [--traj-tol X]]
+           [--trajectory SDRS.csv [--qpos joint=value,...] [--mj-timestep 1e-5] [--traj-tol X]
+            [--mj-solref T]]
 
 Both models are put at their initial state (the original at `qpos0` with the `--qpos` values,
 the export at its keyframe `initial`) and compared in the frame of the original's first body (the root; the export's body
@@ -113,8 +114,10 @@ def joints(m, d, root):
     return out
 
 
-def trajectory(m, csv_path, qpos, h):
-    """Largest |sdrs − MuJoCo| per joint column of `csv_path` (rad or m)."""
+def trajectory(m, csv_path, qpos, h, solref=None):
+    """Largest |sdrs − MuJoCo| per joint column of `csv_path` (rad or m).
+    `solref`: every geom's contact time constant (s) replaced by it (MuJoCo's
+    own contact softness, to measure its share of a contact difference)."""
     with open(csv_path, newline="") as f:
         rows = list(csv.reader(f))
     header = [bare(h) for h in rows[0]]
@@ -123,6 +126,8 @@ def trajectory(m, csv_path, qpos, h):
     t = a["t"]
     m.opt.timestep = h
     m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    if solref is not None:
+        m.geom_solref[:, 0] = solref
     d = mujoco.MjData(m)
     set_qpos(m, d, qpos)
     cols = {}
@@ -153,6 +158,8 @@ def main():
     ap.add_argument("--qpos", default="")
     ap.add_argument("--mj-timestep", type=float, default=1e-5)
     ap.add_argument("--traj-tol", type=float, default=1e-2)
+    ap.add_argument("--mj-solref", type=float,
+                    help="MuJoCo's contact time constant for every geom (default: the model's)")
     a = ap.parse_args()
     qpos = {k: float(v) for k, v in (p.split("=") for p in a.qpos.split(",") if p)}
     try:
@@ -210,7 +217,7 @@ def main():
     traj = None
     if a.trajectory:
         traj = trajectory(mujoco.MjModel.from_xml_path(a.original), a.trajectory, qpos,
-                          a.mj_timestep)
+                          a.mj_timestep, a.mj_solref)
         ok = ok and bool(traj) and max(traj.values()) <= a.traj_tol
     print(json.dumps({
         "trajectory": traj, "traj_tol": a.traj_tol,
