@@ -192,10 +192,11 @@ fn servo(
     };
     let g = a.gear;
     let a0 = a.gainprm.first().copied().unwrap_or(1.0);
+    // `+ 0.0` turns a −0 (from a zero bias) into 0 for the report and scene.
     let s = Servo {
-        k: -g * g * bias[1],
-        c: -g * g * bias[2],
-        f: g * (a0 * u + bias[0]),
+        k: -g * g * bias[1] + 0.0,
+        c: -g * g * bias[2] + 0.0,
+        f: g * (a0 * u + bias[0]) + 0.0,
     };
     if s.k < 0.0 || s.c < 0.0 {
         return Err(format!(
