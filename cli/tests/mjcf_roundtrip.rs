@@ -240,10 +240,7 @@ fn position_servos_round_trip_as_equal_joint_laws() {
         String::from_utf8_lossy(&out.stderr)
     );
     let r: serde_json::Value = serde_json::from_str(&text).unwrap();
-    eprintln!(
-        "servo arm: errors {}, servos {}",
-        r["errors"], r["servo"]
-    );
+    eprintln!("servo arm: errors {}, servos {}", r["errors"], r["servo"]);
     assert!(r["ok"].as_bool().unwrap(), "{r:#}");
     let original_servos = r["servo"]["original"].as_object().unwrap();
     let mut joints: Vec<&String> = original_servos.keys().collect();
@@ -252,5 +249,8 @@ fn position_servos_round_trip_as_equal_joint_laws() {
     // The elbow's target: u = 0.3 (ctrl 0 clamped), θ* = u/g = 0.1.
     let elbow = &original_servos["elbow"];
     let (k, f) = (elbow[0].as_f64().unwrap(), elbow[2].as_f64().unwrap());
-    assert!((k - 270.0).abs() < 1e-9 && (f / k - 0.1).abs() < 1e-12, "{elbow}");
+    assert!(
+        (k - 270.0).abs() < 1e-9 && (f / k - 0.1).abs() < 1e-12,
+        "{elbow}"
+    );
 }
