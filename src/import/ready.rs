@@ -21,7 +21,8 @@
 //!   A floating root becomes a `free` joint. The choice and its reason are
 //!   in the report (`ready.base`).
 //! - **Pose** (`--pose joint=value,…`): initial coordinates of revolute and
-//!   prismatic joints (rad or m); the PD targets hold this pose.
+//!   prismatic joints (rad or m); the PD targets hold this pose (a joint
+//!   driven by an MJCF servo keeps the servo's target, see **Gains**).
 //! - **Contact** (on by default): `s = 0.01`, `κ = 1`, `μ = 0.5`; every pair
 //!   of links whose hulls intersect or lie within `1.5 × 2s/(1−s)` of each
 //!   other in the initial pose is excluded (listed in the report): the
