@@ -100,8 +100,9 @@ fn urdf_dynamics_become_effects_and_damp_as_viscous_torque() {
 /// each gets a report line, never a silent drop. `lift` (revolute, limits
 /// [−1, 1] around its initial 0) keeps its scene limit, which carries the
 /// URDF's effort 5 N·m and velocity 2 rad/s; `wheel` (continuous, no
-/// scene limit) has its effort 3 and velocity 4 listed as left out; the
-/// transmission is listed as ignored.
+/// scene limit) has its effort 3 and velocity 4 listed as left out; each
+/// transmission is listed as ignored with its joint, actuator and
+/// `mechanicalReduction` (one line each, no generic line).
 #[test]
 fn urdf_effort_velocity_and_transmissions_are_reported() {
     let dir = temp_dir("urdf-effort");
@@ -121,6 +122,8 @@ fn urdf_effort_velocity_and_transmissions_are_reported() {
   <transmission name="t_lift"><type>transmission_interface/SimpleTransmission</type>
     <joint name="lift"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
     <actuator name="m_lift"><mechanicalReduction>50</mechanicalReduction></actuator></transmission>
+  <transmission name="t_wheel" type="pr2_mechanism_model/SimpleTransmission">
+    <joint name="wheel"/><actuator name="m_wheel"/><mechanicalReduction>7.5</mechanicalReduction></transmission>
 </robot>"#,
     )
     .unwrap();
@@ -144,8 +147,38 @@ fn urdf_effort_velocity_and_transmissions_are_reported() {
             "{l}"
         );
     }
-    assert!(
-        notes.iter().any(|n| n.contains("<transmission>")),
+    // One line per transmission: its joint, actuator and reduction (ROS's
+    // `<actuator><mechanicalReduction>` and the older direct child).
+    for (t, kind, joint, actuator, reduction) in [
+        (
+            "t_lift",
+            "transmission_interface/SimpleTransmission",
+            "lift",
+            "m_lift",
+            "50",
+        ),
+        (
+            "t_wheel",
+            "pr2_mechanism_model/SimpleTransmission",
+            "wheel",
+            "m_wheel",
+            "7.5",
+        ),
+    ] {
+        let l = line(&format!("ignored <transmission> \"{t}\" ({kind})"));
+        assert!(
+            l.contains(&format!("joint(s) [\"{joint}\"]"))
+                && l.contains(&format!("actuator(s) [\"{actuator}\"]"))
+                && l.contains(&format!("mechanicalReduction [{reduction}]")),
+            "{l}"
+        );
+    }
+    assert_eq!(
+        notes
+            .iter()
+            .filter(|n| n.contains("<transmission>"))
+            .count(),
+        2,
         "{notes:?}"
     );
     let r = &imp.scene.robots[0];

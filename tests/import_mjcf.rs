@@ -425,7 +425,8 @@ fn mjcf_geom_friction_becomes_the_scene_mu_with_a_report_line() {
 /// ω = √(k/I). Tolerance chosen before the run: implicit Euler at Δt = 1e-4
 /// loses amplitude as exp(−ω² Δt t / 2), 6e-4 rad at t = 1 s; bound 1.5e-3
 /// rad. A ball joint's spring is listed in the report, and each actuator
-/// gets a report line (kind, gear, gains, range, joint). (`angle="radian"`:
+/// gets a report line (kind, gear, gains, range, joint; the motor is left
+/// out, the position servo maps to the controller). (`angle="radian"`:
 /// MJCF's default is degrees, and `springref` follows it — the first run
 /// without it read 0.3° = 5.236e-3 rad, as MuJoCo compiles it.)
 #[test]
@@ -477,11 +478,17 @@ fn mjcf_joint_springs_follow_hookes_law_and_actuators_are_listed() {
         "{notes:?}"
     );
     assert!(
-        has("actuator \"p\" (position, gear 1, kp 20, kv 2) on joint \"h\" left out"),
+        has(
+            "actuator \"p\" (position, gear 1, kp 20, kv 2) on joint \"h\" → the scene's PD controller"
+        ),
         "{notes:?}"
     );
-    // Only the hinge moves: weld the ball (its spring is not simulated).
+    // Only the hinge moves: weld the ball (its spring is not simulated),
+    // and only the spring drives it: the position servo mapped to the
+    // controller is taken off (`tests/import_mjcf_actuators.rs` checks it).
     let mut spec = imp.scene.clone();
+    assert_eq!(spec.robots[0].controller.gains["h"].kp, Some(10.0));
+    spec.robots[0].controller = Default::default();
     for l in &mut spec.robots[0].links {
         if l.name == "bob" {
             l.joint.kind = sdrs::scene::schema::JointType::Fixed;

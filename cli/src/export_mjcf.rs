@@ -18,6 +18,11 @@ pub struct ExportMjcfArgs {
     /// Model name. Default: the scene file's stem.
     #[arg(long)]
     pub name: Option<String>,
+    /// Also write the PD controller's constant-target channels on hinges and
+    /// slides as MuJoCo `<position kp="2 k_p" kv="2 k_d/Δt">` actuators with
+    /// the target as the keyframe's ctrl (`sdrs::output::mjcf::pd_actuators`).
+    #[arg(long)]
+    pub actuators: bool,
 }
 
 pub fn run(a: ExportMjcfArgs) -> Result<()> {
@@ -33,7 +38,7 @@ pub fn run(a: ExportMjcfArgs) -> Result<()> {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "sdrs".into())
     });
-    let text = sdrs::output::mjcf::scene_to_mjcf(&scene, &name);
+    let text = sdrs::output::mjcf::scene_to_mjcf_with(&scene, &name, a.actuators);
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }

@@ -82,8 +82,9 @@ pub struct ImportArgs {
     /// pairs that overlap in the initial pose, listed in the report).
     #[arg(long)]
     pub no_contact: bool,
-    /// Write no PD gains (by default every joint holds its initial pose
-    /// against gravity).
+    /// Write no holding PD gains (by default every joint holds its initial
+    /// pose against gravity; joints an MJCF position or velocity actuator
+    /// drives keep that actuator's gains either way).
     #[arg(long)]
     pub no_hold: bool,
     /// Initial pose: `joint=value,…` (rad or m); the PD targets hold it.

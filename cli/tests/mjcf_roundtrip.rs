@@ -14,8 +14,11 @@
 //!   order, so the error must shrink with Δt: bounds chosen from that
 //!   before the runs, largest joint difference at Δt = 1e-4 ≤ 0.02 (rad or
 //!   m) and a ratio ≥ 5 between Δt = 1e-3 and 1e-4 (order ≥ 0.7).
-//!   Actuators are not exported (the scene has no control inputs); the
-//!   import lists each one in its report.
+//!   gymnasium's actuators are motors: not exported (no force at rest, no
+//!   torque-input channel); the import lists each one in its report.
+//! - Servos: a hand-written arm's `<position>` actuators → the scene's PD
+//!   → `export-mjcf --actuators` → equal joint-space laws (K, C, F) to
+//!   1e-9 relative.
 
 mod support;
 
@@ -229,4 +232,89 @@ fn contact_trajectory_of_half_cheetah_follows_mujoco_within_the_contact_models_d
         assert!(e <= bound, "{joint}: {e} > {bound}");
     }
     assert_eq!(whole.len(), 9, "{whole:?}");
+}
+
+/// A menagerie-style arm (three hinges and a slide finger, `<position>`
+/// servos with gears 1–3, kp, kv and a `ctrlrange` that excludes 0, and a
+/// motor): `sdrs import` (default hold) → `sdrs export-mjcf --actuators` →
+/// MuJoCo. The servos of the original at ctrl 0 and of the export at its
+/// keyframe are equal as joint-space laws `τ = F − K q − C q̇` per joint
+/// (`tools/check/mjcf_roundtrip.py --actuators`): the import maps
+/// `K, C, F → k_p = K/2, k_d = C Δt/2, θ* = F/K`, the export writes
+/// `kp = 2 k_p, kv = 2 k_d/Δt, ctrl = θ*` — a plain inversion, so the
+/// tolerance is round-off, 1e-9 relative, as for the masses. The motor's
+/// joint (`wrist`) has no servo in the original (no force at rest) and gets
+/// the import's hold; the tool compares the original's servos only.
+#[test]
+fn position_servos_round_trip_as_equal_joint_laws() {
+    if support::skip_without_venv() {
+        return;
+    }
+    let dir = scratch_dir("mjcf-roundtrip-servo");
+    let original = dir.join("servo_arm.xml");
+    std::fs::write(
+        &original,
+        r#"<mujoco model="servo_arm"><compiler angle="radian"/>
+  <default><geom contype="0" conaffinity="0" density="500"/></default>
+  <worldbody>
+    <body name="base" pos="0 0 0.1"><geom type="cylinder" size="0.08 0.05"/>
+      <body name="upper" pos="0 0 0.05"><joint name="shoulder" axis="0 0 1" range="-3 3"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+        <body name="fore" pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-2 2"/>
+          <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.03"/>
+          <body name="hand" pos="0.25 0 0"><joint name="wrist" axis="1 0 0"/>
+            <geom type="box" size="0.03 0.05 0.02"/>
+            <body name="finger" pos="0.04 0 0"><joint name="slide" type="slide" axis="0 1 0" range="-0.04 0.04"/>
+              <geom type="box" size="0.01 0.01 0.03"/></body></body></body></body></body>
+  </worldbody>
+  <actuator>
+    <position name="a_shoulder" joint="shoulder" kp="50" kv="5"/>
+    <position name="a_elbow" joint="elbow" kp="30" kv="2" gear="3" ctrlrange="0.3 1.5"/>
+    <position name="a_slide" joint="slide" kp="200" kv="4" gear="2" ctrlrange="-0.02 0.02"/>
+    <motor name="m_wrist" joint="wrist" gear="10" ctrlrange="-1 1"/>
+  </actuator>
+</mujoco>"#,
+    )
+    .unwrap();
+    let (scene, exported) = (dir.join("servo_arm.yaml"), dir.join("servo_arm_export.xml"));
+    support::run_ok(
+        sdrs()
+            .args(["import", "-q", "--decomposer", "hull", "--out"])
+            .arg(&scene)
+            .arg(&original),
+    );
+    support::run_ok(
+        sdrs()
+            .args(["export-mjcf", "--actuators"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&exported),
+    );
+    let out = python()
+        .arg(root().join("tools/check/mjcf_roundtrip.py"))
+        .arg(&original)
+        .arg(&exported)
+        .arg("--actuators")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+    eprintln!("servo arm: errors {}, servos {}", r["errors"], r["servo"]);
+    assert!(r["ok"].as_bool().unwrap(), "{r:#}");
+    let original_servos = r["servo"]["original"].as_object().unwrap();
+    let mut joints: Vec<&String> = original_servos.keys().collect();
+    joints.sort();
+    assert_eq!(joints, ["elbow", "shoulder", "slide"]);
+    // The elbow's target: u = 0.3 (ctrl 0 clamped), θ* = u/g = 0.1.
+    let elbow = &original_servos["elbow"];
+    let (k, f) = (elbow[0].as_f64().unwrap(), elbow[2].as_f64().unwrap());
+    assert!(
+        (k - 270.0).abs() < 1e-9 && (f / k - 0.1).abs() < 1e-12,
+        "{elbow}"
+    );
 }

@@ -215,7 +215,8 @@ pub fn import_with(
 }
 
 /// Puts what an MJCF file adds (gravity, ground, obstacles, MuJoCo's
-/// contact filter, joint effects) into the imported scene and validates it.
+/// contact filter, joint effects, actuator-driven PD) into the imported
+/// scene and validates it.
 fn add_mjcf_scene(
     imp: &mut Imported,
     extra: mjcf::MjcfScene,
@@ -232,6 +233,24 @@ fn add_mjcf_scene(
     scene.obstacles = extra.obstacles;
     // Effects name bare joints (accepted while one robot has the joint).
     scene.effects = extra.effects;
+    // Joints driven by the input's actuators: their gains and targets
+    // (`ready::make_ready`'s hold leaves these joints alone).
+    let controller = &mut scene.robots[0].controller;
+    for (joint, d) in extra.drives {
+        controller.gains.insert(
+            joint.clone(),
+            crate::scene::schema::Gains {
+                kp: Some(d.kp),
+                kd: Some(d.kd),
+            },
+        );
+        controller.targets.insert(
+            joint,
+            crate::scene::schema::SignalList::One(crate::control::Signal::Constant {
+                value: d.target,
+            }),
+        );
+    }
 
     let mut exclude: Vec<[String; 2]> = extra
         .exclude

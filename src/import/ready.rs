@@ -21,7 +21,8 @@
 //!   A floating root becomes a `free` joint. The choice and its reason are
 //!   in the report (`ready.base`).
 //! - **Pose** (`--pose joint=value,…`): initial coordinates of revolute and
-//!   prismatic joints (rad or m); the PD targets hold this pose.
+//!   prismatic joints (rad or m); the PD targets hold this pose (a joint
+//!   driven by an MJCF servo keeps the servo's target, see **Gains**).
 //! - **Contact** (on by default): `s = 0.01`, `κ = 1`, `μ = 0.5`; every pair
 //!   of links whose hulls intersect or lie within `1.5 × 2s/(1−s)` of each
 //!   other in the initial pose is excluded (listed in the report): the
@@ -47,6 +48,9 @@
 //!   gravity's destabilizing `m_j g r_j` (an upright arm stays up).
 //!   `k_d,j = Δt √(2 k_p,j M_jj)` damps the joint's own inertia `M_jj`
 //!   (from the step Hessian at rest, `M = Δt² ∂²O/∂θ²`) critically.
+//!   A joint whose gains the input already set (an MJCF position or
+//!   velocity actuator, `super::mjcf::actuators`) keeps them and its target:
+//!   the input's servo is the model's, and MuJoCo simulates it at rest.
 
 use super::error::ImportError;
 use crate::contact::ContactParams;
@@ -132,7 +136,9 @@ pub struct ReadyReport {
     pub excluded_pairs: Vec<[String; 2]>,
     /// Height by which the robot was lifted onto the ground (m), if any.
     pub ground_lift: Option<f64>,
-    /// PD gains per joint: `[k_p, k_d]`.
+    /// PD gains the hold wrote, per joint: `[k_p, k_d]`. Joints the input
+    /// drives itself (MJCF actuators mapped to the controller,
+    /// `super::mjcf::actuators`) keep those gains and are not listed.
     pub gains: BTreeMap<String, [f64; 2]>,
 }
 
@@ -206,8 +212,12 @@ pub fn make_ready(
         }
     }
     if opts.hold {
-        report.gains = hold_gains(scene, file, floating, &load)?;
-        hold_initial_pose(&mut scene.robots[0], &report.gains);
+        // Joints the input drives (MJCF actuators) keep the input's gains.
+        let driven: BTreeSet<String> = scene.robots[0].controller.gains.keys().cloned().collect();
+        let mut gains = hold_gains(scene, file, floating, &load)?;
+        gains.retain(|joint, _| !driven.contains(joint));
+        hold_initial_pose(&mut scene.robots[0], &gains);
+        report.gains = gains;
     }
     load(scene)?;
     Ok(report)
@@ -466,10 +476,12 @@ fn hold_gains(
     floating: bool,
     load: &dyn Fn(&SceneSpec) -> Result<Scene, ImportError>,
 ) -> Result<BTreeMap<String, [f64; 2]>, ImportError> {
-    // Gravity torques and joint inertias with the base fixed and no contact.
+    // Gravity torques and joint inertias with the base fixed, no contact
+    // and no controller (an input's actuator gains are not inertia).
     let mut fixed = scene.clone();
     fixed.contact = None;
     fixed.ground = None;
+    fixed.robots[0].controller = Default::default();
     let root = fixed.robots[0]
         .links
         .iter()

@@ -8,7 +8,8 @@
 //!   reads them);
 //! - top-level elements other than `<link>`, `<joint>` and `<material>`
 //!   (`<gazebo>`, `<transmission>`, …) are dropped: they describe other
-//!   simulators and controllers;
+//!   simulators and controllers (each `<transmission>` gets its own line
+//!   with its joints and `mechanicalReduction`: [`transmission_notes`]);
 //! - a repeated singleton child (a second `<axis>` in a joint) is dropped;
 //!   the first one counts, as in tinyxml-based readers; so is anything but a
 //!   shape inside `<geometry>` (a misplaced `<material>`);
@@ -131,10 +132,62 @@ pub struct Normalized {
 /// The repaired text and what was repaired. On malformed XML the text is
 /// returned unchanged (the strict checks report it with its line).
 pub fn normalize(text: &str) -> Normalized {
-    rewrite(text).unwrap_or_else(|_| Normalized {
+    let mut n = rewrite(text).unwrap_or_else(|_| Normalized {
         text: text.to_string(),
         ..Normalized::default()
-    })
+    });
+    n.notes.extend(transmission_notes(text));
+    n
+}
+
+/// One report line per top-level `<transmission>` (dropped: the scene has
+/// no actuator model, the import's PD hold drives the joints): its name and
+/// type, its joints, its actuators and every `mechanicalReduction` (ROS's
+/// `<actuator><mechanicalReduction>` and the older direct child). When the
+/// text does not parse here, one generic line if it has any.
+pub fn transmission_notes(text: &str) -> Vec<String> {
+    let Ok(doc) = roxmltree::Document::parse(text) else {
+        return if text.contains("<transmission") {
+            vec!["ignored <transmission> elements (they describe controllers)".into()]
+        } else {
+            Vec::new()
+        };
+    };
+    let named = |n: &roxmltree::Node, tag: &str| -> Vec<String> {
+        n.children()
+            .filter(|c| c.has_tag_name(tag))
+            .map(|c| format!("\"{}\"", c.attribute("name").unwrap_or("?")))
+            .collect()
+    };
+    let reduction = |n: &roxmltree::Node| -> Vec<String> {
+        n.descendants()
+            .filter(|c| c.has_tag_name("mechanicalReduction"))
+            .map(|c| c.text().unwrap_or("").trim().to_string())
+            .collect()
+    };
+    doc.root_element()
+        .children()
+        .filter(|t| t.has_tag_name("transmission"))
+        .map(|t| {
+            let kind = t
+                .children()
+                .find(|c| c.has_tag_name("type"))
+                .and_then(|c| c.text())
+                .or(t.attribute("type"))
+                .unwrap_or("no type")
+                .trim();
+            let joints = named(&t, "joint");
+            let actuators = named(&t, "actuator");
+            let red = reduction(&t);
+            format!(
+                "ignored <transmission> \"{}\" ({kind}): joint(s) [{}], actuator(s) [{}], mechanicalReduction [{}]; the scene has no actuator model (the import's PD hold drives the joints)",
+                t.attribute("name").unwrap_or("?"),
+                joints.join(", "),
+                actuators.join(", "),
+                red.join(", ")
+            )
+        })
+        .collect()
 }
 
 /// Where the rewrite is: the current link and how many `<collision>` and
@@ -180,7 +233,8 @@ fn rewrite(text: &str) -> Result<Normalized, quick_xml::Error> {
                 let drop = match parent.as_deref() {
                     Some("robot") if stack.len() == 1 => {
                         let keep = matches!(name.as_str(), "link" | "joint" | "material");
-                        if !keep {
+                        // Transmissions get a line each ([`transmission_notes`]).
+                        if !keep && name != "transmission" {
                             notes.insert(format!(
                                 "ignored <{name}> elements (they describe other simulators or controllers)"
                             ));

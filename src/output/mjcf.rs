@@ -29,9 +29,10 @@
 //!   `m_p` at `p`, link frame).
 //!
 //! Not translated (MuJoCo has its own): the SDRS barrier and friction
-//! smoothing, PD controllers, mimic ties, the calibration effects listed
-//! by [`untranslated`] (actuator gain and delay: no actuators are written;
-//! encoder offsets; the barrier's `κ` and `s`).
+//! smoothing, PD controllers (unless asked for: [`pd_actuators`],
+//! `--actuators`), mimic ties, the calibration effects listed by
+//! [`untranslated`] (actuator gain and delay; encoder offsets; the
+//! barrier's `κ` and `s`).
 
 use crate::energy::effects::{EffectKind, Target};
 use crate::math::{Pose, rot};
@@ -66,8 +67,15 @@ fn pose_attrs(a: &Pose) -> String {
     )
 }
 
-/// The MJCF text of `scene` (all robots, objects and environment).
+/// The MJCF text of `scene` (all robots, objects and environment), without
+/// actuators.
 pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
+    scene_to_mjcf_with(scene, model_name, false)
+}
+
+/// [`scene_to_mjcf`]; with `actuators`, the PD channels as MuJoCo actuators
+/// ([`pd_actuators`], `sdrs export-mjcf --actuators`).
+pub fn scene_to_mjcf_with(scene: &Scene, model_name: &str, actuators: bool) -> String {
     let model = &scene.model;
     let mut x = String::new();
     let _ = writeln!(
@@ -161,12 +169,85 @@ pub fn scene_to_mjcf(scene: &Scene, model_name: &str) -> String {
             let _ = writeln!(x, "  </contact>");
         }
     }
+    let mut ctrl_attr = String::new();
+    if actuators {
+        let (block, ctrl) = pd_actuators(scene);
+        x.push_str(&block);
+        if !ctrl.is_empty() {
+            let c: Vec<String> = ctrl.iter().map(|v| f(*v)).collect();
+            ctrl_attr = format!(" ctrl=\"{}\"", c.join(" "));
+        }
+    }
     let q: Vec<String> = key_qpos.iter().map(|v| f(*v)).collect();
     let _ = writeln!(x, "  <keyframe>");
-    let _ = writeln!(x, "    <key name=\"initial\" qpos=\"{}\"/>", q.join(" "));
+    let _ = writeln!(
+        x,
+        "    <key name=\"initial\" qpos=\"{}\"{ctrl_attr}/>",
+        q.join(" ")
+    );
     let _ = writeln!(x, "  </keyframe>");
     let _ = writeln!(x, "</mujoco>");
     x
+}
+
+/// The `<actuator>` block of the scene's PD channels and the controls of
+/// keyframe `initial`: the inverse of the MJCF import's mapping
+/// (`crate::import::mjcf::actuators`). A channel on a hinge or slide with a
+/// constant target `θ*` exerts `τ = 2 k_p (θ* − θ) − (2 k_d/Δt) θ̇`
+/// (`crate::energy::pd`), which is MuJoCo's `<position kp="2 k_p"
+/// kv="2 k_d/Δt">` (gear 1) at `ctrl = θ*`, or `<velocity kv="2 k_d/Δt">`
+/// at `ctrl = 0` when `k_p = 0`. Other channels (time-varying targets,
+/// multi-coordinate joints, the free root's pose target) are listed in a
+/// comment, not written. Actuator gain and delay effects are not applied
+/// (see [`untranslated`]).
+pub fn pd_actuators(scene: &Scene) -> (String, Vec<f64>) {
+    let model = &scene.model;
+    let dt = scene.settings.dt;
+    let mut x = String::from("  <actuator>\n");
+    let mut ctrl = Vec::new();
+    for ch in &scene.controller.channels {
+        let link = model.dofs[ch.dof].link;
+        let jn = joint_name(scene, link);
+        let one_dof = matches!(
+            model.links[link].joint,
+            JointKind::Revolute { .. } | JointKind::Prismatic { .. }
+        );
+        let (kp, kv) = (2.0 * ch.kp, 2.0 * ch.kd / dt);
+        match (&ch.signal, one_dof) {
+            (crate::control::Signal::Constant { value }, true) if kp > 0.0 => {
+                let _ = writeln!(
+                    x,
+                    "    <position name=\"pd_{jn}\" joint=\"{jn}\" kp=\"{kp}\" kv=\"{kv}\"/>"
+                );
+                ctrl.push(*value);
+            }
+            (crate::control::Signal::Constant { .. }, true) => {
+                let _ = writeln!(
+                    x,
+                    "    <velocity name=\"pd_{jn}\" joint=\"{jn}\" kv=\"{kv}\"/>"
+                );
+                ctrl.push(0.0);
+            }
+            (_, true) => {
+                let _ = writeln!(
+                    x,
+                    "    <!-- PD on \"{jn}\" not written: its target is not constant -->"
+                );
+            }
+            (_, false) => {
+                let _ = writeln!(
+                    x,
+                    "    <!-- PD on \"{}\" not written: only hinge and slide coordinates -->",
+                    model.dofs[ch.dof].name
+                );
+            }
+        }
+    }
+    if ctrl.is_empty() && scene.controller.channels.is_empty() {
+        return (String::new(), ctrl);
+    }
+    x.push_str("  </actuator>\n");
+    (x, ctrl)
 }
 
 /// Link `i`'s second moments (link frame) with the scene's

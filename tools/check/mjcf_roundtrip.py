@@ -2,7 +2,7 @@
 """Round trip of an MJCF model through sdrs: the original against `sdrs import` → `sdrs
 export-mjcf`, both compiled by MuJoCo (issue 32, item 6, static part).
 
-Usage: mjcf_roundtrip.py ORIGINAL.xml EXPORTED.xml [--tol 1e-9]
+Usage: mjcf_roundtrip.py ORIGINAL.xml EXPORTED.xml [--tol 1e-9] [--actuators]
            [--trajectory SDRS.csv [--qpos joint=value,...] [--mj-timestep 1e-5] [--traj-tol X]
             [--mj-solref T]]
 
@@ -19,8 +19,15 @@ of that name), so that where the import placed the robot (lifted onto a ground) 
   damping, armature, frictionloss, stiffness and springref.
 
 Relative errors `|a − b| / max(|b|, floor)` (floors: 1e-9 kg, 1e-6 m, 1e-9 kg m², 1e-9 for the
-joint coefficients). Actuators are listed from the original (sdrs does not export them: the scene
-has no control inputs) and reported as `actuators_not_exported`.
+joint coefficients). Actuators are listed from the original and reported as
+`actuators_not_exported` (without `--actuators`, sdrs exports none).
+
+`--actuators`: the servos of both models as joint-space laws `τ = F − K q − C q̇` per hinge/slide
+(fixed-gain, affine-bias actuators without activation dynamics, summed per joint; the original at
+ctrl 0 clamped to ctrlrange, the export at its keyframe's ctrl), relative error `servo` (floors
+1, 1e-3, 1e-3); a joint the original servos and the export does not is `missing`. The export
+(`sdrs export-mjcf --actuators`) writes the scene's PD as `<position kp="2 k_p" kv="2 k_d/Δt">`,
+so an element-wise comparison (gear, kp) would not apply: the laws are what must be equal.
 
 `--trajectory`: the original model simulated by MuJoCo (RK4 at `--mj-timestep`, from `qpos0`
 with the `--qpos` values set — the same initial pose the sdrs scene was imported with, `--pose`)
@@ -144,6 +151,34 @@ def trajectory(m, csv_path, qpos, h, solref=None):
     return err
 
 
+def servos(m, d):
+    """Joint name → [K, C, F]: the joint-space stiffness, damping and force at the current ctrl
+    (clamped to ctrlrange when limited) of the fixed-gain, affine/no-bias actuators without
+    activation dynamics on one hinge/slide: τ = F − K q − C q̇, summed over the actuators
+    (K = −g² b₁, C = −g² b₂, F = g (a₀ u + b₀); `src/import/mjcf/actuators.rs`)."""
+    out = {}
+    for a in range(m.nu):
+        if int(m.actuator_trntype[a]) not in (0, 1) or int(m.actuator_dyntype[a]) != 0:
+            continue
+        if int(m.actuator_gaintype[a]) != 0 or int(m.actuator_biastype[a]) not in (0, 1):
+            continue
+        j = int(m.actuator_trnid[a][0])
+        if int(m.jnt_type[j]) not in (2, 3):
+            continue
+        g, a0 = float(m.actuator_gear[a][0]), float(m.actuator_gainprm[a][0])
+        b = m.actuator_biasprm[a] if int(m.actuator_biastype[a]) == 1 else np.zeros(3)
+        u = float(d.ctrl[a])
+        if m.actuator_ctrllimited[a]:
+            u = min(max(u, float(m.actuator_ctrlrange[a][0])), float(m.actuator_ctrlrange[a][1]))
+        k, c, f = -g * g * float(b[1]), -g * g * float(b[2]), g * (a0 * u + float(b[0]))
+        if k == 0 and c == 0:
+            continue  # a motor: no force at rest
+        name = bare(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}")
+        s = out.setdefault(name, [0.0, 0.0, 0.0])
+        s[0], s[1], s[2] = s[0] + k, s[1] + c, s[2] + f
+    return out
+
+
 def rel(a, b, floor):
     a, b = np.asarray(a, float), np.asarray(b, float)
     return float(np.max(np.abs(a - b)) / max(float(np.max(np.abs(b))), floor))
@@ -160,6 +195,9 @@ def main():
     ap.add_argument("--traj-tol", type=float, default=1e-2)
     ap.add_argument("--mj-solref", type=float,
                     help="MuJoCo's contact time constant for every geom (default: the model's)")
+    ap.add_argument("--actuators", action="store_true",
+                    help="compare the servos (K, C, F per joint) of the original at ctrl 0 and "
+                         "the export at its keyframe (export-mjcf --actuators)")
     a = ap.parse_args()
     qpos = {k: float(v) for k, v in (p.split("=") for p in a.qpos.split(",") if p)}
     try:
@@ -213,6 +251,18 @@ def main():
             note("joint_coefficients", rel(k[c], j[c], 1e-9), f"{name}.{c}")
     actuators = [mujoco.mj_id2name(mo, mujoco.mjtObj.mjOBJ_ACTUATOR, i) or f"actuator{i}"
                  for i in range(mo.nu)]
+    servo = None
+    if a.actuators:
+        so, se = servos(mo, do), servos(me, de)
+        errors["servo"] = 0.0
+        for name, v in so.items():
+            if name not in se:
+                missing.append(f"servo on {name}")
+                continue
+            # Floors: 1 N·m/rad, 1e-3 N·m·s/rad, 1e-3 N·m (a zero force or damping).
+            for i, floor in enumerate((1.0, 1e-3, 1e-3)):
+                note("servo", rel(se[name][i], v[i], floor), f"{name}.{'KCF'[i]}")
+        servo = {"original": so, "exported": se}
     ok = not missing and all(e <= a.tol for e in errors.values())
     traj = None
     if a.trajectory:
@@ -223,7 +273,7 @@ def main():
         "trajectory": traj, "traj_tol": a.traj_tol,
         "original": a.original, "exported": a.exported, "bodies": len(bo), "joints": len(jo),
         "errors": errors, "worst": worst, "missing": missing,
-        "actuators_not_exported": actuators, "tol": a.tol, "ok": ok,
+        "actuators_not_exported": actuators, "servo": servo, "tol": a.tol, "ok": ok,
     }, indent=1))
     return 0 if ok else 1
 

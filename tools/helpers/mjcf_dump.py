@@ -19,8 +19,12 @@ the numbers printed here are the model MuJoCo simulates:
   compiled mesh's vertices and faces in the geom frame;
 - actuators: name, kind (motor|position|velocity|general, from MuJoCo's
   gain/bias types and parameters), the joint it drives (null for other
-  transmissions), gear, kp, kv, ctrlrange (null when not limited), for the
-  import notes;
+  transmissions), gear, kp, kv, ctrlrange and forcerange (null when not
+  limited), `transmission` (joint|jointinparent|slidercrank|tendon|site|body)
+  and the name of its `target`, `dyntype`, `gaintype`, `biastype` and the
+  first three `gainprm`/`biasprm` (the import maps fixed-gain, affine-bias
+  actuators on a hinge or slide to the scene's PD controller:
+  `src/import/mjcf/actuators.rs`);
 - `exclude`: MuJoCo's compiled `<contact><exclude>` body pairs (body
   indices as in `bodies`, -1 = world), decoded from `exclude_signature`
   (`(body1 << 16) + body2`);
@@ -42,6 +46,14 @@ except ImportError as e:  # pragma: no cover - exercised through sdrs
     sys.exit(3)
 
 JOINT_TYPES = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+TRN_TYPES = {0: "joint", 1: "jointinparent", 2: "slidercrank", 3: "tendon", 4: "site", 5: "body"}
+DYN_TYPES = {0: "none", 1: "integrator", 2: "filter", 3: "filterexact", 4: "muscle", 5: "user"}
+GAIN_TYPES = {0: "fixed", 1: "affine", 2: "muscle", 3: "user"}
+BIAS_TYPES = {0: "none", 1: "affine", 2: "muscle", 3: "user"}
+_O = mujoco.mjtObj
+# The object an actuator's transmission acts on, by transmission type.
+TRN_TARGETS = {0: _O.mjOBJ_JOINT, 1: _O.mjOBJ_JOINT, 2: _O.mjOBJ_SITE, 3: _O.mjOBJ_TENDON,
+               4: _O.mjOBJ_SITE, 5: _O.mjOBJ_BODY}
 GEOM_TYPES = {0: "plane", 1: "hfield", 2: "sphere", 3: "capsule", 4: "ellipsoid",
               5: "cylinder", 6: "box", 7: "mesh", 8: "sdf"}
 
@@ -134,9 +146,11 @@ def main():
             elif bias == 1 and bp[0] == 0 and bp[1] == 0 and bp[2] == -gp[0]:
                 kind = "velocity"
         joint = None
-        if int(m.actuator_trntype[a]) == 0:  # mjTRN_JOINT
-            joint = name_of(m, mujoco.mjtObj.mjOBJ_JOINT, int(m.actuator_trnid[a][0]),
-                            f"joint{int(m.actuator_trnid[a][0])}")
+        trn, tid = int(m.actuator_trntype[a]), int(m.actuator_trnid[a][0])
+        if trn in (0, 1):  # mjTRN_JOINT, mjTRN_JOINTINPARENT
+            joint = name_of(m, mujoco.mjtObj.mjOBJ_JOINT, tid, f"joint{tid}")
+        target_kind = TRN_TARGETS.get(trn)
+        target = name_of(m, target_kind, tid, f"#{tid}") if target_kind is not None else None
         actuators.append({
             "name": name_of(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, f"actuator{a}"),
             "kind": kind,
@@ -145,6 +159,14 @@ def main():
             "kp": float(gp[0]) if kind == "position" else None,
             "kv": float(-bp[2]) + 0.0 if kind == "position" else (float(gp[0]) if kind == "velocity" else None),
             "ctrlrange": floats(m.actuator_ctrlrange[a]) if m.actuator_ctrllimited[a] else None,
+            "forcerange": floats(m.actuator_forcerange[a]) if m.actuator_forcelimited[a] else None,
+            "transmission": TRN_TYPES.get(trn, str(trn)),
+            "target": target,
+            "dyntype": DYN_TYPES.get(int(m.actuator_dyntype[a]), str(int(m.actuator_dyntype[a]))),
+            "gaintype": GAIN_TYPES.get(gain, str(gain)),
+            "biastype": BIAS_TYPES.get(bias, str(bias)),
+            "gainprm": floats(gp[:3]),
+            "biasprm": floats(bp[:3]),
         })
     exclude = [[int(sig) >> 16, int(sig) & 0xFFFF] for sig in m.exclude_signature]
     out = {

@@ -16,7 +16,8 @@ pub struct Dump {
     pub option: DumpOption,
     pub bodies: Vec<DumpBody>,
     pub geoms: Vec<DumpGeom>,
-    /// Every actuator (listed in the import notes).
+    /// Every actuator (mapped to the controller or listed in the import
+    /// notes: `super::actuators`).
     #[serde(default)]
     pub actuators: Vec<DumpActuator>,
     /// `<contact><exclude>` body pairs (indices into `bodies`, −1 the
@@ -128,6 +129,31 @@ pub struct DumpActuator {
     pub kv: Option<f64>,
     /// `[lower, upper]` when the control is limited.
     pub ctrlrange: Option<[f64; 2]>,
+    /// `[lower, upper]` (N·m or N, actuator space) when the force is limited.
+    #[serde(default)]
+    pub forcerange: Option<[f64; 2]>,
+    /// `joint`, `jointinparent`, `slidercrank`, `tendon`, `site` or `body`.
+    #[serde(default)]
+    pub transmission: String,
+    /// Name of the transmission's joint, tendon, site or body.
+    #[serde(default)]
+    pub target: Option<String>,
+    /// Activation dynamics: `none`, `integrator`, `filter`, `filterexact`, …
+    #[serde(default)]
+    pub dyntype: String,
+    /// `fixed`, `affine`, `muscle` or `user`.
+    #[serde(default)]
+    pub gaintype: String,
+    /// `none`, `affine`, `muscle` or `user`.
+    #[serde(default)]
+    pub biastype: String,
+    /// First three gain parameters (`fixed`: force = `gainprm[0]` · ctrl).
+    #[serde(default)]
+    pub gainprm: Vec<f64>,
+    /// First three bias parameters (`affine`: `b₀ + b₁ L + b₂ L̇`, `L` the
+    /// actuator length `gear · q`).
+    #[serde(default)]
+    pub biasprm: Vec<f64>,
 }
 
 /// A compiled mesh in its geom's frame.

@@ -45,15 +45,23 @@
 //!   scene's `joint_damping`/`armature`/`joint_friction` effects,
 //!   `stiffness` with `springref` → a `joint_spring` effect (hinge and
 //!   slide joints; on ball and free joints a report line), gravity → the
-//!   scene's gravity. Every actuator is listed in the notes (kind, gear,
-//!   gains, control range, joint) and left out: the scene has no control
-//!   inputs, and the import's PD gains hold the joints instead; tendons,
-//!   equality constraints and height fields are counted in the notes and
-//!   left out;
+//!   scene's gravity; tendons, equality constraints and height fields are
+//!   counted in the notes and left out;
+//! - actuators ([`actuators`]): a fixed-gain, affine-bias actuator without
+//!   activation dynamics on one hinge or slide (`<position>`, `<velocity>`,
+//!   such a `<general>`) → the scene controller's gains and constant target
+//!   on that joint, `k_p = K/2`, `k_d = C Δt/2`, `θ* = F/K` (MuJoCo's joint
+//!   stiffness `K = g² kp`, damping `C = g² kv` and force at rest
+//!   `F = g kp u`, `u` the control at rest: 0 clamped to `ctrlrange`); such a
+//!   joint takes its gains from its actuators, not from the import's PD
+//!   hold. Motors (no force at rest, no torque-input channel), other
+//!   transmissions (tendon, site, body), activation dynamics and
+//!   `forcerange` clamping get report lines, one per actuator;
 //! - geom sliding friction → the scene's one contact `μ` (MuJoCo's pair
 //!   value `max(μ₁, μ₂)`, largest over the pairs with the floor; other pair
 //!   values are listed in the notes: [`contact_friction`]).
 
+pub mod actuators;
 mod bodies;
 pub mod dump;
 mod filter;
@@ -89,6 +97,9 @@ pub struct MjcfScene {
     /// The one friction coefficient the scene's contact takes (see
     /// [`contact_friction`]); `None` when no two geoms may collide.
     pub friction: Option<f64>,
+    /// PD gains and targets of the joints driven by position-like actuators
+    /// ([`actuators`]), by joint name.
+    pub drives: std::collections::BTreeMap<String, actuators::Drive>,
 }
 
 /// The scene has one friction coefficient; MuJoCo gives each contact pair
@@ -137,31 +148,6 @@ pub fn contact_friction(d: &dump::Dump, notes: &mut Vec<String>) -> Option<f64> 
     Some(mu)
 }
 
-/// The report line of an actuator: the scene has no control inputs, so it
-/// is listed with what it was and what holds its joint instead.
-fn actuator_note(a: &dump::DumpActuator) -> String {
-    let mut what = format!("{}, gear {}", a.kind, a.gear);
-    if let Some(kp) = a.kp {
-        what.push_str(&format!(", kp {kp}"));
-    }
-    if let Some(kv) = a.kv {
-        what.push_str(&format!(", kv {kv}"));
-    }
-    if let Some([lo, hi]) = a.ctrlrange {
-        what.push_str(&format!(", ctrlrange [{lo}, {hi}]"));
-    }
-    match &a.joint {
-        Some(j) => format!(
-            "actuator \"{}\" ({what}) on joint \"{j}\" left out: the scene has no control inputs; the joint is held by the import's PD gains (report: ready.gains)",
-            a.name
-        ),
-        None => format!(
-            "actuator \"{}\" ({what}) left out: only joint transmissions are read, and the scene has no control inputs",
-            a.name
-        ),
-    }
-}
-
 /// Whether `path` is an MJCF file (its root element is `<mujoco>`).
 pub fn is_mjcf(path: &Path) -> bool {
     let Ok(text) = std::fs::read_to_string(path) else {
@@ -194,7 +180,7 @@ pub fn read_mjcf(
             notes.push(format!("{n} {what} left out (not simulated)"));
         }
     }
-    notes.extend(d.actuators.iter().map(actuator_note));
+    let drives = actuators::drives(&d, opts.dt, &mut notes);
     let nb = d.bodies.len();
     if nb == 0 {
         return Err(invalid(
@@ -250,6 +236,7 @@ pub fn read_mjcf(
             exclude_obstacle,
             effects,
             friction,
+            drives,
         },
     ))
 }
