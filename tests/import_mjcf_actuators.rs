@@ -188,6 +188,29 @@ fn motors_tendons_sites_and_activation_dynamics_are_reported_not_dropped() {
     assert!(xml.is_file(), "{} not found", xml.display());
     let d = sdrs::import::mjcf::dump::dump(&xml).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(d.actuators.len(), 10);
+    // Every other element the import leaves out is counted for its report
+    // line ("N sensors … left out"), as MuJoCo compiles them for this model.
+    let count = |kind: &str| {
+        d.unsupported
+            .iter()
+            .find(|(k, _)| k.starts_with(kind))
+            .map(|(_, n)| *n)
+            .unwrap_or_else(|| panic!("no count for {kind}: {:?}", d.unsupported))
+    };
+    for (kind, n) in [
+        ("sensors", 11),
+        ("sites", 11),
+        ("keyframes", 1),
+        ("lights", 1),
+        ("tendons", 2),
+        ("equality constraints", 1),
+        ("cameras", 0),
+        ("mocap bodies", 0),
+        ("skins", 0),
+        ("flexes", 0),
+    ] {
+        assert_eq!(count(kind), n, "{kind}");
+    }
     let dt = 1e-3;
     let mut notes = Vec::new();
     let got = drives(&d, dt, &mut notes);

@@ -29,8 +29,9 @@ the numbers printed here are the model MuJoCo simulates:
   indices as in `bodies`, -1 = world), decoded from `exclude_signature`
   (`(body1 << 16) + body2`);
 - `option`: gravity and timestep; `unsupported`: counts of what the
-  importer leaves out (tendons, equality constraints, actuators, sites with
-  sensors are not needed), for the import notes.
+  importer leaves out (explicit contact pairs, tendons, equality
+  constraints, height fields, sensors, sites, keyframes, cameras, lights,
+  mocap bodies, skins, flexes), one import note per kind present.
 
 Exit codes: 0 ok, 2 the model does not compile (MuJoCo's message, which
 names the element and line, is printed on stderr), 3 mujoco missing.
@@ -182,6 +183,14 @@ def main():
             "tendons": int(m.ntendon),
             "equality constraints": int(m.neq),
             "height fields": int(m.nhfield),
+            "sensors (<sensor>; the scene records the state, not sensor readings)": int(m.nsensor),
+            "sites (<site>)": int(m.nsite),
+            "keyframes (<key>; the scene starts at qpos0, or at --pose)": int(m.nkey),
+            "cameras": int(m.ncam),
+            "lights": int(m.nlight),
+            "mocap bodies": int(m.nmocap),
+            "skins": int(m.nskin),
+            "flexes (deformable bodies)": int(m.nflex),
         },
     }
     json.dump(out, sys.stdout)
