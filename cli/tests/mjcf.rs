@@ -116,6 +116,39 @@ fn export_mjcf_writes_a_model_mujoco_loads_and_keeps_existing_files() {
     assert_eq!(std::fs::read(&out).unwrap(), before);
 }
 
+/// gymnasium's bundled MJCF model `model` (the venv's package).
+fn gymnasium_xml(model: &str) -> std::path::PathBuf {
+    support::root()
+        .join(".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets")
+        .join(format!("{model}.xml"))
+}
+
+/// `sdrs import XML` with the default options, then `sdrs simulate --steps
+/// 200`; returns the summary JSON (asserting the 200 steps ran).
+fn import_and_simulate_200_steps(model: &str, xml: &std::path::Path) -> serde_json::Value {
+    let dir = scratch_dir(&format!("gym-{model}"));
+    let scene = dir.join(format!("{model}.yaml"));
+    support::run_ok(
+        support::sdrs()
+            .arg("import")
+            .arg(xml)
+            .arg("--out")
+            .arg(&scene)
+            .arg("-q"),
+    );
+    let json = dir.join("summary.json");
+    support::run_ok(
+        support::sdrs()
+            .args(["simulate", "-q", "--steps", "200", "--json"])
+            .arg(&json)
+            .arg(&scene),
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(s["steps"], 200, "{model}");
+    s
+}
+
 /// gymnasium's free-joint models (`<joint type="free">` at a non-zero
 /// pose) import with the default options and simulate 200 steps. Physics
 /// check, independent of our mass bookkeeping: before any contact, only
@@ -128,30 +161,9 @@ fn gymnasium_free_joint_models_import_and_simulate_200_steps() {
     if support::skip_without_venv() {
         return;
     }
-    let assets =
-        support::root().join(".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets");
     for model in ["ant", "humanoid", "humanoidstandup"] {
-        let dir = scratch_dir(&format!("gym-{model}"));
-        let xml = assets.join(format!("{model}.xml"));
-        let scene = dir.join(format!("{model}.yaml"));
-        support::run_ok(
-            support::sdrs()
-                .arg("import")
-                .arg(&xml)
-                .arg("--out")
-                .arg(&scene)
-                .arg("-q"),
-        );
-        let json = dir.join("summary.json");
-        support::run_ok(
-            support::sdrs()
-                .args(["simulate", "-q", "--steps", "200", "--json"])
-                .arg(&json)
-                .arg(&scene),
-        );
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        assert_eq!(s["steps"], 200, "{model}");
+        let xml = gymnasium_xml(model);
+        let s = import_and_simulate_200_steps(model, &xml);
         let out = python()
             .args([
                 "-c",
@@ -198,8 +210,6 @@ fn every_other_gymnasium_model_imports_and_simulates_200_steps() {
     if support::skip_without_venv() {
         return;
     }
-    let assets =
-        support::root().join(".venv/lib/python3.11/site-packages/gymnasium/envs/mujoco/assets");
     let models = [
         "half_cheetah",
         "hopper",
@@ -214,26 +224,7 @@ fn every_other_gymnasium_model_imports_and_simulates_200_steps() {
         "walker2d_v5",
     ];
     for model in models {
-        let dir = scratch_dir(&format!("gym-all-{model}"));
-        let scene = dir.join(format!("{model}.yaml"));
-        support::run_ok(
-            support::sdrs()
-                .arg("import")
-                .arg(assets.join(format!("{model}.xml")))
-                .arg("--out")
-                .arg(&scene)
-                .arg("-q"),
-        );
-        let json = dir.join("summary.json");
-        support::run_ok(
-            support::sdrs()
-                .args(["simulate", "-q", "--steps", "200", "--json"])
-                .arg(&json)
-                .arg(&scene),
-        );
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        assert_eq!(s["steps"], 200, "{model}");
+        let s = import_and_simulate_200_steps(model, &gymnasium_xml(model));
         let state = s["final_state"].as_object().unwrap();
         assert!(!state.is_empty(), "{model}");
         for (k, v) in state {
