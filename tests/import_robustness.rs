@@ -315,3 +315,49 @@ fn a_millimetre_mesh_gets_a_units_warning_and_its_mass_is_reported() {
     .unwrap();
     assert!(!m.report.notes.iter().any(|n| n.starts_with("units:")));
 }
+
+/// example-robot-data's `romeo_laas_small.urdf` (issue 32's 69-file sweep)
+/// draws links with meshes at absolute paths into a vendor SDK
+/// (`file:///usr/Romeo/…/Torso.mesh`) that no package ships. A link with no
+/// `<collision>` takes its visuals for contact; a missing visual mesh is left
+/// out with a line naming the element and the file (the link gets the
+/// stand-in cube and keeps its `<inertial>`), while a missing *collision*
+/// mesh is still an error naming both.
+#[test]
+fn a_missing_visual_mesh_is_left_out_with_a_note_and_a_missing_collision_mesh_is_an_error() {
+    let dir = temp_dir("missing-visual");
+    let inertial = r#"<inertial><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>"#;
+    let visual_only = format!(
+        r#"<robot name="r"><link name="body">{inertial}<visual><geometry><mesh filename="file:///nonexistent/sdk/Torso.mesh"/></geometry></visual></link></robot>"#
+    );
+    std::fs::write(dir.join("v.urdf"), &visual_only).unwrap();
+    let imported = import(&dir.join("v.urdf"), &options(Decomposer::Hull))
+        .unwrap_or_else(|e| panic!("a missing visual mesh refused the file: {e}"));
+    let notes = &imported.report.notes;
+    assert!(
+        notes.iter().any(|n| n.contains("link \"body\" visual[0]")
+            && n.contains("/nonexistent/sdk/Torso.mesh not found")
+            && n.contains("left out")),
+        "{notes:?}"
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("link \"body\" has no geometry")),
+        "the stand-in cube's line: {notes:?}"
+    );
+    assert_eq!(imported.links[0].hulls.len(), 1);
+    let collision = visual_only
+        .replace("<visual>", "<collision>")
+        .replace("</visual>", "</collision>");
+    std::fs::write(dir.join("c.urdf"), collision).unwrap();
+    let e = import(&dir.join("c.urdf"), &options(Decomposer::Hull))
+        .err()
+        .expect("a missing collision mesh must stay an error")
+        .to_string();
+    assert!(
+        e.contains("link \"body\" collision[0]") && e.contains("Torso.mesh not found"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -65,8 +65,9 @@ pub fn resolve_mesh_path(urdf: &Path, filename: &str) -> Result<PathBuf, Vec<Pat
 }
 
 /// A link's geometry: its `<collision>` elements, or its `<visual>` ones
-/// when it has none; pybullet's `<plane>` and `<cdf>` substituted as
-/// [`super::pybullet_shapes`] says.
+/// when it has none (a visual whose mesh file is missing is left out with a
+/// report line; a missing collision mesh is an error); pybullet's `<plane>`
+/// and `<cdf>` substituted as [`super::pybullet_shapes`] says.
 pub(super) fn link_geometry(
     path: &Path,
     l: &urdf_rs::Link,
@@ -135,7 +136,18 @@ pub(super) fn link_geometry(
         }
     } else {
         for (gi, v) in l.visual.iter().enumerate() {
-            geometry.extend(one(Slot::Visual, gi, &v.origin, &v.geometry)?);
+            match one(Slot::Visual, gi, &v.origin, &v.geometry) {
+                Ok(g) => geometry.extend(g),
+                // A visual is drawn, not collided: a missing visual mesh
+                // (e.g. an absolute path into a vendor SDK) leaves the link
+                // without that piece, with a line in the report; a missing
+                // collision mesh stays an error.
+                Err(ImportError::MissingMesh { element, mesh, .. }) => notes.push(format!(
+                    "{element}: mesh file {} not found; a link without <collision> takes its visual geometry for contact, and this piece is left out (the link's <inertial> is kept)",
+                    mesh.display()
+                )),
+                Err(e) => return Err(e),
+            }
         }
     }
     Ok(geometry)
