@@ -352,8 +352,7 @@ fn a_missing_visual_mesh_is_left_out_with_a_note_and_a_missing_collision_mesh_is
         .replace("</visual>", "</collision>");
     std::fs::write(dir.join("c.urdf"), collision).unwrap();
     let e = import(&dir.join("c.urdf"), &options(Decomposer::Hull))
-        .err()
-        .expect("a missing collision mesh must stay an error")
+        .expect_err("a missing collision mesh must stay an error")
         .to_string();
     assert!(
         e.contains("link \"body\" collision[0]") && e.contains("Torso.mesh not found"),

@@ -99,7 +99,8 @@ pub fn fit_resolution(pb: &Problem, opts: &FitOptions) -> Option<(Scene, Resolut
     let r0 = pb.train_residuals(&cand, &given)?;
     let rss0: f64 = r0.iter().map(|x| x * x).sum();
     let f = fit(pb, &cand, opts)?;
-    if !(f.rss < rss0) {
+    // Not lower (or NaN): the nuisance fit did not help.
+    if f.rss.partial_cmp(&rss0) != Some(std::cmp::Ordering::Less) {
         return None;
     }
     let specs: Vec<EffectSpec> = cand.specs(&f.params);

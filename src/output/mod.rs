@@ -197,10 +197,10 @@ impl CsvStream {
         self.rows.row(t, q, &mut self.line);
         self.buf.extend_from_slice(self.line.as_bytes());
         self.written += 1;
-        if self.buf.len() >= Self::BUFFER || self.last_flush.elapsed() >= Self::FLUSH_EVERY {
-            if let Err(e) = self.write_out() {
-                return Err(self.io(e));
-            }
+        if (self.buf.len() >= Self::BUFFER || self.last_flush.elapsed() >= Self::FLUSH_EVERY)
+            && let Err(e) = self.write_out()
+        {
+            return Err(self.io(e));
         }
         Ok(())
     }
