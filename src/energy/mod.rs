@@ -11,6 +11,7 @@
 //! effects ([`effects`]) plug in the same way.
 
 pub mod contact;
+pub mod dof_hessian;
 pub mod effects;
 pub mod friction;
 pub mod gravity;
@@ -24,6 +25,7 @@ pub mod vjp;
 
 pub use crate::control::PdTarget;
 pub use contact::ContactEnergy;
+pub use dof_hessian::DofHessian;
 pub use friction::FrictionEnergy;
 pub use gravity::Gravity;
 pub use inertia::Inertia;
@@ -34,7 +36,7 @@ pub use pd::PdController;
 use crate::kinematics::Kinematics;
 use crate::math::Pose;
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix, Vector3};
+use nalgebra::{DVector, Matrix3x4, Matrix4, SMatrix, Vector3};
 
 /// 12×12 Hessian block over `vec(A_i)`.
 pub type PoseHessian = SMatrix<f64, 12, 12>;
@@ -100,8 +102,9 @@ pub struct EnergyAccumulator {
     pub pair_hess: Vec<(usize, usize, PoseHessian)>,
     /// `∂E/∂θ` from terms written directly in coordinates.
     pub dof_grad: DVector<f64>,
-    /// `∂²E/∂θ²` from terms written directly in coordinates.
-    pub dof_hess: DMatrix<f64>,
+    /// `∂²E/∂θ²` from terms written directly in coordinates (sparse: a
+    /// diagonal and a few off-diagonal entries).
+    pub dof_hess: DofHessian,
 }
 
 impl EnergyAccumulator {
@@ -117,7 +120,7 @@ impl EnergyAccumulator {
             link_moment_set: false,
             pair_hess: Vec::new(),
             dof_grad: DVector::zeros(m),
-            dof_hess: DMatrix::zeros(m, m),
+            dof_hess: DofHessian::zeros(m),
         }
     }
 
@@ -140,7 +143,7 @@ impl EnergyAccumulator {
                 self.link_moment_set = false;
             }
             self.pair_hess.clear();
-            self.dof_hess.fill(0.0);
+            self.dof_hess.clear();
         }
     }
 

@@ -12,12 +12,13 @@
 //! - Hessian, second-order part: `⟨Q_b, S_k S_l⟩` when `k`'s joint is a proper
 //!   ancestor of `l`'s joint `b`, and `⟨Q_a, S_kl⟩` within one joint `a`.
 
+use super::envelope::ColumnEnvelope;
 use crate::energy::{EnergyAccumulator, Need, PoseHessian};
 use crate::kinematics::Kinematics;
 use crate::math::homogeneous;
-use crate::math::{frob, twist_apply, twist_mul};
+use crate::math::{frob, twist_apply};
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, Matrix4, SMatrix};
 
 /// Scratch buffers of the assembler (allocated once).
 #[derive(Clone, Debug, Default)]
@@ -27,6 +28,16 @@ pub struct AssembleScratch {
     jac: Vec<SMatrix<f64, 12, 1>>,
     jac2: Vec<SMatrix<f64, 12, 1>>,
     hj: Vec<SMatrix<f64, 12, 1>>,
+    envelope: ColumnEnvelope,
+    /// Address and size of the buffer the last Hessian was written into.
+    written: Option<(usize, usize)>,
+}
+
+impl AssembleScratch {
+    /// The envelope of the last assembled Hessian.
+    pub fn envelope(&self) -> &ColumnEnvelope {
+        &self.envelope
+    }
 }
 
 /// `G Ãᵀ = [G_R Rᵀ + g_t tᵀ | g_t]` for `G = [G_R | g_t]`, `A = [R | t]`.
@@ -43,6 +54,13 @@ fn g_atr(g: &Matrix3x4<f64>, a: &Matrix3x4<f64>) -> Matrix3x4<f64> {
 
 /// Adds the pose-space derivatives in `acc` (plus its direct coordinate
 /// terms) into `grad` and `hess` (overwritten), as required by `need`.
+///
+/// `hess` is cleared over the envelope of the Hessian this scratch last
+/// wrote into the same buffer (entries outside it are zero already), or
+/// whole when the buffer or its size changed; `scratch.envelope()` is then
+/// the new Hessian's [`ColumnEnvelope`]. (The buffer is recognized by its
+/// address and size: a caller must not hand in a different non-zero matrix
+/// at the address of the last one.)
 pub fn assemble(
     model: &Model,
     kin: &Kinematics,
@@ -53,48 +71,22 @@ pub fn assemble(
     scratch: &mut AssembleScratch,
 ) {
     if need >= Need::Hessian {
-        hess.copy_from(&acc.dof_hess);
-    }
-    assemble_onto_dof_hess(model, kin, acc, need, grad, hess, scratch);
-}
-
-/// [`assemble`], taking the coordinate Hessian `acc.dof_hess` by swapping
-/// buffers instead of copying it (`acc.dof_hess` then holds the old
-/// contents of `hess`: stale until the accumulator's next
-/// [`EnergyAccumulator::reset`] with [`Need::Hessian`], which clears it
-/// anyway). At 256 coordinates the copy was a 512 kB read and write per
-/// Hessian evaluation. The result is bitwise [`assemble`]'s.
-pub fn assemble_swapping(
-    model: &Model,
-    kin: &Kinematics,
-    acc: &mut EnergyAccumulator,
-    need: Need,
-    grad: &mut DVector<f64>,
-    hess: &mut DMatrix<f64>,
-    scratch: &mut AssembleScratch,
-) {
-    if need >= Need::Hessian {
-        if hess.shape() == acc.dof_hess.shape() {
-            std::mem::swap(hess, &mut acc.dof_hess);
+        let n = hess.nrows();
+        let id = (hess.as_ptr() as usize, n);
+        if scratch.written == Some(id) && scratch.envelope.len() == n {
+            scratch.envelope.zero(hess);
         } else {
-            hess.copy_from(&acc.dof_hess);
+            hess.fill(0.0);
+        }
+        scratch.envelope.build(model, acc);
+        scratch.written = Some(id);
+        for (k, v) in acc.dof_hess.diagonal().iter().enumerate() {
+            hess[(k, k)] = *v;
+        }
+        for &((k, l), v) in acc.dof_hess.off_diagonal() {
+            hess[(k, l)] = v;
         }
     }
-    assemble_onto_dof_hess(model, kin, acc, need, grad, hess, scratch);
-}
-
-/// [`assemble`] with `hess` already holding `acc.dof_hess` (when `need`
-/// asks for the Hessian).
-fn assemble_onto_dof_hess(
-    model: &Model,
-    kin: &Kinematics,
-    acc: &EnergyAccumulator,
-    need: Need,
-    grad: &mut DVector<f64>,
-    hess: &mut DMatrix<f64>,
-    scratch: &mut AssembleScratch,
-) {
-    let nlink = model.links.len();
     if need < Need::Gradient {
         return;
     }
@@ -104,8 +96,27 @@ fn assemble_onto_dof_hess(
     if need < Need::Hessian {
         return;
     }
-    // First-order part, diagonal link blocks.
-    for i in 0..nlink {
+    add_link_blocks(model, kin, acc, hess, scratch);
+    if acc.link_moment_set {
+        fill_composites(model, kin, acc, &mut scratch.composite);
+    }
+    add_tree_terms(model, kin, acc.link_moment_set, hess, scratch);
+    for (i, j, h) in &acc.pair_hess {
+        add_pair_block(model, kin, *i, *j, h, hess, scratch);
+    }
+    mirror_upper(model, acc, hess);
+}
+
+/// First-order part of the diagonal link blocks, `J_iᵀ H_ii J_i`, into the
+/// upper triangle (`k ≤ l`; the ancestor list is ascending).
+fn add_link_blocks(
+    model: &Model,
+    kin: &Kinematics,
+    acc: &EnergyAccumulator,
+    hess: &mut DMatrix<f64>,
+    scratch: &mut AssembleScratch,
+) {
+    for i in 0..model.links.len() {
         if !acc.link_hess_set[i] {
             continue;
         }
@@ -114,51 +125,55 @@ fn assemble_onto_dof_hess(
         let h = &acc.link_hess[i];
         scratch.hj.clear();
         scratch.hj.extend(scratch.jac.iter().map(|c| h * c));
-        for (a, &k) in anc.iter().enumerate() {
-            for (b, &l) in anc.iter().enumerate().skip(a) {
-                let v = scratch.jac[a].dot(&scratch.hj[b]);
-                hess[(k, l)] += v;
-                if k != l {
-                    hess[(l, k)] += v;
-                }
+        for (b, &l) in anc.iter().enumerate() {
+            for (a, &k) in anc.iter().enumerate().take(b + 1) {
+                hess[(k, l)] += scratch.jac[a].dot(&scratch.hj[b]);
             }
         }
     }
-    // First-order part, structured blocks W_i ⊗ I₃ via subtree composites.
-    if acc.link_moment_set {
-        scratch.composite.clear();
-        scratch.composite.extend((0..nlink).map(|i| {
-            let a = homogeneous(&kin.pose[i]);
-            a * acc.link_moment[i] * a.transpose()
-        }));
-        for i in (0..nlink).rev() {
-            if let Some(p) = model.links[i].parent {
-                let c = scratch.composite[i];
-                scratch.composite[p] += c;
-            }
-        }
-        for (b, link) in model.links.iter().enumerate() {
-            let ob = link.dof_offset;
-            for l in ob..ob + link.ndof() {
-                let y = kin.twist[l] * scratch.composite[b];
-                for &k in &model.ancestor_dofs[b] {
-                    if k > l {
-                        break; // same-joint pairs once (k ≤ l)
-                    }
-                    let v = frob(&kin.twist[k], &y);
-                    hess[(k, l)] += v;
-                    if k != l {
-                        hess[(l, k)] += v;
-                    }
-                }
-            }
+}
+
+/// Subtree composites `C_b = Σ_{i ∈ subtree(b)} Ã_i W_i Ã_iᵀ` (leaves up).
+fn fill_composites(
+    model: &Model,
+    kin: &Kinematics,
+    acc: &EnergyAccumulator,
+    composite: &mut Vec<Matrix4<f64>>,
+) {
+    composite.clear();
+    composite.extend((0..model.links.len()).map(|i| {
+        let a = homogeneous(&kin.pose[i]);
+        a * acc.link_moment[i] * a.transpose()
+    }));
+    for i in (0..model.links.len()).rev() {
+        if let Some(p) = model.links[i].parent {
+            let c = composite[i];
+            composite[p] += c;
         }
     }
-    // First-order part, coupling blocks between links.
-    for (i, j, h) in &acc.pair_hess {
-        add_pair_block(model, kin, *i, *j, h, hess, scratch);
-    }
-    // Second-order kinematic part.
+}
+
+/// The terms that follow the tree, into the upper triangle: for each
+/// coordinate `l` of joint `b` and each coordinate `k ≤ l` of `b` or of its
+/// ancestors,
+///
+/// - the structured first-order part `⟨S_k, S_l C_b⟩` (when `composites`);
+/// - the second-order kinematic part: `⟨S_k S_l, Q_b⟩ = ⟨R_k, Q_b S_lᵀ⟩`
+///   for a proper ancestor `k` (`R_k` the rotational 3×3 of `S_k`, and
+///   `S_k S_l` means `R_k S_l`, see `crate::math::twist_mul`), `⟨S_kl, Q_b⟩` within
+///   joint `b`.
+///
+/// `Q_b S_lᵀ` (3×3) is formed once per `l`, so each ancestor costs two
+/// 9- and 12-term dot products instead of a 3×3·3×4 product.
+fn add_tree_terms(
+    model: &Model,
+    kin: &Kinematics,
+    composites: bool,
+    hess: &mut DMatrix<f64>,
+    scratch: &AssembleScratch,
+) {
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
     for (b, link) in model.links.iter().enumerate() {
         let nb = link.ndof();
         if nb == 0 {
@@ -166,19 +181,68 @@ fn assemble_onto_dof_hess(
         }
         let qb = &scratch.q_sub[b];
         let ob = link.dof_offset;
+        let anc = &model.ancestor_dofs[b];
+        let proper = &anc[..anc.len() - nb];
         for l in ob..ob + nb {
-            // Same joint.
-            for k in ob..ob + nb {
-                hess[(k, l)] += frob(kin.twist2(model, b, k, l), qb);
-            }
-            // Proper-ancestor coordinates k of joint b.
-            for &k in &model.ancestor_dofs[b] {
-                if k >= ob {
-                    break;
+            let sl = &kin.twist[l];
+            let p = qb * sl.transpose();
+            let col = &mut h[l * n..(l + 1) * n];
+            if composites {
+                let y = sl * scratch.composite[b];
+                for &k in proper {
+                    let sk = &kin.twist[k];
+                    col[k] += frob(sk, &y) + rot_dot(sk, &p);
                 }
-                let v = frob(&twist_mul(&kin.twist[k], &kin.twist[l]), qb);
-                hess[(k, l)] += v;
-                hess[(l, k)] += v;
+                for k in ob..=l {
+                    let v = frob(&kin.twist[k], &y) + frob(kin.twist2(model, b, k, l), qb);
+                    col[k] += v;
+                }
+            } else {
+                for &k in proper {
+                    col[k] += rot_dot(&kin.twist[k], &p);
+                }
+                for k in ob..=l {
+                    col[k] += frob(kin.twist2(model, b, k, l), qb);
+                }
+            }
+        }
+    }
+}
+
+/// `⟨R_s, P⟩`: the Frobenius product of the rotational 3×3 of a twist
+/// with a 3×3 (column-major storage: the twist's first nine entries).
+#[inline]
+fn rot_dot(s: &Matrix3x4<f64>, p: &Matrix3<f64>) -> f64 {
+    let (s, p) = (s.as_slice(), p.as_slice());
+    let mut v = 0.0;
+    for i in 0..9 {
+        v += s[i] * p[i];
+    }
+    v
+}
+
+/// Copies the upper triangle onto the lower one at every entry the
+/// assembly can have written: each coordinate pair `(k, l)` of a joint's
+/// ancestor list (tree terms and diagonal link blocks: two ancestors of one
+/// link are ancestor-related) and of a coupled link pair's two lists. The
+/// coordinate terms write both triangles themselves. The result is exactly
+/// symmetric.
+fn mirror_upper(model: &Model, acc: &EnergyAccumulator, hess: &mut DMatrix<f64>) {
+    for (b, link) in model.links.iter().enumerate() {
+        let ob = link.dof_offset;
+        for l in ob..ob + link.ndof() {
+            for &k in model.ancestor_dofs[b].iter().take_while(|&&k| k < l) {
+                hess[(l, k)] = hess[(k, l)];
+            }
+        }
+    }
+    for (i, j, _) in &acc.pair_hess {
+        for &k in &model.ancestor_dofs[*i] {
+            for &l in &model.ancestor_dofs[*j] {
+                if k != l {
+                    let (lo, hi) = (k.min(l), k.max(l));
+                    hess[(hi, lo)] = hess[(lo, hi)];
+                }
             }
         }
     }
@@ -254,8 +318,12 @@ fn add_pair_block(
     for (a, &k) in anc_i.iter().enumerate() {
         for (b, &l) in anc_j.iter().enumerate() {
             let v = scratch.jac[a].dot(&scratch.hj[b]);
-            hess[(k, l)] += v;
-            hess[(l, k)] += v;
+            // The block and its transpose: twice on the diagonal.
+            if k == l {
+                hess[(k, k)] += v + v;
+            } else {
+                hess[(k.min(l), k.max(l))] += v;
+            }
         }
     }
 }

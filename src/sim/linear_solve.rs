@@ -156,6 +156,9 @@ pub struct BlockSolver {
     last_shift: f64,
     /// [`parallel_min_cubes`] (tests lower or raise it).
     parallel_min_cubes: usize,
+    /// Row bounds of the next partition only ([`BlockSolver::bound_rows`];
+    /// empty: every row).
+    row_end: Vec<usize>,
     pub stats: LinearSolveStats,
 }
 
@@ -173,6 +176,7 @@ impl Default for BlockSolver {
             bounds: Vec::new(),
             last_shift: 0.0,
             parallel_min_cubes: parallel_min_cubes(),
+            row_end: Vec::new(),
             stats: LinearSolveStats::default(),
         }
     }
@@ -226,6 +230,7 @@ impl BlockSolver {
         let p = &mut self.parent;
         p.clear();
         p.extend(0..n);
+        let bound = (self.row_end.len() == n).then_some(&self.row_end[..]);
         // The lower triangle, column by column (contiguous; the transposed
         // read `h[(j, i)]` strided by `n` and dominated this scan). The
         // components do not depend on the order in which edges are joined,
@@ -233,7 +238,8 @@ impl BlockSolver {
         // grouping below is the same whatever the order.
         // (Plain slices: nalgebra's generic matrix iterator does not
         // vectorize and cost more than the scan itself.)
-        join_nonzeros(h.as_slice(), n, p);
+        join_nonzeros(h.as_slice(), n, bound, p);
+        self.row_end.clear();
         // Roots are the smallest index of their block; count sizes per root.
         self.cursor.clear();
         self.cursor.resize(n + 1, 0);
@@ -260,6 +266,15 @@ impl BlockSolver {
             self.order[self.cursor[r]] = i;
             self.cursor[r] += 1;
         }
+    }
+
+    /// Declares that in the matrix of the **next** call only (a direction
+    /// or a solve), the rows `i ≥ ends[j]` of column `j` are zero (the
+    /// step Hessian's [`super::envelope::ColumnEnvelope`]): the partition's
+    /// scan skips them. The blocks found are the same.
+    pub fn bound_rows(&mut self, ends: &[usize]) {
+        self.row_end.clear();
+        self.row_end.extend_from_slice(ends);
     }
 
     /// `dir = −Ĥ⁻¹ g` (see the module documentation). `h` must be symmetric
@@ -810,36 +825,36 @@ fn find(c: &mut [usize], mut i: usize) -> usize {
 /// has them (only comparisons: the same unions on every path; measured at
 /// N = 32: 16.2 µs per call for the previous scan, 6.2 µs with AVX2, about
 /// a fifth less again with AVX-512).
-fn join_nonzeros(h: &[f64], n: usize, p: &mut [usize]) {
+fn join_nonzeros(h: &[f64], n: usize, bound: Option<&[usize]>, p: &mut [usize]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the CPU supports AVX-512F (checked above).
-        unsafe { join_nonzeros_avx512(h, n, p) };
+        unsafe { join_nonzeros_avx512(h, n, bound, p) };
         return;
     }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked above).
-        unsafe { join_nonzeros_avx2(h, n, p) };
+        unsafe { join_nonzeros_avx2(h, n, bound, p) };
         return;
     }
-    join_nonzeros_generic(h, n, p);
+    join_nonzeros_generic(h, n, bound, p);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn join_nonzeros_avx512(h: &[f64], n: usize, p: &mut [usize]) {
-    join_nonzeros_generic(h, n, p);
+unsafe fn join_nonzeros_avx512(h: &[f64], n: usize, bound: Option<&[usize]>, p: &mut [usize]) {
+    join_nonzeros_generic(h, n, bound, p);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn join_nonzeros_avx2(h: &[f64], n: usize, p: &mut [usize]) {
-    join_nonzeros_generic(h, n, p);
+unsafe fn join_nonzeros_avx2(h: &[f64], n: usize, bound: Option<&[usize]>, p: &mut [usize]) {
+    join_nonzeros_generic(h, n, bound, p);
 }
 
 #[inline(always)]
-fn join_nonzeros_generic(h: &[f64], n: usize, p: &mut [usize]) {
+fn join_nonzeros_generic(h: &[f64], n: usize, bound: Option<&[usize]>, p: &mut [usize]) {
     if n == 0 {
         return;
     }
@@ -851,7 +866,8 @@ fn join_nonzeros_generic(h: &[f64], n: usize, p: &mut [usize]) {
         // Fixed chunks of 8 are tested branch-free first: all zero (most of
         // the matrix when robots are apart), then none needing a union (the
         // rest); both tests vectorize.
-        let mut chunks = col[j..].chunks_exact(8);
+        let end = bound.map_or(n, |b| b[j].clamp(j, n));
+        let mut chunks = col[j..end].chunks_exact(8);
         let mut base = j;
         for c in &mut chunks {
             let c: &[f64; 8] = c.try_into().expect("chunk of 8");

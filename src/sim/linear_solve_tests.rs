@@ -319,9 +319,22 @@ fn partition_is_the_components_of_the_nonzero_pattern() {
         // as the portable one.
         let (mut fast, mut portable): (Vec<usize>, Vec<usize>) =
             ((0..n).collect(), (0..n).collect());
-        join_nonzeros(h.as_slice(), n, &mut fast);
-        join_nonzeros_generic(h.as_slice(), n, &mut portable);
+        join_nonzeros(h.as_slice(), n, None, &mut fast);
+        join_nonzeros_generic(h.as_slice(), n, None, &mut portable);
         assert_eq!(fast, portable, "case {case}: scan paths differ");
+        // Each column's scan cut at its last non-zero (the tightest row
+        // bound an envelope can give): the same forest.
+        let ends: Vec<usize> = (0..n)
+            .map(|j| {
+                (0..n)
+                    .rev()
+                    .find(|&i| h[(i, j)] != 0.0)
+                    .map_or(j + 1, |i| i + 1)
+            })
+            .collect();
+        let mut bounded: Vec<usize> = (0..n).collect();
+        join_nonzeros(h.as_slice(), n, Some(&ends), &mut bounded);
+        assert_eq!(bounded, fast, "case {case}: bounded scan differs");
         // Reference: union–find over all non-zeros, roots = smallest index.
         let mut p: Vec<usize> = (0..n).collect();
         for j in 0..n {

@@ -9,6 +9,7 @@
 
 pub mod assemble;
 pub mod effects;
+pub mod envelope;
 pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
@@ -197,7 +198,7 @@ impl Objective for StepObjective<'_> {
             *w = work;
         }
         if need >= Need::Gradient {
-            assemble::assemble_swapping(model, self.kin, self.acc, need, grad, hess, self.assemble);
+            assemble::assemble(model, self.kin, self.acc, need, grad, hess, self.assemble);
             timers.add(Stage::Assembly, mark.elapsed());
         }
         Ok(self.acc.value)
@@ -207,6 +208,10 @@ impl Objective for StepObjective<'_> {
     /// near rest: each link contributes `m_i ‖g‖ ε (‖x_i‖ + 1)` (J), with
     /// `x_i` its position at the last evaluation; a safety factor of 64
     /// covers the summation over vertices and the kinematic chain.
+    fn hessian_envelope(&self) -> Option<&envelope::ColumnEnvelope> {
+        Some(self.assemble.envelope())
+    }
+
     fn value_noise(&self) -> f64 {
         let g = self.ctx.gravity.norm();
         let sum: f64 = self

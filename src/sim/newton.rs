@@ -30,6 +30,7 @@
 //! The simulator asks for this only when a step's straight path could not be
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
+use super::envelope::ColumnEnvelope;
 use super::linear_solve::{BlockSolver, Mode};
 pub use crate::counters::NewtonReport;
 use crate::counters::{Stage, StageTimers};
@@ -240,6 +241,14 @@ pub trait Objective {
     ) -> Result<f64, EnergyError> {
         Ok(alpha)
     }
+
+    /// Rows of each column of the Hessian of the last evaluation that may
+    /// be non-zero (every other entry is exactly zero), when the objective
+    /// knows them; the solver's dense passes over `H` then skip the rest.
+    /// Default: unknown (every entry is read).
+    fn hessian_envelope(&self) -> Option<&ColumnEnvelope> {
+        None
+    }
 }
 
 /// Scratch buffers of the solver.
@@ -426,7 +435,15 @@ impl Solve<'_> {
         self.report.grad_inf = grad_inf;
         self.report.value = value;
         let s = &mut *self.scratch;
-        if !grad_inf.is_finite() || s.hess.as_slice().iter().any(|v| !v.is_finite()) {
+        let env = self
+            .obj
+            .hessian_envelope()
+            .filter(|e| e.len() == s.hess.nrows());
+        let hess_non_finite = match env {
+            Some(e) => e.any_non_finite(&s.hess),
+            None => s.hess.as_slice().iter().any(|v| !v.is_finite()),
+        };
+        if !grad_inf.is_finite() || hess_non_finite {
             return Err(NewtonError::NonFinite { iter });
         }
         if grad_inf < self.opts.tol {
@@ -434,7 +451,10 @@ impl Solve<'_> {
         }
         self.report.grad_floor = 64.0
             * f64::EPSILON
-            * max_row_sum(&s.hess, &mut s.row_sums)
+            * match env {
+                Some(e) => e.max_row_sum(&s.hess, &mut s.row_sums),
+                None => max_row_sum(&s.hess, &mut s.row_sums),
+            }
             * (q.amax() + self.obj.length_scale());
         Ok(None)
     }
@@ -457,6 +477,13 @@ impl Solve<'_> {
         };
         loop {
             let s = &mut *self.scratch;
+            if let Some(e) = self
+                .obj
+                .hessian_envelope()
+                .filter(|e| e.len() == s.hess.nrows())
+            {
+                s.linear.bound_rows(e.row_ends());
+            }
             self.timers.time(Stage::LinearSolve, || {
                 s.linear.direction(
                     &s.hess,

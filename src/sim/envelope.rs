@@ -1,0 +1,307 @@
+//! Which rows of each column of the step Hessian can be non-zero.
+//!
+//! The assembled `H = ∂²O/∂θ²` of a tree is sparse: entry `(k, l)` is
+//! structurally non-zero only when one coordinate's joint is an ancestor of
+//! the other's (inertia, gravity, the kinematic second-order terms, a
+//! link's own contact block), when a coupled link pair `(i, j)` has `k` and
+//! `l` on its two ancestor paths (contact and friction between links), or
+//! when a coordinate term couples them (mimic ties). [`ColumnEnvelope`]
+//! bounds the non-zeros of each column `l` by a row range
+//! `lo_l ≤ k < hi_l`; with coordinates numbered depth-first (every scene
+//! and import does) a tree's columns span that tree's coordinates only, so
+//! four separate chains of 64 coordinates touch a quarter of the
+//! 256 × 256 matrix.
+//!
+//! Every dense pass over `H` that only needs its non-zeros — clearing it
+//! before the next assembly, the finiteness test, the row sums of Newton's
+//! round-off floor, the block partition of the linear solve — runs over the
+//! envelope. Entries outside it are exactly zero, so each pass gives the
+//! bits of the full pass.
+
+use crate::energy::EnergyAccumulator;
+use crate::model::Model;
+use nalgebra::DMatrix;
+use std::ops::Range;
+
+/// Row range of the possible non-zeros of every column (see the module
+/// documentation).
+#[derive(Clone, Debug, Default)]
+pub struct ColumnEnvelope {
+    lo: Vec<usize>,
+    hi: Vec<usize>,
+}
+
+impl ColumnEnvelope {
+    /// Every row of every column of an `n × n` matrix.
+    pub fn full(n: usize) -> Self {
+        ColumnEnvelope {
+            lo: vec![0; n],
+            hi: vec![n; n],
+        }
+    }
+
+    /// Number of columns.
+    pub fn len(&self) -> usize {
+        self.lo.len()
+    }
+
+    /// Whether there are no columns.
+    pub fn is_empty(&self) -> bool {
+        self.lo.is_empty()
+    }
+
+    /// Rows of column `l` that may be non-zero.
+    pub fn rows(&self, l: usize) -> Range<usize> {
+        self.lo[l]..self.hi[l]
+    }
+
+    /// One past the last row of each column that may be non-zero.
+    pub fn row_ends(&self) -> &[usize] {
+        &self.hi
+    }
+
+    /// The envelope of the Hessian the assembler builds from `acc`: the
+    /// diagonal, every ancestor pair of the tree, both ancestor paths of
+    /// every coupled link pair, the coordinate terms' off-diagonal entries.
+    pub fn build(&mut self, model: &Model, acc: &EnergyAccumulator) {
+        let n = model.ndof();
+        self.lo.clear();
+        self.lo.extend(0..n);
+        self.hi.clear();
+        self.hi.extend(1..=n);
+        for (b, link) in model.links.iter().enumerate() {
+            let (ob, nb) = (link.dof_offset, link.ndof());
+            if nb == 0 {
+                continue;
+            }
+            let anc = &model.ancestor_dofs[b];
+            let end = ob + nb;
+            for l in ob..end {
+                self.lo[l] = self.lo[l].min(anc[0]);
+                self.hi[l] = self.hi[l].max(end);
+            }
+            for &k in anc.iter().take_while(|&&k| k < ob) {
+                self.hi[k] = self.hi[k].max(end);
+            }
+        }
+        for (i, j, _) in &acc.pair_hess {
+            let (ai, aj) = (&model.ancestor_dofs[*i], &model.ancestor_dofs[*j]);
+            let (Some(fi), Some(fj)) = (ai.first(), aj.first()) else {
+                continue;
+            };
+            let first = (*fi).min(*fj);
+            let end = ai[ai.len() - 1].max(aj[aj.len() - 1]) + 1;
+            for &l in ai.iter().chain(aj) {
+                self.lo[l] = self.lo[l].min(first);
+                self.hi[l] = self.hi[l].max(end);
+            }
+        }
+        for &((k, l), _) in acc.dof_hess.off_diagonal() {
+            self.lo[l] = self.lo[l].min(k);
+            self.hi[l] = self.hi[l].max(k + 1);
+            self.lo[k] = self.lo[k].min(l);
+            self.hi[k] = self.hi[k].max(l + 1);
+        }
+    }
+
+    /// Sets the envelope's entries of `h` to zero.
+    pub fn zero(&self, h: &mut DMatrix<f64>) {
+        let n = h.nrows();
+        for (l, col) in h.as_mut_slice().chunks_exact_mut(n.max(1)).enumerate() {
+            col[self.rows(l)].fill(0.0);
+        }
+    }
+
+    /// Whether any entry of `h` in the envelope is NaN or infinite.
+    pub fn any_non_finite(&self, h: &DMatrix<f64>) -> bool {
+        let n = h.nrows();
+        h.as_slice()
+            .chunks_exact(n.max(1))
+            .enumerate()
+            .any(|(l, col)| col[self.rows(l)].iter().any(|v| !v.is_finite()))
+    }
+
+    /// `max_k Σ_l |h_kl|` (`‖h‖∞`), summing each row in column order over
+    /// the envelope (the bits of the full sum: the skipped entries are
+    /// zeros). `sums` is scratch.
+    pub fn max_row_sum(&self, h: &DMatrix<f64>, sums: &mut Vec<f64>) -> f64 {
+        let n = h.nrows();
+        sums.clear();
+        // `Sum for f64` folds from −0.0; the same start keeps every bit.
+        sums.resize(n, -0.0);
+        if n == 0 {
+            return 0.0;
+        }
+        for (l, col) in h.as_slice().chunks_exact(n).enumerate() {
+            let r = self.rows(l);
+            for (s, v) in sums[r.clone()].iter_mut().zip(&col[r]) {
+                *s += v.abs();
+            }
+        }
+        sums.iter().copied().fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::{Need, PoseHessian};
+    use crate::kinematics::{KinOrder, Kinematics};
+    use crate::scene::Scene;
+    use crate::sim::assemble::{AssembleScratch, assemble};
+    use nalgebra::{DVector, Matrix3x4};
+    use rand::{RngExt, SeedableRng};
+    type Rng = rand_chacha::ChaCha8Rng;
+    use std::path::Path;
+
+    /// Two robots: a branching tree (revolute root, a spherical and a
+    /// prismatic branch, a ball joint under the spherical one) and a free
+    /// body; plus a fixed link, which has no coordinates of its own.
+    const SCENE: &str = r#"
+dt: 0.01
+robots:
+  - name: t
+    links:
+      - name: a
+        joint: {type: revolute, axis: [0, 0, 1]}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+      - name: b
+        parent: a
+        joint: {type: spherical, origin: {xyz: [0.2, 0, 0]}}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+      - name: c
+        parent: a
+        joint: {type: prismatic, axis: [0, 1, 0], origin: {xyz: [0, 0.2, 0]}}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+      - name: d
+        parent: b
+        joint: {type: ball, origin: {xyz: [0.2, 0, 0]}}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+      - name: e
+        parent: d
+        joint: {type: fixed, origin: {xyz: [0.2, 0, 0]}}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+  - name: f
+    links:
+      - name: g
+        joint: {type: free}
+        hulls: [{box: {size: [0.1, 0.1, 0.1]}}]
+        mass: 1.0
+"#;
+
+    fn random_block(rng: &mut Rng) -> PoseHessian {
+        PoseHessian::from_fn(|_, _| rng.random_range(-1.0..1.0))
+    }
+
+    /// A random accumulator: gradients, symmetric diagonal blocks on some
+    /// links, the inertia moments, coupled pairs (within a tree, across
+    /// trees, a link with no coordinates), coordinate terms with an
+    /// off-diagonal tie.
+    fn random_acc(model: &crate::model::Model, rng: &mut Rng) -> EnergyAccumulator {
+        let nl = model.links.len();
+        let mut acc = EnergyAccumulator::new(model);
+        acc.reset(Need::Hessian);
+        for g in acc.link_grad.iter_mut() {
+            *g = Matrix3x4::from_fn(|_, _| rng.random_range(-1.0..1.0));
+        }
+        for i in 0..nl {
+            if rng.random_range(0.0..1.0) < 0.5 {
+                let b = random_block(rng);
+                acc.add_link_hess(i, &(b + b.transpose()));
+            }
+        }
+        acc.link_moment.copy_from_slice(&model.second_moment);
+        acc.link_moment_set = true;
+        for _ in 0..rng.random_range(0..4usize) {
+            let i = rng.random_range(0..nl);
+            let j = (i + 1 + rng.random_range(0..nl - 1)) % nl;
+            acc.pair_hess.push((i, j, random_block(rng)));
+        }
+        let n = model.ndof();
+        for k in 0..n {
+            acc.dof_hess[(k, k)] += rng.random_range(0.0..2.0);
+        }
+        let (k, l) = (rng.random_range(0..n), rng.random_range(0..n));
+        if k != l {
+            let v = rng.random_range(-1.0..1.0);
+            acc.dof_hess[(k, l)] += v;
+            acc.dof_hess[(l, k)] += v;
+        }
+        acc
+    }
+
+    /// Assembling into a reused buffer (cleared over the last envelope
+    /// only) gives the bits of assembling into a fresh zero matrix; every
+    /// non-zero lies in the envelope; the result is exactly symmetric; the
+    /// envelope's passes equal the full passes.
+    #[test]
+    fn reused_buffer_equals_fresh_assembly_and_nonzeros_lie_inside() {
+        let scene = Scene::from_str(SCENE, Path::new("envelope.yaml")).unwrap();
+        let model = &scene.model;
+        let n = model.ndof();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut kin = Kinematics::new(model);
+        let mut reused = DMatrix::zeros(n, n);
+        let mut reused_scratch = AssembleScratch::default();
+        let mut grad = DVector::zeros(n);
+        for round in 0..40 {
+            let q = DVector::from_fn(n, |_, _| rng.random_range(-0.5..0.5));
+            let charts = vec![nalgebra::Matrix3::identity(); model.nchart];
+            kin.update(model, &q, &charts, KinOrder::Second);
+            let acc = random_acc(model, &mut rng);
+            let mut fresh = DMatrix::zeros(n, n);
+            let mut fresh_scratch = AssembleScratch::default();
+            assemble(
+                model,
+                &kin,
+                &acc,
+                Need::Hessian,
+                &mut grad,
+                &mut fresh,
+                &mut fresh_scratch,
+            );
+            assemble(
+                model,
+                &kin,
+                &acc,
+                Need::Hessian,
+                &mut grad,
+                &mut reused,
+                &mut reused_scratch,
+            );
+            let env = reused_scratch.envelope();
+            for l in 0..n {
+                for k in 0..n {
+                    let (a, b) = (fresh[(k, l)], reused[(k, l)]);
+                    assert_eq!(a.to_bits(), b.to_bits(), "round {round}: ({k}, {l})");
+                    assert_eq!(
+                        a.to_bits(),
+                        fresh[(l, k)].to_bits(),
+                        "not symmetric at ({k}, {l})"
+                    );
+                    if a != 0.0 {
+                        assert!(
+                            env.rows(l).contains(&k),
+                            "round {round}: ({k}, {l}) outside"
+                        );
+                    }
+                }
+            }
+            let (mut s1, mut s2) = (Vec::new(), Vec::new());
+            let full = ColumnEnvelope::full(n);
+            assert_eq!(
+                env.max_row_sum(&reused, &mut s1).to_bits(),
+                full.max_row_sum(&reused, &mut s2).to_bits()
+            );
+            assert!(!env.any_non_finite(&reused));
+            reused[(env.rows(n - 1).start, n - 1)] = f64::NAN;
+            assert!(env.any_non_finite(&reused));
+            reused[(env.rows(n - 1).start, n - 1)] = 0.0;
+        }
+    }
+}
