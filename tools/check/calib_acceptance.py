@@ -24,6 +24,18 @@ For each third-party MJCF model (gymnasium's bundled models by default):
     python tools/check/calib_acceptance.py --sdrs target/release/sdrs --out out/acc \
         [--cases quick|all] [--robots reacher,inverted_double_pendulum]
 
+Several recordings, one model (issue 33, item 4): `--initial J=V,…` starts
+the MuJoCo data (and the case's scene) at another state of the measured
+joints; with `--two-recordings` recording A starts from the model's state
+and B from `--initial`, and each case is calibrated on A alone, B alone
+(the scene started at B's state) and A + B (`--measured` twice; B is then
+simulated from its first sample, as `sdrs calibrate` starts any further
+recording). Each fit must meet the case's rule, and the joint fit lie
+inside both single fits' 95 % intervals:
+
+    python tools/check/calib_acceptance.py --sdrs target/release/sdrs --out out/two \
+        --robots reacher --only damping_all --initial joint0=-0.5,joint1=0.5 --two-recordings
+
 Prints one line per case and writes `<out>/summary.json`. Exit status 1 if
 a target is missed (the table says which). `--cases quick` (CI size) runs
 the clean and one-effect damping cases of the first robot.
@@ -121,7 +133,7 @@ def fail(msg):
     sys.exit(2)
 
 
-def make_scene(args, robot, spec, case_dir):
+def make_scene(args, robot, spec, case_dir, initial=None, name="scene.yaml"):
     src = os.path.join(ASSETS, spec["file"])
     raw = os.path.join(case_dir, "imported.yaml")
     r = subprocess.run([args.sdrs, "import", src, "--out", raw, "--decomposer", "hull", "--force"],
@@ -149,13 +161,21 @@ def make_scene(args, robot, spec, case_dir):
         g["kd"] *= spec["gain_scale"]
     ctrl["kp"] = ctrl.get("kp", 0.0) * spec["gain_scale"]
     ctrl["kd"] = ctrl.get("kd", 0.0) * spec["gain_scale"]
-    path = os.path.join(case_dir, "scene.yaml")
+    if initial:
+        init = rob.setdefault("initial", {})
+        for j, q in initial.items():
+            init[j] = {"q": [q], "qdot": [0.0]}
+    path = os.path.join(case_dir, name)
     with open(path, "w") as f:
         yaml.safe_dump(sc, f, sort_keys=False)
     return path, sc
 
 
-def simulate_mujoco(args, spec, sc, hidden, out_csv, seed):
+def simulate_mujoco(args, spec, sc, hidden, out_csv, seed, initial=None):
+    """MuJoCo data for one case. `initial` ({joint: q}, the `--initial`
+    state) replaces the scene's initial coordinate of those joints; every
+    velocity starts at 0, as `sdrs calibrate` starts a further recording
+    (its first sample, the scene's velocities)."""
     model = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, spec["file"]))
     model.opt.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + args.integrator.upper())
     model.opt.timestep = args.timestep
@@ -184,6 +204,8 @@ def simulate_mujoco(args, spec, sc, hidden, out_csv, seed):
     init = rob.get("initial", {})
     for j in joints:
         q = init.get(j, {}).get("q", [0.0])[0]
+        if initial and j in initial:
+            q = initial[j]
         data.qpos[model.joint(j).qposadr[0]] = q
     mujoco.mj_forward(model, data)
     dt_sdrs = spec["dt"]
@@ -261,6 +283,133 @@ def judge(res, hidden, expect=None):
     return max(errs) <= tol, "errors " + ", ".join(f"{100 * e:.1f} %" for e in errs)
 
 
+def parse_initial(text, robot, spec):
+    """`--initial JOINT=VALUE[,JOINT=VALUE…]` → {joint: value}. Each joint
+    must be one the robot's excitation drives (the measured coordinates, the
+    ones `sdrs calibrate` sets from a further recording's first sample),
+    given once, with a finite value inside the MJCF joint's range."""
+    model = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, spec["file"]))
+    joints = list(spec["excite"])
+    out = {}
+    for item in text.split(","):
+        item = item.strip()
+        if not item:
+            continue
+        if item.count("=") != 1:
+            fail(f"--initial: {item!r} is not JOINT=VALUE (e.g. {joints[0]}=-0.5)")
+        j, v = (x.strip() for x in item.split("="))
+        if j not in joints:
+            fail(f"--initial: {j!r} is not a measured joint of {robot} (its joints: {', '.join(joints)})")
+        if j in out:
+            fail(f"--initial: joint {j!r} given twice")
+        try:
+            q = float(v)
+        except ValueError:
+            fail(f"--initial: {j}={v!r}: the value is not a number (rad or m)")
+        if not np.isfinite(q):
+            fail(f"--initial: {j}={v}: the value is not finite")
+        jid = model.joint(j).id
+        if model.jnt_limited[jid]:
+            lo, hi = model.jnt_range[jid]
+            if not lo < q < hi:
+                fail(f"--initial: {j}={q} is outside the joint's range [{lo}, {hi}] in {spec['file']}")
+        out[j] = q
+    if not out:
+        fail("--initial: no JOINT=VALUE given")
+    return out
+
+
+def calibrate(args, scene_path, data, cal, what):
+    """`sdrs calibrate` on one or several recordings; its calibration.json."""
+    cmd = [args.sdrs, "calibrate", scene_path]
+    for d in data:
+        cmd += ["--measured", d]
+    cmd += ["--out", cal, "-q"]
+    if args.effects:
+        cmd += ["--effects", args.effects]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        fail(f"sdrs calibrate ({what}): {r.stderr.strip()}")
+    with open(os.path.join(cal, "calibration.json")) as f:
+        return json.load(f)
+
+
+def interval(res, key):
+    """(value, low, high) of `key` in a calibration.json, None when not fitted."""
+    c = (res.get("confidence") or {}).get(key)
+    if c is None:
+        return None
+    return c["value"], c["low"], c["high"]
+
+
+def inside(v, iv):
+    return iv is not None and iv[1] is not None and iv[1] <= v <= iv[2]
+
+
+def agreement(ra, rb, rj, hidden):
+    """The two-recording rule (issue 33: "fits across two recordings agree
+    with the single-recording fits within their intervals"), per hidden
+    key: `joint` — the joint fit inside A's and B's 95 % intervals (the
+    criterion); `cross` — A's fit inside B's interval and B's inside A's
+    (a stricter check, reported beside it). Returns (joint ok, cross ok,
+    rows) with rows {key: {a, b, ab: (value, low, high)}}."""
+    joint_ok, cross_ok, rows = True, True, {}
+    for k, _, _ in hidden:
+        a, b, j = interval(ra, k), interval(rb, k), interval(rj, k)
+        rows[k] = {"a": a, "b": b, "ab": j}
+        if a is None or b is None or j is None:
+            joint_ok = cross_ok = False
+            continue
+        joint_ok &= inside(j[0], a) and inside(j[0], b)
+        cross_ok &= inside(a[0], b) and inside(b[0], a)
+    return joint_ok, cross_ok, rows
+
+
+def fmt_iv(iv):
+    if iv is None:
+        return "not fitted"
+    lo = "?" if iv[1] is None else f"{iv[1]:.5g}"
+    hi = "?" if iv[2] is None else f"{iv[2]:.5g}"
+    return f"{iv[0]:.5g} [{lo}, {hi}]"
+
+
+def run_two_recordings(args, robot, spec, i, name, hidden, initial, case_dir):
+    """Recording A from the model's initial state, B from `initial` (its own
+    noise seed); `sdrs calibrate` on A alone, on B alone (the scene started
+    at B's state) and on A + B (`--measured A --measured B`, the scene at
+    A's state: B is simulated from its first sample, as `sdrs calibrate`
+    starts every further recording). Returns the summary entry."""
+    scene_a, sc_a = make_scene(args, robot, spec, case_dir)
+    scene_b, sc_b = make_scene(args, robot, spec, case_dir, initial, "scene_b.yaml")
+    da, db = os.path.join(case_dir, "measured_a.csv"), os.path.join(case_dir, "measured_b.csv")
+    simulate_mujoco(args, spec, sc_a, hidden, da, seed=1 + i)
+    simulate_mujoco(args, spec, sc_a, hidden, db, seed=101 + i, initial=initial)
+    ra = calibrate(args, scene_a, [da], os.path.join(case_dir, "cal_a"), f"{robot} {name} A")
+    rb = calibrate(args, scene_b, [db], os.path.join(case_dir, "cal_b"), f"{robot} {name} B")
+    rj = calibrate(args, scene_a, [da, db], os.path.join(case_dir, "cal_ab"), f"{robot} {name} A+B")
+    judged = {w: judge(r, hidden) for w, r in (("a", ra), ("b", rb), ("ab", rj))}
+    joint_ok, cross_ok, rows = agreement(ra, rb, rj, hidden)
+    ok = joint_ok and all(j[0] for j in judged.values())
+    for w, r in (("A", ra), ("B", rb), ("A+B", rj)):
+        fl = r["error_floor"]
+        print(f"  {w:<4} verdict {r['verdict']:<11} {r['candidate'] or '-':<40} gap {fl['gap']:.2e} "
+              f"floor {fl['floor']:.2e}  {judged[w.lower().replace('+', '')][1]}", flush=True)
+    for k, row in rows.items():
+        print(f"  {k}: A {fmt_iv(row['a'])}  B {fmt_iv(row['b'])}  A+B {fmt_iv(row['ab'])}", flush=True)
+    print(f"{'PASS' if ok else 'MISS'} {robot:<26} {name:<28} two recordings (B from "
+          f"{', '.join(f'{j}={q}' for j, q in initial.items())}): joint fit inside both single intervals: "
+          f"{'yes' if joint_ok else 'NO'}; each single inside the other's: {'yes' if cross_ok else 'NO'}",
+          flush=True)
+    return {"robot": robot, "case": name, "mode": "two_recordings", "ok": ok, "initial_b": initial,
+            "joint_inside_singles": joint_ok, "singles_inside_each_other": cross_ok,
+            "hidden": {k: v for k, v, _ in hidden},
+            "fits": {w: {"verdict": r["verdict"], "candidate": r["candidate"], "parameters": r["parameters"],
+                         "parameters_at_dt": r.get("parameters_at_dt"), "confidence": r.get("confidence"),
+                         "judged": judged[w], "reason": r["reason"], "error_floor": r["error_floor"],
+                         "recordings": r.get("recordings")}
+                     for w, r in (("a", ra), ("b", rb), ("ab", rj))}}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sdrs", required=True)
@@ -275,6 +424,13 @@ def main():
     ap.add_argument("--only", help="run only the case with this name (e.g. friction_joint0)")
     ap.add_argument("--integrator", default="RK4", choices=["RK4", "implicitfast", "implicit", "Euler"])
     ap.add_argument("--effects", help="candidate effects passed to `sdrs calibrate --effects` (isolating runs)")
+    ap.add_argument("--initial", help="JOINT=VALUE[,JOINT=VALUE…]: MuJoCo starts at these joint coordinates (rad or "
+                    "m; measured joints of the one robot given by --robots; velocities 0) and so does the case's "
+                    "scene; with --two-recordings, the start of recording B only")
+    ap.add_argument("--two-recordings", action="store_true",
+                    help="per case: recording A from the model's initial state and B from --initial; calibrations "
+                    "on A alone, B alone (scene at B's state) and A+B (--measured twice); the joint fit must lie "
+                    "inside both single fits' 95 %% intervals (issue 33)")
     ap.add_argument("--solreffriction", help="MuJoCo dof_frictionloss solref 'timeconst,dampratio' "
                     "(default: the model's; a smaller time constant makes the dry friction harder)")
     args = ap.parse_args()
@@ -283,32 +439,43 @@ def main():
     robots = [r for r in args.robots.split(",") if r]
     if args.cases == "quick":
         robots = robots[:1]
+    if args.two_recordings and not args.initial:
+        fail("--two-recordings needs --initial (recording B's start)")
+    if args.initial and len(robots) != 1:
+        fail(f"--initial names joints of one robot: give exactly one with --robots (got {', '.join(robots) or 'none'})")
     for robot in robots:
         if robot not in ROBOTS:
             fail(f"unknown robot {robot!r} (robots: {', '.join(ROBOTS)})")
+    names = [c[0] for r in robots for c in cases_for(ROBOTS[r])]
+    if args.only and args.only not in names:
+        fail(f"--only {args.only!r}: no such case (cases: {', '.join(dict.fromkeys(names))})")
+    for robot in robots:
         spec = dict(ROBOTS[robot])
         if args.dt:
             spec["dt"] = args.dt
         cases = cases_for(spec)
         if args.cases == "quick":
             cases = cases[:2]
+        initial = parse_initial(args.initial, robot, spec) if args.initial else None
         for i, (name, hidden, expect) in enumerate(cases):
             if args.only and name != args.only:
                 continue
             case_dir = os.path.join(args.out, f"{robot}_{name}")
             os.makedirs(case_dir, exist_ok=True)
-            scene_path, sc = make_scene(args, robot, spec, case_dir)
+            if args.two_recordings:
+                if expect is not None:
+                    if args.only:
+                        fail(f"--two-recordings: case {name} is outside the library (its rule has no interval to compare)")
+                    print(f"skip {robot} {name}: outside the library, no interval to compare", flush=True)
+                    continue
+                entry = run_two_recordings(args, robot, spec, i, name, hidden, initial, case_dir)
+                missed += not entry["ok"]
+                summary.append(entry)
+                continue
+            scene_path, sc = make_scene(args, robot, spec, case_dir, initial)
             data = os.path.join(case_dir, "measured.csv")
-            simulate_mujoco(args, spec, sc, hidden, data, seed=1 + i)
-            cal = os.path.join(case_dir, "cal")
-            cmd = [args.sdrs, "calibrate", scene_path, "--measured", data, "--out", cal, "-q"]
-            if args.effects:
-                cmd += ["--effects", args.effects]
-            r = subprocess.run(cmd, capture_output=True, text=True)
-            if r.returncode != 0:
-                fail(f"sdrs calibrate ({robot} {name}): {r.stderr.strip()}")
-            with open(os.path.join(cal, "calibration.json")) as f:
-                res = json.load(f)
+            simulate_mujoco(args, spec, sc, hidden, data, seed=1 + i, initial=initial)
+            res = calibrate(args, scene_path, [data], os.path.join(case_dir, "cal"), f"{robot} {name}")
             ok, why = judge(res, hidden, expect)
             missed += not ok
             fl = res["error_floor"]
