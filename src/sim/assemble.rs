@@ -18,7 +18,7 @@ use crate::kinematics::Kinematics;
 use crate::math::homogeneous;
 use crate::math::{frob, twist_apply};
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, Matrix4, SMatrix};
+use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix};
 
 /// Scratch buffers of the assembler (allocated once).
 #[derive(Clone, Debug, Default)]
@@ -28,6 +28,8 @@ pub struct AssembleScratch {
     jac: Vec<SMatrix<f64, 12, 1>>,
     jac2: Vec<SMatrix<f64, 12, 1>>,
     hj: Vec<SMatrix<f64, 12, 1>>,
+    /// `(ω_k, v_k)` of every coordinate's twist ([`twist_vector`]).
+    twist6: Vec<[f64; 6]>,
     envelope: ColumnEnvelope,
     /// Address and size of the buffer the last Hessian was written into.
     written: Option<(usize, usize)>,
@@ -104,7 +106,7 @@ pub fn assemble(
     for (i, j, h) in &acc.pair_hess {
         add_pair_block(model, kin, *i, *j, h, hess, scratch);
     }
-    mirror_upper(model, acc, hess);
+    mirror_upper(&scratch.envelope, hess);
 }
 
 /// First-order part of the diagonal link blocks, `J_iᵀ H_ii J_i`, into the
@@ -160,18 +162,24 @@ fn fill_composites(
 /// - the structured first-order part `⟨S_k, S_l C_b⟩` (when `composites`);
 /// - the second-order kinematic part: `⟨S_k S_l, Q_b⟩ = ⟨R_k, Q_b S_lᵀ⟩`
 ///   for a proper ancestor `k` (`R_k` the rotational 3×3 of `S_k`, and
-///   `S_k S_l` means `R_k S_l`, see `crate::math::twist_mul`), `⟨S_kl, Q_b⟩` within
-///   joint `b`.
+///   `S_k S_l` means `R_k S_l`, see `crate::math::twist_mul`), `⟨S_kl, Q_b⟩`
+///   within joint `b`.
 ///
-/// `Q_b S_lᵀ` (3×3) is formed once per `l`, so each ancestor costs two
-/// 9- and 12-term dot products instead of a 3×3·3×4 product.
+/// For a proper ancestor both parts are one product `⟨S_k, Z_l⟩` with
+/// `Z_l = S_l C_b + [Q_b S_lᵀ | 0]`, formed once per `l`; and since `R_k`
+/// is skew-symmetric (`R_k = [ω_k]×`, `S_k = [[ω_k]× | v_k]`),
+/// `⟨S_k, Z⟩ = ω_k · ax(Z) + v_k · z₄` with `ax(Z) = (Z₂₁ − Z₁₂, Z₀₂ − Z₂₀,
+/// Z₁₀ − Z₀₁)` and `z₄` the last column: six multiplications per entry,
+/// like the composite-rigid-body algorithm's `S_kᵀ F_l`.
 fn add_tree_terms(
     model: &Model,
     kin: &Kinematics,
     composites: bool,
     hess: &mut DMatrix<f64>,
-    scratch: &AssembleScratch,
+    scratch: &mut AssembleScratch,
 ) {
+    scratch.twist6.clear();
+    scratch.twist6.extend(kin.twist.iter().map(twist_vector));
     let n = hess.nrows();
     let h = hess.as_mut_slice();
     for (b, link) in model.links.iter().enumerate() {
@@ -185,63 +193,77 @@ fn add_tree_terms(
         let proper = &anc[..anc.len() - nb];
         for l in ob..ob + nb {
             let sl = &kin.twist[l];
+            let y = composites.then(|| sl * scratch.composite[b]);
+            let mut z = y.unwrap_or_else(Matrix3x4::zeros);
             let p = qb * sl.transpose();
+            let mut z_rot = z.fixed_view_mut::<3, 3>(0, 0);
+            z_rot += p;
+            let w = axial_and_translation(&z);
             let col = &mut h[l * n..(l + 1) * n];
-            if composites {
-                let y = sl * scratch.composite[b];
-                for &k in proper {
-                    let sk = &kin.twist[k];
-                    col[k] += frob(sk, &y) + rot_dot(sk, &p);
+            for &k in proper {
+                let t = &scratch.twist6[k];
+                col[k] += t[0] * w[0]
+                    + t[1] * w[1]
+                    + t[2] * w[2]
+                    + t[3] * w[3]
+                    + t[4] * w[4]
+                    + t[5] * w[5];
+            }
+            for k in ob..=l {
+                let mut v = frob(kin.twist2(model, b, k, l), qb);
+                if let Some(y) = &y {
+                    v += frob(&kin.twist[k], y);
                 }
-                for k in ob..=l {
-                    let v = frob(&kin.twist[k], &y) + frob(kin.twist2(model, b, k, l), qb);
-                    col[k] += v;
-                }
-            } else {
-                for &k in proper {
-                    col[k] += rot_dot(&kin.twist[k], &p);
-                }
-                for k in ob..=l {
-                    col[k] += frob(kin.twist2(model, b, k, l), qb);
-                }
+                col[k] += v;
             }
         }
     }
 }
 
-/// `⟨R_s, P⟩`: the Frobenius product of the rotational 3×3 of a twist
-/// with a 3×3 (column-major storage: the twist's first nine entries).
-#[inline]
-fn rot_dot(s: &Matrix3x4<f64>, p: &Matrix3<f64>) -> f64 {
-    let (s, p) = (s.as_slice(), p.as_slice());
-    let mut v = 0.0;
-    for i in 0..9 {
-        v += s[i] * p[i];
-    }
-    v
+/// `(ω, v)` of a twist matrix `S = [[ω]× | v]` (ω from the skew part of the
+/// rotational 3×3, `½(S − Sᵀ)`, which it is up to round-off).
+fn twist_vector(s: &Matrix3x4<f64>) -> [f64; 6] {
+    [
+        0.5 * (s[(2, 1)] - s[(1, 2)]),
+        0.5 * (s[(0, 2)] - s[(2, 0)]),
+        0.5 * (s[(1, 0)] - s[(0, 1)]),
+        s[(0, 3)],
+        s[(1, 3)],
+        s[(2, 3)],
+    ]
 }
 
-/// Copies the upper triangle onto the lower one at every entry the
-/// assembly can have written: each coordinate pair `(k, l)` of a joint's
-/// ancestor list (tree terms and diagonal link blocks: two ancestors of one
-/// link are ancestor-related) and of a coupled link pair's two lists. The
-/// coordinate terms write both triangles themselves. The result is exactly
-/// symmetric.
-fn mirror_upper(model: &Model, acc: &EnergyAccumulator, hess: &mut DMatrix<f64>) {
-    for (b, link) in model.links.iter().enumerate() {
-        let ob = link.dof_offset;
-        for l in ob..ob + link.ndof() {
-            for &k in model.ancestor_dofs[b].iter().take_while(|&&k| k < l) {
-                hess[(l, k)] = hess[(k, l)];
-            }
-        }
-    }
-    for (i, j, _) in &acc.pair_hess {
-        for &k in &model.ancestor_dofs[*i] {
-            for &l in &model.ancestor_dofs[*j] {
-                if k != l {
-                    let (lo, hi) = (k.min(l), k.max(l));
-                    hess[(hi, lo)] = hess[(lo, hi)];
+/// `(ax(Z), z₄)` with `⟨[[ω]× | v], Z⟩ = ω · ax(Z) + v · z₄` (see
+/// [`add_tree_terms`]).
+fn axial_and_translation(z: &Matrix3x4<f64>) -> [f64; 6] {
+    [
+        z[(2, 1)] - z[(1, 2)],
+        z[(0, 2)] - z[(2, 0)],
+        z[(1, 0)] - z[(0, 1)],
+        z[(0, 3)],
+        z[(1, 3)],
+        z[(2, 3)],
+    ]
+}
+
+/// Copies the upper triangle onto the lower one over the envelope
+/// (`h_lk = h_kl` for `k < l` in column `l`'s rows). Every entry the
+/// assembly can have written is there; the others are zeros on both sides
+/// (the buffer was cleared), so the copy leaves them zero. Columns go in
+/// groups of eight: for each row `k`, the eight values of row `k` are
+/// written to one contiguous run of column `k` (one cache line) instead of
+/// eight strided stores. The result is exactly symmetric.
+fn mirror_upper(env: &ColumnEnvelope, hess: &mut DMatrix<f64>) {
+    const GROUP: usize = 8;
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
+    for l0 in (0..n).step_by(GROUP) {
+        let l1 = (l0 + GROUP).min(n);
+        let k0 = (l0..l1).map(|l| env.rows(l).start).min().unwrap_or(l0);
+        for k in k0..l1 {
+            for l in l0.max(k + 1)..l1 {
+                if env.rows(l).contains(&k) {
+                    h[l + k * n] = h[k + l * n];
                 }
             }
         }
