@@ -19,6 +19,14 @@
 //! boxes overlap on all three axes (closed intervals, as the BVH's test), so
 //! the pair set is the same as before, and it is returned sorted: the result
 //! does not depend on the sweep order, and is deterministic.
+//!
+//! **Links first.** The sweep runs over one box per link (per run of
+//! consecutive hulls of one link: the union of their boxes), then tests the
+//! hull boxes of each candidate link pair. A link made of many blocks (a
+//! designed jaw: tens of touching blocks) no longer puts all pairs of its own
+//! blocks through the sweep only to reject them as same-link pairs; that was
+//! half of a parallel-jaw co-design iteration. Two hull boxes that overlap
+//! lie in link boxes that overlap, so the pair set is unchanged.
 
 use super::aabb::Aabb;
 use super::hulls::WorldHulls;
@@ -30,7 +38,11 @@ use std::collections::BTreeSet;
 #[derive(Clone, Default)]
 pub struct BroadPhase {
     aabbs: Vec<Aabb>,
-    /// Box indices sorted by `(lo[axis], index)`; kept between queries.
+    /// Runs of consecutive hulls of one link: `(link, hull indices)`.
+    groups: Vec<(usize, std::ops::Range<usize>)>,
+    /// Each run's box: the union of its hulls' boxes.
+    group_boxes: Vec<Aabb>,
+    /// Run indices sorted by `(lo[axis], index)`; kept between queries.
     order: Vec<usize>,
     /// Sweep axis (0, 1, 2) of `order`.
     axis: usize,
@@ -156,77 +168,131 @@ impl BroadPhase {
         excluded: &BTreeSet<(usize, usize)>,
         mut visit: impl FnMut(usize, usize) -> bool,
     ) -> bool {
-        let boxes = &self.aabbs;
-        let n = boxes.len();
-        if n < 2 {
-            return true;
-        }
-        // Axis of the largest spread of the box centres (NaN-free spreads
-        // only; ties keep the lower axis).
-        let mut spread = [0.0f64; 3];
-        for (e, s) in spread.iter_mut().enumerate() {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for b in boxes {
-                let c = b.lo[e] + b.hi[e];
-                lo = lo.min(c);
-                hi = hi.max(c);
+        self.group_hulls(hulls);
+        let BroadPhase {
+            aabbs,
+            groups,
+            group_boxes,
+            order,
+            axis,
+        } = self;
+        sweep_and_prune(group_boxes, order, axis, |ga, gb| {
+            let ((la, ra), (lb, rb)) = (&groups[ga], &groups[gb]);
+            if la == lb || excluded.contains(&((*la).min(*lb), (*la).max(*lb))) {
+                return true;
             }
-            *s = hi - lo;
-        }
-        let mut axis = self.axis;
-        for e in 0..3 {
-            if spread[e] > 1.5 * spread[axis] {
-                axis = e;
-            }
-        }
-        if self.order.len() != n {
-            self.order.clear();
-            self.order.extend(0..n);
-        }
-        self.axis = axis;
-        // Insertion sort by (lo[axis], index): a total order, so the
-        // sorted sequence is unique whatever the previous one was.
-        let key = |i: usize| (boxes[i].lo[axis], i);
-        let less =
-            |a: (f64, usize), b: (f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
-        let order = &mut self.order;
-        for k in 1..n {
-            let cur = order[k];
-            let kc = key(cur);
-            let mut j = k;
-            while j > 0 && less(kc, key(order[j - 1])) {
-                order[j] = order[j - 1];
-                j -= 1;
-            }
-            order[j] = cur;
-        }
-        let (o1, o2) = ((axis + 1) % 3, (axis + 2) % 3);
-        for (k, &a) in order.iter().enumerate() {
-            let ba = &boxes[a];
-            for &b in &order[k + 1..] {
-                let bb = &boxes[b];
-                // Sorted by lower bound: no later box can overlap `a` along
-                // the axis once one starts past its upper bound.
-                // (NaN bounds compare as "past" too: no pair, as in the
-                // overlap test.)
-                if !matches!(
-                    bb.lo[axis].partial_cmp(&ba.hi[axis]),
-                    Some(Ordering::Less | Ordering::Equal)
-                ) {
-                    break;
-                }
-                if !(ba.lo[axis] <= bb.hi[axis] && overlap(ba, bb, o1) && overlap(ba, bb, o2)) {
-                    continue;
-                }
-                let (a, b) = (a.min(b), a.max(b));
-                let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-                if la != lb && !excluded.contains(&(la.min(lb), la.max(lb))) && !visit(a, b) {
-                    return false;
+            for a in ra.clone() {
+                let ba = &aabbs[a];
+                for b in rb.clone() {
+                    if ba.intersects(&aabbs[b]) && !visit(a.min(b), a.max(b)) {
+                        return false;
+                    }
                 }
             }
-        }
-        true
+            true
+        })
     }
+
+    /// The runs of consecutive hulls of one link and their boxes (the
+    /// componentwise min/max of the hulls' boxes; a NaN bound drops out of
+    /// the union, and its hull out of every pair by the hull test).
+    fn group_hulls(&mut self, hulls: &WorldHulls) {
+        self.groups.clear();
+        self.group_boxes.clear();
+        for (h, b) in self.aabbs.iter().enumerate() {
+            let link = hulls.ids[h].link;
+            match self.groups.last_mut() {
+                Some((l, r)) if *l == link => {
+                    r.end = h + 1;
+                    let g = self.group_boxes.last_mut().expect("one box per run");
+                    for e in 0..3 {
+                        g.lo[e] = g.lo[e].min(b.lo[e]);
+                        g.hi[e] = g.hi[e].max(b.hi[e]);
+                    }
+                }
+                _ => {
+                    self.groups.push((link, h..h + 1));
+                    self.group_boxes.push(*b);
+                }
+            }
+        }
+    }
+}
+
+/// Incremental sweep and prune over `boxes` (see the module documentation):
+/// every pair whose boxes overlap along the sweep axis and the two others
+/// goes to `visit` (unordered indices) until it returns false.
+fn sweep_and_prune(
+    boxes: &[Aabb],
+    order: &mut Vec<usize>,
+    axis_state: &mut usize,
+    mut visit: impl FnMut(usize, usize) -> bool,
+) -> bool {
+    let n = boxes.len();
+    if n < 2 {
+        return true;
+    }
+    // Axis of the largest spread of the box centres (NaN-free spreads
+    // only; ties keep the lower axis).
+    let mut spread = [0.0f64; 3];
+    for (e, s) in spread.iter_mut().enumerate() {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for b in boxes {
+            let c = b.lo[e] + b.hi[e];
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+        *s = hi - lo;
+    }
+    let mut axis = *axis_state;
+    for e in 0..3 {
+        if spread[e] > 1.5 * spread[axis] {
+            axis = e;
+        }
+    }
+    if order.len() != n {
+        order.clear();
+        order.extend(0..n);
+    }
+    *axis_state = axis;
+    // Insertion sort by (lo[axis], index): a total order, so the
+    // sorted sequence is unique whatever the previous one was.
+    let key = |i: usize| (boxes[i].lo[axis], i);
+    let less = |a: (f64, usize), b: (f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+    for k in 1..n {
+        let cur = order[k];
+        let kc = key(cur);
+        let mut j = k;
+        while j > 0 && less(kc, key(order[j - 1])) {
+            order[j] = order[j - 1];
+            j -= 1;
+        }
+        order[j] = cur;
+    }
+    let (o1, o2) = ((axis + 1) % 3, (axis + 2) % 3);
+    for (k, &a) in order.iter().enumerate() {
+        let ba = &boxes[a];
+        for &b in &order[k + 1..] {
+            let bb = &boxes[b];
+            // Sorted by lower bound: no later box can overlap `a` along
+            // the axis once one starts past its upper bound.
+            // (NaN bounds compare as "past" too: no pair, as in the
+            // overlap test.)
+            if !matches!(
+                bb.lo[axis].partial_cmp(&ba.hi[axis]),
+                Some(Ordering::Less | Ordering::Equal)
+            ) {
+                break;
+            }
+            if !(ba.lo[axis] <= bb.hi[axis] && overlap(ba, bb, o1) && overlap(ba, bb, o2)) {
+                continue;
+            }
+            if !visit(a, b) {
+                return false;
+            }
+        }
+    }
+    true
 }
 
 #[cfg(test)]
@@ -345,5 +411,75 @@ mod tests {
             assert_eq!(pairs, brute, "query {q}");
         }
         assert_eq!(bp.axis, 2, "the sweep follows the largest spread");
+    }
+
+    /// Links of several touching blocks (a designed jaw), some links'
+    /// hulls not consecutive, an excluded link pair, NaN vertices: the
+    /// link-first sweep finds exactly the brute-force hull pairs, on every
+    /// one of several moving queries.
+    #[test]
+    fn many_hulls_per_link_match_brute_force() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        // (link, centre) per hull: links 0–5 are 3×3 grids of unit blocks
+        // 1 mm apart; link 6's hulls are split around link 7's.
+        let mut hulls: Vec<(usize, Vector3<f64>)> = Vec::new();
+        for link in 0..6 {
+            let base = Vector3::new(link as f64 * 2.5, (link % 2) as f64 * 1.5, 0.0);
+            for i in 0..9 {
+                let o = Vector3::new((i % 3) as f64 * 1.001, (i / 3) as f64 * 1.001, 0.0);
+                hulls.push((link, base + o * 0.5));
+            }
+        }
+        hulls.push((6, Vector3::new(1.0, 0.5, 0.4)));
+        hulls.push((7, Vector3::new(3.0, 0.5, 0.4)));
+        hulls.push((6, Vector3::new(5.0, 0.5, 0.4)));
+        let excluded: BTreeSet<(usize, usize)> = [(0, 1), (2, 6)].into_iter().collect();
+        let mut bp = BroadPhase::default();
+        let mut pairs = Vec::new();
+        for q in 0..20 {
+            for (_, c) in &mut hulls {
+                *c += Vector3::new(
+                    rng.random_range(-0.1..0.1),
+                    rng.random_range(-0.1..0.1),
+                    rng.random_range(-0.1..0.1),
+                );
+            }
+            let mut w = WorldHulls::default();
+            for (k, (link, c)) in hulls.iter().enumerate() {
+                let start = w.vertices.len();
+                let mut v = cube(*c);
+                if q % 5 == 4 && k == 7 {
+                    v.iter_mut().for_each(|x| x.x = f64::NAN);
+                } else if q % 5 == 3 && k == 7 {
+                    v[0].x = f64::NAN;
+                }
+                w.vertices.extend(v);
+                w.ranges.push(start..w.vertices.len());
+                w.ids.push(HullId {
+                    link: *link,
+                    hull: k,
+                });
+            }
+            let range = 0.05;
+            bp.candidate_pairs(&w, range, &excluded, &mut pairs);
+            // The contract, on the padded hull boxes themselves (whatever a
+            // NaN vertex does to its box, both sides see the same box).
+            let mut boxes = Vec::new();
+            hull_boxes(&w, &mut boxes);
+            let boxes: Vec<Aabb> = boxes.iter().map(|b| padded(b, 0.5 * range)).collect();
+            let mut brute = Vec::new();
+            for a in 0..hulls.len() {
+                for b in a + 1..hulls.len() {
+                    let (la, lb) = (hulls[a].0, hulls[b].0);
+                    let apart = !excluded.contains(&(la.min(lb), la.max(lb)));
+                    if la != lb && apart && boxes[a].intersects(&boxes[b]) {
+                        brute.push((a, b));
+                    }
+                }
+            }
+            assert!(!brute.is_empty());
+            assert_eq!(pairs, brute, "query {q}");
+        }
     }
 }
