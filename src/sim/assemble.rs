@@ -209,12 +209,12 @@ fn add_tree_terms(
                     + t[4] * w[4]
                     + t[5] * w[5];
             }
-            for k in ob..=l {
+            for (k, c) in col.iter_mut().enumerate().take(l + 1).skip(ob) {
                 let mut v = frob(kin.twist2(model, b, k, l), qb);
                 if let Some(y) = &y {
                     v += frob(&kin.twist[k], y);
                 }
-                col[k] += v;
+                *c += v;
             }
         }
     }
