@@ -204,14 +204,14 @@ impl Objective for StepObjective<'_> {
         Ok(self.acc.value)
     }
 
-    /// Gravity's `Σ ρ g·X` dominates the round-off of the step objective
-    /// near rest: each link contributes `m_i ‖g‖ ε (‖x_i‖ + 1)` (J), with
-    /// `x_i` its position at the last evaluation; a safety factor of 64
-    /// covers the summation over vertices and the kinematic chain.
     fn hessian_envelope(&self) -> Option<&envelope::ColumnEnvelope> {
         Some(self.assemble.envelope())
     }
 
+    /// Gravity's `Σ ρ g·X` dominates the round-off of the step objective
+    /// near rest: each link contributes `m_i ‖g‖ ε (‖x_i‖ + 1)` (J), with
+    /// `x_i` its position at the last evaluation; a safety factor of 64
+    /// covers the summation over vertices and the kinematic chain.
     fn value_noise(&self) -> f64 {
         let g = self.ctx.gravity.norm();
         let sum: f64 = self

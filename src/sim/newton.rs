@@ -30,7 +30,7 @@
 //! The simulator asks for this only when a step's straight path could not be
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
-use super::envelope::ColumnEnvelope;
+use super::envelope::{self, ColumnEnvelope};
 use super::linear_solve::{BlockSolver, Mode};
 pub use crate::counters::NewtonReport;
 use crate::counters::{Stage, StageTimers};
@@ -259,7 +259,7 @@ pub struct NewtonScratch {
     dir: DVector<f64>,
     trial: DVector<f64>,
     trial_grad: DVector<f64>,
-    /// Row sums of `|H|` ([`max_row_sum`]).
+    /// Row sums of `|H|` ([`envelope::max_row_sum`]).
     row_sums: Vec<f64>,
     /// Block-wise Cholesky / clamped-eigen solver and its work space.
     pub(crate) linear: BlockSolver,
@@ -439,11 +439,7 @@ impl Solve<'_> {
             .obj
             .hessian_envelope()
             .filter(|e| e.len() == s.hess.nrows());
-        let hess_non_finite = match env {
-            Some(e) => e.any_non_finite(&s.hess),
-            None => s.hess.as_slice().iter().any(|v| !v.is_finite()),
-        };
-        if !grad_inf.is_finite() || hess_non_finite {
+        if !grad_inf.is_finite() || envelope::any_non_finite(&s.hess, env) {
             return Err(NewtonError::NonFinite { iter });
         }
         if grad_inf < self.opts.tol {
@@ -451,10 +447,7 @@ impl Solve<'_> {
         }
         self.report.grad_floor = 64.0
             * f64::EPSILON
-            * match env {
-                Some(e) => e.max_row_sum(&s.hess, &mut s.row_sums),
-                None => max_row_sum(&s.hess, &mut s.row_sums),
-            }
+            * envelope::max_row_sum(&s.hess, env, &mut s.row_sums)
             * (q.amax() + self.obj.length_scale());
         Ok(None)
     }
@@ -660,25 +653,4 @@ impl Solve<'_> {
             tol: self.opts.tol,
         })
     }
-}
-
-/// `‖H‖∞ = max_i Σ_j |h_ij|`, the largest absolute row sum. Accumulated
-/// column by column (contiguous in the column-major `h`; a row-wise walk
-/// strides by `n` and was 10 % of a step at `n = 256`): each row's sum still
-/// adds its entries in the order `j = 0, 1, …` from the same start, so the
-/// result is bitwise the row-wise one. `sums` is scratch.
-fn max_row_sum(h: &DMatrix<f64>, sums: &mut Vec<f64>) -> f64 {
-    let n = h.nrows();
-    sums.clear();
-    // `Sum for f64` folds from −0.0; the same start keeps every bit.
-    sums.resize(n, -0.0);
-    if n == 0 {
-        return 0.0;
-    }
-    for col in h.as_slice().chunks_exact(n) {
-        for (s, v) in sums.iter_mut().zip(col) {
-            *s += v.abs();
-        }
-    }
-    sums.iter().copied().fold(0.0, f64::max)
 }
