@@ -365,6 +365,78 @@ fn single_jaw_design_gradient_matches_central_differences() {
     fd_check("single_jaw_gripper", None, 1e-7, 10);
 }
 
+#[test]
+fn single_jaw_cross_ties_and_bounds_hold_after_optimizer_iterations() {
+    ties_and_bounds_hold("single_jaw_cross", &["gripper/jaw"], 120, 2);
+}
+
+/// The standing cross (issue 30, `robots/single_jaw_cross`), full horizon,
+/// h = 1e-7, Newton tolerance 1e-11, at the drilled design
+/// (`scene_hole.yaml`: the arm jams in the hole and the cross is carried):
+/// at least 10 of the 12 largest vertex components within 1e-4, all 12
+/// within 1e-3, as the first single-jaw task. At the initial design the
+/// check is ill-posed: the arm's pointed tip meets the leg exactly where
+/// four blocks meet, and the loss has a kink there (measured 2026-11-29:
+/// central differences 3.6e-2 where the one-sided analytic value is 2e-6,
+/// on a corner vertex's y; notes/grasping-topology-change.md part 2 §8).
+#[test]
+fn single_jaw_cross_design_gradient_matches_central_differences() {
+    let p = cross_problem("scene_hole.yaml", 1e-11);
+    fd_check_problem(&p, "single_jaw_cross", 1e-7, 10);
+}
+
+/// The cross task with its trajectory's scene replaced by `scene`, Newton
+/// tolerance `tol`.
+fn cross_problem(scene: &str, tol: f64) -> Problem {
+    let path = robots("single_jaw_cross/task.yaml");
+    let mut task: TaskSpec =
+        serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    task.trajectories[0].scene = scene.into();
+    let mut p = multi::load(&path, task, true).unwrap();
+    p.trajectories[0].scene.settings.newton.tol = tol;
+    p
+}
+
+/// The design space can carry the cross through a drilled hole (issue 30,
+/// the single jaw): `scene_hole.yaml` is the initial jaw with every
+/// right-leg vertex near the arm's axis moved ≤ 4.8 mm (inside the task's
+/// 14 mm bound). Measured, physics only (the prescribed path, no
+/// optimization): the initial jaw pushes the cross along the ground (not
+/// grasped, no hole); the drilled jaw has a through-hole (`holes` ≥ 1), the
+/// arm passes it and the cross is lifted with the jaw (drift ≤ 2 cm, rise ≥
+/// 5 cm), and the task's loss falls more than 100×.
+#[test]
+fn single_jaw_cross_a_drilled_hole_within_the_bound_lifts_the_cross() {
+    let measure = |scene: &str| {
+        let p = cross_problem(scene, 1e-6);
+        let d = p.design.values(&p.first().model);
+        let c = p.controls.values(&p.first().controller);
+        let loss = p.evaluate(&d, &c).unwrap().loss;
+        let grasp = sdrs::optimize::grasp::measure(&p, &d, &c).unwrap();
+        let topo = sdrs::optimize::grasp_metrics::topologies(&p, &d).unwrap();
+        let holes = topo["gripper/jaw"]["holes"].as_u64().unwrap();
+        let jaw = sdrs::optimize::names::link(&p.first().model, "gripper/jaw").unwrap();
+        let verts: Vec<_> = p.first().model.links[jaw]
+            .hulls
+            .iter()
+            .flat_map(|h| h.x_local.clone())
+            .collect();
+        (loss, grasp[0].clone(), holes, verts)
+    };
+    let (l0, g0, h0, v0) = measure("scene.yaml");
+    let (l1, g1, h1, v1) = measure("scene_hole.yaml");
+    println!("initial: loss {l0:.4e}, {g0:?}, holes {h0}");
+    println!("drilled: loss {l1:.4e}, {g1:?}, holes {h1}");
+    let moved = v0.iter().zip(&v1).map(|(a, b)| (a - b).amax()).fold(0.0, f64::max);
+    println!("largest vertex move {moved:.4e} m");
+    assert!(moved <= 0.014, "the drilled design leaves the bound: {moved}");
+    assert!(!g0.lifted && g0.max_drift > 0.05, "the initial jaw pushes the cross: {g0:?}");
+    assert_eq!(h0, 0);
+    assert!(h1 >= 1, "a through-hole: holes {h1}");
+    assert!(g1.grasped, "the drilled jaw carries the cross: {g1:?}");
+    assert!(l1 < 0.01 * l0, "loss {l0} → {l1}");
+}
+
 /// The hand's six finger links (4 V-HACD hulls each; only a few coincident
 /// vertices per link are tied), horizon 60 of 200 (the fingers closing on
 /// the object; the loss is final-time, so at step 60).

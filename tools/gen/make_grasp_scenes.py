@@ -7,7 +7,7 @@ paper's block design space; the three-fingered hand: `--decomposer vhacd
 OBJ, V-HACD hulls) on a ground plane, with the prescribed base path and the
 closed-pose targets of the task header. Run from the repository root after `cargo build --release`:
 
-    .venv/bin/python tools/gen/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw,three_finger]
+    .venv/bin/python tools/gen/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw,single_jaw_cross,three_finger]
 
 The outputs are committed; rerun only to regenerate them.
 """
@@ -39,7 +39,7 @@ def object_hulls(obj, tmp, convex):
 def write(path, scene, header):
     text = header + yaml.safe_dump(scene, sort_keys=False, default_flow_style=None, width=200)
     path.write_text(text)
-    print("wrote", path.relative_to(ROOT))
+    print("wrote", path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
 
 
 def parallel_jaw(blocks, tmp):
@@ -127,6 +127,127 @@ def single_jaw(blocks, tmp):
     write(d / "scene.yaml", scene,
           "# Single-jaw gripper and the X-shaped object (written by tools/gen/make_grasp_scenes.py;\n"
           "# see task.yaml for the settings and the prescribed base path).\n")
+
+
+# Single jaw, second task (issue 30, robots/single_jaw_cross/task.yaml, whose
+# header records every setting and each change with the outcome that led to
+# it): a cross of 6 mm rods ("X" turned 45° in its plane so that one arm is
+# horizontal) standing on a foot, its left arm pointed and aimed at a line
+# where four blocks of the jaw's right leg meet. The jaw starts left of the
+# cross, is lowered, and moves +x until its right leg's outer face is at
+# x = −0.013 m (10 mm from the upright): the arm must cross the leg's full
+# thickness (a through-hole), then the jaw holds and lifts 0.2 m.
+CROSS_ROD = 0.006       # rod section (m), square (first runs: 0.012)
+CROSS_ARM = 0.07        # horizontal arm half-length to the tip's base (m)
+CROSS_TIP = 0.012       # pointed tip length (m)
+CROSS_Z = 0.08          # horizontal arm's axis height (m)
+CROSS_TOP = 0.14        # top of the upright (m)
+CROSS_FOOT = (0.04, 0.01)  # foot side, thickness (m)
+SJ_GRID_Z = -0.12 + 2 * 0.17 / 7   # jaw-frame z of the leg's grid line (rows 2|3 from the tip)
+SJ_GRID_Y = 0.012                  # jaw-frame y of the leg's grid line (columns 3|4)
+SJ2_TIMES = [0.0, 1.2, 2.4, 3.6, 4.8]
+SJ2_X0, SJ2_X1 = -0.25, -0.163     # jaw x at the start and after the approach (m)
+# Jaw height, relative to the URDF pose (origin 0.4 m up), that puts the
+# leg's grid line at the arm's axis: the cross rests 2 mm above the ground
+# (the barrier's equilibrium at s = 1 mm) and the jaw sags 1.6 mm below its
+# target (PD against gravity), both measured with `sdrs simulate` (the first
+# runs ignored both and aimed 7.6 mm too low).
+SJ2_S = 0.001  # barrier support (m); first runs: 0.003
+SJ2_REST, SJ2_SAG = 0.002, 0.0016
+SJ2_Z = round(CROSS_Z + SJ2_REST - SJ_GRID_Z - 0.4 + SJ2_SAG, 6)
+SJ2_PATH = {
+    "x": [SJ2_X0, SJ2_X0, SJ2_X1, SJ2_X1, SJ2_X1],   # approach in stage 2
+    "y": [-SJ_GRID_Y] * 5,
+    "z": [0.0, SJ2_Z, SJ2_Z, SJ2_Z, SJ2_Z + 0.2],   # lower in stage 1, lift in stage 4
+    "rx": [0.0] * 5, "ry": [0.0] * 5, "rz": [0.0] * 5,
+}
+
+
+def box(x0, x1, y0, y1, z0, z1):
+    return {"vertices": [[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)]}
+
+
+def cross_hulls():
+    """The cross's convex pieces (object frame: foot on z = 0, upright on the z axis)."""
+    r, a, t, zc = CROSS_ROD / 2, CROSS_ARM, CROSS_TIP, CROSS_Z
+    f, ft = CROSS_FOOT[0] / 2, CROSS_FOOT[1]
+    hulls = [box(-f, f, -f, f, 0.0, ft), box(-r, r, -r, r, ft, zc - r),
+             box(-a, a, -r, r, zc - r, zc + r), box(-r, r, -r, r, zc + r, CROSS_TOP)]
+    for s in (-1.0, 1.0):
+        base = [[s * a, y, z] for y in (-r, r) for z in (zc - r, zc + r)]
+        hulls.append({"vertices": base + [[s * (a + t), 0.0, zc]]})
+    return hulls
+
+
+def single_jaw_cross(blocks, tmp, out_dir):
+    d = ROOT / "robots" / "single_jaw_gripper"
+    g = sdrs_import(d / "single_jaw_gripper.urdf", Path(tmp) / "sj.yaml", "--decomposer", "grid",
+                    "--max-hulls", str(blocks), "--designable", "jaw")
+    robot = g["robots"][0]
+    robot["name"] = "gripper"
+    robot["controller"] = {
+        "kp": 0.0, "kd": 0.0,
+        "gains": {"base": {"kp": 3000.0, "kd": 3.0}},
+        "targets": {"base": [{"type": "table", "times": list(SJ2_TIMES), "values": [round(v, 6) for v in SJ2_PATH[k]]}
+                             for k in ["x", "y", "z", "rx", "ry", "rz"]]},
+    }
+    robot["initial"] = {"base": {"q": [SJ2_X0, -SJ_GRID_Y, 0.0, 0.0, 0.0, 0.0]}}
+    # The URDF pose (jaw origin 0.4 m up) is the path's reference: undo the
+    # importer's drop onto the ground.
+    robot["base"] = {"xyz": [0.0, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
+    scene = {
+        "version": 1, "dt": 0.01, "steps": 480,
+        "solver": {"tol": 1e-6, "max_iters": 100},
+        "robots": [robot],
+        "objects": [{"name": "x_object", "mass": 0.05, "hulls": cross_hulls(),
+                     "initial": {"q": [0.0, 0.0, 0.001, 0.0, 0.0, 0.0]}}],
+        "ground": {"height": 0.0},
+        # s = 1 mm: the barrier acts within ≈ 2s of a surface, and a 6 mm rod
+        # in a hole the bound can open (≈ ±10 mm) needs less than s = 3 mm's 6 mm.
+        "contact": {**g["contact"], "s": SJ2_S, "mu": 0.05},
+    }
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write(out_dir / "scene.yaml", scene,
+          "# Single-jaw gripper and the standing cross (written by tools/gen/make_grasp_scenes.py\n"
+          "# --which single_jaw_cross; see task.yaml for the settings and the prescribed base path).\n")
+    drill(robot["links"][0]["hulls"], SJ_HOLE_HALF, SJ_HOLE_FRACTION)
+    write(out_dir / "scene_hole.yaml", scene,
+          "# scene.yaml with a hand-made through-hole in the jaw's right leg along the cross's arm\n"
+          f"# (tools/gen/make_grasp_scenes.py `drill`: every leg vertex within {SJ_HOLE_HALF} m (max-norm, in y-z)\n"
+          f"# of the arm's axis moved {SJ_HOLE_FRACTION:.0%} of the way out to that square). A design within\n"
+          "# the task's bound that lifts the cross: tests/grasping.rs.\n")
+
+
+# The hand-made hole of scene_hole.yaml (single_jaw_cross): found by
+# interpolating between the initial jaw and a 12 mm square hole (fraction
+# 1), which lets the arm through but not hang; from 38 % to 48 % the arm
+# jams in the hole and the cross is carried (notes/grasping-topology-change.md §8).
+SJ_HOLE_HALF, SJ_HOLE_FRACTION = 0.012, 0.4
+
+
+def drill(hulls, half, fraction):
+    """Moves every right-leg vertex (jaw frame x in [0.10, 0.16]) that lies
+    within `half` (max-norm in y-z) of the arm's axis `fraction` of the way
+    out to the square of half-width `half`; a vertex on the axis moves
+    diagonally towards its own block's centre."""
+    cy, cz = SJ_GRID_Y, SJ_GRID_Z
+    for h in hulls:
+        vs = h["vertices"]
+        my = sum(v[1] for v in vs) / len(vs)
+        mz = sum(v[2] for v in vs) / len(vs)
+        for v in vs:
+            if not 0.10 <= v[0] <= 0.16:
+                continue
+            dy, dz = v[1] - cy, v[2] - cz
+            n = max(abs(dy), abs(dz))
+            if n >= half:
+                continue
+            if n < 1e-6:  # on the axis: towards the block's own centre
+                dy, dz = (1.0 if my > cy else -1.0), (1.0 if mz > cz else -1.0)
+                n = 1.0
+            k = half / n
+            v[1] += fraction * (cy + dy * k - v[1])
+            v[2] += fraction * (cz + dz * k - v[2])
 
 
 # Three-fingered hand (task.yaml header): the URDF's six finger links are
@@ -225,11 +346,15 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--blocks", type=int, default=156)
     ap.add_argument("--which", default="parallel_jaw")
+    ap.add_argument("--out-dir", type=Path, default=None,
+                    help="single_jaw_cross: where to write scene.yaml and scene_hole.yaml (default robots/single_jaw_cross)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         if "parallel_jaw" in a.which:
             parallel_jaw(a.blocks, tmp)
-        if "single_jaw" in a.which:
+        if "single_jaw_cross" in a.which:
+            single_jaw_cross(a.blocks, tmp, a.out_dir or ROOT / "robots" / "single_jaw_cross")
+        elif "single_jaw" in a.which:
             single_jaw(a.blocks, tmp)
         if "three_finger" in a.which:
             three_finger(tmp)
