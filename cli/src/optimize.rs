@@ -156,6 +156,8 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             },
             "trajectories": problem.trajectories.len(),
             "metrics": metrics_json,
+            // Why the run ended before its last iteration, else null.
+            "stopped": outcome.stopped,
         }),
     )?;
     let label = sdrs::optimize::output::run_label(&problem, a.design != "off");
@@ -185,7 +187,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         outcome.initial_loss,
         outcome.loss,
         100.0 * (1.0 - outcome.loss / outcome.initial_loss),
-        iters,
+        outcome.history.last().map_or(0, |r| r.iter),
         out.display()
     );
     if let Some(m) = metrics_json.get("final") {
@@ -197,6 +199,12 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
                 .unwrap_or(f64::NAN),
             m["upright_at_horizon"],
             m["first_fall_time"]
+        );
+    }
+    if let Some(why) = &outcome.stopped {
+        anyhow::bail!(
+            "the run {why}; the outputs in {} are for the iterations that ran (`--resume` retries from there)",
+            out.display()
         );
     }
     Ok(())

@@ -308,6 +308,9 @@ impl PyTask {
         out.set_item("history", h.into_pyarray(py))?;
         out.set_item("design", arr(py, &o.design))?;
         out.set_item("controller", arr(py, &o.controller))?;
+        // Why the run ended early (an Adam step that could not be
+        // simulated), else None.
+        out.set_item("stopped", o.stopped)?;
         Ok(out)
     }
 

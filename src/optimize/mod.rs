@@ -381,7 +381,16 @@ pub struct Outcome {
     pub loss: f64,
     /// The iteration whose iterate this is (0 = the start).
     pub iter: usize,
+    /// Why the run stopped before its last iteration, with the error's
+    /// causes (an Adam step that could not be simulated at any of its
+    /// [`ADAM_RETRIES`] shortenings); `None` when it ran every iteration.
+    pub stopped: Option<String>,
 }
+
+/// How many times Adam halves a step whose trial cannot be simulated (a
+/// failed Newton solve, an interpenetrating start) before the run stops:
+/// 4, i.e. down to 1/16 of the step.
+pub const ADAM_RETRIES: u32 = 4;
 
 /// Runs the optimizer for `iters` iterations; `on_iter` sees each record
 /// and the design vector that iteration simulated (after projection).
@@ -451,13 +460,57 @@ pub fn optimize_with<E: Into<OptimizeError>>(
         run.record(0, &ev, &d, ev.loss, true, &mut on_iter);
         on_state(&run.state(0)).map_err(Into::into)?;
     }
+    let mut stopped = None;
     for it in run.first..=iters {
         let (d_new, c_new) = run.propose(p, &ev);
         let trial = p.evaluate(&d_new, &c_new);
-        run.settle(p, it, &mut ev, (d_new, c_new), trial, &mut on_iter)?;
+        let stop = run.settle(p, it, &mut ev, (d_new, c_new), trial, &mut on_iter)?;
         on_state(&run.state(it)).map_err(Into::into)?;
+        if let Some(e) = stop {
+            stopped = Some(format!("stopped at iteration {it}: {}", error_chain(&e)));
+            break;
+        }
     }
-    Ok(run.outcome(p, ev))
+    let mut outcome = run.outcome(p, ev);
+    outcome.stopped = stopped;
+    Ok(outcome)
+}
+
+/// `e` and its causes, `: `-separated.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut msg = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        msg.push_str(": ");
+        msg.push_str(&c.to_string());
+        cause = c.source();
+    }
+    msg
+}
+
+/// Adam's answer to a trial `(d_new, c_new)` from `(d, c)` that could not be
+/// simulated (`first`): the same step at half the length from the same
+/// iterate, up to [`ADAM_RETRIES`] times. Returns the first trial that
+/// `eval` simulates, or the last failure. Halving keeps a projected design
+/// inside its box (the box is convex and holds both ends).
+fn shorten_until_simulated<T, E>(
+    (d, c): (&DVector<f64>, &DVector<f64>),
+    (d_new, c_new): (DVector<f64>, DVector<f64>),
+    first: E,
+    mut eval: impl FnMut(&DVector<f64>, &DVector<f64>) -> Result<T, E>,
+) -> Result<(DVector<f64>, DVector<f64>, T), E> {
+    let (mut dd, mut dc) = (d_new - d, c_new - c);
+    let mut err = first;
+    for _ in 0..ADAM_RETRIES {
+        dd *= 0.5;
+        dc *= 0.5;
+        let (d_try, c_try) = (d + &dd, c + &dc);
+        match eval(&d_try, &c_try) {
+            Ok(t) => return Ok((d_try, c_try, t)),
+            Err(e) => err = e,
+        }
+    }
+    Err(err)
 }
 
 /// The trust region's radius settings of the task.
@@ -623,10 +676,12 @@ impl Run {
     }
 
     /// Takes or rejects the trial `(d_new, c_new)` of iteration `it`: Adam
-    /// always moves (a failed trial ends the run); the trust region moves
-    /// on a lower loss and grows its radii, else keeps the iterate, shrinks
-    /// them and records the trial (a trial that cannot be simulated is a
-    /// rejected step).
+    /// always moves (a trial that cannot be simulated is retried shorter,
+    /// [`shorten_until_simulated`]; if none can be, the iterate stays and
+    /// the error is returned as `Some`: the run stops there); the trust
+    /// region moves on a lower loss and grows its radii, else keeps the
+    /// iterate, shrinks them and records the trial (a trial that cannot be
+    /// simulated is a rejected step).
     fn settle(
         &mut self,
         p: &Problem,
@@ -635,17 +690,27 @@ impl Run {
         (d_new, c_new): (DVector<f64>, DVector<f64>),
         trial: Result<Evaluation, OptimizeError>,
         on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
-    ) -> Result<(), OptimizeError> {
+    ) -> Result<Option<OptimizeError>, OptimizeError> {
         let o = &p.task.optimizer;
         let rs = radius_settings(p);
         let moved = (d_new != self.d, c_new != self.c);
         match (o.method, trial) {
-            (Method::Adam, Ok(e)) => {
-                (self.d, self.c, *ev) = (d_new, c_new, e);
-                self.keep(it, ev.loss);
-                let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                let d = self.d.clone();
-                self.record(it, ev, &d, best_loss, true, on_iter);
+            (Method::Adam, Ok(e)) => self.adam_move(it, ev, (d_new, c_new, e), on_iter),
+            (Method::Adam, Err(first)) => {
+                let step = shorten_until_simulated(
+                    (&self.d, &self.c),
+                    (d_new.clone(), c_new),
+                    first,
+                    |d, c| p.evaluate(d, c),
+                );
+                match step {
+                    Ok(trial) => self.adam_move(it, ev, trial, on_iter),
+                    Err(e) => {
+                        let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+                        self.record(it, ev, &d_new, best_loss, false, on_iter);
+                        return Ok(Some(e));
+                    }
+                }
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 (self.d, self.c, *ev) = (d_new, c_new, e);
@@ -659,19 +724,28 @@ impl Run {
                 self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, &e, &d_new, ev.loss, false, on_iter);
             }
-            (Method::Adam, Err(e)) => {
-                return Err(OptimizeError::Iteration {
-                    iter: it,
-                    source: Box::new(e),
-                });
-            }
             (Method::TrustRegion, Err(_)) => {
                 // A trial point that cannot be simulated is a rejected step.
                 self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, ev, &d_new, ev.loss, false, on_iter);
             }
         }
-        Ok(())
+        Ok(None)
+    }
+
+    /// Adam's move to the simulated trial `(d, c, e)` of iteration `it`.
+    fn adam_move(
+        &mut self,
+        it: usize,
+        ev: &mut Evaluation,
+        (d, c, e): (DVector<f64>, DVector<f64>, Evaluation),
+        on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
+    ) {
+        (self.d, self.c, *ev) = (d, c, e);
+        self.keep(it, ev.loss);
+        let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+        let d = self.d.clone();
+        self.record(it, ev, &d, best_loss, true, on_iter);
     }
 
     /// The run's result: the best iterate or the last accepted one
@@ -693,6 +767,7 @@ impl Run {
                 controller: b.controller,
                 initial_loss: self.initial_loss,
                 iter: b.iter,
+                stopped: None,
             },
             _ => Outcome {
                 history: self.history,
@@ -701,7 +776,79 @@ impl Run {
                 controller: self.c,
                 initial_loss: self.initial_loss,
                 iter: last_iter,
+                stopped: None,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A trial "simulates" when every coordinate moved less than 0.3.
+    fn eval(
+        d0: &DVector<f64>,
+    ) -> impl FnMut(&DVector<f64>, &DVector<f64>) -> Result<f64, String> + '_ {
+        move |d, _c| {
+            let step = (d - d0).amax();
+            if step < 0.3 {
+                Ok(step)
+            } else {
+                Err(format!("step {step}"))
+            }
+        }
+    }
+
+    #[test]
+    fn an_unsimulable_adam_step_is_retried_at_half_length_from_the_same_iterate() {
+        let (d, c) = (
+            DVector::from_vec(vec![1.0, -1.0]),
+            DVector::from_vec(vec![0.5]),
+        );
+        let trial = (
+            DVector::from_vec(vec![2.0, -1.0]),
+            DVector::from_vec(vec![1.5]),
+        );
+        let mut calls = 0;
+        let mut inner = eval(&d);
+        let r = shorten_until_simulated((&d, &c), trial, "first".to_string(), |a, b| {
+            calls += 1;
+            inner(a, b)
+        });
+        // 1.0 failed before the call; 0.5 fails, 0.25 simulates.
+        let (d2, c2, step) = r.unwrap();
+        assert_eq!(calls, 2);
+        assert_eq!(step, 0.25);
+        assert_eq!(d2.as_slice(), &[1.25, -1.0]);
+        assert_eq!(c2.as_slice(), &[0.75]);
+    }
+
+    #[test]
+    fn an_adam_step_that_never_simulates_returns_the_last_failure_after_the_retries() {
+        let (d, c) = (DVector::from_vec(vec![0.0]), DVector::from_vec(vec![0.0]));
+        let trial = (DVector::from_vec(vec![100.0]), DVector::from_vec(vec![0.0]));
+        let mut calls = 0;
+        let mut inner = eval(&d);
+        let r = shorten_until_simulated((&d, &c), trial, "first".to_string(), |a, b| {
+            calls += 1;
+            inner(a, b)
+        });
+        assert_eq!(calls, ADAM_RETRIES);
+        assert_eq!(r.unwrap_err(), format!("step {}", 100.0 / 16.0));
+    }
+
+    #[test]
+    fn the_error_chain_lists_every_cause() {
+        let e = OptimizeError::Iteration {
+            iter: 3,
+            source: Box::new(OptimizeError::Invalid {
+                element: "x".into(),
+                msg: "bad".into(),
+            }),
+        };
+        let s = error_chain(&e);
+        assert!(s.starts_with("iteration 3: "), "{s}");
+        assert!(s.contains("bad"), "{s}");
     }
 }
