@@ -10,6 +10,7 @@
 # 2. the loss, grasp and `holes` along the straight line in design space
 #    from the initial jaw to a 12 mm square hole (fraction 0 … 1 of
 #    tools/gen/make_grasp_scenes.py `drill`), and finely between 0.3 and 0.5.
+# 3. a picture of the right leg seen along the arm ($OUT/single_jaw_cross.png).
 # About 10 minutes on 2 cores. Runs under `nice -n 5`; SKIP_BUILD=1 uses the
 # built binary.
 set -euo pipefail
@@ -65,3 +66,8 @@ for f in [0.0, 0.1, 0.2, 0.3, 0.34, 0.36, 0.38, 0.4, 0.44, 0.48, 0.5, 0.6, 0.8, 
     l0, _, g, h = row(d / "o")
     print(f"| {f:.2f} | {l0:.4e} | {g['grasped']} | {g['max_drift']:.3f} | {g['rise']:.4f} | {h} |")
 PY
+# The right leg seen along the arm: initial, drilled (scene_hole.yaml), the
+# design alone (trust region, Adam); copy it to docs/ to update the README's.
+"$PY" tools/gen/picture_single_jaw_cross.py robots/single_jaw_cross/scene.yaml \
+  robots/single_jaw_cross/scene_hole.yaml "$OUT/design_alone/scenes/scene.yaml" \
+  "$OUT/design_alone_adam/scenes/scene.yaml" --out "$OUT/single_jaw_cross.png"
