@@ -427,10 +427,20 @@ fn single_jaw_cross_a_drilled_hole_within_the_bound_lifts_the_cross() {
     let (l1, g1, h1, v1) = measure("scene_hole.yaml");
     println!("initial: loss {l0:.4e}, {g0:?}, holes {h0}");
     println!("drilled: loss {l1:.4e}, {g1:?}, holes {h1}");
-    let moved = v0.iter().zip(&v1).map(|(a, b)| (a - b).amax()).fold(0.0, f64::max);
+    let moved = v0
+        .iter()
+        .zip(&v1)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, f64::max);
     println!("largest vertex move {moved:.4e} m");
-    assert!(moved <= 0.014, "the drilled design leaves the bound: {moved}");
-    assert!(!g0.lifted && g0.max_drift > 0.05, "the initial jaw pushes the cross: {g0:?}");
+    assert!(
+        moved <= 0.014,
+        "the drilled design leaves the bound: {moved}"
+    );
+    assert!(
+        !g0.lifted && g0.max_drift > 0.05,
+        "the initial jaw pushes the cross: {g0:?}"
+    );
     assert_eq!(h0, 0);
     assert!(h1 >= 1, "a through-hole: holes {h1}");
     assert!(g1.grasped, "the drilled jaw carries the cross: {g1:?}");
