@@ -18,7 +18,7 @@ import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from picture_topology_demo import ROOT, SS, fill, hull2d, outline, write_png  # noqa: E402
+from picture_topology_demo import ROOT, render, write_png  # noqa: E402
 from make_grasp_scenes import CROSS_ROD, SJ_GRID_Y, SJ_GRID_Z  # noqa: E402
 
 PX, HALF = 260, 0.03  # panel size (px), half window (m)
@@ -37,18 +37,9 @@ def leg_sections(scene_path):
 
 
 def panel(sections):
-    n = PX * SS
-    xs = np.linspace(-HALF, HALF, n)
-    grid = (xs[None, :].repeat(n, 0), xs[::-1, None].repeat(n, 1))  # y right, z up
-    img = np.full((n, n, 3), 255.0)
-    for p in sections:
-        fill(img, hull2d(p), (150, 150, 150), grid)
-    for p in sections:
-        outline(img, hull2d(p), (70, 70, 70), grid, 0.00008)
     r = CROSS_ROD / 2
     rod = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
-    outline(img, rod, (220, 30, 30), grid, 0.0002)
-    return img.reshape(PX, SS, PX, SS, 3).mean(axis=(1, 3))
+    return render(sections, HALF, PX, 0.00008, [(rod, (220, 30, 30), 0.0002)])
 
 
 def main():

@@ -70,20 +70,28 @@ def outline(img, poly, color, grid, width):
         img[dist <= width] = color
 
 
-def panel(hulls):
-    n = PX * SS
-    xs = np.linspace(-HALF, HALF, n)
-    grid = (xs[None, :].repeat(n, 0), xs[::-1, None].repeat(n, 1))  # x right, y up
+def render(polys, half, px, edge, marks):
+    """A `px`-pixel square panel of the window `±half` (m): every 2-D point
+    set of `polys` filled grey as its convex hull with an `edge`-wide
+    outline, then each `(polygon, colour, width)` of `marks` outlined."""
+    n = px * SS
+    xs = np.linspace(-half, half, n)
+    grid = (xs[None, :].repeat(n, 0), xs[::-1, None].repeat(n, 1))  # first axis right, second up
     img = np.full((n, n, 3), 255.0)
+    hulls = [hull2d(p) for p in polys]
     for h in hulls:
-        fill(img, hull2d(h), (150, 150, 150), grid)
+        fill(img, h, (150, 150, 150), grid)
     for h in hulls:
-        outline(img, hull2d(h), (70, 70, 70), grid, 0.00012)
+        outline(img, h, (70, 70, 70), grid, edge)
+    for poly, colour, width in marks:
+        outline(img, poly, colour, grid, width)
+    return img.reshape(px, SS, px, SS, 3).mean(axis=(1, 3))
+
+
+def panel(hulls):
     sq = np.array([[-0.04, -0.04], [0.04, -0.04], [0.04, 0.04], [-0.04, 0.04]])
-    outline(img, sq, (0, 0, 0), grid, 0.00015)
     peg = sq * (0.003 / 0.04)
-    outline(img, peg, (220, 30, 30), grid, 0.0003)
-    return img.reshape(PX, SS, PX, SS, 3).mean(axis=(1, 3))
+    return render(hulls, HALF, PX, 0.00012, [(sq, (0, 0, 0), 0.00015), (peg, (220, 30, 30), 0.0003)])
 
 
 def write_png(path, rgb):
