@@ -5,10 +5,13 @@
 //!
 //! Typical magnitudes use each coordinate's effective inertia
 //! `I_k = Δt²·∂²(inertia term)/∂θ_k²` at `θ^0` (kg·m² or kg): damping
-//! `2 I_k` (a 0.5 s decay), friction `5 I_k` (5 rad/s² of deceleration),
-//! armature `0.2 I_k`. Bounds: coefficients in `[0, 10⁴·typical]`, gains and
-//! mass scales in `[0.05, 20]`, offsets in `[−0.5, 0.5]`, actuation delays in
-//! `[0, 0.1]` s (typical 10 ms, start 5 ms), payload masses in
+//! `2 I_k` (a 0.5 s decay), friction and the Stribeck excess `5 I_k`
+//! (5 rad/s² of deceleration), armature `0.2 I_k`. Bounds: coefficients in
+//! `[0, 10⁴·typical]`, gains and mass scales in `[0.05, 20]`, offsets in
+//! `[−0.5, 0.5]`, actuation delays in `[0, 0.1]` s (typical 10 ms, start
+//! 5 ms), actuator deadbands in `[0, 0.1]` rad or m (typical 0.01 — a
+//! gearbox's backlash is 0.1–1°, a hobby servo's deadband a few degrees —
+//! start 0.005), payload masses in
 //! `[0, 10 × total mass]` at positions within the link's hull box grown by
 //! half its size (at least 5 cm), `μ ∈ [0, 5]`, `κ ∈ [κ₀/100, 100κ₀]`,
 //! `s ∈ [s₀/10, min(0.5, 10s₀)]`.
@@ -27,6 +30,9 @@ use crate::scene::Scene;
 
 /// Upper bound of an actuation delay's fit box (s).
 pub const MAX_DELAY: f64 = 0.1;
+
+/// Upper bound of an actuator deadband's half-width (rad or m): 5.7°.
+pub const MAX_DEADBAND: f64 = 0.1;
 
 /// Effective inertia of every coordinate at `θ^0` (see the module doc).
 pub fn effective_inertia(scene: &Scene) -> Vec<f64> {
@@ -72,7 +78,7 @@ fn joint_candidate(kind: EffectKind, on: String, inertia: f64) -> Candidate {
             let t = 2.0 * inertia;
             single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
-        EffectKind::JointFriction => {
+        EffectKind::JointFriction | EffectKind::StribeckFriction => {
             let t = 5.0 * inertia;
             single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
@@ -82,6 +88,7 @@ fn joint_candidate(kind: EffectKind, on: String, inertia: f64) -> Candidate {
         }
         EffectKind::ActuatorGain => single(kind, on, 0.05, 20.0, 1.0, &[1.0]),
         EffectKind::ActuationDelay => single(kind, on, 0.0, MAX_DELAY, 0.01, &[0.005]),
+        EffectKind::ActuatorDeadband => single(kind, on, 0.0, MAX_DEADBAND, 0.01, &[0.005]),
         _ => single(kind, on, -0.5, 0.5, 0.05, &[0.0]),
     }
 }

@@ -291,6 +291,12 @@ pub fn untranslated(scene: &Scene) -> Vec<(String, String)> {
                     "no actuators are written; MuJoCo has no actuation delay attribute"
                 }
                 EffectKind::JointOffset => "an encoder offset is on the measurement side, not the model",
+                EffectKind::StribeckFriction => {
+                    "MuJoCo's frictionloss is Coulomb only; the breakaway excess has no attribute"
+                }
+                EffectKind::ActuatorDeadband => {
+                    "no actuators are written; MuJoCo has no actuator deadband attribute"
+                }
                 EffectKind::ContactKappa | EffectKind::ContactS => {
                     "a parameter of the SDRS contact barrier; MuJoCo's contacts are soft constraints (solref/solimp)"
                 }

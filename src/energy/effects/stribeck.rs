@@ -1,0 +1,149 @@
+//! Stribeck joint friction: the breakaway excess `Δf` of a friction that is
+//! larger when a joint starts to slide than when it slides fast,
+//! `τ(v) = −[f_c + Δf·exp(−(v/v_s)²)]·sign v` (N·m or N).
+//!
+//! The Coulomb level `f_c` is the [`super::coulomb`] effect's
+//! (`joint_friction`); this term adds the excess `Δf = f_s − f_c ≥ 0` that
+//! decays with speed, with the Coulomb term's smoothing below `√ε`. A full
+//! Stribeck curve is the pair `joint_friction + stribeck_friction` on the
+//! same coordinates. One parameter per effect: the Stribeck speed `v_s` is
+//! fixed at [`DEFAULT_VS`] (0.1 rad/s or m/s, within the usual 0.01–0.3
+//! rad/s of geared joints); fitting `(Δf, v_s)` together from positions is
+//! poorly conditioned (a larger excess over a narrower band moves the
+//! trajectory much as a smaller one over a wider band does).
+//!
+//! Position-level dissipation potential per coordinate (as in
+//! [`super::coulomb`]):
+//!
+//! ```text
+//! F(θ) = Σ_k Δf_k Δt B(v_k),   v_k = (θ_k − θ_k^t)/Δt,   r = √(v² + ε)
+//! B(v) = e^{ε/v_s²} v_s (√π/2) [erf(r/v_s) − erf(√ε/v_s)]      (rad/s or m/s)
+//! B'(v) = exp(−(v/v_s)²) · v/r                                  (→ exp(−(v/v_s)²) sign v)
+//! B''(v) = exp(−(v/v_s)²) · [ε/r³ − 2v²/(v_s² r)]
+//! ∂F/∂θ_k = Δf_k B'(v_k)                          (the Stribeck force, N·m)
+//! ∂²F/∂θ_k² = Δf_k B''(v_k)/Δt
+//! ```
+//!
+//! (`d erf(r/v_s)/dv = (2/√π) e^{−r²/v_s²} v/(r v_s)` and `r² = v² + ε`,
+//! so the factor `e^{ε/v_s²}` makes `B'` exactly `exp(−(v/v_s)²)·A_ε'(v)`
+//! with `A_ε'` the Coulomb term's smoothed sign.) `B(0) = 0`, `B ≥ 0`.
+//! Units: `Δf` in N·m (revolute) or N (prismatic), `v_s` in rad/s or m/s,
+//! `ε` in (rad/s)² or (m/s)².
+//!
+//! Non-convexity: the force decreases with speed above `|v| ≈ √ε`, so
+//! `B'' < 0` there (most negative `≈ −0.86/v_s` at `|v| ≈ v_s/√2`). The
+//! exact Hessian is written (the adjoint pass needs it); Newton's step
+//! clamps the eigenvalues of the whole step Hessian
+//! ([`crate::sim::linear_solve`]), where the inertia term `M/Δt²` usually
+//! dominates `Δf·0.86/(v_s Δt)`.
+//!
+//! Adjoint (`Φ = Σ_k λ_k Δf_k B'(v_k)`): `∂Φ/∂θ_k^t = −λ_k Δf_k B''(v_k)/Δt`,
+//! `∂Φ/∂Δf_k = λ_k B'(v_k)`.
+
+use super::JointCoeffs;
+use crate::energy::vjp::{AdjointDirection, VjpAccumulator};
+use crate::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
+use crate::kinematics::Kinematics;
+use nalgebra::DVector;
+
+/// Stribeck speed `v_s` (rad/s or m/s).
+pub const DEFAULT_VS: f64 = 0.1;
+
+/// The error function, `erf(x) = (2/√π) ∫₀ˣ e^{−t²} dt`, to a few ulps.
+///
+/// For `|x| < 6`: the series of positive terms
+/// `erf(x) = (2/√π) e^{−x²} Σ_{n≥0} 2ⁿ x^{2n+1} / (1·3·…·(2n+1))` (no
+/// cancellation; about `x² + 40` terms). Beyond, `1 − erf(6) < 3e-17`:
+/// `±1`.
+pub fn erf(x: f64) -> f64 {
+    let a = x.abs();
+    if a >= 6.0 {
+        return x.signum();
+    }
+    let x2 = a * a;
+    let mut term = a;
+    let mut sum = a;
+    let mut n = 0.0;
+    while term > 1e-17 * sum {
+        n += 1.0;
+        term *= 2.0 * x2 / (2.0 * n + 1.0);
+        sum += term;
+    }
+    let v = 2.0 / std::f64::consts::PI.sqrt() * (-x2).exp() * sum;
+    v.min(1.0).copysign(x)
+}
+
+/// `(B(v), B'(v), B''(v))` of the module doc for speed `vs` and smoothing
+/// `eps`.
+pub fn stribeck_shape(v: f64, vs: f64, eps: f64) -> (f64, f64, f64) {
+    let r = (v * v + eps).sqrt();
+    let s = eps.sqrt();
+    let b = (eps / (vs * vs)).exp()
+        * vs
+        * (0.5 * std::f64::consts::PI.sqrt())
+        * (erf(r / vs) - erf(s / vs));
+    let g = (-(v / vs) * (v / vs)).exp();
+    let db = g * v / r;
+    let ddb = g * (eps / (r * r * r) - 2.0 * v * v / (vs * vs * r));
+    (b.max(0.0), db, ddb)
+}
+
+/// The Stribeck excess over a set of coordinates.
+#[derive(Clone, Debug)]
+pub struct StribeckFriction {
+    pub coeffs: JointCoeffs,
+    /// Stribeck speed `v_s` (> 0).
+    pub vs: f64,
+    /// Velocity smoothing `ε` (> 0).
+    pub eps: f64,
+}
+
+impl Energy for StribeckFriction {
+    fn name(&self) -> &'static str {
+        "stribeck_friction"
+    }
+
+    fn accumulate(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        _kin: &Kinematics,
+        need: Need,
+        acc: &mut EnergyAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt = 1.0 / ctx.dt;
+        for (k, f, _) in self.coeffs.iter() {
+            let v = (q[k] - ctx.q_prev[k]) * inv_dt;
+            let (b, db, ddb) = stribeck_shape(v, self.vs, self.eps);
+            acc.value += f * ctx.dt * b;
+            if need >= Need::Gradient {
+                acc.dof_grad[k] += f * db;
+            }
+            if need >= Need::Hessian {
+                acc.dof_hess[(k, k)] += f * ddb * inv_dt;
+            }
+        }
+        Ok(())
+    }
+
+    fn vjp(
+        &mut self,
+        ctx: &StepContext,
+        q: &DVector<f64>,
+        _kin: &Kinematics,
+        dir: &AdjointDirection,
+        out: &mut VjpAccumulator,
+    ) -> Result<(), EnergyError> {
+        let inv_dt = 1.0 / ctx.dt;
+        for (k, f, slot) in self.coeffs.iter() {
+            let l = dir.lambda[k];
+            let v = (q[k] - ctx.q_prev[k]) * inv_dt;
+            let (_, db, ddb) = stribeck_shape(v, self.vs, self.eps);
+            out.q_prev[k] -= l * f * ddb * inv_dt;
+            if let Some(s) = slot {
+                *out.effect(s) += l * db;
+            }
+        }
+        Ok(())
+    }
+}
