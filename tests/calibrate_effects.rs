@@ -564,7 +564,10 @@ fn stribeck_shape_is_exact_near_zero_and_the_stribeck_speed() {
             // Far from the smoothing: the Stribeck curve exp(−(v/v_s)²)·sign v.
             if v.abs() >= 100.0 * eps.sqrt() {
                 let curve = (-(v / vs) * (v / vs)).exp() * v.signum();
-                assert!((db - curve).abs() <= 1e-3 * curve.abs().max(1e-12), "{v}: {db} vs {curve}");
+                assert!(
+                    (db - curve).abs() <= 1e-3 * curve.abs().max(1e-12),
+                    "{v}: {db} vs {curve}"
+                );
             }
         }
     }
@@ -576,7 +579,8 @@ fn stribeck_shape_is_exact_near_zero_and_the_stribeck_speed() {
 /// (its gradient is `−2 k_p e`).
 fn check_deadband_term(on: &str, b: f64, errors: &[f64], tol: f64) -> f64 {
     let arm = ARM.replace("kd: 0.003", "kd: 0.0");
-    let text = format!("{arm}\neffects:\n  - {{effect: actuator_deadband, on: {on}, values: [{b}]}}\n");
+    let text =
+        format!("{arm}\neffects:\n  - {{effect: actuator_deadband, on: {on}, values: [{b}]}}\n");
     let sc = scene(&text);
     let stepped = |keep: &str| {
         let mut sim = sc.simulator();
@@ -670,7 +674,10 @@ fn actuator_deadband_is_the_ideal_band_away_from_its_edges() {
             let inside = deadband(s * 0.5 * b, b, d);
             assert!(inside.abs() <= 1.01 * d * d / (3.0 * b), "{b}: {inside}");
             let out = deadband(s * 3.0 * b, b, d);
-            assert!((out - s * 2.0 * b).abs() <= 1.01 * d * d / (16.0 * b), "{b}: {out}");
+            assert!(
+                (out - s * 2.0 * b).abs() <= 1.01 * d * d / (16.0 * b),
+                "{b}: {out}"
+            );
             assert_eq!(deadband(-s * 0.3 * b, b, d), -deadband(s * 0.3 * b, b, d));
         }
         let mut prev = deadband(-0.5, b, d);
@@ -733,7 +740,10 @@ fn stribeck_and_deadband_are_neutral_at_zero_and_act_otherwise() {
         ("{effect: stribeck_friction, on: all, values: [0.0]}", true),
         ("{effect: actuator_deadband, on: all, values: [0.0]}", true),
         ("{effect: stribeck_friction, on: all, values: [0.5]}", false),
-        ("{effect: actuator_deadband, on: all, values: [0.05]}", false),
+        (
+            "{effect: actuator_deadband, on: all, values: [0.05]}",
+            false,
+        ),
     ] {
         let t = run(&scene(&format!("{ARM}\neffects:\n  - {spec}\n")));
         let d = b

@@ -139,7 +139,8 @@ impl EffectKind {
     /// [`crate::calibrate::CalibrateOptions::effects`]): effects added after
     /// the hidden-effect and clean-data suites were tuned on
     /// [`EffectKind::ALL`]. Both are fitted and ranked like the others.
-    pub const OPT_IN: [EffectKind; 2] = [EffectKind::StribeckFriction, EffectKind::ActuatorDeadband];
+    pub const OPT_IN: [EffectKind; 2] =
+        [EffectKind::StribeckFriction, EffectKind::ActuatorDeadband];
 
     /// The documented name (as in scene files and `calibration.json`).
     pub fn name(self) -> &'static str {
