@@ -31,7 +31,8 @@ pub fn install(effects: &[Effect], sim: &mut Simulator) {
             }
             (Target::Dofs(d), EffectKind::StribeckFriction) => {
                 Some(Box::new(stribeck::StribeckFriction {
-                    coeffs: JointCoeffs::shared(d, v, e.slot),
+                    coulomb: JointCoeffs::shared(d, v, e.slot),
+                    excess: JointCoeffs::shared(d, e.values[1], e.slot + 1),
                     vs: stribeck::DEFAULT_VS,
                     eps: e.eps,
                 }))

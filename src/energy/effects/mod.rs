@@ -89,8 +89,8 @@ pub enum EffectKind {
     JointSpring,
     /// Actuation delay `d` (s) of the PD channels: [`delay`].
     ActuationDelay,
-    /// Stribeck excess `Δf` (N·m) of joint friction at breakaway over the
-    /// Coulomb level: [`stribeck`]. Offered when named (not in
+    /// Stribeck joint friction: Coulomb level `f_c` and breakaway excess
+    /// `Δf` (N·m): [`stribeck`]. Offered when named (not in
     /// [`EffectKind::ALL`]): [`EffectKind::OPT_IN`].
     StribeckFriction,
     /// Deadband half-width `b` (rad or m) of the PD position error:
@@ -187,6 +187,7 @@ impl EffectKind {
         match self {
             EffectKind::Payload => &["mass", "x", "y", "z"],
             EffectKind::JointSpring => &["stiffness", "springref"],
+            EffectKind::StribeckFriction => &["coulomb", "excess"],
             _ => &[""],
         }
     }
@@ -195,7 +196,8 @@ impl EffectKind {
     pub fn units(self) -> &'static [&'static str] {
         match self {
             EffectKind::JointDamping => &["N·m·s/rad"],
-            EffectKind::JointFriction | EffectKind::StribeckFriction => &["N·m"],
+            EffectKind::JointFriction => &["N·m"],
+            EffectKind::StribeckFriction => &["N·m", "N·m"],
             EffectKind::Armature => &["kg·m²"],
             EffectKind::ActuatorGain | EffectKind::LinkMassScale | EffectKind::ContactMu => &["1"],
             EffectKind::JointOffset | EffectKind::ActuatorDeadband => &["rad"],

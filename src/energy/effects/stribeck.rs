@@ -1,43 +1,50 @@
-//! Stribeck joint friction: the breakaway excess `Δf` of a friction that is
-//! larger when a joint starts to slide than when it slides fast,
-//! `τ(v) = −[f_c + Δf·exp(−(v/v_s)²)]·sign v` (N·m or N).
+//! Stribeck joint friction: a friction that is larger when a joint starts
+//! to slide than when it slides fast,
+//! `τ(v) = −[f_c + Δf·exp(−(v/v_s)²)]·sign v` (N·m or N), with two
+//! parameters: the Coulomb level `f_c ≥ 0` and the breakaway excess
+//! `Δf = f_s − f_c ≥ 0`, both smoothed below `√ε` as [`super::coulomb`] is.
 //!
-//! The Coulomb level `f_c` is the [`super::coulomb`] effect's
-//! (`joint_friction`); this term adds the excess `Δf = f_s − f_c ≥ 0` that
-//! decays with speed, with the Coulomb term's smoothing below `√ε`. A full
-//! Stribeck curve is the pair `joint_friction + stribeck_friction` on the
-//! same coordinates. One parameter per effect: the Stribeck speed `v_s` is
-//! fixed at [`DEFAULT_VS`] (0.1 rad/s or m/s, within the usual 0.01–0.3
-//! rad/s of geared joints); fitting `(Δf, v_s)` together from positions is
-//! poorly conditioned (a larger excess over a narrower band moves the
+//! Why both in one effect: the excess alone cannot be found when the
+//! Coulomb level is unknown too. It acts only near velocity reversals, so
+//! on data with both it does not beat the baseline alone, and calibration
+//! pairs only singles that do (`src/calibrate/select.rs`); the pair
+//! `joint_friction + stribeck_friction(excess)` was never formed
+//! (`notes/calibration.md`, session 9). With `f_c` in the effect a single
+//! candidate is the whole curve, and on Coulomb-only data the parsimony
+//! rule prefers the one-parameter `joint_friction`. The Stribeck speed
+//! `v_s` is fixed at [`DEFAULT_VS`] (0.1 rad/s or m/s, within the usual
+//! 0.01–0.3 rad/s of geared joints): fitting `v_s` as well from positions
+//! is poorly conditioned (a larger excess over a narrower band moves the
 //! trajectory much as a smaller one over a wider band does).
 //!
 //! Position-level dissipation potential per coordinate (as in
 //! [`super::coulomb`]):
 //!
 //! ```text
-//! F(θ) = Σ_k Δf_k Δt B(v_k),   v_k = (θ_k − θ_k^t)/Δt,   r = √(v² + ε)
+//! F(θ) = Σ_k Δt [f_c,k A_ε(v_k) + Δf_k B(v_k)],   v_k = (θ_k − θ_k^t)/Δt
+//! A_ε(v) = √(v² + ε) − √ε = r − √ε                              (rad/s or m/s)
 //! B(v) = e^{ε/v_s²} v_s (√π/2) [erf(r/v_s) − erf(√ε/v_s)]      (rad/s or m/s)
-//! B'(v) = exp(−(v/v_s)²) · v/r                                  (→ exp(−(v/v_s)²) sign v)
+//! B'(v) = exp(−(v/v_s)²) · v/r                     (→ exp(−(v/v_s)²) sign v)
 //! B''(v) = exp(−(v/v_s)²) · [ε/r³ − 2v²/(v_s² r)]
-//! ∂F/∂θ_k = Δf_k B'(v_k)                          (the Stribeck force, N·m)
-//! ∂²F/∂θ_k² = Δf_k B''(v_k)/Δt
+//! ∂F/∂θ_k = f_c,k A_ε'(v_k) + Δf_k B'(v_k)         (the friction force, N·m)
+//! ∂²F/∂θ_k² = [f_c,k A_ε''(v_k) + Δf_k B''(v_k)]/Δt
 //! ```
 //!
+//! with `A_ε' = v/r`, `A_ε'' = ε/r³` ([`super::coulomb::smooth_abs`]).
 //! (`d erf(r/v_s)/dv = (2/√π) e^{−r²/v_s²} v/(r v_s)` and `r² = v² + ε`,
-//! so the factor `e^{ε/v_s²}` makes `B'` exactly `exp(−(v/v_s)²)·A_ε'(v)`
-//! with `A_ε'` the Coulomb term's smoothed sign.) `B(0) = 0`, `B ≥ 0`.
-//! Units: `Δf` in N·m (revolute) or N (prismatic), `v_s` in rad/s or m/s,
-//! `ε` in (rad/s)² or (m/s)².
+//! so the factor `e^{ε/v_s²}` makes `B'` exactly `exp(−(v/v_s)²)·A_ε'(v)`.)
+//! `B(0) = 0`, `B ≥ 0`. Units: `f_c`, `Δf` in N·m (revolute) or N
+//! (prismatic), `v_s` in rad/s or m/s, `ε` in (rad/s)² or (m/s)².
 //!
-//! Non-convexity: the force decreases with speed above `|v| ≈ √ε`, so
-//! `B'' < 0` there (most negative `≈ −0.86/v_s` at `|v| ≈ v_s/√2`). The
-//! exact Hessian is written (the adjoint pass needs it); Newton's step
-//! clamps the eigenvalues of the whole step Hessian
+//! Non-convexity: the excess's force decreases with speed above
+//! `|v| ≈ √ε`, so `B'' < 0` there (most negative `≈ −0.86/v_s` at
+//! `|v| ≈ v_s/√2`). The exact Hessian is written (the adjoint pass needs
+//! it); Newton's step clamps the eigenvalues of the whole step Hessian
 //! ([`crate::sim::linear_solve`]), where the inertia term `M/Δt²` usually
 //! dominates `Δf·0.86/(v_s Δt)`.
 //!
-//! Adjoint (`Φ = Σ_k λ_k Δf_k B'(v_k)`): `∂Φ/∂θ_k^t = −λ_k Δf_k B''(v_k)/Δt`,
+//! Adjoint (`Φ = Σ_k λ_k ∂F/∂θ_k`):
+//! `∂Φ/∂θ_k^t = −λ_k [f_c,k A_ε'' + Δf_k B'']/Δt`, `∂Φ/∂f_c,k = λ_k A_ε'(v_k)`,
 //! `∂Φ/∂Δf_k = λ_k B'(v_k)`.
 
 use super::JointCoeffs;
@@ -102,14 +109,35 @@ pub fn stribeck_shape(v: f64, vs: f64, eps: f64) -> (f64, f64, f64) {
     (b.max(0.0), db, ddb)
 }
 
-/// The Stribeck excess over a set of coordinates.
+/// The Stribeck friction over a set of coordinates: Coulomb levels and
+/// excesses on the same coordinates (in the same order).
 #[derive(Clone, Debug)]
 pub struct StribeckFriction {
-    pub coeffs: JointCoeffs,
+    /// `f_c` per coordinate.
+    pub coulomb: JointCoeffs,
+    /// `Δf` per coordinate (same `dofs` as `coulomb`).
+    pub excess: JointCoeffs,
     /// Stribeck speed `v_s` (> 0).
     pub vs: f64,
     /// Velocity smoothing `ε` (> 0).
     pub eps: f64,
+}
+
+impl StribeckFriction {
+    /// `(k, f_c, Δf, slot of f_c, slot of Δf)`.
+    fn terms(&self) -> impl Iterator<Item = (usize, f64, f64, Option<usize>, Option<usize>)> + '_ {
+        self.coulomb
+            .iter()
+            .zip(self.excess.iter())
+            .map(|((k, fc, sc), (_, df, sd))| (k, fc, df, sc, sd))
+    }
+
+    /// `(F_k/Δt, ∂F/∂θ_k, Δt ∂²F/∂θ_k²)` at velocity `v`.
+    fn local(&self, v: f64, fc: f64, df: f64) -> (f64, f64, f64) {
+        let (a, da, dda) = super::coulomb::smooth_abs(v, self.eps);
+        let (b, db, ddb) = stribeck_shape(v, self.vs, self.eps);
+        (fc * a + df * b, fc * da + df * db, fc * dda + df * ddb)
+    }
 }
 
 impl Energy for StribeckFriction {
@@ -126,15 +154,15 @@ impl Energy for StribeckFriction {
         acc: &mut EnergyAccumulator,
     ) -> Result<(), EnergyError> {
         let inv_dt = 1.0 / ctx.dt;
-        for (k, f, _) in self.coeffs.iter() {
+        for (k, fc, df, _, _) in self.terms() {
             let v = (q[k] - ctx.q_prev[k]) * inv_dt;
-            let (b, db, ddb) = stribeck_shape(v, self.vs, self.eps);
-            acc.value += f * ctx.dt * b;
+            let (f, g, h) = self.local(v, fc, df);
+            acc.value += ctx.dt * f;
             if need >= Need::Gradient {
-                acc.dof_grad[k] += f * db;
+                acc.dof_grad[k] += g;
             }
             if need >= Need::Hessian {
-                acc.dof_hess[(k, k)] += f * ddb * inv_dt;
+                acc.dof_hess[(k, k)] += h * inv_dt;
             }
         }
         Ok(())
@@ -149,13 +177,16 @@ impl Energy for StribeckFriction {
         out: &mut VjpAccumulator,
     ) -> Result<(), EnergyError> {
         let inv_dt = 1.0 / ctx.dt;
-        for (k, f, slot) in self.coeffs.iter() {
+        for (k, fc, df, sc, sd) in self.terms() {
             let l = dir.lambda[k];
             let v = (q[k] - ctx.q_prev[k]) * inv_dt;
-            let (_, db, ddb) = stribeck_shape(v, self.vs, self.eps);
-            out.q_prev[k] -= l * f * ddb * inv_dt;
-            if let Some(s) = slot {
-                *out.effect(s) += l * db;
+            let (_, _, h) = self.local(v, fc, df);
+            out.q_prev[k] -= l * h * inv_dt;
+            if let Some(s) = sc {
+                *out.effect(s) += l * super::coulomb::smooth_abs(v, self.eps).1;
+            }
+            if let Some(s) = sd {
+                *out.effect(s) += l * stribeck_shape(v, self.vs, self.eps).1;
             }
         }
         Ok(())
