@@ -103,7 +103,9 @@ pub fn scene_to_mjcf_with(scene: &Scene, model_name: &str, actuators: bool) -> S
         let slot = match e.effect {
             EffectKind::JointDamping => 0,
             EffectKind::Armature => 1,
-            EffectKind::JointFriction => 2,
+            // A Stribeck friction's Coulomb level (`values[0]`); its
+            // excess is listed as untranslated.
+            EffectKind::JointFriction | EffectKind::StribeckFriction => 2,
             EffectKind::JointSpring => 3,
             _ => continue,
         };
@@ -292,7 +294,7 @@ pub fn untranslated(scene: &Scene) -> Vec<(String, String)> {
                 }
                 EffectKind::JointOffset => "an encoder offset is on the measurement side, not the model",
                 EffectKind::StribeckFriction => {
-                    "MuJoCo's frictionloss is Coulomb only; the breakaway excess has no attribute"
+                    "its Coulomb level is written as frictionloss; MuJoCo has no attribute for the breakaway excess"
                 }
                 EffectKind::ActuatorDeadband => {
                     "no actuators are written; MuJoCo has no actuator deadband attribute"

@@ -1,8 +1,9 @@
 //! The library of candidate effects that calibration can add to a model.
 //!
 //! Each effect is either a term of the step objective (paper, eq. `SDRS`)
-//! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`stribeck`],
-//! [`armature`], [`extra_mass`] (payload, link mass scale), [`deadband`]
+//! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`stribeck`]
+//! (Coulomb level and breakaway excess), [`armature`], [`extra_mass`]
+//! (payload, link mass scale), [`deadband`]
 //! (a correction of the PD term) — or a parameter of an existing
 //! part of the model — [`gain`] (controller gains), [`delay`] (actuation delay), [`crate::contact::params`]
 //! (`μ`, `κ`, `s`) — or of the measurement — [`offset`] (encoder bias).
