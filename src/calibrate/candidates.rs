@@ -6,12 +6,12 @@
 //! Typical magnitudes use each coordinate's effective inertia
 //! `I_k = Δt²·∂²(inertia term)/∂θ_k²` at `θ^0` (kg·m² or kg): damping
 //! `2 I_k` (a 0.5 s decay), friction and both Stribeck parameters (Coulomb
-//! level, excess) `5 I_k` (5 rad/s² of deceleration), armature `0.2 I_k`. Bounds: coefficients in
-//! `[0, 10⁴·typical]`, gains and mass scales in `[0.05, 20]`, offsets in
-//! `[−0.5, 0.5]`, actuation delays in `[0, 0.1]` s (typical 10 ms, start
-//! 5 ms), actuator deadbands in `[0, 0.1]` rad or m (typical 0.01 — a
-//! gearbox's backlash is 0.1–1°, a hobby servo's deadband a few degrees —
-//! start 0.005), payload masses in
+//! level, excess) `5 I_k` (5 rad/s² of deceleration), armature `0.2 I_k`.
+//! Bounds: coefficients in `[0, 10⁴·typical]`, gains and mass scales in
+//! `[0.05, 20]`, offsets in `[−0.5, 0.5]`, actuation delays in `[0, 0.1]` s
+//! (typical 10 ms, start 5 ms), actuator deadbands in `[0, 0.1]` rad or m
+//! (typical 0.01 — a gearbox's backlash is 0.1–1°, a hobby servo's
+//! deadband a few degrees — start 0.005), payload masses in
 //! `[0, 10 × total mass]` at positions within the link's hull box grown by
 //! half its size (at least 5 cm), `μ ∈ [0, 5]`, `κ ∈ [κ₀/100, 100κ₀]`,
 //! `s ∈ [s₀/10, min(0.5, 10s₀)]`.

@@ -21,7 +21,9 @@
 //!   excluded pairs become `<exclude>`;
 //! - the initial state as keyframe `initial`, limits as `range`, the joint
 //!   effects `joint_damping`, `armature`, `joint_friction`, `joint_spring`
-//!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`;
+//!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`
+//!   (a `stribeck_friction`'s Coulomb level adds to `frictionloss`; its
+//!   breakaway excess is untranslated);
 //!   contact `μ` (with a `contact_mu` effect applied) as the geoms' sliding
 //!   friction; `payload` and `link_mass_scale` effects in the bodies'
 //!   `inertial` (second moments `M₂ ← σ M₂ + m_p [p pᵀ, p; pᵀ, 1]`:
