@@ -26,7 +26,8 @@ pub struct CalibrateArgs {
     /// Candidate effects, comma separated (default: all applicable):
     /// joint_damping, joint_friction, armature, actuator_gain, joint_offset,
     /// payload, link_mass_scale, contact_mu, contact_kappa, contact_s,
-    /// actuation_delay.
+    /// actuation_delay; and, only when named, stribeck_friction,
+    /// actuator_deadband.
     #[arg(long, value_delimiter = ',')]
     pub effects: Option<Vec<String>>,
     /// Fit the contact model's resolution (barrier support s, stiffness κ)

@@ -5,10 +5,13 @@
 //!
 //! Typical magnitudes use each coordinate's effective inertia
 //! `I_k = Δt²·∂²(inertia term)/∂θ_k²` at `θ^0` (kg·m² or kg): damping
-//! `2 I_k` (a 0.5 s decay), friction `5 I_k` (5 rad/s² of deceleration),
-//! armature `0.2 I_k`. Bounds: coefficients in `[0, 10⁴·typical]`, gains and
-//! mass scales in `[0.05, 20]`, offsets in `[−0.5, 0.5]`, actuation delays in
-//! `[0, 0.1]` s (typical 10 ms, start 5 ms), payload masses in
+//! `2 I_k` (a 0.5 s decay), friction and both Stribeck parameters (Coulomb
+//! level, excess) `5 I_k` (5 rad/s² of deceleration), armature `0.2 I_k`.
+//! Bounds: coefficients in `[0, 10⁴·typical]`, gains and mass scales in
+//! `[0.05, 20]`, offsets in `[−0.5, 0.5]`, actuation delays in `[0, 0.1]` s
+//! (typical 10 ms, start 5 ms), actuator deadbands in `[0, 0.1]` rad or m
+//! (typical 0.01 — a gearbox's backlash is 0.1–1°, a hobby servo's
+//! deadband a few degrees — start 0.005), payload masses in
 //! `[0, 10 × total mass]` at positions within the link's hull box grown by
 //! half its size (at least 5 cm), `μ ∈ [0, 5]`, `κ ∈ [κ₀/100, 100κ₀]`,
 //! `s ∈ [s₀/10, min(0.5, 10s₀)]`.
@@ -16,7 +19,11 @@
 //! Starts: one for single-parameter candidates (their least-squares
 //! problems are close to monotone in the parameter: `0.2 ×` typical for
 //! coefficients, the nominal value for gains, scales, offsets and contact
-//! parameters); two for payloads (at the link's centre of mass and at a
+//! parameters); two for the Stribeck friction (`(0.2, 0.2) ×` and
+//! `(0.2, 1) ×` typical: the excess acts only near velocity reversals, and
+//! its cost is not monotone — on `arm2` with an excess of 0.5 hidden, a
+//! local minimum at 0.017 from the `0.2 ×` start, a hump between 0.1 and
+//! 0.2); two for payloads (at the link's centre of mass and at a
 //! corner of its box), whose position makes the problem multi-modal; pairs
 //! start from the two single fits.
 
@@ -27,6 +34,9 @@ use crate::scene::Scene;
 
 /// Upper bound of an actuation delay's fit box (s).
 pub const MAX_DELAY: f64 = 0.1;
+
+/// Upper bound of an actuator deadband's half-width (rad or m): 5.7°.
+pub const MAX_DEADBAND: f64 = 0.1;
 
 /// Effective inertia of every coordinate at `θ^0` (see the module doc).
 pub fn effective_inertia(scene: &Scene) -> Vec<f64> {
@@ -76,13 +86,37 @@ fn joint_candidate(kind: EffectKind, on: String, inertia: f64) -> Candidate {
             let t = 5.0 * inertia;
             single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
+        EffectKind::StribeckFriction => stribeck_candidate(on, 5.0 * inertia),
         EffectKind::Armature => {
             let t = 0.2 * inertia;
             single(kind, on, 0.0, 1e4 * t, t, &[0.2 * t])
         }
         EffectKind::ActuatorGain => single(kind, on, 0.05, 20.0, 1.0, &[1.0]),
         EffectKind::ActuationDelay => single(kind, on, 0.0, MAX_DELAY, 0.01, &[0.005]),
+        EffectKind::ActuatorDeadband => single(kind, on, 0.0, MAX_DEADBAND, 0.01, &[0.005]),
         _ => single(kind, on, -0.5, 0.5, 0.05, &[0.0]),
+    }
+}
+
+/// The Stribeck friction `[f_c, Δf]` on `on` with typical magnitude `t`
+/// for both: box `[0, 10⁴ t]²`, starts `(0.2t, 0.2t)` and `(0.2t, t)` (see
+/// the module doc).
+fn stribeck_candidate(on: String, t: f64) -> Candidate {
+    let kind = EffectKind::StribeckFriction;
+    Candidate {
+        label: format!("{}/{on}", kind.name()),
+        templates: vec![Template {
+            spec: EffectSpec {
+                effect: kind,
+                on,
+                values: vec![0.0; 2],
+                eps: None,
+            },
+        }],
+        lower: vec![0.0; 2],
+        upper: vec![1e4 * t; 2],
+        typical: vec![t; 2],
+        starts: vec![vec![0.2 * t, 0.2 * t], vec![0.2 * t, t]],
     }
 }
 

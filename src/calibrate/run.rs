@@ -90,8 +90,9 @@ pub fn check_resolution_names(names: Option<&[String]>, fit: bool) -> Result<(),
     }
 }
 
-/// The effect kinds `names` lists (`None`: all of [`EffectKind::ALL`]); an
-/// unknown name is an error listing the known ones.
+/// The effect kinds `names` lists (`None`: all of [`EffectKind::ALL`]; the
+/// [`EffectKind::OPT_IN`] ones only when named); an unknown name is an
+/// error listing the known ones.
 pub fn effect_kinds(names: Option<&[String]>) -> Result<Vec<EffectKind>, CalibrateError> {
     let Some(names) = names else {
         return Ok(EffectKind::ALL.to_vec());
@@ -102,7 +103,12 @@ pub fn effect_kinds(names: Option<&[String]>) -> Result<Vec<EffectKind>, Calibra
             EffectKind::from_name(n.trim()).ok_or_else(|| CalibrateError::Effects {
                 msg: format!(
                     "unknown effect \"{n}\" (effects: {})",
-                    EffectKind::ALL.map(|k| k.name()).join(", ")
+                    EffectKind::ALL
+                        .iter()
+                        .chain(&EffectKind::OPT_IN)
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             })
         })

@@ -88,7 +88,7 @@ impl Energy for PdController {
 }
 
 /// Whether channel `ch` belongs to a free root's pose target.
-fn in_pose_target(ctx: &StepContext, ch: usize) -> bool {
+pub(crate) fn in_pose_target(ctx: &StepContext, ch: usize) -> bool {
     ctx.pose_targets
         .iter()
         .any(|p| (p.first..p.first + 6).contains(&ch))

@@ -21,7 +21,9 @@
 //!   excluded pairs become `<exclude>`;
 //! - the initial state as keyframe `initial`, limits as `range`, the joint
 //!   effects `joint_damping`, `armature`, `joint_friction`, `joint_spring`
-//!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`;
+//!   as `damping`, `armature`, `frictionloss`, `stiffness` + `springref`
+//!   (a `stribeck_friction`'s Coulomb level adds to `frictionloss`; its
+//!   breakaway excess is untranslated);
 //!   contact `μ` (with a `contact_mu` effect applied) as the geoms' sliding
 //!   friction; `payload` and `link_mass_scale` effects in the bodies'
 //!   `inertial` (second moments `M₂ ← σ M₂ + m_p [p pᵀ, p; pᵀ, 1]`:
@@ -103,7 +105,9 @@ pub fn scene_to_mjcf_with(scene: &Scene, model_name: &str, actuators: bool) -> S
         let slot = match e.effect {
             EffectKind::JointDamping => 0,
             EffectKind::Armature => 1,
-            EffectKind::JointFriction => 2,
+            // A Stribeck friction's Coulomb level (`values[0]`); its
+            // excess is listed as untranslated.
+            EffectKind::JointFriction | EffectKind::StribeckFriction => 2,
             EffectKind::JointSpring => 3,
             _ => continue,
         };
@@ -291,6 +295,12 @@ pub fn untranslated(scene: &Scene) -> Vec<(String, String)> {
                     "no actuators are written; MuJoCo has no actuation delay attribute"
                 }
                 EffectKind::JointOffset => "an encoder offset is on the measurement side, not the model",
+                EffectKind::StribeckFriction => {
+                    "its Coulomb level is written as frictionloss; MuJoCo has no attribute for the breakaway excess"
+                }
+                EffectKind::ActuatorDeadband => {
+                    "no actuators are written; MuJoCo has no actuator deadband attribute"
+                }
                 EffectKind::ContactKappa | EffectKind::ContactS => {
                     "a parameter of the SDRS contact barrier; MuJoCo's contacts are soft constraints (solref/solimp)"
                 }

@@ -50,8 +50,12 @@
 //! effects:                   # optional extra physics (default none; written by `sdrs calibrate`)
 //!   - {effect: joint_damping, on: all, values: [0.05]}      # c (N·m·s/rad), every joint coordinate
 //!   - {effect: joint_friction, on: shoulder, values: [0.2], eps: 1.0e-4}  # f (N·m); ε ((rad/s)², default 1e-4)
+//!   - {effect: stribeck_friction, on: shoulder, values: [0.1, 0.3]}  # f_c, Δf (N·m): Coulomb
+//!                            #   level and breakaway excess, v_s = 0.1 rad/s; eps as for joint_friction
 //!   - {effect: armature, on: all, values: [0.01]}           # a (kg·m²)
 //!   - {effect: actuator_gain, on: all, values: [0.8]}       # g: k_p, k_d → g·k_p, g·k_d
+//!   - {effect: actuator_deadband, on: all, values: [0.01]}  # b (rad or m): PD position error
+//!                            #   deadband (smoothed over 1e-3)
 //!   - {effect: joint_offset, on: shoulder, values: [0.02]}  # encoder bias (rad); measurement only,
 //!                            #   `sdrs simulate` writes physical coordinates
 //!   - {effect: payload, on: upper, values: [0.5, 0.1, 0, 0]}  # m (kg), x y z (m, link frame)

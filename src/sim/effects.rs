@@ -1,12 +1,14 @@
 //! Installing calibration effects ([`crate::energy::effects`]) into a
-//! simulator: their energy terms join the step objective, actuator gains
-//! scale the controller channels.
+//! simulator: their energy terms join the step objective (an actuator
+//! deadband's term sits next to the PD term), actuator gains scale the
+//! controller channels and actuation delays shift their targets.
 
 use super::Simulator;
 use crate::energy::Energy;
 use crate::energy::effects::extra_mass::{ExtraMass, ExtraMassKind};
 use crate::energy::effects::{
-    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, delay, gain, spring,
+    Effect, EffectKind, JointCoeffs, Target, armature, coulomb, damping, deadband, delay, gain,
+    spring, stribeck,
 };
 use nalgebra::Vector3;
 
@@ -25,6 +27,20 @@ pub fn install(effects: &[Effect], sim: &mut Simulator) {
                 Some(Box::new(coulomb::JointFriction {
                     coeffs: JointCoeffs::shared(d, v, e.slot),
                     eps: e.eps,
+                }))
+            }
+            (Target::Dofs(d), EffectKind::StribeckFriction) => {
+                Some(Box::new(stribeck::StribeckFriction {
+                    coulomb: JointCoeffs::shared(d, v, e.slot),
+                    excess: JointCoeffs::shared(d, e.values[1], e.slot + 1),
+                    vs: stribeck::DEFAULT_VS,
+                    eps: e.eps,
+                }))
+            }
+            (Target::Dofs(d), EffectKind::ActuatorDeadband) => {
+                Some(Box::new(deadband::ActuatorDeadband {
+                    coeffs: JointCoeffs::shared(d, v, e.slot),
+                    width: deadband::DEFAULT_WIDTH,
                 }))
             }
             (Target::Dofs(d), EffectKind::Armature) => Some(Box::new(armature::Armature(

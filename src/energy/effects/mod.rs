@@ -1,8 +1,10 @@
 //! The library of candidate effects that calibration can add to a model.
 //!
 //! Each effect is either a term of the step objective (paper, eq. `SDRS`)
-//! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`armature`],
-//! [`extra_mass`] (payload, link mass scale) — or a parameter of an existing
+//! behind the [`Energy`] trait — [`damping`], [`coulomb`], [`stribeck`]
+//! (Coulomb level and breakaway excess), [`armature`], [`extra_mass`]
+//! (payload, link mass scale), [`deadband`]
+//! (a correction of the PD term) — or a parameter of an existing
 //! part of the model — [`gain`] (controller gains), [`delay`] (actuation delay), [`crate::contact::params`]
 //! (`μ`, `κ`, `s`) — or of the measurement — [`offset`] (encoder bias).
 //! Every parameter has an adjoint gradient: energy terms write
@@ -34,11 +36,13 @@
 pub mod armature;
 pub mod coulomb;
 pub mod damping;
+pub mod deadband;
 pub mod delay;
 pub mod extra_mass;
 pub mod gain;
 pub mod offset;
 pub mod spring;
+pub mod stribeck;
 
 use crate::model::Model;
 use serde::{Deserialize, Serialize};
@@ -86,6 +90,13 @@ pub enum EffectKind {
     JointSpring,
     /// Actuation delay `d` (s) of the PD channels: [`delay`].
     ActuationDelay,
+    /// Stribeck joint friction: Coulomb level `f_c` and breakaway excess
+    /// `Δf` (N·m): [`stribeck`]. Offered when named (not in
+    /// [`EffectKind::ALL`]): [`EffectKind::OPT_IN`].
+    StribeckFriction,
+    /// Deadband half-width `b` (rad or m) of the PD position error:
+    /// [`deadband`]. Offered when named: [`EffectKind::OPT_IN`].
+    ActuatorDeadband,
 }
 
 /// What an effect acts on.
@@ -125,6 +136,13 @@ impl EffectKind {
         EffectKind::ActuationDelay,
     ];
 
+    /// Calibration candidates offered only when named (`--effects`,
+    /// [`crate::calibrate::CalibrateOptions::effects`]): effects added after
+    /// the hidden-effect and clean-data suites were tuned on
+    /// [`EffectKind::ALL`]. Both are fitted and ranked like the others.
+    pub const OPT_IN: [EffectKind; 2] =
+        [EffectKind::StribeckFriction, EffectKind::ActuatorDeadband];
+
     /// The documented name (as in scene files and `calibration.json`).
     pub fn name(self) -> &'static str {
         match self {
@@ -140,12 +158,18 @@ impl EffectKind {
             EffectKind::ContactS => "contact_s",
             EffectKind::JointSpring => "joint_spring",
             EffectKind::ActuationDelay => "actuation_delay",
+            EffectKind::StribeckFriction => "stribeck_friction",
+            EffectKind::ActuatorDeadband => "actuator_deadband",
         }
     }
 
-    /// The calibration candidate of that name (one of [`EffectKind::ALL`]).
+    /// The calibration candidate of that name (one of [`EffectKind::ALL`]
+    /// or [`EffectKind::OPT_IN`]).
     pub fn from_name(s: &str) -> Option<EffectKind> {
-        Self::ALL.into_iter().find(|k| k.name() == s)
+        Self::ALL
+            .into_iter()
+            .chain(Self::OPT_IN)
+            .find(|k| k.name() == s)
     }
 
     pub fn scope(self) -> Scope {
@@ -164,6 +188,7 @@ impl EffectKind {
         match self {
             EffectKind::Payload => &["mass", "x", "y", "z"],
             EffectKind::JointSpring => &["stiffness", "springref"],
+            EffectKind::StribeckFriction => &["coulomb", "excess"],
             _ => &[""],
         }
     }
@@ -173,9 +198,10 @@ impl EffectKind {
         match self {
             EffectKind::JointDamping => &["N·m·s/rad"],
             EffectKind::JointFriction => &["N·m"],
+            EffectKind::StribeckFriction => &["N·m", "N·m"],
             EffectKind::Armature => &["kg·m²"],
             EffectKind::ActuatorGain | EffectKind::LinkMassScale | EffectKind::ContactMu => &["1"],
-            EffectKind::JointOffset => &["rad"],
+            EffectKind::JointOffset | EffectKind::ActuatorDeadband => &["rad"],
             EffectKind::Payload => &["kg", "m", "m", "m"],
             EffectKind::ContactKappa => &["J·m"],
             EffectKind::ContactS => &["m"],
@@ -240,8 +266,8 @@ pub struct EffectSpec {
     pub on: String,
     /// Parameter values (SI; payload: `[mass, x, y, z]`).
     pub values: Vec<f64>,
-    /// Joint friction only: velocity smoothing `ε` ((rad/s)²). Default
-    /// [`coulomb::DEFAULT_EPS`].
+    /// Joint and Stribeck friction only: velocity smoothing `ε`
+    /// ((rad/s)²). Default [`coulomb::DEFAULT_EPS`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eps: Option<f64>,
 }
@@ -271,7 +297,7 @@ pub struct Effect {
     pub on: String,
     pub target: Target,
     pub values: Vec<f64>,
-    /// Joint friction smoothing `ε`.
+    /// Joint (and Stribeck) friction smoothing `ε`.
     pub eps: f64,
     /// Index of the first parameter in the effect-parameter vector (the
     /// slot of [`crate::diff::VjpAccumulator::effect`]).
@@ -536,7 +562,11 @@ impl Effect {
             effect: self.kind,
             on: self.on.clone(),
             values: self.values.clone(),
-            eps: (self.kind == EffectKind::JointFriction).then_some(self.eps),
+            eps: matches!(
+                self.kind,
+                EffectKind::JointFriction | EffectKind::StribeckFriction
+            )
+            .then_some(self.eps),
         }
     }
 }
