@@ -85,6 +85,23 @@ fn rel(a: f64, b: f64, floor: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(floor)
 }
 
+/// Central differences of the step objective's value and gradient along
+/// coordinate `k` at `q` with step `hstep`: `(∂O/∂θ_k, ∂∇O/∂θ_k)`.
+fn central_differences(
+    sim: &mut sdrs::sim::Simulator,
+    q: &DVector<f64>,
+    k: usize,
+    hstep: f64,
+) -> (f64, DVector<f64>) {
+    let mut qp = q.clone();
+    qp[k] += hstep;
+    let mut qm = q.clone();
+    qm[k] -= hstep;
+    let (ep, gp, _) = sim.objective(&qp, Need::Gradient).unwrap();
+    let (em, gm, _) = sim.objective(&qm, Need::Gradient).unwrap();
+    ((ep - em) / (2.0 * hstep), (gp - gm) / (2.0 * hstep))
+}
+
 /// One effect alone in the objective: gradient and Hessian vs central
 /// differences at `q = θ^t + Δt·v` for the given joint velocities.
 fn check_term(spec: &str, name: &str, velocities: &[f64], tol: f64) -> f64 {
@@ -117,15 +134,7 @@ fn check_term(spec: &str, name: &str, velocities: &[f64], tol: f64) -> f64 {
         let q = point(v);
         let (_, g, h) = sim.objective(&q, Need::Hessian).unwrap();
         for k in 0..n {
-            let hstep = 1e-6 * dt;
-            let mut qp = q.clone();
-            qp[k] += hstep;
-            let mut qm = q.clone();
-            qm[k] -= hstep;
-            let (ep, gp, _) = sim.objective(&qp, Need::Gradient).unwrap();
-            let (em, gm, _) = sim.objective(&qm, Need::Gradient).unwrap();
-            let fd_g = (ep - em) / (2.0 * hstep);
-            let fd_h: DVector<f64> = (gp - gm) / (2.0 * hstep);
+            let (fd_g, fd_h) = central_differences(&mut sim, &q, k, 1e-6 * dt);
             let eg = (g[k] - fd_g).abs() / scale_g;
             let eh = (h.column(k) - &fd_h).amax() / scale_h;
             worst = worst.max(eg).max(eh);
@@ -617,15 +626,7 @@ fn check_deadband_term(on: &str, b: f64, errors: &[f64], tol: f64) -> f64 {
             assert_eq!((v, g.amax(), h.amax()), (0.0, 0.0, 0.0));
         }
         for k in 0..n {
-            let hstep = 1e-7;
-            let mut qp = q.clone();
-            qp[k] += hstep;
-            let mut qm = q.clone();
-            qm[k] -= hstep;
-            let (ep, gp, _) = sim.objective(&qp, Need::Gradient).unwrap();
-            let (em, gm, _) = sim.objective(&qm, Need::Gradient).unwrap();
-            let fd_g = (ep - em) / (2.0 * hstep);
-            let fd_h: DVector<f64> = (gp - gm) / (2.0 * hstep);
+            let (fd_g, fd_h) = central_differences(&mut sim, &q, k, 1e-7);
             let eg = (g[k] - fd_g).abs() / scale_g;
             let eh = (h.column(k) - &fd_h).amax() / scale_h;
             worst = worst.max(eg).max(eh);
