@@ -3,7 +3,7 @@
 # co-design and its `--design off` twin, wall times, and the independent
 # python-fcl interpenetration check of every optimized trajectory.
 #
-#   bash tools/bench/bench_grasping.sh [OUT=out/grasping] [TASKS="parallel_jaw_gripper single_jaw_gripper three_finger_hand"]
+#   bash tools/bench/bench_grasping.sh [OUT=out/grasping] [TASKS="parallel_jaw_gripper single_jaw_gripper single_jaw_cross three_finger_hand"]
 #
 # Iterations: the task's `optimizer.iters` unless ITERS is set. Runs under
 # `nice -n 5` (the machine is shared). Prints a table; the per-run outputs
@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${OUT:-out/grasping}
-TASKS=${TASKS:-"parallel_jaw_gripper single_jaw_gripper three_finger_hand"}
+TASKS=${TASKS:-"parallel_jaw_gripper single_jaw_gripper single_jaw_cross three_finger_hand"}
 PY=${PY:-.venv/bin/python}
 [ -n "${SKIP_BUILD:-}" ] || cargo build --release -q  # SKIP_BUILD=1: use the built binary
 BIN=target/release/sdrs
