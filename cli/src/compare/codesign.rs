@@ -90,6 +90,9 @@ pub fn run(
         let out = optimize(&p, iters, |_, _| pb.inc(1))
             .with_context(|| format!("{}: {method}", spec.name))?;
         let wall = t0.elapsed().as_secs_f64();
+        if let Some(why) = &out.stopped {
+            pb.suspend(|| eprintln!("warning: {}: {method}: the run {why}", spec.name));
+        }
         let n = out.history.len().max(1) as f64;
         let grasps = sdrs::optimize::grasp::measure(&p, &out.design, &out.controller)?;
         let m = match &metrics {
@@ -122,6 +125,7 @@ pub fn run(
             first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
             grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
             grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
+            stopped: out.stopped.clone(),
         };
         super::store_part(&file, spec, &run)?;
         runs.push(run);

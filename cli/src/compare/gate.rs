@@ -251,6 +251,7 @@ mod tests {
                     first_fall_time: None,
                     grasped: None,
                     grasp_trajectories: None,
+                    stopped: None,
                 }],
                 fd: None,
                 shapes_svg: None,

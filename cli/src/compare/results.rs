@@ -138,6 +138,11 @@ pub struct CodesignRun {
     pub grasped: Option<usize>,
     #[serde(default)]
     pub grasp_trajectories: Option<usize>,
+    /// Why the run ended before its last iteration (an Adam step that could
+    /// not be simulated, `sdrs::optimize::Outcome::stopped`); the row then
+    /// holds the iterations that ran.
+    #[serde(default)]
+    pub stopped: Option<String>,
 }
 
 /// Central differences of one design-gradient component at the initial design.
