@@ -419,12 +419,17 @@ pub fn resolve(
         let kind = s.effect;
         let np = kind.param_names().len();
         if s.values.len() != np {
+            let names = kind.param_names().join(", ");
+            let names = if np > 1 {
+                format!(" ({names})")
+            } else {
+                String::new()
+            };
             return Err(Invalid::new(
                 format!("{el}.values"),
                 format!(
-                    "{} takes {np} value(s) ({}), got {}",
+                    "{} takes {np} value(s){names}, got {}",
                     kind.name(),
-                    kind.param_names().join(", "),
                     s.values.len()
                 ),
             ));
