@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Creates the project-local Python environment .venv/ for the helpers in
-# tools/ (helpers/, check/, bench/, gen/), installs the pinned packages of tools/setup/requirements.txt, then builds
+# tools/ (helpers/, check/, bench/, gen/), installs the pinned packages of
+# tools/setup/requirements.txt (with uv, itself pinned), then builds
 # the Python package `sdrs` (python/, PyO3) with maturin in the release
 # profile into .venv (sharing target/ with cargo, so the core is compiled
 # once). Idempotent: the pip step is skipped when the requirements are
@@ -20,12 +21,22 @@ if [ ! -x "$venv/bin/python" ]; then
   "$py" -m venv "$venv"
 fi
 stamp="$venv/.requirements.sha256"
-want="$(sha256sum "$req" | cut -d' ' -f1)"
+uv_version=0.13.9
+want="$(sha256sum "$req" | cut -d' ' -f1) uv $uv_version"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   echo "setup_python: $venv packages are up to date"
 else
   echo "setup_python: installing $(grep -cv '^\s*\(#\|$\)' "$req") pinned packages from tools/setup/requirements.txt"
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$req"
+  # uv (pinned) installs the same pinned set as `pip install -r` would, with
+  # parallel downloads: 26 s instead of pip's 133 s on a fresh 2-core machine
+  # (2026-11-29; same `pip freeze` either way).
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "uv==$uv_version"
+  # uv reads no pip configuration: pass on the machine's pip settings.
+  [ -n "${PIP_INDEX_URL:-}" ] && export UV_INDEX_URL="$PIP_INDEX_URL"
+  [ -n "${PIP_EXTRA_INDEX_URL:-}" ] && export UV_EXTRA_INDEX_URL="$PIP_EXTRA_INDEX_URL"
+  [ -n "${PIP_FIND_LINKS:-}" ] && export UV_FIND_LINKS="$PIP_FIND_LINKS"
+  [ -n "${PIP_CERT:-}" ] && export SSL_CERT_FILE="$PIP_CERT"
+  "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -r "$req"
   echo "$want" > "$stamp"
 fi
 # The `sdrs` Python package: `maturin develop` builds python/ (release
