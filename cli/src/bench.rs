@@ -61,6 +61,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         let mut scene = Scene::from_spec(spec, &path)?;
         a.contact.apply(&mut scene)?;
         let mut sim = crate::contact_model::simulator(&scene)?;
+        sim.timers.set_detailed(true);
         let t0 = Instant::now();
         let traj = sdrs::sim::run::run(&mut sim, a.steps, |_| {})?;
         let wall = t0.elapsed().as_secs_f64();

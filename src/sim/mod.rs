@@ -147,18 +147,14 @@ impl Objective for StepObjective<'_> {
             Need::Hessian => KinOrder::Second,
         };
         let model = self.ctx.model;
-        // One clock reading per stage boundary: each reading ends one stage
-        // and starts the next (the clock was half of the timers' cost).
-        let mut mark = Instant::now();
+        // Detailed timers only: one clock reading per stage boundary, each
+        // ending one stage and starting the next.
+        let mut mark = timers.start_laps();
         self.kin.update(model, q, self.charts, order);
-        let now = Instant::now();
-        timers.add(Stage::Kinematics, now - mark);
-        mark = now;
+        timers.lap(&mut mark, Stage::Kinematics);
         // Clearing the accumulator is counted with the assembly.
         self.acc.reset(need);
-        let now = Instant::now();
-        timers.add(Stage::Assembly, now - mark);
-        mark = now;
+        timers.lap(&mut mark, Stage::Assembly);
         let track = need >= Need::Gradient && self.work.is_some();
         let mut work = StepWork::default();
         // `Σ ⟨∂E/∂A, A − A^t⟩ + …` of the accumulator so far: a term's work
@@ -187,9 +183,7 @@ impl Objective for StepObjective<'_> {
             } else {
                 before = None;
             }
-            let now = Instant::now();
-            timers.add_term(index, e.name(), now - mark);
-            mark = now;
+            timers.lap_term(&mut mark, index, e.name());
             if !self.acc.value.is_finite() {
                 return Ok(self.acc.value);
             }
@@ -199,7 +193,7 @@ impl Objective for StepObjective<'_> {
         }
         if need >= Need::Gradient {
             assemble::assemble(model, self.kin, self.acc, need, grad, hess, self.assemble);
-            timers.add(Stage::Assembly, mark.elapsed());
+            timers.lap(&mut mark, Stage::Assembly);
         }
         Ok(self.acc.value)
     }

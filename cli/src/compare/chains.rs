@@ -89,6 +89,7 @@ fn one(
 ) -> Result<ChainRow> {
     let steps = spec.steps;
     let mut sim = crate::contact_model::simulator(scene)?;
+    sim.timers.set_detailed(true);
     let t0 = Instant::now();
     let traj = sdrs::sim::run::run_recording(&mut sim, steps, spec.fcl && first, |_| {})
         .with_context(|| format!("four chains, {model}, {n} links per chain"))?;
