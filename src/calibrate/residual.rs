@@ -45,9 +45,28 @@
 //! | `1` | constant torque bias (N·m) |
 //! | `θ̈` | rotor inertia (kg·m²) |
 //! | `u̇` = `Σ_ch 2k_p θ̇*(τ) + (2k_d/Δt) θ̈*(τ)` | actuation delay `d` (s): `∇U_pd(t − d) − ∇U_pd(t) ≈ d u̇` |
+//! | `2k_p sign(e)` = `Σ_ch 2k_p sign(θ*(τ) − θ)` | actuator deadband `b` (rad) |
 //!
 //! (units for a revolute joint; a prismatic one has N, m instead of N·m,
-//! rad). `u̇` is only offered for controlled coordinates.
+//! rad). `u̇` and `2k_p sign(e)` are only offered for controlled
+//! coordinates. The deadband's term: a band of half-width `b` removes
+//! `2k_p clamp(e, −b, b)` from the PD force `2k_p e`
+//! ([`crate::energy::effects::deadband`]), which is `2k_p b sign(e)` once
+//! the error `e` leaves the band; inside it the loss, `2k_p e`, is a
+//! change of gain (the library's `actuator_gain`).
+//!
+//! # Deadband refinement
+//!
+//! `2k_p sign(e)` is the deadband's force only outside the band; the
+//! fraction of rows inside it biases the coefficient low (a first run on
+//! `arm2` with b = 0.02 rad on the elbow gave 0.0177, its interval
+//! [0.0162, 0.0191] excluding the truth). When the term is kept, it is
+//! refitted with the band's shape `2k_p clamp(e, −b, b)/b`, `b` the
+//! previous coefficient, the other kept terms fixed, until `b` stops
+//! changing: at the true band the shape is exact, and below (above) it the
+//! coefficient is a weighted mean of ratios in `[b, b*]` (`[b*, b]`), so the
+//! iteration moves monotonically towards `b*`. The interval is the last
+//! least-squares fit's (conditional on the shape).
 //!
 //! # Selection
 //!
@@ -132,7 +151,7 @@ pub struct ResidualRegression {
 }
 
 /// Names, meanings and units of the basis (module doc's table).
-const BASIS: [(&str, &str, &str); 9] = [
+const BASIS: [(&str, &str, &str); NB] = [
     ("sign(θ̇)", "dry friction", "N·m"),
     ("θ̇", "viscous damping", "N·m·s/rad"),
     ("θ̇|θ̇|", "velocity-squared drag", "N·m·s²/rad²"),
@@ -142,7 +161,11 @@ const BASIS: [(&str, &str, &str); 9] = [
     ("1", "constant torque bias", "N·m"),
     ("θ̈", "rotor inertia", "kg·m²"),
     ("u̇", "actuation delay", "s"),
+    ("2k_p sign(e)", "actuator deadband", "rad"),
 ];
+
+/// Number of basis terms.
+const NB: usize = 10;
 
 /// Degree of the local smoothing polynomial.
 const DEGREE: usize = 5;
@@ -259,24 +282,21 @@ fn row(
     })
 }
 
-/// Basis values of joint `k` in `row` (module doc's order); `u̇` is
-/// `None` for an uncontrolled coordinate.
-fn basis(row: &Row, k: usize, sim: &crate::sim::Simulator, dt: f64) -> [Option<f64>; 9] {
+/// Basis values of joint `k` in `row` (module doc's order), the deadband
+/// term for a band of half-width `b` ([`band_shape`]); `u̇` and the
+/// deadband term are `None` for an uncontrolled coordinate.
+fn basis(row: &Row, k: usize, sim: &crate::sim::Simulator, dt: f64, b: f64) -> [Option<f64>; NB] {
     let (th, v, a) = row.state[k];
-    let mut udot = None;
+    let (mut udot, mut band) = (None, None);
     for ch in sim.controller.channels.iter().filter(|c| c.dof == k) {
         let t = row.tau - ch.delay;
-        let u = 2.0 * ch.kp * ch.signal.eval(t).1 + 2.0 * ch.kd / dt * ch.signal.accel(t);
+        let (target, rate) = ch.signal.eval(t);
+        let u = 2.0 * ch.kp * rate + 2.0 * ch.kd / dt * ch.signal.accel(t);
         udot = Some(udot.unwrap_or(0.0) + u);
+        band = Some(band.unwrap_or(0.0) + 2.0 * ch.kp * band_shape(target - th, b));
     }
     [
-        Some(if v > 0.0 {
-            1.0
-        } else if v < 0.0 {
-            -1.0
-        } else {
-            0.0
-        }),
+        Some(sign(v)),
         Some(v),
         Some(v * v.abs()),
         Some(th),
@@ -285,13 +305,32 @@ fn basis(row: &Row, k: usize, sim: &crate::sim::Simulator, dt: f64) -> [Option<f
         Some(1.0),
         Some(a),
         udot,
+        band,
     ]
+}
+
+/// The deadband term's shape at PD error `e` for a band of half-width `b`
+/// (module doc, "Deadband refinement"): `sign(e)` at `b = 0`, else
+/// `clamp(e, −b, b)/b`.
+fn band_shape(e: f64, b: f64) -> f64 {
+    if b > 0.0 { e.clamp(-b, b) / b } else { sign(e) }
+}
+
+/// `1`, `−1` or `0` (at exactly zero, unlike `f64::signum`).
+fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
 }
 
 /// Least squares of `y` on the columns `cols` of `x` over `rows`:
 /// `(coefficients, RSS on rows, (XᵀX)⁻¹)`.
 fn ols(
-    x: &[[f64; 9]],
+    x: &[[f64; NB]],
     y: &[f64],
     rows: &[usize],
     cols: &[usize],
@@ -305,7 +344,7 @@ fn ols(
 }
 
 /// RSS of `c` (on `cols`) over `rows`.
-fn rss(x: &[[f64; 9]], y: &[f64], rows: &[usize], cols: &[usize], c: &DVector<f64>) -> f64 {
+fn rss(x: &[[f64; NB]], y: &[f64], rows: &[usize], cols: &[usize], c: &DVector<f64>) -> f64 {
     rows.iter()
         .map(|&i| {
             let p: f64 = cols
@@ -320,7 +359,7 @@ fn rss(x: &[[f64; 9]], y: &[f64], rows: &[usize], cols: &[usize], c: &DVector<f6
 
 /// Greedy forward selection with a held-out stop (module doc).
 fn select_terms(
-    x: &[[f64; 9]],
+    x: &[[f64; NB]],
     y: &[f64],
     train: &[usize],
     hold: &[usize],
@@ -369,10 +408,11 @@ fn inflation(r: &[f64], lags: usize) -> f64 {
 fn regress_joint(
     scene: &Scene,
     rows: &[Row],
-    x: &[[f64; 9]],
+    x: &[[f64; NB]],
     k: usize,
     split_time: f64,
     opts: &ResidualOptions,
+    fixed: Option<&[usize]>,
 ) -> Option<JointRegression> {
     let y: Vec<f64> = rows.iter().map(|r| r.force[k]).collect();
     let train: Vec<usize> = (0..rows.len())
@@ -382,10 +422,13 @@ fn regress_joint(
         .filter(|&i| rows[i].tau >= split_time)
         .collect();
     let all: Vec<usize> = (0..rows.len()).collect();
-    let avail: Vec<usize> = (0..9)
+    let avail: Vec<usize> = (0..NB)
         .filter(|&c| x.iter().all(|r| r[c].is_finite()))
         .collect();
-    let kept = select_terms(x, &y, &train, &hold, &avail, opts);
+    let kept = match fixed {
+        Some(cols) => cols.to_vec(),
+        None => select_terms(x, &y, &train, &hold, &avail, opts),
+    };
     let y_ho: f64 = hold.iter().map(|&i| y[i] * y[i]).sum();
     let mut terms = Vec::new();
     let mut explained = 0.0;
@@ -427,6 +470,65 @@ fn regress_joint(
     })
 }
 
+/// The basis of joint `k` on every row, the deadband term for band `b`.
+fn design(rows: &[Row], k: usize, sim: &crate::sim::Simulator, dt: f64, b: f64) -> Vec<[f64; NB]> {
+    rows.iter()
+        .map(|r| basis(r, k, sim, dt, b).map(|v| v.unwrap_or(f64::NAN)))
+        .collect()
+}
+
+/// Index of the deadband term in [`BASIS`].
+const BAND: usize = NB - 1;
+
+/// Refines a kept deadband term of `reg` to the band's exact shape (module
+/// doc, "Deadband refinement"): with the kept terms fixed, the fixed point
+/// of `b ← coefficient of 2k_p clamp(e, −b, b)/b`, from the sign term's
+/// coefficient; at most 50 rounds, to a relative change of 1e-9. `reg` is
+/// returned unchanged when no deadband term is kept or the coefficient is
+/// not positive.
+fn refine_band(
+    scene: &Scene,
+    rows: &[Row],
+    sim: &crate::sim::Simulator,
+    k: usize,
+    split_time: f64,
+    opts: &ResidualOptions,
+    reg: JointRegression,
+) -> JointRegression {
+    let name = BASIS[BAND].0;
+    let cols: Vec<usize> = reg
+        .terms
+        .iter()
+        .filter_map(|t| BASIS.iter().position(|b| b.0 == t.term))
+        .collect();
+    let coefficient = |r: &JointRegression| {
+        r.terms
+            .iter()
+            .find(|t| t.term == name)
+            .map(|t| t.coefficient)
+    };
+    let Some(mut b) = coefficient(&reg).filter(|&b| b > 0.0) else {
+        return reg;
+    };
+    let mut best = reg;
+    for _ in 0..50 {
+        let x = design(rows, k, sim, scene.settings.dt, b);
+        let Some(next) = regress_joint(scene, rows, &x, k, split_time, opts, Some(&cols)) else {
+            break;
+        };
+        let Some(nb) = coefficient(&next).filter(|&v| v > 0.0) else {
+            break;
+        };
+        best = next;
+        let done = (nb - b).abs() <= 1e-9 * b;
+        b = nb;
+        if done {
+            break;
+        }
+    }
+    best
+}
+
 /// Regresses the residual force of every measured coordinate (`base`: the
 /// scene's simulation over the data, for unmeasured coordinates and
 /// encoder offsets; `split_time`: start of the held-out window). `None`
@@ -454,12 +556,9 @@ pub fn regress(
     }
     let mut joints = Vec::new();
     for ch in &measured.channels {
-        let x: Vec<[f64; 9]> = rows
-            .iter()
-            .map(|r| basis(r, ch.dof, &sim, dt).map(|v| v.unwrap_or(f64::NAN)))
-            .collect();
-        if let Some(j) = regress_joint(scene, &rows, &x, ch.dof, split_time, opts) {
-            joints.push(j);
+        let x = design(&rows, ch.dof, &sim, dt, 0.0);
+        if let Some(j) = regress_joint(scene, &rows, &x, ch.dof, split_time, opts, None) {
+            joints.push(refine_band(scene, &rows, &sim, ch.dof, split_time, opts, j));
         }
     }
     let strongest = joints
@@ -476,7 +575,7 @@ pub fn regress(
 /// The "residual force" section of `report.md`.
 pub fn markdown(r: &ResidualRegression) -> String {
     let mut s = String::from(
-        "## Residual force regression\n\nThe residual generalized force of the scene as given at the smoothed measured states, regressed per joint on sign θ̇, θ̇, θ̇|θ̇|, θ, sin θ, cos θ, 1, θ̈ and the PD command's rate u̇ (a delay), by greedy forward selection with a held-out stop (`calibrate::residual`).\n\n| joint | RMS force | term | meaning | coefficient | 95 % interval | held-out share explained |\n|---|---:|---|---|---:|---|---:|\n",
+        "## Residual force regression\n\nThe residual generalized force of the scene as given at the smoothed measured states, regressed per joint on sign θ̇, θ̇, θ̇|θ̇|, θ, sin θ, cos θ, 1, θ̈, the PD command's rate u̇ (a delay) and the sign of the PD error 2k_p sign(e) (a deadband), by greedy forward selection with a held-out stop (`calibrate::residual`).\n\n| joint | RMS force | term | meaning | coefficient | 95 % interval | held-out share explained |\n|---|---:|---|---|---:|---|---:|\n",
     );
     for j in &r.joints {
         if j.terms.is_empty() {
