@@ -60,6 +60,9 @@ pub struct CentralCheck {
     /// ≤ crit |adjoint| + 3 central_noise` (agreement within the
     /// differences' own uncertainty).
     pub pass: bool,
+    /// [`check_component_adaptive`] only: the same stencil's estimate at
+    /// `h/2`, whose agreement with `central` is the smoothness test.
+    pub halved: Option<f64>,
 }
 
 /// Coefficients `c_k` of `D(2^k h)`, `k = 0…levels`, in Richardson's
@@ -235,6 +238,162 @@ pub fn check_component_with<E>(
         relative_error,
         resolved,
         pass,
+        halved: None,
+    })
+}
+
+/// The stencil's estimate of the derivative at step `h` (NaN for a fit
+/// that cannot be made).
+fn estimate<E>(
+    loss_at: &mut dyn FnMut(f64) -> Result<f64, E>,
+    h: f64,
+    stencil: Stencil,
+) -> Result<f64, E> {
+    let mut d = |t: f64| -> Result<f64, E> { Ok((loss_at(t)? - loss_at(-t)?) / (2.0 * t)) };
+    match stencil {
+        Stencil::Richardson { levels } => {
+            let mut g = 0.0;
+            for (k, &c) in richardson_coefficients(levels).iter().enumerate() {
+                g += c * d(h * 2f64.powi(k as i32))?;
+            }
+            Ok(g)
+        }
+        Stencil::Fit { steps, levels } => {
+            let steps = steps.max(levels + 1);
+            let Some((w, _)) = fit_weights(steps, levels) else {
+                return Ok(f64::NAN);
+            };
+            let mut g = 0.0;
+            for (j, wj) in w.iter().enumerate() {
+                g += wj * d(h * (j + 1) as f64 / steps as f64)?;
+            }
+            Ok(g)
+        }
+    }
+}
+
+/// The stencil's noise factor: its estimate's standard deviation in units
+/// of `σ/h` (Richardson level 1: 0.950; NaN for a fit that cannot be made).
+pub fn noise_factor(stencil: Stencil) -> f64 {
+    match stencil {
+        Stencil::Richardson { levels } => richardson_coefficients(levels)
+            .iter()
+            .enumerate()
+            .map(|(k, c)| c * c / (2.0 * 4f64.powi(k as i32)))
+            .sum::<f64>()
+            .sqrt(),
+        Stencil::Fit { steps, levels } => {
+            fit_weights(steps.max(levels + 1), levels).map_or(f64::NAN, |(_, f)| f)
+        }
+    }
+}
+
+/// Step range and resolution margin of [`check_component_adaptive`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Adaptive {
+    /// Smallest step; also the loss noise's scale (spacing `h_min/10`).
+    pub h_min: f64,
+    /// Largest step.
+    pub h_max: f64,
+    /// A component is resolved when `margin · central_noise ≤ crit |g|`.
+    /// With 2 (the fixed check's), an estimate whose error is noise alone
+    /// fails a resolved component about 5 % of the time; with 4, 6e-5.
+    pub margin: f64,
+}
+
+/// A component checked at a step chosen from its own noise, with a test
+/// that the loss is smooth over the stencil's span.
+///
+/// 1. The loss noise `σ` is measured as in [`check_component_with`]
+///    (spacing `h_min/10`).
+/// 2. `h = clamp(margin · f σ / (crit |g|), h_min, h_max)`, `f` the stencil's
+///    noise factor: the smallest step at which the component is resolved
+///    with the margin (a large component keeps `h_min`, a small one gets
+///    the step its size needs).
+/// 3. The estimates `c(h)` and `c(h/2)` are compared: on a loss smooth over
+///    `±2h` they differ by noise (and truncation far below it), so
+///    `|c(h) − c(h/2)| ≤ 3 √(σ_c(h)² + σ_c(h/2)²) + crit |g|/2` is the
+///    smoothness test (a contact kink inside the span fails it).
+/// 4. Resolved: smooth and `margin · σ_c(h) ≤ crit |g|`; `c(h)` must then
+///    agree to `crit`. Smooth but not resolved (`h = h_max` and still too
+///    noisy): `c(h)` must agree within `crit |g| + 3 σ_c(h)`. Not smooth:
+///    the fixed check's rule at `h_min` (a kink the larger span reached may
+///    lie outside the smaller one): `c(h_min)` within `crit |g| +
+///    3 σ_c(h_min)`.
+///
+/// Costs 10 loss evaluations for the noise plus the stencil's at `h` and
+/// `h/2` (Richardson level 1: 6, as `D(h)` is shared), and at `h_min` when
+/// not smooth.
+pub fn check_component_adaptive<E>(
+    loss_at: &mut dyn FnMut(f64) -> Result<f64, E>,
+    l0: f64,
+    adjoint: f64,
+    opts: Adaptive,
+    stencil: Stencil,
+    crit: f64,
+) -> Result<CentralCheck, E> {
+    let loss_noise = loss_noise(loss_at, l0, opts.h_min / 10.0)?;
+    // Evaluations are cached by step: Richardson's tables at h and h/2 share D(h).
+    let mut cache: Vec<(u64, f64)> = Vec::new();
+    let mut cached = |t: f64| -> Result<f64, E> {
+        if let Some(&(_, v)) = cache.iter().find(|(k, _)| *k == t.to_bits()) {
+            return Ok(v);
+        }
+        let v = loss_at(t)?;
+        cache.push((t.to_bits(), v));
+        Ok(v)
+    };
+    let factor = noise_factor(stencil);
+    let want = opts.margin * factor * loss_noise / (crit * adjoint.abs());
+    let h = if want.is_finite() {
+        want.clamp(opts.h_min, opts.h_max)
+    } else {
+        opts.h_min
+    };
+    let central = estimate(&mut cached, h, stencil)?;
+    let half = estimate(&mut cached, h / 2.0, stencil)?;
+    let (noise_h, noise_half) = (factor * loss_noise / h, 2.0 * factor * loss_noise / h);
+    let gap = (central - half).abs();
+    let smooth = gap <= 3.0 * noise_h.hypot(noise_half) + 0.5 * crit * adjoint.abs();
+    let resolved = smooth && opts.margin * noise_h <= crit * adjoint.abs();
+    // Not smooth: the fixed check at h_min (a kink the larger span reached
+    // may lie outside the smaller one).
+    let (h_used, estimate_used, noise_used) = if smooth {
+        (h, central, noise_h)
+    } else {
+        let noise_min = factor * loss_noise / opts.h_min;
+        (opts.h_min, estimate(&mut cached, opts.h_min, stencil)?, noise_min)
+    };
+    let scale = adjoint.abs().max(estimate_used.abs());
+    let relative_error = if scale > 0.0 {
+        (estimate_used - adjoint).abs() / scale
+    } else {
+        0.0
+    };
+    let pass = if resolved {
+        relative_error <= crit
+    } else {
+        (estimate_used - adjoint).abs() <= crit * adjoint.abs() + 3.0 * noise_used
+    };
+    let steps = match stencil {
+        Stencil::Richardson { levels } => levels + 1,
+        Stencil::Fit { steps, levels } => steps.max(levels + 1),
+    };
+    let levels = match stencil {
+        Stencil::Richardson { levels } | Stencil::Fit { levels, .. } => levels,
+    };
+    Ok(CentralCheck {
+        adjoint,
+        central: estimate_used,
+        h: h_used,
+        levels,
+        steps,
+        loss_noise,
+        central_noise: noise_used,
+        relative_error,
+        resolved,
+        pass,
+        halved: Some(half),
     })
 }
 
@@ -393,6 +552,64 @@ mod tests {
                 "{stencil:?}: scatter {sd:e}, predicted {predicted:e}"
             );
         }
+    }
+
+    /// The adaptive check: a component too small for the fixed step is
+    /// resolved at the larger step its size needs (and agrees); an adjoint
+    /// 2 % off fails; a large component keeps `h_min`.
+    #[test]
+    fn adaptive_step_resolves_small_components_and_catches_wrong_adjoints() {
+        let sigma = 1e-9;
+        let f = |t: f64, slope: f64| slope * t + 0.5 * t * t + 3f64.sqrt() * sigma * noise(t);
+        let opts = Adaptive {
+            h_min: 1e-6,
+            h_max: 1e-3,
+            margin: 4.0,
+        };
+        let stencil = Stencil::Richardson { levels: 1 };
+        for slope in [0.5, 100.0] {
+            let l0 = f(0.0, slope);
+            let mut at = |t: f64| Ok::<_, Infallible>(f(t, slope));
+            let fixed = check_component(&mut at, l0, slope, 1e-6, 1, 1e-4).unwrap();
+            let mut at = |t: f64| Ok::<_, Infallible>(f(t, slope));
+            let c = check_component_adaptive(&mut at, l0, slope, opts, stencil, 1e-4).unwrap();
+            assert!(c.resolved && c.pass, "slope {slope}: {c:?}");
+            assert_eq!(fixed.resolved, slope > 1.0, "slope {slope}: {fixed:?}");
+            assert!(4.0 * c.central_noise <= 1e-4 * slope, "{c:?}");
+            if slope > 1.0 {
+                assert_eq!(c.h, 1e-6);
+            } else {
+                assert!(c.h > 1e-5, "{c:?}");
+            }
+            let mut at = |t: f64| Ok::<_, Infallible>(f(t, slope));
+            let bad =
+                check_component_adaptive(&mut at, l0, 1.02 * slope, opts, stencil, 1e-4).unwrap();
+            assert!(!bad.pass, "slope {slope}: {bad:?}");
+        }
+    }
+
+    /// A kink inside the stencil's span (a ramp starting at t = 1.5e-5,
+    /// inside ±2h for the step the noise asks for) fails the smoothness
+    /// test: the component is not resolved and is judged at `h_min`, whose
+    /// span (±2e-6) misses the kink, so the true derivative at 0 passes
+    /// and a 2 % error is caught there.
+    #[test]
+    fn adaptive_check_flags_a_kink_inside_its_span() {
+        let sigma = 1e-9;
+        let f = |t: f64| 0.5 * t + 40.0 * (t - 1.5e-5).max(0.0) + 3f64.sqrt() * sigma * noise(t);
+        let opts = Adaptive {
+            h_min: 1e-6,
+            h_max: 1e-3,
+            margin: 4.0,
+        };
+        let mut at = |t: f64| Ok::<_, Infallible>(f(t));
+        let stencil = Stencil::Richardson { levels: 1 };
+        let c = check_component_adaptive(&mut at, f(0.0), 0.5, opts, stencil, 1e-4).unwrap();
+        assert!(!c.resolved && c.pass && c.h == 1e-6, "{c:?}");
+        assert!((c.halved.unwrap() - 0.5).abs() > 1.0, "{c:?}");
+        let mut at = |t: f64| Ok::<_, Infallible>(f(t));
+        let bad = check_component_adaptive(&mut at, f(0.0), 0.51, opts, stencil, 1e-4).unwrap();
+        assert!(!bad.pass, "{bad:?}");
     }
 
     /// Errors of the loss evaluation are passed through.

@@ -2,7 +2,7 @@
 //! a thin wrapper of [`sdrs::diff::central::check_component`] (see its module
 //! docs for the estimator and the noise model) for losses that cannot fail.
 
-pub use sdrs::diff::central::{CentralCheck, Stencil};
+pub use sdrs::diff::central::{Adaptive, CentralCheck, Stencil};
 
 /// `default` unless the environment says otherwise: `FD_STEPS=m` selects
 /// the least-squares fit of `m` differences over `(0, h]`
@@ -38,11 +38,20 @@ pub fn check_component(
     }
 }
 
+/// How each component's differences are taken: at one fixed step, or at a
+/// step chosen from its own noise with a smoothness test
+/// ([`sdrs::diff::central::check_component_adaptive`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Steps {
+    Fixed(f64),
+    Adaptive(Adaptive),
+}
+
 /// Checks a sample of components (`vars`: name and adjoint value of each)
-/// with [`check_component`] (`stencil`); `loss_at(k, t)` is the loss with the `k`-th
-/// variable moved by `t`, `l0 = L(0)`. Prints one line per component,
-/// prefixed by `label`. Returns how many are resolved and agree, and whether
-/// every component passes.
+/// with [`check_component`] at a fixed step `h` (`stencil`); `loss_at(k, t)`
+/// is the loss with the `k`-th variable moved by `t`, `l0 = L(0)`. Prints
+/// one line per component, prefixed by `label`. Returns how many are
+/// resolved and agree, and whether every component passes.
 pub fn check_sample(
     label: &str,
     vars: &[(String, f64)],
@@ -52,16 +61,42 @@ pub fn check_sample(
     stencil: Stencil,
     crit: f64,
 ) -> (usize, bool) {
+    check_sample_with(label, vars, loss_at, l0, Steps::Fixed(h), stencil, crit)
+}
+
+/// [`check_sample`] with fixed or adaptive steps.
+pub fn check_sample_with(
+    label: &str,
+    vars: &[(String, f64)],
+    loss_at: &dyn Fn(usize, f64) -> f64,
+    l0: f64,
+    steps: Steps,
+    stencil: Stencil,
+    crit: f64,
+) -> (usize, bool) {
     let mut agree = 0;
     let mut all = true;
     for (k, (name, g)) in vars.iter().enumerate() {
-        let c = check_component(&|t| loss_at(k, t), l0, *g, h, stencil, crit);
+        let c = match steps {
+            Steps::Fixed(h) => check_component(&|t| loss_at(k, t), l0, *g, h, stencil, crit),
+            Steps::Adaptive(a) => {
+                let mut at = |t: f64| Ok::<f64, std::convert::Infallible>(loss_at(k, t));
+                match sdrs::diff::central::check_component_adaptive(&mut at, l0, *g, a, stencil, crit) {
+                    Ok(c) => c,
+                    Err(e) => match e {},
+                }
+            }
+        };
+        let halved = c
+            .halved
+            .map_or(String::new(), |v| format!(", at h/2 {v:.9e}"));
         eprintln!(
-            "{label} {name}: adjoint {:.9e} central {:.9e} rel {:.2e} \
-             (loss noise {:.1e}, central noise {:.1e}, {} differences, {}) {}",
+            "{label} {name}: adjoint {:.9e} central {:.9e} rel {:.2e} at h {:.1e} \
+             (loss noise {:.1e}, central noise {:.1e}, {} differences{halved}, {}) {}",
             c.adjoint,
             c.central,
             c.relative_error,
+            c.h,
             c.loss_noise,
             c.central_noise,
             c.steps,
@@ -90,7 +125,7 @@ pub fn check_problem_sample(
     c: &nalgebra::DVector<f64>,
     ev: &sdrs::optimize::Evaluation,
     idx: &[usize],
-    h: f64,
+    steps: Steps,
     stencil: Stencil,
 ) -> (usize, bool) {
     let vars: Vec<(String, f64)> = idx
@@ -102,5 +137,5 @@ pub fn check_problem_sample(
         dt[idx[k]] += t;
         p.loss_value(&dt, c).unwrap()
     };
-    check_sample(label, &vars, &loss_at, ev.loss, h, stencil, 1e-4)
+    check_sample_with(label, &vars, &loss_at, ev.loss, steps, stencil, 1e-4)
 }
