@@ -156,17 +156,16 @@ fn fd_check_noise(
     stencil: common::fd::Stencil,
     need: usize,
 ) {
-    let (agree, all) =
-        common::fd::check_problem_sample(
-            &format!("{name}:"),
-            p,
-            d,
-            c,
-            ev,
-            idx,
-            common::fd::Steps::Fixed(eps),
-            stencil,
-        );
+    let (agree, all) = common::fd::check_problem_sample(
+        &format!("{name}:"),
+        p,
+        d,
+        c,
+        ev,
+        idx,
+        common::fd::Steps::Fixed(eps),
+        stencil,
+    );
     eprintln!(
         "{name}: {agree} of {} resolved and within 1e-4 (h = {eps:e}), every component passes: {all}",
         idx.len()

@@ -362,7 +362,11 @@ pub fn check_component_adaptive<E>(
         (h, central, noise_h)
     } else {
         let noise_min = factor * loss_noise / opts.h_min;
-        (opts.h_min, estimate(&mut cached, opts.h_min, stencil)?, noise_min)
+        (
+            opts.h_min,
+            estimate(&mut cached, opts.h_min, stencil)?,
+            noise_min,
+        )
     };
     let scale = adjoint.abs().max(estimate_used.abs());
     let relative_error = if scale > 0.0 {

@@ -81,7 +81,9 @@ pub fn check_sample_with(
             Steps::Fixed(h) => check_component(&|t| loss_at(k, t), l0, *g, h, stencil, crit),
             Steps::Adaptive(a) => {
                 let mut at = |t: f64| Ok::<f64, std::convert::Infallible>(loss_at(k, t));
-                match sdrs::diff::central::check_component_adaptive(&mut at, l0, *g, a, stencil, crit) {
+                match sdrs::diff::central::check_component_adaptive(
+                    &mut at, l0, *g, a, stencil, crit,
+                ) {
                     Ok(c) => c,
                     Err(e) => match e {},
                 }
