@@ -48,24 +48,12 @@ pub enum Steps {
 }
 
 /// Checks a sample of components (`vars`: name and adjoint value of each)
-/// with [`check_component`] at a fixed step `h` (`stencil`); `loss_at(k, t)`
-/// is the loss with the `k`-th variable moved by `t`, `l0 = L(0)`. Prints
-/// one line per component, prefixed by `label`. Returns how many are
-/// resolved and agree, and whether every component passes.
+/// at fixed or adaptive `steps` (`stencil`, relative criterion `crit`);
+/// `loss_at(k, t)` is the loss with the `k`-th variable moved by `t`,
+/// `l0 = L(0)`. Prints one line per component, prefixed by `label`.
+/// Returns how many are resolved and agree, and whether every component
+/// passes.
 pub fn check_sample(
-    label: &str,
-    vars: &[(String, f64)],
-    loss_at: &dyn Fn(usize, f64) -> f64,
-    l0: f64,
-    h: f64,
-    stencil: Stencil,
-    crit: f64,
-) -> (usize, bool) {
-    check_sample_with(label, vars, loss_at, l0, Steps::Fixed(h), stencil, crit)
-}
-
-/// [`check_sample`] with fixed or adaptive steps.
-pub fn check_sample_with(
     label: &str,
     vars: &[(String, f64)],
     loss_at: &dyn Fn(usize, f64) -> f64,
@@ -139,5 +127,5 @@ pub fn check_problem_sample(
         dt[idx[k]] += t;
         p.loss_value(&dt, c).unwrap()
     };
-    check_sample_with(label, &vars, &loss_at, ev.loss, steps, stencil, 1e-4)
+    check_sample(label, &vars, &loss_at, ev.loss, steps, stencil, 1e-4)
 }
