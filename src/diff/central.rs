@@ -182,37 +182,11 @@ pub fn check_component_with<E>(
     stencil: Stencil,
     crit: f64,
 ) -> Result<CentralCheck, E> {
-    let mut central = 0.0;
-    let (levels, steps, factor) = match stencil {
-        Stencil::Richardson { levels } => {
-            let mut var = 0.0;
-            for (k, &c) in richardson_coefficients(levels).iter().enumerate() {
-                let hk = h * 2f64.powi(k as i32);
-                central += c * (loss_at(hk)? - loss_at(-hk)?) / (2.0 * hk);
-                var += c * c / (2.0 * 4f64.powi(k as i32));
-            }
-            (levels, levels + 1, var.sqrt())
-        }
-        Stencil::Fit { steps, levels } => {
-            let steps = steps.max(levels + 1);
-            // The normal matrix of distinct abscissae is positive definite;
-            // were it not numerically, the estimate is NaN and the check
-            // fails (NaN is neither resolved nor within any band).
-            match fit_weights(steps, levels) {
-                Some((w, factor)) => {
-                    for (j, wj) in w.iter().enumerate() {
-                        let hj = h * (j + 1) as f64 / steps as f64;
-                        central += wj * (loss_at(hj)? - loss_at(-hj)?) / (2.0 * hj);
-                    }
-                    (levels, steps, factor)
-                }
-                None => {
-                    central = f64::NAN;
-                    (levels, steps, f64::NAN)
-                }
-            }
-        }
-    };
+    // A fit that cannot be made gives NaN, and the check fails (NaN is
+    // neither resolved nor within any band).
+    let central = estimate(loss_at, h, stencil)?;
+    let factor = noise_factor(stencil);
+    let (levels, steps) = shape(stencil);
     let loss_noise = loss_noise(loss_at, l0, h / 10.0)?;
     let central_noise = factor * loss_noise / h;
     let scale = adjoint.abs().max(central.abs());
@@ -249,12 +223,14 @@ fn estimate<E>(
     h: f64,
     stencil: Stencil,
 ) -> Result<f64, E> {
-    let mut d = |t: f64| -> Result<f64, E> { Ok((loss_at(t)? - loss_at(-t)?) / (2.0 * t)) };
+    // `w (L(t) − L(−t)) / 2t`, in this order (the fixed check's bits).
+    let mut term =
+        |w: f64, t: f64| -> Result<f64, E> { Ok(w * (loss_at(t)? - loss_at(-t)?) / (2.0 * t)) };
     match stencil {
         Stencil::Richardson { levels } => {
             let mut g = 0.0;
             for (k, &c) in richardson_coefficients(levels).iter().enumerate() {
-                g += c * d(h * 2f64.powi(k as i32))?;
+                g += term(c, h * 2f64.powi(k as i32))?;
             }
             Ok(g)
         }
@@ -265,7 +241,7 @@ fn estimate<E>(
             };
             let mut g = 0.0;
             for (j, wj) in w.iter().enumerate() {
-                g += wj * d(h * (j + 1) as f64 / steps as f64)?;
+                g += term(*wj, h * (j + 1) as f64 / steps as f64)?;
             }
             Ok(g)
         }
@@ -285,6 +261,15 @@ pub fn noise_factor(stencil: Stencil) -> f64 {
         Stencil::Fit { steps, levels } => {
             fit_weights(steps.max(levels + 1), levels).map_or(f64::NAN, |(_, f)| f)
         }
+    }
+}
+
+/// `(levels, differences)` of a stencil (a fit with `steps ≤ levels` is
+/// treated as `steps = levels + 1`).
+fn shape(stencil: Stencil) -> (usize, usize) {
+    match stencil {
+        Stencil::Richardson { levels } => (levels, levels + 1),
+        Stencil::Fit { steps, levels } => (levels, steps.max(levels + 1)),
     }
 }
 
@@ -379,13 +364,7 @@ pub fn check_component_adaptive<E>(
     } else {
         (estimate_used - adjoint).abs() <= crit * adjoint.abs() + 3.0 * noise_used
     };
-    let steps = match stencil {
-        Stencil::Richardson { levels } => levels + 1,
-        Stencil::Fit { steps, levels } => steps.max(levels + 1),
-    };
-    let levels = match stencil {
-        Stencil::Richardson { levels } | Stencil::Fit { levels, .. } => levels,
-    };
+    let (levels, steps) = shape(stencil);
     Ok(CentralCheck {
         adjoint,
         central: estimate_used,
