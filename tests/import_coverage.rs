@@ -6,6 +6,7 @@
 mod import_support;
 
 use import_support::*;
+use rayon::prelude::*;
 use sdrs::import::write::{OutputPaths, write_outputs};
 use sdrs::import::{ImportOptions, import};
 use std::path::Path;
@@ -19,7 +20,9 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
     let opts = ImportOptions::default();
     let mut inputs: Vec<std::path::PathBuf> = ROBOTS.iter().map(|r| robot_urdf(r)).collect();
     inputs.extend(object_meshes());
-    for (k, input) in inputs.iter().enumerate() {
+    // Inputs are independent: two at a time (each import and each trimesh
+    // check is single-threaded).
+    inputs.par_iter().enumerate().for_each(|(k, input)| {
         let imp = import(input, &opts).unwrap_or_else(|e| panic!("{e}"));
         for l in &imp.report.links {
             assert!(
@@ -45,7 +48,7 @@ fn authored_robots_cover_their_source_meshes_per_trimesh() {
             summary["links"].as_object().map(|m| m.len()).unwrap_or(0)
         );
         assert!(ok, "{}: {err}", input.display());
-    }
+    });
     let _ = std::fs::remove_dir_all(&dir);
 }
 

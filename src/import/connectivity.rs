@@ -202,6 +202,22 @@ fn analyse_pair(a: &DesignHull, b: &DesignHull, scale: f64) -> PairResult {
     PairResult::Gap(d.point, d.margin)
 }
 
+/// Whether a face plane of one hull has every vertex of the other more than
+/// `gap` outside it. Such a pair is neither overlapping nor touching (a
+/// vertex within 1e-12·L of the other hull is at least `gap` − 1e-12·L
+/// from the plane's far side), so it can only be a gap; gaps are analysed
+/// only when a link's groups need bridging (the loop over separate groups
+/// in [`connect_link`] takes every pair that has no gap yet).
+fn plane_separates(a: &DesignHull, b: &DesignHull, gap: f64) -> bool {
+    let beyond = |p: &DesignHull, q: &DesignHull| {
+        p.poly
+            .planes
+            .iter()
+            .any(|(n, c)| q.poly.vertices.iter().all(|v| n.dot(v) - c > gap))
+    };
+    beyond(a, b) || beyond(b, a)
+}
+
 fn boxes_meet(a: &DesignHull, b: &DesignHull, tol: f64) -> bool {
     let (la, ha) = bounds(&a.poly.vertices);
     let (lb, hb) = bounds(&b.poly.vertices);
@@ -217,7 +233,9 @@ pub fn connect_link(hulls: &mut [DesignHull], bridge_gaps: bool) -> LinkConnecti
     let mut gaps: Vec<(f64, usize, usize, Vector3<f64>)> = Vec::new();
     for i in 0..n {
         for j in i + 1..n {
-            if !boxes_meet(&hulls[i], &hulls[j], 1e-9 * scale) {
+            if !boxes_meet(&hulls[i], &hulls[j], 1e-9 * scale)
+                || plane_separates(&hulls[i], &hulls[j], 1e-6 * scale)
+            {
                 continue;
             }
             match analyse_pair(&hulls[i], &hulls[j], scale) {

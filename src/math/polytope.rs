@@ -347,6 +347,13 @@ impl Polytope {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Whether `p` is inside or on the boundary: `violation(p) ≤ 0`
+    /// exactly (the same plane values; it stops at the first plane that `p`
+    /// is outside of).
+    pub fn contains(&self, p: &Vector3<f64>) -> bool {
+        !self.planes.iter().any(|(n, b)| n.dot(p) - b > 0.0)
+    }
+
     /// Euclidean distance from `p` to the polytope (0 inside).
     pub fn distance(&self, p: &Vector3<f64>) -> f64 {
         if self.violation(p) <= 0.0 {
