@@ -53,6 +53,10 @@ pub struct ImportArgs {
     /// Write the import report (JSON) here.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Decomposition cache: reuse V-HACD results stored in this directory (same mesh, same
+    /// decomposition options, same sdrs version) and store new ones there [default: none].
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
     /// Replace existing outputs.
     #[arg(long)]
     pub force: bool,
@@ -213,6 +217,7 @@ impl ImportArgs {
             density: self.density,
             bridge_gaps: !self.no_bridge,
             ties: self.ties.into(),
+            cache: self.cache.clone(),
             ..ImportOptions::default()
         };
         ImportJob {

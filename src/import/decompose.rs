@@ -31,6 +31,7 @@
 //!   1e-6 relative); otherwise an error.
 
 use super::ImportOptions;
+use super::cache::DiskCache;
 use super::error::ImportError;
 use super::mesh::{MeshContext, TriMesh};
 use super::polytope::{Polytope, convex_hull};
@@ -105,13 +106,30 @@ impl std::str::FromStr for HullPoints {
 /// hull budget: a robot's repeated parts (a quadruped's four legs, a
 /// gripper's two fingers) are decomposed once. Every decomposer is
 /// deterministic (V-HACD runs sequentially, CoACD with a fixed seed), so a
-/// hit returns exactly what a new run would; failures are not kept.
+/// hit returns exactly what a new run would; failures are not kept. With
+/// [`ImportOptions::cache`], V-HACD results also come from and go to the
+/// disk cache ([`super::cache`]).
 #[derive(Default)]
-pub struct Memo(std::collections::HashMap<MemoKey, Vec<Polytope>>);
+pub struct Memo {
+    seen: std::collections::HashMap<MemoKey, Vec<Polytope>>,
+    disk: Option<DiskCache>,
+}
 
 type MemoKey = (Decomposer, usize, Vec<[u64; 3]>, Vec<[usize; 3]>);
 
 impl Memo {
+    /// An empty memo for one import with `opts` (opening its disk cache).
+    pub fn new(opts: &ImportOptions) -> Result<Memo, ImportError> {
+        let disk = match &opts.cache {
+            Some(dir) if DiskCache::caches(opts.decomposer) => Some(DiskCache::open(dir)?),
+            _ => None,
+        };
+        Ok(Memo {
+            seen: Default::default(),
+            disk,
+        })
+    }
+
     /// [`decompose`], or the stored result of the same call.
     pub fn decompose(
         &mut self,
@@ -127,11 +145,21 @@ impl Memo {
             mesh.vertices.iter().map(bits).collect(),
             mesh.triangles.clone(),
         );
-        if let Some(parts) = self.0.get(&key) {
+        if let Some(parts) = self.seen.get(&key) {
             return Ok(parts.clone());
         }
-        let parts = decompose(mesh, opts, max_hulls, ctx)?;
-        self.0.insert(key, parts.clone());
+        let disk = self.disk.as_ref().filter(|_| DiskCache::caches(opts.decomposer));
+        let parts = match disk.and_then(|d| d.load(mesh, opts, max_hulls)) {
+            Some(parts) => parts,
+            None => {
+                let parts = decompose(mesh, opts, max_hulls, ctx)?;
+                if let Some(d) = disk {
+                    d.store(mesh, opts, max_hulls, &parts)?;
+                }
+                parts
+            }
+        };
+        self.seen.insert(key, parts.clone());
         Ok(parts)
     }
 }

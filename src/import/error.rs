@@ -84,6 +84,9 @@ pub enum ImportError {
     },
     #[error("{msg}")]
     Python { msg: String },
+    /// The decomposition cache (`--cache`) could not be used.
+    #[error("{}: {msg}", path.display())]
+    Cache { path: PathBuf, msg: String },
     /// An option value no import can use; the message names the option.
     #[error("{msg}")]
     Options { msg: String },

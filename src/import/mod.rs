@@ -16,6 +16,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod assemble;
+pub mod cache;
 pub mod collada;
 pub mod connectivity;
 pub mod decompose;
@@ -101,6 +102,10 @@ pub struct ImportOptions {
     pub volume_grid: usize,
     /// Seed for sampling and CoACD. Default 0.
     pub seed: u64,
+    /// Directory of the decomposition cache ([`cache`]): V-HACD results
+    /// are read from it when the mesh and every option they depend on
+    /// match, and new ones are stored there. Default `None` (no cache).
+    pub cache: Option<std::path::PathBuf>,
 }
 
 /// The value of `options` whose `name` is `s` (ASCII case ignored), or a
@@ -148,6 +153,7 @@ impl Default for ImportOptions {
             coverage_samples: 2000,
             volume_grid: 48,
             seed: 0,
+            cache: None,
         }
     }
 }
@@ -308,8 +314,7 @@ fn link_geometry(
         Some(d) if opts.decomposer == decompose::Decomposer::Grid && !d.contains(&link.name) => {
             grid_opts = ImportOptions {
                 decomposer: decompose::Decomposer::Hull,
-                designable: opts.designable.clone(),
-                ..*opts
+                ..opts.clone()
             };
             &grid_opts
         }
@@ -473,7 +478,7 @@ fn build(
     let n = src.links.len();
     progress.start(n as u64, "links");
     let mut geoms = Vec::with_capacity(n);
-    let mut memo = decompose::Memo::default();
+    let mut memo = decompose::Memo::new(opts)?;
     for li in 0..n {
         progress.message(&src.links[li].name);
         let g = link_geometry(&src, li, opts, &mut memo);
