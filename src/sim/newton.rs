@@ -520,7 +520,8 @@ impl Solve<'_> {
             .obj
             .max_step(q, &self.scratch.dir, self.timers)?
             .clamp(0.0, 1.0);
-        let t0 = std::time::Instant::now();
+        // Clock readings only with detailed timers (`StageTimers::set_detailed`).
+        let t0 = self.timers.start_laps();
         let mut in_evals = std::time::Duration::ZERO;
         let mut start = alpha_max;
         let mut cut = false;
@@ -537,9 +538,9 @@ impl Solve<'_> {
             }
             // Continuous collision detection of the accepted segment
             // `q → q + α Δ` (see `Objective::certify`).
-            let tc = std::time::Instant::now();
+            let tc = self.timers.start_laps();
             let certified = self.obj.certify(q, &self.scratch.dir, alpha, self.timers)?;
-            in_evals += tc.elapsed();
+            in_evals += tc.map_or(std::time::Duration::ZERO, |t| t.elapsed());
             if certified >= alpha {
                 break true;
             }
@@ -547,8 +548,10 @@ impl Solve<'_> {
             cut = true;
             start = certified.max(0.0);
         };
-        self.timers
-            .add(Stage::LineSearch, t0.elapsed().saturating_sub(in_evals));
+        if let Some(t0) = t0 {
+            self.timers
+                .add(Stage::LineSearch, t0.elapsed().saturating_sub(in_evals));
+        }
         Ok(accepted)
     }
 
@@ -564,11 +567,11 @@ impl Solve<'_> {
         let s = &mut *self.scratch;
         s.trial.clone_from(q);
         s.trial.axpy(alpha, &s.dir, 1.0);
-        let te = std::time::Instant::now();
+        let te = self.timers.start_laps();
         let v = self
             .obj
             .eval(&s.trial, need, &mut s.trial_grad, &mut s.hess, self.timers)?;
-        *in_evals += te.elapsed();
+        *in_evals += te.map_or(std::time::Duration::ZERO, |t| t.elapsed());
         Ok(v)
     }
 
