@@ -94,15 +94,25 @@ fn a_cached_import_writes_the_same_files_as_a_new_one() {
     );
     let second = import(&dir.join("second"), Some(&cache));
     assert_eq!(entries(&cache), stored, "a hit must not add entries");
-    assert!(plain.len() >= 3, "{:?}", plain.iter().map(|f| &f.0).collect::<Vec<_>>());
-    for (name, run) in [("first (cache misses)", &first), ("second (cache hits)", &second)] {
+    assert!(
+        plain.len() >= 3,
+        "{:?}",
+        plain.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for (name, run) in [
+        ("first (cache misses)", &first),
+        ("second (cache hits)", &second),
+    ] {
         assert_eq!(
             run.iter().map(|f| &f.0).collect::<Vec<_>>(),
             plain.iter().map(|f| &f.0).collect::<Vec<_>>(),
             "{name}: other files"
         );
         for ((n, a), (_, b)) in run.iter().zip(&plain) {
-            assert!(a == b, "{name}: {n} differs from the import without a cache");
+            assert!(
+                a == b,
+                "{name}: {n} differs from the import without a cache"
+            );
         }
     }
     // A damaged entry is a miss: recomputed, rewritten, same output.
@@ -111,7 +121,11 @@ fn a_cached_import_writes_the_same_files_as_a_new_one() {
     std::fs::write(victim, &good[..good.len() / 2]).unwrap();
     let third = import(&dir.join("third"), Some(&cache));
     assert!(third == plain, "an import over a damaged entry differs");
-    assert_eq!(std::fs::read(victim).unwrap(), good, "the damaged entry was not rewritten");
+    assert_eq!(
+        std::fs::read(victim).unwrap(),
+        good,
+        "the damaged entry was not rewritten"
+    );
 }
 
 #[test]

@@ -170,7 +170,12 @@ fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_fixed_and_a_float
         }
     });
     let (mut refused, mut exports) = (vec![Vec::new(), Vec::new()], Vec::new());
-    for (rel, both) in results.into_inner().unwrap().into_iter().map(Option::unwrap) {
+    for (rel, both) in results
+        .into_inner()
+        .unwrap()
+        .into_iter()
+        .map(Option::unwrap)
+    {
         for (b, outcome) in both.into_iter().enumerate() {
             match outcome {
                 Outcome::Refused(r) => refused[b].push(r),
@@ -186,6 +191,11 @@ fn every_pybullet_urdf_imports_and_stands_on_the_ground_with_a_fixed_and_a_float
             files.len(),
             refused[b]
         );
-        assert_eq!(refused[b].len(), REFUSED.len(), "{base} base: {:?}", refused[b]);
+        assert_eq!(
+            refused[b].len(),
+            REFUSED.len(),
+            "{base} base: {:?}",
+            refused[b]
+        );
     }
 }

@@ -14,8 +14,10 @@
 //! falls back to `Jᵀr` from its finite-difference Jacobian.
 
 use super::problem::{Candidate, Problem};
-use crate::diff::{Loss, LossTerm, backward, record};
+use crate::diff::{Loss, LossTerm, Tape, backward};
 use crate::energy::effects::{self, EffectKind, Target};
+use crate::scene::Scene;
+use crate::sim::Simulator;
 use std::collections::BTreeMap;
 
 /// Training residuals and their exact gradient `Jᵀr` at `p`; with several
@@ -27,23 +29,24 @@ pub fn residual_gradient(
     cand: &Candidate,
     p: &[f64],
 ) -> Option<(Vec<f64>, Vec<f64>)> {
-    let (mut r, mut g) = own_residual_gradient(pb, cand, p)?;
-    for o in pb.others {
-        let (ro, go) = pb.with_other(o, |q| own_residual_gradient(q, cand, p))?;
-        r.extend(ro);
-        for (a, b) in g.iter_mut().zip(go) {
-            *a += b;
-        }
-    }
-    Some((r, g))
+    let (r, rec) = residuals_recorded(pb, cand, p)?;
+    Some((r, gradient(pb, cand, p, &mut rec?)?))
 }
 
-/// [`residual_gradient`] of the first recording alone.
-fn own_residual_gradient(
+/// The forward passes at one parameter vector, kept for [`gradient`]: per
+/// recording, the scene with the candidate's effects, the simulator after
+/// the run and its tape.
+pub struct Recorded(Vec<(Scene, Simulator, Tape)>);
+
+/// [`Problem::train_residuals`] at `p` (the same values: the same runs),
+/// with the runs recorded for [`gradient`] when the adjoint applies (`None`
+/// beside the residuals when a channel is a charted rotation). `None` when a
+/// simulation fails or a residual is not finite.
+pub fn residuals_recorded(
     pb: &Problem,
     cand: &Candidate,
     p: &[f64],
-) -> Option<(Vec<f64>, Vec<f64>)> {
+) -> Option<(Vec<f64>, Option<Recorded>)> {
     let model = &pb.scene.model;
     if pb
         .measured
@@ -51,12 +54,60 @@ fn own_residual_gradient(
         .iter()
         .any(|c| model.links[model.dofs[c.dof].link].joint.has_chart())
     {
-        return None;
+        return Some((pb.train_residuals(cand, p)?, None));
     }
-    let specs = cand.specs(p);
-    let sc = pb.scene_with(&specs)?;
-    let mut sim = sc.simulator();
-    let tape = record(&mut sim, pb.steps_to(pb.split)).ok()?;
+    let mut runs = Vec::with_capacity(1 + pb.others.len());
+    let mut r = own_recorded(pb, cand, p, &mut runs)?;
+    for o in pb.others {
+        r.extend(pb.with_other(o, |q| own_recorded(q, cand, p, &mut runs))?);
+    }
+    Some((r, Some(Recorded(runs))))
+}
+
+/// One recording's training residuals (as [`Problem::train_residuals`]
+/// computes them), its run pushed onto `runs`.
+fn own_recorded(
+    pb: &Problem,
+    cand: &Candidate,
+    p: &[f64],
+    runs: &mut Vec<(Scene, Simulator, Tape)>,
+) -> Option<Vec<f64>> {
+    let sc = pb.scene_with(&cand.specs(p))?;
+    let (simulated, sim, tape) = pb.simulate_scene_recorded(&sc, pb.steps_to(pb.split))?;
+    let mut r = Vec::new();
+    pb.residuals(&simulated, 0..pb.split, &mut r);
+    runs.push((sc, sim, tape));
+    r.iter().all(|x| x.is_finite()).then_some(r)
+}
+
+/// The exact `Jᵀr` at `p` from the runs `rec` recorded there by
+/// [`residuals_recorded`] (one backward pass per recording, gradients
+/// summed); `None` when a term cannot be differentiated.
+pub fn gradient(pb: &Problem, cand: &Candidate, p: &[f64], rec: &mut Recorded) -> Option<Vec<f64>> {
+    let mut runs = rec.0.iter_mut();
+    let (sc, sim, tape) = runs.next()?;
+    let mut g = own_gradient(pb, cand, p, sc, sim, tape)?;
+    for o in pb.others {
+        let (sc, sim, tape) = runs.next()?;
+        let go = pb.with_other(o, |q| own_gradient(q, cand, p, sc, sim, tape))?;
+        for (a, b) in g.iter_mut().zip(go) {
+            *a += b;
+        }
+    }
+    Some(g)
+}
+
+/// One recording's `Jᵀr` from its run.
+fn own_gradient(
+    pb: &Problem,
+    cand: &Candidate,
+    p: &[f64],
+    sc: &Scene,
+    sim: &mut Simulator,
+    tape: &Tape,
+) -> Option<Vec<f64>> {
+    let model = &pb.scene.model;
+    let specs_len = cand.specs(p).len();
     let mut offset = vec![0.0; model.ndof()];
     for (dofs, b) in effects::offsets(&sc.effects) {
         for &k in dofs {
@@ -66,7 +117,6 @@ fn own_residual_gradient(
     let dt = sc.settings.dt;
     let h = tape.len();
     let mut coef: BTreeMap<(usize, usize), f64> = BTreeMap::new();
-    let mut r = Vec::new();
     let mut sum_r = vec![0.0; model.ndof()];
     for i in 0..pb.split {
         let t = pb.measured.times[i];
@@ -82,7 +132,6 @@ fn own_residual_gradient(
                 (1.0 - w) * qa + w * tape.coords(k as isize + 1).0[ch.dof]
             };
             let ri = v + offset[ch.dof] - y;
-            r.push(ri);
             sum_r[ch.dof] += ri;
             *coef.entry((k, ch.dof)).or_default() += (1.0 - w) * ri;
             if w != 0.0 {
@@ -96,12 +145,12 @@ fn own_residual_gradient(
             .map(|((level, dof), coef)| LossTerm::JointLinear { dof, level, coef })
             .collect(),
     };
-    let grads = backward(&mut sim, &tape, &loss).ok()?;
+    let grads = backward(sim, tape, &loss).ok()?;
     if !grads.unavailable.is_empty() {
         return None;
     }
     let all = crate::diff::effects::gradient(&sc.effects, &sim.controller, &grads);
-    let first = sc.effects.len() - specs.len();
+    let first = sc.effects.len() - specs_len;
     let mut g = Vec::with_capacity(p.len());
     for e in &sc.effects[first..] {
         match (e.kind, &e.target) {
@@ -109,5 +158,5 @@ fn own_residual_gradient(
             _ => g.extend_from_slice(&all[e.slot..e.slot + e.values.len()]),
         }
     }
-    Some((r, g))
+    Some(g)
 }

@@ -11,7 +11,9 @@
 //! parameter; candidates have 1–4 parameters, and the residual count is far
 //! larger than the parameter count, so adjoint rows would cost more); the
 //! right-hand side `Jᵀr = ∂(½‖r‖²)/∂p` is exact, from one adjoint pass
-//! ([`super::adjoint`], FD-tested in `tests/calibrate_fit_gradient.rs`). Several starts;
+//! ([`super::adjoint`], FD-tested in `tests/calibrate_fit_gradient.rs`)
+//! over the run that evaluated the residuals (recorded as it ran, so the
+//! gradient costs a backward pass and no further simulation). Several starts;
 //! the best end point wins (ties: the first start, so results are
 //! deterministic).
 //!
@@ -108,6 +110,22 @@ fn sq(r: &[f64]) -> f64 {
     r.iter().map(|x| x * x).sum()
 }
 
+/// The training residuals at `p`; with [`FitOptions::adjoint_gradient`] the
+/// runs are recorded as well, so that the exact `Jᵀr` at an accepted point
+/// needs only the backward pass (the forward one is this evaluation's).
+fn evaluate(
+    pb: &Problem,
+    cand: &Candidate,
+    p: &[f64],
+    opts: &FitOptions,
+) -> Option<(Vec<f64>, Option<super::adjoint::Recorded>)> {
+    if opts.adjoint_gradient {
+        super::adjoint::residuals_recorded(pb, cand, p)
+    } else {
+        Some((pb.train_residuals(cand, p)?, None))
+    }
+}
+
 /// Fits `cand` from one start; `None` when the start cannot be simulated.
 fn fit_from(
     pb: &Problem,
@@ -120,7 +138,7 @@ fn fit_from(
     let mut p = start.to_vec();
     clamp(cand, &mut p);
     *sims += 1;
-    let mut r = pb.train_residuals(cand, &p)?;
+    let (mut r, mut rec) = evaluate(pb, cand, &p, opts)?;
     let mut cost = sq(&r);
     let mut lambda = 1e-3;
     for _ in 0..opts.max_iters {
@@ -131,12 +149,10 @@ fn fit_from(
         if gn_start.is_none() {
             *gn_start = Some(a.clone());
         }
-        let exact = if opts.adjoint_gradient {
-            *sims += 1;
-            super::adjoint::residual_gradient(pb, cand, &p).map(|(_, g)| DVector::from_vec(g))
-        } else {
-            None
-        };
+        let exact = rec
+            .as_mut()
+            .and_then(|t| super::adjoint::gradient(pb, cand, &p, t))
+            .map(DVector::from_vec);
         let g = exact.unwrap_or_else(|| j.transpose() * DVector::from_column_slice(&r));
         let mut accepted = false;
         let k = p.len();
@@ -171,12 +187,13 @@ fn fit_from(
                 return Some((p, cost, r));
             }
             *sims += 1;
-            if let Some(rq) = pb.train_residuals(cand, &q) {
+            if let Some((rq, rec_q)) = evaluate(pb, cand, &q, opts) {
                 let c = sq(&rq);
                 if rq.len() == r.len() && c < cost {
                     let gain = (cost - c) / cost.max(1e-300);
                     p = q;
                     r = rq;
+                    rec = rec_q;
                     cost = c;
                     lambda = (lambda / 3.0).max(1e-12);
                     accepted = true;

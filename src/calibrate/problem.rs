@@ -8,8 +8,10 @@
 //! linearly at `t_i`, `b_c` the candidate's encoder offsets (0 otherwise).
 
 use super::data::{Measured, interpolate};
+use crate::diff::{Tape, tape::record_observed};
 use crate::energy::effects::{self, Effect, EffectKind, EffectSpec};
 use crate::scene::Scene;
+use crate::sim::Simulator;
 use nalgebra::DVector;
 
 /// One effect of a candidate, with the positions of its values in the
@@ -146,6 +148,23 @@ pub struct Problem<'a> {
     pub others: &'a [Recording],
 }
 
+/// A run's reported coordinates and contact flags with `sc`'s encoder
+/// offsets.
+fn simulated(sc: &Scene, states: Vec<DVector<f64>>, contact: Vec<bool>) -> Simulated {
+    let mut offset = vec![0.0; sc.model.ndof()];
+    for (dofs, b) in effects::offsets(&sc.effects) {
+        for &k in dofs {
+            offset[k] += b;
+        }
+    }
+    Simulated {
+        dt: sc.settings.dt,
+        states,
+        contact,
+        offset,
+    }
+}
+
 impl<'a> Problem<'a> {
     /// Steps needed to reach sample `end − 1`.
     pub fn steps_to(&self, end: usize) -> usize {
@@ -177,21 +196,29 @@ impl<'a> Problem<'a> {
     pub fn simulate_scene(&self, sc: &Scene, steps: usize) -> Option<Simulated> {
         let mut sim = sc.simulator();
         let traj = crate::sim::run::run(&mut sim, steps, |_| {}).ok()?;
-        let n = sc.model.ndof();
-        let mut offset = vec![0.0; n];
-        for (dofs, b) in effects::offsets(&sc.effects) {
-            for &k in dofs {
-                offset[k] += b;
-            }
-        }
         let mut contact = vec![false];
         contact.extend(traj.diagnostics.iter().map(|d| d.contact_pairs > 0));
-        Some(Simulated {
-            dt: sc.settings.dt,
-            states: traj.states,
-            contact,
-            offset,
+        Some(simulated(sc, traj.states, contact))
+    }
+
+    /// As [`Problem::simulate_scene`], also recording the run for the
+    /// backward pass: the simulator after the run and its tape (the same
+    /// trajectory, from the same single run).
+    pub fn simulate_scene_recorded(
+        &self,
+        sc: &Scene,
+        steps: usize,
+    ) -> Option<(Simulated, Simulator, Tape)> {
+        let mut sim = sc.simulator();
+        let (mut states, mut contact) = (Vec::with_capacity(steps + 1), vec![false]);
+        let tape = record_observed(&mut sim, steps, |_, sim, d| {
+            states.push(sim.state.reported_q(&sim.model));
+            if let Some(d) = d {
+                contact.push(d.contact_pairs > 0);
+            }
         })
+        .ok()?;
+        Some((simulated(sc, states, contact), sim, tape))
     }
 
     /// Residuals over samples `range` (appended to `out`).

@@ -1,7 +1,7 @@
 //! The forward pass with everything the backward pass needs.
 
 use crate::sim::run::run_observed;
-use crate::sim::{SimState, Simulator, StepError};
+use crate::sim::{SimState, Simulator, StepDiagnostics, StepError};
 use nalgebra::{DVector, Matrix3};
 use std::ops::ControlFlow;
 
@@ -48,12 +48,23 @@ impl Tape {
 /// recorder and stream uses); this observer keeps, per step, the state it
 /// started from and its solution.
 pub fn record(sim: &mut Simulator, steps: usize) -> Result<Tape, StepError> {
+    record_observed(sim, steps, |_, _, _| {})
+}
+
+/// As [`record`], also calling `also` as [`run_observed`]'s observer would be
+/// (after the tape has taken the step): one run serves both, and the
+/// trajectory is the one a plain run gives.
+pub fn record_observed(
+    sim: &mut Simulator,
+    steps: usize,
+    mut also: impl FnMut(usize, &Simulator, Option<&StepDiagnostics>),
+) -> Result<Tape, StepError> {
     let mut tape = Tape {
         steps: Vec::with_capacity(steps),
         dt: sim.settings.dt,
     };
     let mut before = sim.state.clone();
-    run_observed(sim, steps, |k, sim, _| {
+    run_observed(sim, steps, |k, sim, d| {
         if k > 0 {
             // The solution in the chart it was solved in: `sim.state.q` may
             // have been re-centred after acceptance; poses are
@@ -63,6 +74,7 @@ pub fn record(sim: &mut Simulator, steps: usize) -> Result<Tape, StepError> {
             let before = std::mem::replace(&mut before, sim.state.clone());
             tape.steps.push(StepRecord { before, q_new });
         }
+        also(k, sim, d);
         ControlFlow::Continue(())
     })?;
     Ok(tape)

@@ -18,11 +18,11 @@
 //! Only V-HACD is cached: CoACD runs in an external Python package whose
 //! version this key cannot see, and the other decomposers are cheap.
 
+use super::ImportOptions;
 use super::decompose::{Decomposer, HullPoints};
 use super::error::ImportError;
 use super::mesh::TriMesh;
 use super::polytope::Polytope;
-use super::ImportOptions;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
@@ -56,7 +56,12 @@ impl DiskCache {
 
     /// The stored hulls of `mesh` decomposed with `opts` and `max_hulls`, or
     /// `None` (no entry, or one whose key differs).
-    pub fn load(&self, mesh: &TriMesh, opts: &ImportOptions, max_hulls: usize) -> Option<Vec<Polytope>> {
+    pub fn load(
+        &self,
+        mesh: &TriMesh,
+        opts: &ImportOptions,
+        max_hulls: usize,
+    ) -> Option<Vec<Polytope>> {
         let key = key_bytes(mesh, opts, max_hulls);
         let bytes = std::fs::read(self.entry(&key)).ok()?;
         let rest = bytes.strip_prefix(key.as_slice())?;
@@ -221,7 +226,9 @@ mod tests {
     fn cube_mesh(s: f64) -> TriMesh {
         let h = convex_hull(
             &(0..8)
-                .map(|i| Vector3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64) * s)
+                .map(|i| {
+                    Vector3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64) * s
+                })
                 .collect::<Vec<_>>(),
         )
         .unwrap();
@@ -264,7 +271,11 @@ mod tests {
         };
         assert!(cache.load(&mesh, &o(&|o| o.resolution = 32), 16).is_none());
         assert!(cache.load(&mesh, &o(&|o| o.threshold = 0.02), 16).is_none());
-        assert!(cache.load(&mesh, &o(&|o| o.hull_points = HullPoints::Mesh), 16).is_none());
+        assert!(
+            cache
+                .load(&mesh, &o(&|o| o.hull_points = HullPoints::Mesh), 16)
+                .is_none()
+        );
         // Options the decomposition does not read share the entry.
         assert!(cache.load(&mesh, &o(&|o| o.density = 500.0), 16).is_some());
         // A damaged entry (truncated, or with bytes appended) is a miss.
@@ -286,7 +297,10 @@ mod tests {
         let file = std::env::temp_dir().join(format!("sdrs-cache-file-{}", std::process::id()));
         std::fs::write(&file, b"not a directory").unwrap();
         let err = DiskCache::open(&file.join("sub")).unwrap_err().to_string();
-        assert!(err.contains("sdrs-cache-file") && err.contains("cache directory"), "{err}");
+        assert!(
+            err.contains("sdrs-cache-file") && err.contains("cache directory"),
+            "{err}"
+        );
         let _ = std::fs::remove_file(&file);
     }
 

@@ -148,7 +148,10 @@ impl Memo {
         if let Some(parts) = self.seen.get(&key) {
             return Ok(parts.clone());
         }
-        let disk = self.disk.as_ref().filter(|_| DiskCache::caches(opts.decomposer));
+        let disk = self
+            .disk
+            .as_ref()
+            .filter(|_| DiskCache::caches(opts.decomposer));
         let parts = match disk.and_then(|d| d.load(mesh, opts, max_hulls)) {
             Some(parts) => parts,
             None => {
