@@ -6,7 +6,7 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use support::{root, scratch_dir, sdrs};
+use support::{root, run_ok, scratch_dir, sdrs};
 
 /// Imports the spider (four legs of mesh links) into `out_dir`, through
 /// `cache` when given; the files written, by name.
@@ -20,15 +20,7 @@ fn import(out_dir: &Path, cache: Option<&Path>) -> Vec<(String, Vec<u8>)> {
     if let Some(c) = cache {
         cmd.arg("--cache").arg(c);
     }
-    let out = cmd
-        .arg(root().join("robots/spider/spider.urdf"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(cmd.arg(root().join("robots/spider/spider.urdf")));
     files(out_dir)
 }
 

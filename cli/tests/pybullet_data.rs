@@ -14,7 +14,7 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use support::{pybullet_data, python, root, scratch_dir, sdrs};
+use support::{pybullet_data, python, root, run_ok, scratch_dir, sdrs};
 
 /// Files refused, and the reason their error must name.
 const REFUSED: &[(&str, &str)] = &[
@@ -82,18 +82,13 @@ fn run_one(dir: &Path, cache: &Path, k: usize, urdf: &Path, rel: &str, base: &st
     }
     let export = dir.join(format!("r{k}_{base}_export"));
     let json = dir.join(format!("r{k}_{base}.json"));
-    let out = sdrs()
-        .args(["simulate", "-q", "--steps", "200", "--json"])
-        .arg(&json)
-        .arg("--export")
-        .arg(&export)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{rel} ({base} base): {}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        sdrs()
+            .args(["simulate", "-q", "--steps", "200", "--json"])
+            .arg(&json)
+            .arg("--export")
+            .arg(&export)
+            .arg(&scene),
     );
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
