@@ -16,7 +16,7 @@ use super::envelope::ColumnEnvelope;
 use crate::energy::{EnergyAccumulator, Need, PoseHessian};
 use crate::kinematics::Kinematics;
 use crate::math::homogeneous;
-use crate::math::{frob, twist_apply, twist_mul};
+use crate::math::{frob, twist_apply};
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix};
 
@@ -28,6 +28,8 @@ pub struct AssembleScratch {
     jac: Vec<SMatrix<f64, 12, 1>>,
     jac2: Vec<SMatrix<f64, 12, 1>>,
     hj: Vec<SMatrix<f64, 12, 1>>,
+    /// `(ω_k, v_k)` of every coordinate's twist ([`twist_vector`]).
+    twist6: Vec<[f64; 6]>,
     envelope: ColumnEnvelope,
     /// Address and size of the buffer the last Hessian was written into.
     written: Option<(usize, usize)>,
@@ -99,17 +101,16 @@ pub fn assemble(
     add_link_blocks(model, kin, acc, hess, scratch);
     if acc.link_moment_set {
         fill_composites(model, kin, acc, &mut scratch.composite);
-        add_composite_terms(model, kin, hess, scratch);
     }
+    add_tree_terms(model, kin, acc.link_moment_set, hess, scratch);
     for (i, j, h) in &acc.pair_hess {
         add_pair_block(model, kin, *i, *j, h, hess, scratch);
     }
-    add_second_order(model, kin, hess, scratch);
+    mirror_upper(&scratch.envelope, hess);
 }
 
-/// First-order part of the diagonal link blocks, `J_iᵀ H_ii J_i` (both
-/// triangles, each entry's two copies with the same additions in the same
-/// order: the Hessian stays exactly symmetric).
+/// First-order part of the diagonal link blocks, `J_iᵀ H_ii J_i`, into the
+/// upper triangle (`k ≤ l`; the ancestor list is ascending).
 fn add_link_blocks(
     model: &Model,
     kin: &Kinematics,
@@ -126,13 +127,9 @@ fn add_link_blocks(
         let h = &acc.link_hess[i];
         scratch.hj.clear();
         scratch.hj.extend(scratch.jac.iter().map(|c| h * c));
-        for (a, &k) in anc.iter().enumerate() {
-            for (b, &l) in anc.iter().enumerate().skip(a) {
-                let v = scratch.jac[a].dot(&scratch.hj[b]);
-                hess[(k, l)] += v;
-                if k != l {
-                    hess[(l, k)] += v;
-                }
+        for (b, &l) in anc.iter().enumerate() {
+            for (a, &k) in anc.iter().enumerate().take(b + 1) {
+                hess[(k, l)] += scratch.jac[a].dot(&scratch.hj[b]);
             }
         }
     }
@@ -158,41 +155,33 @@ fn fill_composites(
     }
 }
 
-/// Structured first-order part `W_i ⊗ I₃` (inertia) through the subtree
-/// composites: `⟨S_k, S_l C_b⟩` for each coordinate `l` of joint `b` and
-/// each coordinate `k ≤ l` of `b` or of its ancestors.
-fn add_composite_terms(
+/// The terms that follow the tree, into the upper triangle: for each
+/// coordinate `l` of joint `b` and each coordinate `k ≤ l` of `b` or of its
+/// ancestors,
+///
+/// - the structured first-order part `⟨S_k, S_l C_b⟩` (when `composites`);
+/// - the second-order kinematic part: `⟨S_k S_l, Q_b⟩ = ⟨R_k, Q_b S_lᵀ⟩`
+///   for a proper ancestor `k` (`R_k` the rotational 3×3 of `S_k`, and
+///   `S_k S_l` means `R_k S_l`, see `crate::math::twist_mul`), `⟨S_kl, Q_b⟩`
+///   within joint `b`.
+///
+/// For a proper ancestor both parts are one product `⟨S_k, Z_l⟩` with
+/// `Z_l = S_l C_b + [Q_b S_lᵀ | 0]`, formed once per `l`; and since `R_k`
+/// is skew-symmetric (`R_k = [ω_k]×`, `S_k = [[ω_k]× | v_k]`),
+/// `⟨S_k, Z⟩ = ω_k · ax(Z) + v_k · z₄` with `ax(Z) = (Z₂₁ − Z₁₂, Z₀₂ − Z₂₀,
+/// Z₁₀ − Z₀₁)` and `z₄` the last column: six multiplications per entry,
+/// like the composite-rigid-body algorithm's `S_kᵀ F_l`.
+fn add_tree_terms(
     model: &Model,
     kin: &Kinematics,
+    composites: bool,
     hess: &mut DMatrix<f64>,
-    scratch: &AssembleScratch,
+    scratch: &mut AssembleScratch,
 ) {
-    for (b, link) in model.links.iter().enumerate() {
-        let ob = link.dof_offset;
-        for l in ob..ob + link.ndof() {
-            let y = kin.twist[l] * scratch.composite[b];
-            for &k in &model.ancestor_dofs[b] {
-                if k > l {
-                    break; // same-joint pairs once (k ≤ l)
-                }
-                let v = frob(&kin.twist[k], &y);
-                hess[(k, l)] += v;
-                if k != l {
-                    hess[(l, k)] += v;
-                }
-            }
-        }
-    }
-}
-
-/// Second-order kinematic part: `⟨Q_b, S_kl⟩` within joint `b`,
-/// `⟨Q_b, S_k S_l⟩` for a coordinate `k` of a proper ancestor of `b`.
-fn add_second_order(
-    model: &Model,
-    kin: &Kinematics,
-    hess: &mut DMatrix<f64>,
-    scratch: &AssembleScratch,
-) {
+    scratch.twist6.clear();
+    scratch.twist6.extend(kin.twist.iter().map(twist_vector));
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
     for (b, link) in model.links.iter().enumerate() {
         let nb = link.ndof();
         if nb == 0 {
@@ -200,17 +189,82 @@ fn add_second_order(
         }
         let qb = &scratch.q_sub[b];
         let ob = link.dof_offset;
+        let anc = &model.ancestor_dofs[b];
+        let proper = &anc[..anc.len() - nb];
         for l in ob..ob + nb {
-            for k in ob..ob + nb {
-                hess[(k, l)] += frob(kin.twist2(model, b, k, l), qb);
+            let sl = &kin.twist[l];
+            let y = composites.then(|| sl * scratch.composite[b]);
+            let mut z = y.unwrap_or_else(Matrix3x4::zeros);
+            let p = qb * sl.transpose();
+            let mut z_rot = z.fixed_view_mut::<3, 3>(0, 0);
+            z_rot += p;
+            let w = axial_and_translation(&z);
+            let col = &mut h[l * n..(l + 1) * n];
+            for &k in proper {
+                let t = &scratch.twist6[k];
+                col[k] += t[0] * w[0]
+                    + t[1] * w[1]
+                    + t[2] * w[2]
+                    + t[3] * w[3]
+                    + t[4] * w[4]
+                    + t[5] * w[5];
             }
-            for &k in &model.ancestor_dofs[b] {
-                if k >= ob {
-                    break;
+            for (k, c) in col.iter_mut().enumerate().take(l + 1).skip(ob) {
+                let mut v = frob(kin.twist2(model, b, k, l), qb);
+                if let Some(y) = &y {
+                    v += frob(&kin.twist[k], y);
                 }
-                let v = frob(&twist_mul(&kin.twist[k], &kin.twist[l]), qb);
-                hess[(k, l)] += v;
-                hess[(l, k)] += v;
+                *c += v;
+            }
+        }
+    }
+}
+
+/// `(ω, v)` of a twist matrix `S = [[ω]× | v]` (ω from the skew part of the
+/// rotational 3×3, `½(S − Sᵀ)`, which it is up to round-off).
+fn twist_vector(s: &Matrix3x4<f64>) -> [f64; 6] {
+    [
+        0.5 * (s[(2, 1)] - s[(1, 2)]),
+        0.5 * (s[(0, 2)] - s[(2, 0)]),
+        0.5 * (s[(1, 0)] - s[(0, 1)]),
+        s[(0, 3)],
+        s[(1, 3)],
+        s[(2, 3)],
+    ]
+}
+
+/// `(ax(Z), z₄)` with `⟨[[ω]× | v], Z⟩ = ω · ax(Z) + v · z₄` (see
+/// [`add_tree_terms`]).
+fn axial_and_translation(z: &Matrix3x4<f64>) -> [f64; 6] {
+    [
+        z[(2, 1)] - z[(1, 2)],
+        z[(0, 2)] - z[(2, 0)],
+        z[(1, 0)] - z[(0, 1)],
+        z[(0, 3)],
+        z[(1, 3)],
+        z[(2, 3)],
+    ]
+}
+
+/// Copies the upper triangle onto the lower one over the envelope
+/// (`h_lk = h_kl` for `k < l` in column `l`'s rows). Every entry the
+/// assembly can have written is there; the others are zeros on both sides
+/// (the buffer was cleared), so the copy leaves them zero. Columns go in
+/// groups of eight: for each row `k`, the eight values of row `k` are
+/// written to one contiguous run of column `k` (one cache line) instead of
+/// eight strided stores. The result is exactly symmetric.
+fn mirror_upper(env: &ColumnEnvelope, hess: &mut DMatrix<f64>) {
+    const GROUP: usize = 8;
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
+    for l0 in (0..n).step_by(GROUP) {
+        let l1 = (l0 + GROUP).min(n);
+        let k0 = (l0..l1).map(|l| env.rows(l).start).min().unwrap_or(l0);
+        for k in k0..l1 {
+            for l in l0.max(k + 1)..l1 {
+                if env.rows(l).contains(&k) {
+                    h[l + k * n] = h[k + l * n];
+                }
             }
         }
     }
@@ -286,8 +340,12 @@ fn add_pair_block(
     for (a, &k) in anc_i.iter().enumerate() {
         for (b, &l) in anc_j.iter().enumerate() {
             let v = scratch.jac[a].dot(&scratch.hj[b]);
-            hess[(k, l)] += v;
-            hess[(l, k)] += v;
+            // The block and its transpose: twice on the diagonal.
+            if k == l {
+                hess[(k, k)] += v + v;
+            } else {
+                hess[(k.min(l), k.max(l))] += v;
+            }
         }
     }
 }
