@@ -117,6 +117,11 @@ fn hidden_deadband_on_one_joint_is_found_as_the_pd_error_sign_there() {
     let t = &joint(&r, "elbow").terms[0];
     assert_eq!(t.term, "2k_p sign(e)");
     assert!((t.coefficient / 0.02 - 1.0).abs() < 0.2, "{t:?}");
+    // The interval covers the smoothing bias (it includes the fit at half
+    // the window), and stays informative: both criteria set before the
+    // run (2026-11-29, fifth session).
+    assert!(t.low <= 0.02 && 0.02 <= t.high, "m = 9: {t:?}");
+    assert!(t.high - t.low <= 0.25 * 0.02, "m = 9: interval too wide: {t:?}");
     let narrow = ResidualOptions {
         half_window: 4,
         ..Default::default()
