@@ -1,7 +1,10 @@
-//! The decomposition cache (`sdrs import --cache DIR`): an import that finds
-//! its decompositions in the cache writes the same bytes (scene, hull OBJs,
-//! report) as one that computes them, and a damaged entry is recomputed,
-//! never used.
+//! Imports that reuse work write what a plain import writes:
+//! - the decomposition cache (`sdrs import --cache DIR`): an import that
+//!   finds its decompositions in the cache writes the same bytes (scene, hull
+//!   OBJs, report) as one that computes them, and a damaged entry is
+//!   recomputed, never used;
+//! - links in parallel: one thread and two write the same bytes (the spider's
+//!   four identical legs share decompositions across threads).
 
 mod support;
 
@@ -11,8 +14,20 @@ use support::{root, run_ok, scratch_dir, sdrs};
 /// Imports the spider (four legs of mesh links) into `out_dir`, through
 /// `cache` when given; the files written, by name.
 fn import(out_dir: &Path, cache: Option<&Path>) -> Vec<(String, Vec<u8>)> {
+    import_on(out_dir, cache, None)
+}
+
+/// [`import`] with `RAYON_NUM_THREADS` set to `threads` when given.
+fn import_on(
+    out_dir: &Path,
+    cache: Option<&Path>,
+    threads: Option<&str>,
+) -> Vec<(String, Vec<u8>)> {
     std::fs::create_dir_all(out_dir).unwrap();
     let mut cmd = sdrs();
+    if let Some(t) = threads {
+        cmd.env("RAYON_NUM_THREADS", t);
+    }
     cmd.args(["import", "-q", "--ground", "--out"])
         .arg(out_dir.join("spider.yaml"))
         .arg("--report")
@@ -141,4 +156,19 @@ fn a_cache_path_that_is_a_file_is_a_clear_error() {
         "{err}"
     );
     assert_eq!(std::fs::read(&not_dir).unwrap(), b"user data");
+}
+
+#[test]
+fn an_import_on_one_thread_writes_the_same_files_as_on_two() {
+    let dir = scratch_dir("import-threads");
+    let one = import_on(&dir.join("one"), None, Some("1"));
+    let two = import_on(&dir.join("two"), None, Some("2"));
+    assert!(one.len() >= 3);
+    assert_eq!(
+        one.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        two.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for ((n, a), (_, b)) in one.iter().zip(&two) {
+        assert!(a == b, "{n} differs between 1 and 2 threads");
+    }
 }

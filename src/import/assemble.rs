@@ -12,6 +12,7 @@ use super::{
 use crate::energy::effects::{EffectKind, EffectSpec};
 use crate::scene::schema::*;
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// Settings that contradict each other or name links the input lacks.
@@ -40,18 +41,18 @@ pub(super) fn check_options(src: &SourceRobot, opts: &ImportOptions) -> Result<(
     Ok(())
 }
 
-/// Shared vertices inside each link (grid blocks: corners or faces).
+/// Shared vertices inside each link (grid blocks: corners or faces); links
+/// in parallel (each is independent).
 pub(super) fn link_ties(geoms: &mut [LinkGeometry], opts: &ImportOptions) -> Vec<LinkConnectivity> {
-    let mut conn = Vec::with_capacity(geoms.len());
-    for g in geoms.iter_mut() {
-        let grid = opts.decomposer == decompose::Decomposer::Grid;
-        conn.push(match opts.ties {
+    let grid = opts.decomposer == decompose::Decomposer::Grid;
+    geoms
+        .par_iter_mut()
+        .map(|g| match opts.ties {
             connectivity::Ties::Corners if grid => grid::corner_ties(&g.hulls),
             connectivity::Ties::SharedVertex if grid => grid::face_ties(&mut g.hulls),
             _ => connect_link(&mut g.hulls, opts.bridge_gaps),
-        });
-    }
-    conn
+        })
+        .collect()
 }
 
 /// The attachment ties and reports of every joint, and notes on joints
@@ -168,11 +169,13 @@ pub(super) fn link_outputs(
         imported: Vec::with_capacity(n),
         joints: BTreeMap::new(),
     };
+    // The report's figures (union volume, coverage) in parallel.
+    let figures: Vec<ReportFigures> = geoms.par_iter().map(|g| report_figures(g, opts)).collect();
     for (li, l) in src.links.iter().enumerate() {
         let g = &geoms[li];
         let lm = link_mass(src, li, g, opts, notes)?;
         out.reports
-            .push(link_report(l.name.clone(), g, &conn[li], &lm, opts));
+            .push(link_report(l.name.clone(), g, &conn[li], &lm, &figures[li]));
         if !l.joint.input_joints.is_empty() {
             out.joints
                 .insert(l.joint.name.clone(), l.joint.input_joints.clone());
@@ -252,21 +255,38 @@ fn link_mass(
 }
 
 /// A link's report: hulls, union volume, coverage of its sources, mass.
+/// A link's union volume (m³), coverage of its sources (fraction) and
+/// largest distance from a source sample to the hulls (m).
+struct ReportFigures {
+    union_volume: f64,
+    coverage: f64,
+    max_distance: f64,
+}
+
+fn report_figures(g: &LinkGeometry, opts: &ImportOptions) -> ReportFigures {
+    let polys: Vec<_> = g.hulls.iter().map(|h| h.poly.clone()).collect();
+    let union_volume = report::union_volume(&polys, opts.volume_grid);
+    let (mut coverage, mut max_distance) = (1.0f64, 0.0f64);
+    for (k, s) in g.sources.iter().enumerate() {
+        let (c, d) = report::coverage(s, &polys, opts.coverage_samples, opts.seed + k as u64);
+        coverage = coverage.min(c);
+        max_distance = max_distance.max(d);
+    }
+    ReportFigures {
+        union_volume,
+        coverage,
+        max_distance,
+    }
+}
+
 fn link_report(
     name: String,
     g: &LinkGeometry,
     conn: &LinkConnectivity,
     lm: &mass::LinkMass,
-    opts: &ImportOptions,
+    fig: &ReportFigures,
 ) -> report::LinkReport {
-    let polys: Vec<_> = g.hulls.iter().map(|h| h.poly.clone()).collect();
-    let uv = report::union_volume(&polys, opts.volume_grid);
-    let (mut cov, mut maxd) = (1.0f64, 0.0f64);
-    for (k, s) in g.sources.iter().enumerate() {
-        let (c, d) = report::coverage(s, &polys, opts.coverage_samples, opts.seed + k as u64);
-        cov = cov.min(c);
-        maxd = maxd.max(d);
-    }
+    let (uv, cov, maxd) = (fig.union_volume, fig.coverage, fig.max_distance);
     let max_change = g
         .hulls
         .iter()

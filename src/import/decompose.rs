@@ -40,6 +40,8 @@ use nalgebra::Vector3;
 use parry3d_f64::math::Vector as PVec;
 use parry3d_f64::transformation::vhacd::{VHACD, VHACDParameters};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Which decomposition to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -104,14 +106,17 @@ impl std::str::FromStr for HullPoints {
 /// The decompositions made so far in one import, keyed by the mesh as
 /// placed in its link (vertex bits and triangles), the decomposer and the
 /// hull budget: a robot's repeated parts (a quadruped's four legs, a
-/// gripper's two fingers) are decomposed once. Every decomposer is
-/// deterministic (V-HACD runs sequentially, CoACD with a fixed seed), so a
-/// hit returns exactly what a new run would; failures are not kept. With
-/// [`ImportOptions::cache`], V-HACD results also come from and go to the
-/// disk cache ([`super::cache`]).
+/// gripper's two fingers) are decomposed once, also when links are
+/// imported in parallel (the first request of a key computes it, the
+/// others wait for it). Every decomposer is deterministic (V-HACD runs
+/// sequentially, CoACD with a fixed seed), so a hit returns exactly what a
+/// new run would, whichever thread ran it; a failure is not kept (each
+/// caller that meets it runs the decomposition itself and gets its own
+/// error). With [`ImportOptions::cache`], V-HACD results also come from and
+/// go to the disk cache ([`super::cache`]).
 #[derive(Default)]
 pub struct Memo {
-    seen: std::collections::HashMap<MemoKey, Vec<Polytope>>,
+    seen: Mutex<HashMap<MemoKey, Arc<OnceLock<Option<Vec<Polytope>>>>>>,
     disk: Option<DiskCache>,
 }
 
@@ -132,7 +137,7 @@ impl Memo {
 
     /// [`decompose`], or the stored result of the same call.
     pub fn decompose(
-        &mut self,
+        &self,
         mesh: &TriMesh,
         opts: &ImportOptions,
         max_hulls: usize,
@@ -145,24 +150,45 @@ impl Memo {
             mesh.vertices.iter().map(bits).collect(),
             mesh.triangles.clone(),
         );
-        if let Some(parts) = self.seen.get(&key) {
-            return Ok(parts.clone());
+        let cell = {
+            let mut seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(seen.entry(key).or_default())
+        };
+        let mut failure = None;
+        let parts = cell.get_or_init(|| match self.compute(mesh, opts, max_hulls, ctx) {
+            Ok(parts) => Some(parts),
+            Err(e) => {
+                failure = Some(e);
+                None
+            }
+        });
+        match (parts, failure) {
+            (Some(parts), _) => Ok(parts.clone()),
+            (None, Some(e)) => Err(e),
+            // Another caller's failure: run it for this caller's error.
+            (None, None) => self.compute(mesh, opts, max_hulls, ctx),
         }
+    }
+
+    /// [`decompose`] through the disk cache.
+    fn compute(
+        &self,
+        mesh: &TriMesh,
+        opts: &ImportOptions,
+        max_hulls: usize,
+        ctx: &MeshContext,
+    ) -> Result<Vec<Polytope>, ImportError> {
         let disk = self
             .disk
             .as_ref()
             .filter(|_| DiskCache::caches(opts.decomposer));
-        let parts = match disk.and_then(|d| d.load(mesh, opts, max_hulls)) {
-            Some(parts) => parts,
-            None => {
-                let parts = decompose(mesh, opts, max_hulls, ctx)?;
-                if let Some(d) = disk {
-                    d.store(mesh, opts, max_hulls, &parts)?;
-                }
-                parts
-            }
-        };
-        self.seen.insert(key, parts.clone());
+        if let Some(parts) = disk.and_then(|d| d.load(mesh, opts, max_hulls)) {
+            return Ok(parts);
+        }
+        let parts = decompose(mesh, opts, max_hulls, ctx)?;
+        if let Some(d) = disk {
+            d.store(mesh, opts, max_hulls, &parts)?;
+        }
         Ok(parts)
     }
 }

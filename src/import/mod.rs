@@ -53,6 +53,7 @@ use connectivity::DesignHull;
 use mesh::{MeshContext, TriMesh};
 use nalgebra::Vector3;
 use polytope::convex_hull;
+use rayon::prelude::*;
 use source::{SourceRobot, SourceShape};
 use std::path::Path;
 use std::time::Instant;
@@ -303,7 +304,7 @@ fn link_geometry(
     src: &SourceRobot,
     li: usize,
     opts: &ImportOptions,
-    memo: &mut decompose::Memo,
+    memo: &decompose::Memo,
 ) -> Result<LinkGeometry, ImportError> {
     let t0 = Instant::now();
     let link = &src.links[li];
@@ -477,18 +478,20 @@ fn build(
     // 1. Geometry → hulls, link by link.
     let n = src.links.len();
     progress.start(n as u64, "links");
-    let mut geoms = Vec::with_capacity(n);
-    let mut memo = decompose::Memo::new(opts)?;
-    for li in 0..n {
-        progress.message(&src.links[li].name);
-        let g = link_geometry(&src, li, opts, &mut memo);
-        if g.is_err() {
-            progress.finish();
-        }
-        geoms.push(g?);
-        progress.inc();
-    }
+    // Links in parallel (each link's result does not depend on the order;
+    // the first error in link order is the one reported).
+    let memo = decompose::Memo::new(opts)?;
+    let results: Vec<Result<LinkGeometry, ImportError>> = (0..n)
+        .into_par_iter()
+        .map(|li| {
+            progress.message(&src.links[li].name);
+            let g = link_geometry(&src, li, opts, &memo);
+            progress.inc();
+            g
+        })
+        .collect();
     progress.finish();
+    let mut geoms = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     // 2. Shared vertices inside each link; 3. attachment points; 4. tie groups.
     let conn = assemble::link_ties(&mut geoms, opts);
     let attach = assemble::attachments(&src, &mut geoms);
