@@ -121,7 +121,10 @@ fn hidden_deadband_on_one_joint_is_found_as_the_pd_error_sign_there() {
     // the window), and stays informative: both criteria set before the
     // run (2026-11-29, fifth session).
     assert!(t.low <= 0.02 && 0.02 <= t.high, "m = 9: {t:?}");
-    assert!(t.high - t.low <= 0.25 * 0.02, "m = 9: interval too wide: {t:?}");
+    assert!(
+        t.high - t.low <= 0.25 * 0.02,
+        "m = 9: interval too wide: {t:?}"
+    );
     let narrow = ResidualOptions {
         half_window: 4,
         ..Default::default()

@@ -624,7 +624,15 @@ pub fn regress(
                     .filter_map(|i| row(scene, &mut sim, measured, base, i, narrow.half_window))
                     .collect()
             });
-            widen_band(scene, narrow_rows, &sim, ch.dof, split_time, &narrow, &mut j);
+            widen_band(
+                scene,
+                narrow_rows,
+                &sim,
+                ch.dof,
+                split_time,
+                &narrow,
+                &mut j,
+            );
         }
         joints.push(j);
     }
