@@ -116,11 +116,14 @@ impl std::str::FromStr for HullPoints {
 /// go to the disk cache ([`super::cache`]).
 #[derive(Default)]
 pub struct Memo {
-    seen: Mutex<HashMap<MemoKey, Arc<OnceLock<Option<Vec<Polytope>>>>>>,
+    seen: Mutex<HashMap<MemoKey, Arc<MemoCell>>>,
     disk: Option<DiskCache>,
 }
 
 type MemoKey = (Decomposer, usize, Vec<[u64; 3]>, Vec<[usize; 3]>);
+
+/// One key's result: set once by the first request (`None`: it failed).
+type MemoCell = OnceLock<Option<Vec<Polytope>>>;
 
 impl Memo {
     /// An empty memo for one import with `opts` (opening its disk cache).
