@@ -5,7 +5,10 @@
 //! - A helper ([`Runner::output`]) is started with `PR_SET_PDEATHSIG =
 //!   SIGKILL` (Linux), so the kernel kills it when `sdrs` dies for any
 //!   reason, even `SIGKILL`; and it is registered, so that on
-//!   `SIGINT`/`SIGTERM`/`SIGHUP` the handler kills it at once.
+//!   `SIGINT`/`SIGTERM`/`SIGHUP` the handler kills it at once. (The kernel
+//!   sends that signal when the *thread* that started the helper ends; the
+//!   import starts helpers from rayon's worker threads, which live as long
+//!   as the process.)
 //! - A temporary folder the core creates for a helper is registered
 //!   ([`Runner::track_folder`]) and removed by the same handler when `sdrs`
 //!   is interrupted, before it exits with `128 + signal` (130 for `SIGINT`;

@@ -6,12 +6,24 @@ mod support;
 use std::time::{Duration, Instant};
 use support::{robots, scratch_dir, sdrs};
 
+/// Children of every thread of `pid` (the import starts helpers from its
+/// worker threads, and `/proc/PID/task/TID/children` lists one thread's).
 fn children(pid: u32) -> Vec<u32> {
-    std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children"))
-        .unwrap_or_default()
-        .split_whitespace()
-        .filter_map(|s| s.parse().ok())
-        .collect()
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return Vec::new();
+    };
+    let mut out: Vec<u32> = tasks
+        .filter_map(|t| t.ok())
+        .flat_map(|t| {
+            std::fs::read_to_string(t.path().join("children"))
+                .unwrap_or_default()
+                .split_whitespace()
+                .filter_map(|s| s.parse().ok())
+                .collect::<Vec<u32>>()
+        })
+        .collect();
+    out.sort();
+    out
 }
 
 fn alive(pid: u32) -> bool {

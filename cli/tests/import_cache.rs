@@ -9,7 +9,7 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use support::{root, run_ok, scratch_dir, sdrs};
+use support::{files_under, root, run_ok, scratch_dir, sdrs};
 
 /// Imports the spider (four legs of mesh links) into `out_dir`, through
 /// `cache` when given; the files written, by name.
@@ -42,15 +42,9 @@ fn import_on(
 /// Every file under `dir` (relative name, bytes), sorted; the report's
 /// wall times (keys ending in `seconds`) are left out.
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
+    files_under(dir, |_| true)
+        .into_iter()
+        .map(|p| {
             let name = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
             let mut bytes = std::fs::read(&p).unwrap();
             if name == "report.json" {
@@ -58,11 +52,9 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
                 strip_seconds(&mut v);
                 bytes = serde_json::to_vec(&v).unwrap();
             }
-            out.push((name, bytes));
-        }
-    }
-    out.sort();
-    out
+            (name, bytes)
+        })
+        .collect()
 }
 
 fn strip_seconds(v: &mut serde_json::Value) {

@@ -14,7 +14,7 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use support::{pybullet_data, python, root, run_ok, scratch_dir, sdrs};
+use support::{files_under, pybullet_data, python, root, run_ok, scratch_dir, sdrs};
 
 /// Files refused, and the reason their error must name.
 const REFUSED: &[(&str, &str)] = &[
@@ -26,22 +26,10 @@ const REFUSED: &[(&str, &str)] = &[
 ];
 
 fn urdfs(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                if !p.ends_with("random_urdfs") {
-                    stack.push(p);
-                }
-            } else if p.extension().is_some_and(|x| x == "urdf") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
+    files_under(dir, |d| !d.ends_with("random_urdfs"))
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "urdf"))
+        .collect()
 }
 
 /// What happened to one file with one base.

@@ -80,3 +80,25 @@ pub fn python_fcl_check(dir: &std::path::Path) -> serde_json::Value {
     );
     serde_json::from_str(&report).unwrap()
 }
+
+/// Every file under `dir`, sorted, descending only into the folders for
+/// which `descend` holds.
+pub fn files_under(
+    dir: &std::path::Path,
+    descend: impl Fn(&std::path::Path) -> bool,
+) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if !p.is_dir() {
+                out.push(p);
+            } else if descend(&p) {
+                stack.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
