@@ -15,7 +15,7 @@
 
 use super::problem::{Candidate, Problem};
 use crate::diff::{Loss, LossTerm, Tape, backward};
-use crate::energy::effects::{self, EffectKind, Target};
+use crate::energy::effects::{EffectKind, Target};
 use crate::scene::Scene;
 use crate::sim::Simulator;
 use std::collections::BTreeMap;
@@ -108,12 +108,7 @@ fn own_gradient(
 ) -> Option<Vec<f64>> {
     let model = &pb.scene.model;
     let specs_len = cand.specs(p).len();
-    let mut offset = vec![0.0; model.ndof()];
-    for (dofs, b) in effects::offsets(&sc.effects) {
-        for &k in dofs {
-            offset[k] += b;
-        }
-    }
+    let offset = super::problem::encoder_offsets(sc);
     let dt = sc.settings.dt;
     let h = tape.len();
     let mut coef: BTreeMap<(usize, usize), f64> = BTreeMap::new();

@@ -151,18 +151,24 @@ pub struct Problem<'a> {
 /// A run's reported coordinates and contact flags with `sc`'s encoder
 /// offsets.
 fn simulated(sc: &Scene, states: Vec<DVector<f64>>, contact: Vec<bool>) -> Simulated {
+    Simulated {
+        dt: sc.settings.dt,
+        states,
+        contact,
+        offset: encoder_offsets(sc),
+    }
+}
+
+/// Per coordinate, the sum of `sc`'s encoder offsets on it (the
+/// measured-side shift of [`Simulated::at`]).
+pub fn encoder_offsets(sc: &Scene) -> Vec<f64> {
     let mut offset = vec![0.0; sc.model.ndof()];
     for (dofs, b) in effects::offsets(&sc.effects) {
         for &k in dofs {
             offset[k] += b;
         }
     }
-    Simulated {
-        dt: sc.settings.dt,
-        states,
-        contact,
-        offset,
-    }
+    offset
 }
 
 impl<'a> Problem<'a> {

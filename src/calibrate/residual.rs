@@ -504,11 +504,7 @@ fn refine_band(
     reg: JointRegression,
 ) -> JointRegression {
     let name = BASIS[BAND].0;
-    let cols: Vec<usize> = reg
-        .terms
-        .iter()
-        .filter_map(|t| BASIS.iter().position(|b| b.0 == t.term))
-        .collect();
+    let cols = kept_columns(&reg);
     let coefficient = |r: &JointRegression| {
         r.terms
             .iter()
@@ -535,6 +531,14 @@ fn refine_band(
         }
     }
     best
+}
+
+/// The [`BASIS`] columns of `reg`'s kept terms, in its order.
+fn kept_columns(reg: &JointRegression) -> Vec<usize> {
+    reg.terms
+        .iter()
+        .filter_map(|t| BASIS.iter().position(|b| b.0 == t.term))
+        .collect()
 }
 
 /// The kept deadband term of `reg`, if any.
@@ -564,11 +568,7 @@ fn widen_band(
     narrow: &ResidualOptions,
     reg: &mut JointRegression,
 ) {
-    let cols: Vec<usize> = reg
-        .terms
-        .iter()
-        .filter_map(|t| BASIS.iter().position(|b| b.0 == t.term))
-        .collect();
+    let cols = kept_columns(reg);
     let x = design(rows, k, sim, scene.settings.dt, 0.0);
     let Some(first) = regress_joint(scene, rows, &x, k, split_time, narrow, Some(&cols)) else {
         return;

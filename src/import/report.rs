@@ -140,10 +140,16 @@ pub fn coverage(source: &TriMesh, hulls: &[Polytope], samples: usize, seed: u64)
     for p in &pts {
         let mut d = f64::INFINITY;
         for h in hulls {
-            if h.violation(p) > d + slack {
+            let v = h.violation(p);
+            if v > d + slack {
                 continue;
             }
-            d = d.min(h.distance(p));
+            // `distance`, without evaluating the planes again.
+            d = d.min(if v <= 0.0 {
+                0.0
+            } else {
+                h.boundary_distance(p)
+            });
         }
         if d <= tol {
             covered += 1;

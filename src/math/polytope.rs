@@ -356,9 +356,15 @@ impl Polytope {
 
     /// Euclidean distance from `p` to the polytope (0 inside).
     pub fn distance(&self, p: &Vector3<f64>) -> f64 {
-        if self.violation(p) <= 0.0 {
+        if self.contains(p) {
             return 0.0;
         }
+        self.boundary_distance(p)
+    }
+
+    /// Distance from `p` to the boundary triangles (the distance to the
+    /// polytope for a point outside it, as [`Polytope::distance`] uses it).
+    pub fn boundary_distance(&self, p: &Vector3<f64>) -> f64 {
         self.triangles
             .iter()
             .map(|t| {
