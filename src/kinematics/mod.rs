@@ -20,8 +20,8 @@ pub mod motion_bound;
 
 pub use motion_bound::{SegmentMotion, hull_radii};
 
-use crate::math::{Pose, compose, pose_from, rot, trans, twist_apply};
-use crate::model::{JointDerivatives, Model};
+use crate::math::{Pose, compose, pose_from, rot, skew, trans, twist_apply};
+use crate::model::{JointDerivatives, JointKind, Model};
 use nalgebra::{DVector, Matrix3, Matrix3x4, Vector3};
 
 /// How much of the kinematics to compute.
@@ -70,6 +70,92 @@ fn apply_linear(p: &Pose, d: &Pose) -> Pose {
     p.fixed_view::<3, 3>(0, 0) * d
 }
 
+/// The axes of a hinge-type joint (revolute, prismatic, ball: fixed axes in
+/// the joint frame), whose world twists have a closed form.
+#[derive(Clone, Copy, Debug)]
+enum HingeAxes<'a> {
+    /// One rotation axis `a` (unit, joint frame).
+    Revolute(&'a Vector3<f64>),
+    /// One translation axis `a` (unit, joint frame).
+    Prismatic(&'a Vector3<f64>),
+    /// `J = Rot(a₁, q₁) Rot(a₂, q₂)`.
+    Ball(&'a [Vector3<f64>; 2]),
+}
+
+/// The twist `[[ω]× | −ω × t]` of a rotation about the world axis `ω`
+/// through the point `t` (world, m): `∂A/∂q = S Ã` for a link at `t`.
+fn rotation_twist(w: &Vector3<f64>, t: &Vector3<f64>) -> Matrix3x4<f64> {
+    pose_from(&skew(w), &(-w.cross(t)))
+}
+
+/// `[[ω_a]×[ω_b]× | −[ω_a]×[ω_b]× t]`, with `[ω_a]×[ω_b]× = ω_b ω_aᵀ − (ω_a·ω_b) I`.
+fn rotation_twist2(wa: &Vector3<f64>, wb: &Vector3<f64>, t: &Vector3<f64>) -> Matrix3x4<f64> {
+    let m = wb * wa.transpose() - Matrix3::identity() * wa.dot(wb);
+    pose_from(&m, &(-(m * t)))
+}
+
+impl<'a> HingeAxes<'a> {
+    fn of(joint: &'a JointKind) -> Option<Self> {
+        match joint {
+            JointKind::Revolute { axis } => Some(HingeAxes::Revolute(axis)),
+            JointKind::Prismatic { axis } => Some(HingeAxes::Prismatic(axis)),
+            JointKind::Ball { axes } => Some(HingeAxes::Ball(axes)),
+            _ => None,
+        }
+    }
+
+    /// World twists `S_k = (P ∂J/∂q_k) Ã⁻¹` and, for [`KinOrder::Second`],
+    /// `S_kl = (P ∂²J/∂q_k∂q_l) Ã⁻¹` of the pre-joint frame `P = [R_P | ·]`
+    /// and the link pose `A = [R_A | t]`, in closed form (`∂R/∂q = K R`,
+    /// `R K Rᵀ = [R a]×`):
+    ///
+    /// - revolute: `ω = R_P a`, `S = [[ω]× | −ω × t]`, `S₀₀ = [ω]×²` (with
+    ///   the translation `−S₀₀ t`);
+    /// - prismatic: `S = [0 | R_P a]`, `S₀₀ = 0`;
+    /// - ball: `ω₁ = R_P a₁`, `ω₂ = R_A a₂` (`= R_P R₁ a₂`, as `R₂ a₂ = a₂`),
+    ///   `S_k = [[ω_k]× | −ω_k × t]`, `S₁₁ = [ω₁]×²`, `S₁₂ = S₂₁ = [ω₁]×[ω₂]×`,
+    ///   `S₂₂ = [ω₂]×²`.
+    fn twists(
+        self,
+        pre: &Pose,
+        pose: &Pose,
+        order: KinOrder,
+        s1: &mut [Matrix3x4<f64>],
+        s2: &mut [Matrix3x4<f64>],
+    ) {
+        let r_pre = pre.fixed_view::<3, 3>(0, 0);
+        let t = trans(pose);
+        let second = order >= KinOrder::Second;
+        match self {
+            HingeAxes::Revolute(a) => {
+                let w = r_pre * a;
+                s1[0] = rotation_twist(&w, &t);
+                if second {
+                    s2[0] = rotation_twist2(&w, &w, &t);
+                }
+            }
+            HingeAxes::Prismatic(a) => {
+                s1[0] = pose_from(&Matrix3::zeros(), &(r_pre * a));
+                if second {
+                    s2[0] = Matrix3x4::zeros();
+                }
+            }
+            HingeAxes::Ball(axes) => {
+                let w1 = r_pre * axes[0];
+                let w2 = pose.fixed_view::<3, 3>(0, 0) * axes[1];
+                s1[0] = rotation_twist(&w1, &t);
+                s1[1] = rotation_twist(&w2, &t);
+                if second {
+                    s2[0] = rotation_twist2(&w1, &w1, &t);
+                    s2[1] = rotation_twist2(&w1, &w2, &t);
+                    s2[2] = s2[1];
+                    s2[3] = rotation_twist2(&w2, &w2, &t);
+                }
+            }
+        }
+    }
+}
+
 impl Kinematics {
     pub fn new(model: &Model) -> Self {
         let n = model.links.len();
@@ -111,25 +197,34 @@ impl Kinematics {
             let n = link.ndof();
             let qi = q.rows(link.dof_offset, n);
             let local = &mut self.local[i];
-            if order == KinOrder::Pose || n == 0 {
+            let hinge = HingeAxes::of(&link.joint);
+            if order == KinOrder::Pose || n == 0 || hinge.is_some() {
                 local.value = link.joint.transform(&chart, qi.as_slice());
             } else {
                 link.joint
                     .transform_derivatives(&chart, qi.as_slice(), local);
             }
             let pose = compose(&pre, &local.value);
-            if order >= KinOrder::First {
-                for k in 0..n {
-                    self.twist[link.dof_offset + k] =
-                        right_divide(&apply_linear(&pre, &local.d1[k]), &pose);
+            let twists = &mut self.twist[link.dof_offset..link.dof_offset + n];
+            let off = self.twist2_offset[i];
+            let twists2 = &mut self.twist2[off..off + n * n];
+            match hinge {
+                Some(axes) if order >= KinOrder::First => {
+                    axes.twists(&pre, &pose, order, twists, twists2);
                 }
-            }
-            if order >= KinOrder::Second {
-                let off = self.twist2_offset[i];
-                for k in 0..n {
-                    for l in 0..n {
-                        self.twist2[off + k * n + l] =
-                            right_divide(&apply_linear(&pre, &local.d2[k][l]), &pose);
+                _ => {
+                    if order >= KinOrder::First {
+                        for (s, d1) in twists.iter_mut().zip(&local.d1) {
+                            *s = right_divide(&apply_linear(&pre, d1), &pose);
+                        }
+                    }
+                    if order >= KinOrder::Second {
+                        for k in 0..n {
+                            for l in 0..n {
+                                twists2[k * n + l] =
+                                    right_divide(&apply_linear(&pre, &local.d2[k][l]), &pose);
+                            }
+                        }
                     }
                 }
             }
@@ -208,3 +303,6 @@ pub fn link_poses(model: &Model, q: &DVector<f64>, charts: &[Matrix3<f64>]) -> V
     k.update(model, q, charts, KinOrder::Pose);
     k.pose
 }
+
+#[cfg(test)]
+mod tests;

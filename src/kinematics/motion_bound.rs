@@ -512,4 +512,4 @@ pub fn hull_radii(model: &Model, out: &mut Vec<f64>) {
 
 #[cfg(test)]
 #[path = "motion_bound_tests.rs"]
-mod tests;
+pub(crate) mod tests;

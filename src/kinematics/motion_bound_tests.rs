@@ -60,7 +60,7 @@ fn bound_and_path(
 /// A tree with every joint kind: free root → revolute → prismatic →
 /// spherical → ball, plus a fixed branch off the root and a prismatic
 /// root.
-fn every_joint_model(rng: &mut impl rand::Rng) -> Model {
+pub(crate) fn every_joint_model(rng: &mut impl rand::Rng) -> Model {
     let mut at = |v: f64| {
         pose_from(
             &rpy_to_matrix(&[
@@ -200,7 +200,7 @@ fn rotation_vector_angular_speed_never_exceeds_the_coordinate_speed() {
 
 /// One random chart centre (roll ±3, pitch ±1, yaw ±3 rad), shared by every
 /// chart of `model` (the draws in this order: the tests' random streams).
-fn random_charts(rng: &mut rand_chacha::ChaCha8Rng, model: &Model) -> Vec<Matrix3<f64>> {
+pub(crate) fn random_charts(rng: &mut rand_chacha::ChaCha8Rng, model: &Model) -> Vec<Matrix3<f64>> {
     vec![
         rpy_to_matrix(&[
             rng.random_range(-3.0..3.0),

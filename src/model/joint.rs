@@ -101,9 +101,7 @@ impl JointKind {
                 }
             }
         };
-        let axis_rot = |axis: &Vector3<f64>, q: D| -> [D; 9] {
-            so3::exp_generic([q * axis.x, q * axis.y, q * axis.z])
-        };
+        let axis_rot = |axis: &Vector3<f64>, q: D| hinge_rotation(axis, q);
         let chart_rot = |phi: [D; 3]| -> [D; 9] {
             let e = so3::exp_generic(phi);
             let mut r = [D::zero(); 9];
@@ -266,6 +264,24 @@ impl JointKind {
             }
         }
     }
+}
+
+/// Row-major `Rot(a, q) = I + sin q [a]× + (1 − cos q) [a]×²` for a unit
+/// axis `a` (Rodrigues' formula with the angle known: one `sin_cos`, no
+/// norm). `[a]×² = a aᵀ − I`.
+fn hinge_rotation<D: DualNum<Primitive = f64> + Copy>(a: &Vector3<f64>, q: D) -> [D; 9] {
+    let (s, c) = q.sin_cos();
+    let v = D::one() - c;
+    let k = [0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0];
+    let mut r = [D::zero(); 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            let id = if i == j { 1.0 } else { 0.0 };
+            let k2 = a[i] * a[j] - id;
+            r[i * 3 + j] = s * k[i * 3 + j] + v * k2 + id;
+        }
+    }
+    r
 }
 
 fn identity9<D: DualNum<Primitive = f64> + Copy>() -> [D; 9] {
