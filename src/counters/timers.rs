@@ -6,8 +6,10 @@
 //! in its `report` hook ([`StageTimers::carve`]).
 //!
 //! The evaluations inside the Newton solve (kinematics, each energy term,
-//! assembly) and the line search (its remainder after the evaluations and
-//! collision detection) are timed only when the timers are *detailed*
+//! assembly), the terms' own sub-stages (the contact term's broad phase and
+//! collision detection) and the line search (its remainder after the
+//! evaluations and collision detection) are timed only when the timers are
+//! *detailed*
 //! ([`StageTimers::set_detailed`]; off by default): that costs 3 + (number
 //! of terms) clock readings per evaluation, measured at 7 % of the
 //! calibration suite's CPU time on a small robot (2026-11-29, a VM whose

@@ -23,6 +23,7 @@ use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::counters::{Stage, StageTimers, StepDiagnostics};
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
+use crate::math::Pose;
 use crate::model::Model;
 use nalgebra::{DVector, Vector4};
 use std::collections::{BTreeMap, HashMap};
@@ -35,6 +36,9 @@ pub struct ContactEnergy {
     hulls: WorldHulls,
     broad: BroadPhase,
     pairs: Vec<(usize, usize)>,
+    /// The support range and link poses `hulls` and `pairs` were computed
+    /// for (range NaN: never).
+    pairs_key: (f64, Vec<Pose>),
     results: Vec<Result<PairOutcome, contact::ContactError>>,
     /// Vertex-balanced chunks of the pair evaluations (see [`PairWork`]).
     work: PairWork<Result<PairOutcome, contact::ContactError>>,
@@ -60,6 +64,7 @@ impl ContactEnergy {
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
+            pairs_key: (f64::NAN, Vec::new()),
             results: Vec::new(),
             work: PairWork::default(),
             warm: HashMap::new(),
@@ -72,6 +77,32 @@ impl ContactEnergy {
             ccd_time: Duration::ZERO,
             settings,
         }
+    }
+
+    /// World hulls and candidate pairs at `poses`, recomputed only when the
+    /// poses or the support range differ bit for bit from those of the last
+    /// computation (a Newton iteration re-evaluates its accepted trial point
+    /// with derivatives: the same poses). The pairs are a function of the
+    /// poses, the range and the fixed exclusions, so the result is the same
+    /// bits either way.
+    fn update_pairs(&mut self, model: &Model, poses: &[Pose]) {
+        let range = self.params.support_distance();
+        let same = |a: &[Pose], b: &[Pose]| {
+            a.len() == b.len()
+                && a.iter()
+                    .flat_map(|p| p.iter())
+                    .zip(b.iter().flat_map(|p| p.iter()))
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        if self.pairs_key.0.to_bits() == range.to_bits() && same(&self.pairs_key.1, poses) {
+            return;
+        }
+        self.hulls.update(model, poses);
+        self.broad
+            .candidate_pairs(&self.hulls, range, &self.settings.excluded, &mut self.pairs);
+        self.pairs_key.0 = range;
+        self.pairs_key.1.clear();
+        self.pairs_key.1.extend_from_slice(poses);
     }
 
     fn describe(&self, model: &Model, h: usize) -> String {
@@ -117,15 +148,9 @@ impl Energy for ContactEnergy {
         acc: &mut EnergyAccumulator,
     ) -> Result<(), EnergyError> {
         let model = ctx.model;
-        let t0 = Instant::now();
-        self.hulls.update(model, &kin.pose);
-        self.broad.candidate_pairs(
-            &self.hulls,
-            self.params.support_distance(),
-            &self.settings.excluded,
-            &mut self.pairs,
-        );
-        self.broad_time += t0.elapsed();
+        let t0 = ctx.timed.then(Instant::now);
+        self.update_pairs(model, &kin.pose);
+        self.broad_time += t0.map_or(Duration::ZERO, |t| t.elapsed());
 
         let cneed = match need {
             Need::Value => contact::Need::Value,
@@ -288,7 +313,7 @@ impl Energy for ContactEnergy {
         if !self.ccd.options.enabled {
             return Ok(alpha);
         }
-        let t0 = Instant::now();
+        let t0 = ctx.timed.then(Instant::now);
         let out = self.ccd.certify(
             ctx.model,
             &self.settings.excluded,
@@ -298,7 +323,7 @@ impl Energy for ContactEnergy {
             alpha,
             charts,
         );
-        self.ccd_time += t0.elapsed();
+        self.ccd_time += t0.map_or(Duration::ZERO, |t| t.elapsed());
         Ok(out)
     }
 

@@ -78,6 +78,11 @@ pub struct StepContext<'a> {
     /// Free root joints whose six `targets` (from `first`) are one pose
     /// target ([`pd_pose`]).
     pub pose_targets: &'a [crate::control::PoseTarget],
+    /// Whether terms time their own sub-stages (the contact term's broad
+    /// phase and collision detection): the simulator's timers are detailed
+    /// ([`crate::counters::StageTimers::set_detailed`]). Without it no term
+    /// reads the clock inside an evaluation.
+    pub timed: bool,
 }
 
 /// Output buffers for the terms; reused across evaluations.

@@ -121,8 +121,14 @@ fn gradient_dot_step(
     q: &DVector<f64>,
 ) -> f64 {
     let mut d = 0.0;
-    for (k, (g, a0)) in acc.link_grad.iter().zip(ctx.poses_prev).enumerate() {
-        d += g.component_mul(&(kin.pose[k] - a0)).sum();
+    for (g, (a, a0)) in acc.link_grad.iter().zip(kin.pose.iter().zip(ctx.poses_prev)) {
+        // Σ_entries g (a − a⁰), column-major from 0.0: the order (and bits)
+        // of `g.component_mul(&(a − a⁰)).sum()`, without the temporaries.
+        let mut link = 0.0;
+        for ((g, a), a0) in g.iter().zip(a.iter()).zip(a0.iter()) {
+            link += g * (a - a0);
+        }
+        d += link;
     }
     d + acc
         .dof_grad
@@ -341,6 +347,7 @@ impl Simulator {
             &self.scratch.targets,
             &self.controller.pose_targets,
             t_next,
+            self.timers.detailed(),
         );
         self.scratch.kin_start.update(
             &self.model,
@@ -422,6 +429,7 @@ impl Simulator {
             &self.scratch.targets,
             &self.controller.pose_targets,
             t_next,
+            self.timers.detailed(),
         );
         for e in self.energies.iter_mut() {
             e.vjp(&ctx, q, &self.scratch.kin, dir, out)?;
@@ -588,6 +596,7 @@ fn make_context<'a>(
     targets: &'a [PdTarget],
     pose_targets: &'a [crate::control::PoseTarget],
     time: f64,
+    timed: bool,
 ) -> StepContext<'a> {
     StepContext {
         model,
@@ -600,6 +609,7 @@ fn make_context<'a>(
         q_prev2: &state.q_prev,
         targets,
         pose_targets,
+        timed,
     }
 }
 
@@ -648,6 +658,7 @@ fn step_objective(
         targets,
         &controller.pose_targets,
         t_next,
+        timers.detailed(),
     );
     let obj = StepObjective {
         ctx,
