@@ -52,6 +52,45 @@ pub struct Kinematics {
     pub twist2: Vec<Matrix3x4<f64>>,
     pub twist2_offset: Vec<usize>,
     pub order: KinOrder,
+    /// The coordinates and charts of the last full evaluation
+    /// ([`Kinematics::update_cached`]).
+    key: EvalKey,
+}
+
+/// Coordinates and chart centres, compared bit for bit.
+#[derive(Clone, Debug, Default)]
+struct EvalKey {
+    valid: bool,
+    q: Vec<f64>,
+    charts: Vec<Matrix3<f64>>,
+}
+
+impl EvalKey {
+    fn set(&mut self, q: &DVector<f64>, charts: &[Matrix3<f64>]) {
+        self.q.clear();
+        self.q.extend_from_slice(q.as_slice());
+        self.charts.clear();
+        self.charts.extend_from_slice(charts);
+        self.valid = true;
+    }
+
+    fn clear(&mut self) {
+        self.valid = false;
+    }
+
+    fn matches(&self, q: &DVector<f64>, charts: &[Matrix3<f64>]) -> bool {
+        let bits = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        self.valid
+            && bits(&self.q, q.as_slice())
+            && self.charts.len() == charts.len()
+            && self
+                .charts
+                .iter()
+                .zip(charts)
+                .all(|(a, b)| bits(a.as_slice(), b.as_slice()))
+    }
 }
 
 /// `[dR Rᵀ | dt − dR Rᵀ t]`: the world matrix `S` with `D = S Ã` for a
@@ -173,6 +212,7 @@ impl Kinematics {
             twist2: vec![Matrix3x4::zeros(); total],
             twist2_offset,
             order: KinOrder::Pose,
+            key: EvalKey::default(),
         }
     }
 
@@ -185,51 +225,94 @@ impl Kinematics {
         order: KinOrder,
     ) {
         self.order = order;
-        for (i, link) in model.links.iter().enumerate() {
-            let pre = match link.parent {
+        for i in 0..model.links.len() {
+            self.update_link(model, i, q, charts, order, true);
+        }
+        self.key.set(q, charts);
+    }
+
+    /// As [`Kinematics::update`], but when `q` and `charts` are bit for bit
+    /// those of this object's last evaluation the poses are kept and only
+    /// the derivative orders it lacks are computed (the same bits as a
+    /// fresh evaluation). `model` must be the model of that evaluation: the
+    /// caller owns both (the simulator re-evaluates an accepted trial point
+    /// with derivatives, and the accepted step's poses).
+    pub fn update_cached(
+        &mut self,
+        model: &Model,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+        order: KinOrder,
+    ) {
+        if !self.key.matches(q, charts) {
+            return self.update(model, q, charts, order);
+        }
+        if order > self.order {
+            for i in 0..model.links.len() {
+                self.update_link(model, i, q, charts, order, false);
+            }
+            self.order = order;
+        }
+    }
+
+    /// Link `i`'s pose (when `with_pose`; otherwise the stored `pre`, `pose`
+    /// are those of `q`) and its twists up to `order`.
+    fn update_link(
+        &mut self,
+        model: &Model,
+        i: usize,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+        order: KinOrder,
+        with_pose: bool,
+    ) {
+        let link = &model.links[i];
+        let chart = link
+            .chart
+            .map(|c| charts[c])
+            .unwrap_or_else(Matrix3::identity);
+        let n = link.ndof();
+        let qi = q.rows(link.dof_offset, n);
+        let local = &mut self.local[i];
+        let hinge = HingeAxes::of(&link.joint);
+        if order == KinOrder::Pose || n == 0 || hinge.is_some() {
+            if with_pose {
+                local.value = link.joint.transform(&chart, qi.as_slice());
+            }
+        } else {
+            link.joint
+                .transform_derivatives(&chart, qi.as_slice(), local);
+        }
+        if with_pose {
+            self.pre[i] = match link.parent {
                 Some(p) => compose(&self.pose[p], &link.attach),
                 None => link.attach,
             };
-            let chart = link
-                .chart
-                .map(|c| charts[c])
-                .unwrap_or_else(Matrix3::identity);
-            let n = link.ndof();
-            let qi = q.rows(link.dof_offset, n);
-            let local = &mut self.local[i];
-            let hinge = HingeAxes::of(&link.joint);
-            if order == KinOrder::Pose || n == 0 || hinge.is_some() {
-                local.value = link.joint.transform(&chart, qi.as_slice());
-            } else {
-                link.joint
-                    .transform_derivatives(&chart, qi.as_slice(), local);
+            self.pose[i] = compose(&self.pre[i], &local.value);
+        }
+        let (pre, pose) = (&self.pre[i], &self.pose[i]);
+        let twists = &mut self.twist[link.dof_offset..link.dof_offset + n];
+        let off = self.twist2_offset[i];
+        let twists2 = &mut self.twist2[off..off + n * n];
+        match hinge {
+            Some(axes) if order >= KinOrder::First => {
+                axes.twists(pre, pose, order, twists, twists2);
             }
-            let pose = compose(&pre, &local.value);
-            let twists = &mut self.twist[link.dof_offset..link.dof_offset + n];
-            let off = self.twist2_offset[i];
-            let twists2 = &mut self.twist2[off..off + n * n];
-            match hinge {
-                Some(axes) if order >= KinOrder::First => {
-                    axes.twists(&pre, &pose, order, twists, twists2);
-                }
-                _ => {
-                    if order >= KinOrder::First {
-                        for (s, d1) in twists.iter_mut().zip(&local.d1) {
-                            *s = right_divide(&apply_linear(&pre, d1), &pose);
-                        }
+            _ => {
+                if order >= KinOrder::First {
+                    for (s, d1) in twists.iter_mut().zip(&local.d1) {
+                        *s = right_divide(&apply_linear(pre, d1), pose);
                     }
-                    if order >= KinOrder::Second {
-                        for k in 0..n {
-                            for l in 0..n {
-                                twists2[k * n + l] =
-                                    right_divide(&apply_linear(&pre, &local.d2[k][l]), &pose);
-                            }
+                }
+                if order >= KinOrder::Second {
+                    for k in 0..n {
+                        for l in 0..n {
+                            twists2[k * n + l] =
+                                right_divide(&apply_linear(pre, &local.d2[k][l]), pose);
                         }
                     }
                 }
             }
-            self.pre[i] = pre;
-            self.pose[i] = pose;
         }
     }
 
@@ -245,6 +328,7 @@ impl Kinematics {
         needed: &[bool],
     ) {
         self.order = KinOrder::Pose;
+        self.key.clear();
         for (i, link) in model.links.iter().enumerate() {
             if !needed[i] {
                 continue;

@@ -108,3 +108,67 @@ fn twists_match_central_differences_of_the_poses() {
         }
     }
 }
+
+fn same_bits(a: &[Matrix3x4<f64>], b: &[Matrix3x4<f64>]) -> bool {
+    a.iter()
+        .flat_map(|m| m.iter())
+        .zip(b.iter().flat_map(|m| m.iter()))
+        .all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// `update_cached` gives the bits of a fresh `update` whatever the order
+/// of the requests: the same point asked again with more derivatives, with
+/// fewer, a new point, a new chart, and after a partial pose update.
+#[test]
+fn cached_evaluations_equal_fresh_ones_bit_for_bit() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let model = every_joint_model(&mut rng);
+    let charts = random_charts(&mut rng, &model);
+    let q = coordinates(&mut rng, &model, 0);
+    let q2 = coordinates(&mut rng, &model, 0);
+    let charts2 = random_charts(&mut rng, &model);
+    let fresh = |q: &DVector<f64>, charts: &[Matrix3<f64>], order| {
+        let mut k = Kinematics::new(&model);
+        k.update(&model, q, charts, order);
+        k
+    };
+    let mut kin = Kinematics::new(&model);
+    let orders = [KinOrder::Pose, KinOrder::Second, KinOrder::First, KinOrder::Pose];
+    let points = [(&q, &charts), (&q, &charts), (&q2, &charts), (&q2, &charts2)];
+    for (at, (qa, ca)) in points.iter().enumerate() {
+        for &order in &orders {
+            kin.update_cached(&model, qa, ca, order);
+            let f = fresh(qa, ca, order);
+            assert!(same_bits(&kin.pose, &f.pose), "point {at}, {order:?}: poses");
+            if order >= KinOrder::First {
+                assert!(same_bits(&kin.twist, &f.twist), "point {at}, {order:?}: twists");
+            }
+            if order >= KinOrder::Second {
+                assert!(same_bits(&kin.twist2, &f.twist2), "point {at}: second twists");
+            }
+        }
+    }
+    // A partial pose update (as collision detection does) invalidates.
+    let needed = vec![true; model.links.len()];
+    kin.update_poses_where(&model, &q, &charts, &needed);
+    kin.update_cached(&model, &q, &charts, KinOrder::Second);
+    let f = fresh(&q, &charts, KinOrder::Second);
+    assert!(same_bits(&kin.twist2, &f.twist2) && same_bits(&kin.pose, &f.pose));
+}
+
+/// Every joint kind's value with derivatives is `transform`'s, bit for bit
+/// (so a pose does not depend on the derivative order it was asked with).
+#[test]
+fn joint_values_do_not_depend_on_the_derivative_order() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for case in 0..3 {
+        let model = every_joint_model(&mut rng);
+        let charts = random_charts(&mut rng, &model);
+        let q = coordinates(&mut rng, &model, case);
+        let mut a = Kinematics::new(&model);
+        let mut b = Kinematics::new(&model);
+        a.update(&model, &q, &charts, KinOrder::Pose);
+        b.update(&model, &q, &charts, KinOrder::Second);
+        assert!(same_bits(&a.pose, &b.pose), "case {case}");
+    }
+}

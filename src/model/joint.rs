@@ -174,7 +174,8 @@ impl JointKind {
     /// `∂²R/∂q₁∂q₂ = K₁ R K₂`, `∂²R/∂q₂² = R K₂²`; a prismatic joint has
     /// `∂t/∂q = a` and no curvature. `J(q)` itself is [`JointKind::transform`]
     /// (the same bits as a pose-only evaluation). Charted joints (spherical,
-    /// free) use second-order dual numbers ([`JointKind::transform_derivatives_dual`]);
+    /// free) use second-order dual numbers ([`JointKind::transform_derivatives_dual`])
+    /// for the derivatives, with the value from [`JointKind::transform`];
     /// the dual-number evaluation of the hinges was a third of a step with
     /// two links per chain.
     pub fn transform_derivatives(
@@ -215,7 +216,14 @@ impl JointKind {
                 out.d1[0].set_column(3, axis);
                 out.d2[0][0] = Pose::zeros();
             }
-            _ => self.transform_derivatives_dual(chart, q, out),
+            _ => {
+                self.transform_derivatives_dual(chart, q, out);
+                // The dual numbers' real part can differ from `transform`
+                // in the last bit (their division and `sin`/`cos` round
+                // differently): the value is `transform`'s, so every
+                // evaluation order gives one pose for one `q`.
+                out.value = self.transform(chart, q);
+            }
         }
     }
 

@@ -156,7 +156,7 @@ impl Objective for StepObjective<'_> {
         // Detailed timers only: one clock reading per stage boundary, each
         // ending one stage and starting the next.
         let mut mark = timers.start_laps();
-        self.kin.update(model, q, self.charts, order);
+        self.kin.update_cached(model, q, self.charts, order);
         timers.lap(&mut mark, Stage::Kinematics);
         // Clearing the accumulator is counted with the assembly.
         self.acc.reset(need);
@@ -536,7 +536,7 @@ impl Simulator {
         let t0 = Instant::now();
         self.scratch
             .kin
-            .update(&self.model, &q, &self.state.charts, KinOrder::Pose);
+            .update_cached(&self.model, &q, &self.state.charts, KinOrder::Pose);
         let new_poses = self.scratch.kin.pose.clone();
         let mut diag = self.diagnostics(&new_poses, report);
         diag.min_distance = f64::INFINITY;
