@@ -182,12 +182,13 @@ pub struct ContactPair {
     /// `∂U_c/∂A_b` (zero unless [`Need::Gradient`] or more was asked).
     pub grad_b: Matrix3x4<f64>,
     /// `∂²U_c/∂[vec A_a; vec A_b]²` when [`Need::Hessian`] was asked.
-    pub hessian: Option<SMatrix<f64, 24, 24>>,
+    pub hessian: Option<Box<SMatrix<f64, 24, 24>>>,
 }
 
 /// Outcome of [`contact_pair`].
 #[derive(Clone, Debug, PartialEq)]
-#[allow(clippy::large_enum_variant)] // returned by value, never stored in bulk; avoids a heap box
+#[allow(clippy::large_enum_variant)] // ≈ 260 bytes: the 24×24 Hessian (4.6 KB) is boxed, as the
+// per-pair results are stored and moved in bulk (moving it inline was a fifth of a spider step)
 pub enum PairOutcome {
     /// Touching or overlapping (or closer than GJK resolves): the caller treats this as
     /// `U_c = +∞` (e.g. rejects the line-search trial point).
@@ -626,7 +627,7 @@ pub fn contact_pair(
         let hinv = plane_hessian_inverse(&sol.eval.hess);
         let w = hinv * bmat.transpose(); // 4×24
         hess -= bmat * w;
-        out.hessian = Some((hess + hess.transpose()) * 0.5);
+        out.hessian = Some(Box::new((hess + hess.transpose()) * 0.5));
     }
     Ok(PairOutcome::Separated(out))
 }

@@ -222,7 +222,7 @@ impl Energy for ContactEnergy {
                         links,
                         kappa,
                         (&c.grad_a, &c.grad_b),
-                        c.hessian.as_ref(),
+                        c.hessian.as_deref(),
                     );
                 }
             }

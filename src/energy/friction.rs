@@ -217,7 +217,7 @@ impl Energy for FrictionEnergy {
                 links,
                 1.0,
                 (&f.grad_a, &f.grad_b),
-                f.hessian.as_ref(),
+                f.hessian.as_deref(),
             );
         }
         Ok(())

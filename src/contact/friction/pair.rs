@@ -40,11 +40,11 @@ pub struct FrictionPair {
     /// `∂U_f/∂A_b^{t+1}`.
     pub grad_b: Matrix3x4<f64>,
     /// `∂²U_f/∂[vec A_a^{t+1}; vec A_b^{t+1}]²` when asked.
-    pub hessian: Option<SMatrix<f64, 24, 24>>,
+    pub hessian: Option<Box<SMatrix<f64, 24, 24>>>,
     /// `∂²U_f/∂A^{t+1}∂A^t` (rows `[vec A_a^{t+1}; vec A_b^{t+1}]`, columns
     /// `[vec A_a^t; vec A_b^t]`) for fixed lagged normal, basis and forces, when asked. The
     /// step-`t` vertices are `X^t = A^t [x_local; 1]` with the same local vertices.
-    pub mixed: Option<SMatrix<f64, 24, 24>>,
+    pub mixed: Option<Box<SMatrix<f64, 24, 24>>>,
 }
 
 pub(super) fn cross_matrix(n: &Vector3<f64>) -> Matrix3<f64> {
@@ -162,7 +162,7 @@ pub fn friction_pair(
     let hdiag = hess;
     let w = core.hinv * cmat.transpose(); // 3×24
     hess -= cmat * w;
-    out.hessian = Some((hess + hess.transpose()) * 0.5);
+    out.hessian = Some(Box::new((hess + hess.transpose()) * 0.5));
     if need == FrictionNeed::HessianAndMixed {
         let nx = cross_matrix(&frame.normal);
         let qm = Matrix3::identity() / dt + nx * core.q.z;
@@ -191,7 +191,7 @@ pub fn friction_pair(
             }
         }
         mixed -= cmat * (core.hinv * qx);
-        out.mixed = Some(mixed);
+        out.mixed = Some(Box::new(mixed));
     }
     Ok(out)
 }
