@@ -512,7 +512,7 @@ fn contact_warm_start_matches_cold_start() {
             assert!((w.value - cold.value).abs() <= 1e-12 * cold.value);
             assert!((w.plane - cold.plane).norm() <= 1e-8 * cold.plane.norm());
             assert!((w.grad_a - cold.grad_a).norm() <= 1e-9 * cold.grad_a.norm());
-            let (hw, hc) = (w.hessian.unwrap(), cold.hessian.unwrap());
+            let (hw, hc) = (**w.hessian.as_ref().unwrap(), **cold.hessian.as_ref().unwrap());
             assert!((hw - hc).norm() <= 1e-8 * hc.norm());
         }
         // An infeasible warm plane (wrong side) is ignored.
@@ -758,7 +758,7 @@ fn contact_solver_is_robust_on_random_pairs() {
         {
             PairOutcome::Separated(c) => {
                 assert!(c.value.is_finite() && c.value >= 0.0, "trial {trial}");
-                let h = c.hessian.unwrap();
+                let h = c.hessian.as_deref().unwrap();
                 assert!(h.iter().all(|v| v.is_finite()), "trial {trial}");
                 assert!(
                     c.grad_a

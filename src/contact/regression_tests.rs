@@ -149,7 +149,7 @@ fn plane_solve_stops_at_noise_floor_for_mirror_symmetric_pair() {
         };
         assert!(out.iterations <= 20, "{} iterations", out.iterations);
         assert!(out.value.is_finite() && out.value > 0.0);
-        if let Some(h) = out.hessian {
+        if let Some(h) = &out.hessian {
             assert!(h.iter().all(|v| v.is_finite()));
         }
         // Force balance of the plane, to the rounding of the barrier arguments amplified by
