@@ -173,7 +173,9 @@ pub struct ContactPair {
     /// Optimal plane `p* = (n*, o*)` in world coordinates: `n*·X + o* < 0` on hull `a`,
     /// `> 0` on hull `b`, `‖n*‖ < 1`. Pass it back as the warm start of the next call.
     pub plane: Vector4<f64>,
-    /// GJK distance estimate between the hulls.
+    /// A lower bound of the distance between the hulls: GJK's estimate on a
+    /// cold start; from a strictly feasible warm plane (no GJK), the gap of
+    /// the slab along its normal.
     pub distance: f64,
     /// Inner Newton iterations used.
     pub iterations: usize,
@@ -195,8 +197,13 @@ pub enum PairOutcome {
     Intersecting,
     /// Certified gap `≥ 2s/(1−s)`: `U_c = 0` and all derivatives vanish exactly.
     OutOfRange {
-        /// GJK distance estimate.
+        /// A lower bound of the distance (see [`ContactPair::distance`]).
         distance: f64,
+        /// A strictly feasible plane certifying the gap (world frame, the
+        /// mid-plane of the slab with `‖n‖ = 1 − s`). Pass it back as the warm
+        /// start: the next call re-certifies the gap along its normal without
+        /// GJK while the pair stays out of range.
+        plane: Vector4<f64>,
     },
     /// Separated and within range: value, plane and derivatives.
     Separated(ContactPair),
@@ -248,14 +255,14 @@ impl ContactPair {
 #[allow(clippy::large_enum_variant)] // short-lived stack value
 enum Core {
     Intersecting,
-    OutOfRange { distance: f64 },
+    OutOfRange { distance: f64, plane: Vector4<f64> },
     Separated { sol: PlaneSolution, distance: f64 },
 }
 
 /// Outcome of the separation test: the starting plane of the inner solve, in the shifted frame.
 enum Start {
     Intersecting,
-    OutOfRange { distance: f64 },
+    OutOfRange { distance: f64, plane: Vector4<f64> },
     Plane { p: Vector4<f64>, distance: f64 },
 }
 
@@ -277,6 +284,24 @@ fn start_plane(
         .filter(|w| w.iter().all(|v| v.is_finite()))
         .map(|w| (w, plane::value(xa, xb, &w, s)))
         .filter(|(_, v)| v.is_finite());
+    // A strictly feasible warm plane separates the hulls: no GJK. The slab
+    // along its normal `d` (gap `min_b − max_a`, a lower bound of the
+    // distance) certifies the out-of-range case, and the plane is the start.
+    if let Some((w, _)) = warm {
+        let d = Vector3::new(w.x, w.y, w.z).normalize();
+        let (max_a, min_b) = supports_along(xa, xb, &d);
+        let gap = min_b - max_a;
+        if gap >= params.support_distance() {
+            return Ok(Start::OutOfRange {
+                distance: gap,
+                plane: w,
+            });
+        }
+        return Ok(Start::Plane {
+            p: w,
+            distance: gap,
+        });
+    }
     let (cold, distance) = match separate(xa, xb, hint, simplex)? {
         Separation::Separated {
             dir,
@@ -284,13 +309,13 @@ fn start_plane(
             min_b,
             distance,
         } => {
-            if min_b - max_a >= params.support_distance() {
-                return Ok(Start::OutOfRange { distance });
-            }
             // Cold start: the mid-plane of the certified slab with ‖n‖ = 1 − s (strictly
             // feasible: every barrier argument is ≥ (1 − s)(min_b − max_a)/2 > 0).
             let n = dir * (1.0 - s);
             let p = Vector4::new(n.x, n.y, n.z, -(1.0 - s) * 0.5 * (max_a + min_b));
+            if min_b - max_a >= params.support_distance() {
+                return Ok(Start::OutOfRange { distance, plane: p });
+            }
             (Some((p, plane::value(xa, xb, &p, s))), distance)
         }
         Separation::Intersecting => match warm {
@@ -383,7 +408,9 @@ where
     scratch.simplex = Some(simplex);
     let (mut p, distance) = match start? {
         Start::Intersecting => return Ok((Core::Intersecting, c0)),
-        Start::OutOfRange { distance } => return Ok((Core::OutOfRange { distance }, c0)),
+        Start::OutOfRange { distance, plane } => {
+            return Ok((Core::OutOfRange { distance, plane }, c0));
+        }
         Start::Plane { p, distance } => (p, distance),
     };
     let s = params.s;
@@ -534,7 +561,10 @@ pub fn contact_pair(
     )?;
     let (sol, distance) = match core {
         Core::Intersecting => return Ok(PairOutcome::Intersecting),
-        Core::OutOfRange { distance } => return Ok(PairOutcome::OutOfRange { distance }),
+        Core::OutOfRange { distance, plane } => {
+            let plane = world_plane(&plane, &c0);
+            return Ok(PairOutcome::OutOfRange { distance, plane });
+        }
         Core::Separated { sol, distance } => (sol, distance),
     };
     let mut out = ContactPair {
@@ -700,7 +730,7 @@ pub fn contact_vertices(
     )?;
     let (sol, distance) = match core {
         Core::Intersecting => return Ok(VertexOutcome::Intersecting),
-        Core::OutOfRange { distance } => return Ok(VertexOutcome::OutOfRange { distance }),
+        Core::OutOfRange { distance, .. } => return Ok(VertexOutcome::OutOfRange { distance }),
         Core::Separated { sol, distance } => (sol, distance),
     };
     let n = Vector3::new(sol.p.x, sol.p.y, sol.p.z);

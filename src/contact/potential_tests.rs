@@ -350,12 +350,32 @@ fn contact_is_zero_beyond_support_distance() {
             let (la, pa, lb, pb) = configuration(kind, frac * thr, &mut rng);
             let out = pose_eval(&la, &pa, &lb, &pb, Need::Hessian);
             match out {
-                PairOutcome::OutOfRange { distance } => {
+                PairOutcome::OutOfRange { distance, plane } => {
                     assert!(
                         (distance / (frac * thr) - 1.0).abs() < 1e-6,
                         "{distance} vs {}",
                         frac * thr
-                    )
+                    );
+                    // The certificate, passed back as the warm start,
+                    // re-certifies without GJK: out of range again, with a
+                    // lower bound of the distance at or above the threshold.
+                    let mut sc = ContactScratch::new();
+                    let (ha, hb) = (
+                        HullPose {
+                            pose: &pa,
+                            x_local: &la,
+                        },
+                        HullPose {
+                            pose: &pb,
+                            x_local: &lb,
+                        },
+                    );
+                    match contact_pair(ha, hb, &params(), Some(plane), Need::Hessian, &mut sc) {
+                        Ok(PairOutcome::OutOfRange { distance: d2, .. }) => {
+                            assert!(d2 >= thr && d2 <= distance * (1.0 + 1e-9), "{d2}");
+                        }
+                        other => panic!("{kind:?} at {frac}: warm: {other:?}"),
+                    }
                 }
                 other => panic!("{kind:?} at {frac}: expected OutOfRange, got {other:?}"),
             }
@@ -512,7 +532,10 @@ fn contact_warm_start_matches_cold_start() {
             assert!((w.value - cold.value).abs() <= 1e-12 * cold.value);
             assert!((w.plane - cold.plane).norm() <= 1e-8 * cold.plane.norm());
             assert!((w.grad_a - cold.grad_a).norm() <= 1e-9 * cold.grad_a.norm());
-            let (hw, hc) = (**w.hessian.as_ref().unwrap(), **cold.hessian.as_ref().unwrap());
+            let (hw, hc) = (
+                **w.hessian.as_ref().unwrap(),
+                **cold.hessian.as_ref().unwrap(),
+            );
             assert!((hw - hc).norm() <= 1e-8 * hc.norm());
         }
         // An infeasible warm plane (wrong side) is ignored.

@@ -19,6 +19,7 @@ use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_direction
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::ContactSettings;
 use crate::contact::ccd::Ccd;
+use crate::contact::separation::{self, Separation};
 use crate::contact::{self, ContactParams, ContactScratch, PairOutcome};
 use crate::counters::{Stage, StageTimers, StepDiagnostics};
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
@@ -48,7 +49,6 @@ pub struct ContactEnergy {
     broad_time: Duration,
     /// Statistics of the last evaluation.
     last_active: usize,
-    last_min_distance: f64,
     /// The first intersecting pair of the last evaluation.
     last_intersecting: Option<(usize, usize)>,
     /// Continuous collision detection of the line search ([`Energy::max_step`]).
@@ -71,7 +71,6 @@ impl ContactEnergy {
             pair_slots: BTreeMap::new(),
             broad_time: Duration::ZERO,
             last_active: 0,
-            last_min_distance: f64::INFINITY,
             last_intersecting: None,
             ccd: Ccd::new(model, settings.ccd.clone()),
             ccd_time: Duration::ZERO,
@@ -103,6 +102,44 @@ impl ContactEnergy {
         self.pairs_key.0 = range;
         self.pairs_key.1.clear();
         self.pairs_key.1.extend_from_slice(poses);
+    }
+
+    /// The smallest GJK distance estimate over the last evaluation's
+    /// candidate pairs (as a cold start reports it). A warm-started pair
+    /// carries only a lower bound (the slab gap along its plane), so the
+    /// pairs are visited in increasing lower bound and GJK runs until the
+    /// next bound is no smaller than the best distance found: usually once.
+    fn min_distance(&self) -> f64 {
+        let mut order: Vec<(f64, usize)> = self
+            .results
+            .iter()
+            .enumerate()
+            .filter_map(|(k, r)| match r {
+                Ok(PairOutcome::Separated(c)) => Some((c.distance, k)),
+                Ok(PairOutcome::OutOfRange { distance, .. }) => Some((*distance, k)),
+                _ => None,
+            })
+            .collect();
+        order.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut best = f64::INFINITY;
+        let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
+        for (lower, k) in order {
+            if lower >= best {
+                break;
+            }
+            let (a, b) = self.pairs[k];
+            let exact = match separation::separate(
+                self.hulls.hull(a),
+                self.hulls.hull(b),
+                None,
+                &mut simplex,
+            ) {
+                Ok(Separation::Separated { distance, .. }) => distance,
+                _ => lower,
+            };
+            best = best.min(exact.max(lower));
+        }
+        best
     }
 
     fn describe(&self, model: &Model, h: usize) -> String {
@@ -178,7 +215,7 @@ impl Energy for ContactEnergy {
 
         self.pair_slots.clear();
         self.last_intersecting = None;
-        let (mut active, mut min_d) = (0, f64::INFINITY);
+        let mut active = 0;
         // A value-only evaluation is a line-search trial point: if a pair's
         // inner solve fails there, the point is rejected like an infeasible
         // one (+∞) and the search backtracks. Where derivatives are needed
@@ -203,13 +240,11 @@ impl Energy for ContactEnergy {
                     acc.value = f64::INFINITY;
                     return Ok(());
                 }
-                PairOutcome::OutOfRange { distance } => {
-                    min_d = min_d.min(*distance);
-                    self.warm.remove(&(a, b));
+                PairOutcome::OutOfRange { plane, .. } => {
+                    self.warm.insert((a, b), *plane);
                 }
                 PairOutcome::Separated(c) => {
                     active += 1;
-                    min_d = min_d.min(c.distance);
                     self.warm.insert((a, b), c.plane);
                     let kappa = self.settings.kappa;
                     acc.value += kappa * c.value;
@@ -228,7 +263,6 @@ impl Energy for ContactEnergy {
             }
         }
         self.last_active = active;
-        self.last_min_distance = min_d;
         Ok(())
     }
 
@@ -333,7 +367,8 @@ impl Energy for ContactEnergy {
             timers.add(Stage::Ccd, std::mem::take(&mut self.ccd_time));
         }
         d.contact_pairs = self.last_active;
-        d.min_distance = d.min_distance.min(self.last_min_distance);
+        let exact = self.min_distance();
+        d.min_distance = d.min_distance.min(exact);
         timers.carve(Stage::BroadPhase, std::mem::take(&mut self.broad_time));
     }
 }

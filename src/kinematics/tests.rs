@@ -18,10 +18,14 @@ fn generic_twists(
     let mut s2 = vec![Matrix3x4::zeros(); kin.twist2.len()];
     for (i, link) in model.links.iter().enumerate() {
         let n = link.ndof();
-        let chart = link.chart.map(|c| charts[c]).unwrap_or_else(Matrix3::identity);
+        let chart = link
+            .chart
+            .map(|c| charts[c])
+            .unwrap_or_else(Matrix3::identity);
         let mut d = JointDerivatives::default();
         let qi = q.rows(link.dof_offset, n);
-        link.joint.transform_derivatives_dual(&chart, qi.as_slice(), &mut d);
+        link.joint
+            .transform_derivatives_dual(&chart, qi.as_slice(), &mut d);
         let (pre, pose) = (&kin.pre[i], &kin.pose[i]);
         for k in 0..n {
             s1[link.dof_offset + k] = right_divide(&apply_linear(pre, &d.d1[k]), pose);
@@ -102,7 +106,10 @@ fn twists_match_central_differences_of_the_poses() {
                         - twist_apply(&m.twist[l], &m.pose[i]))
                         / (2.0 * h);
                     let an2 = twist_apply(kin.twist2(&model, i, k, l), &kin.pose[i]);
-                    assert!((fd2 - an2).norm() < 1e-8, "case {case}: ∂²A_{i}/∂θ_{k}∂θ_{l}");
+                    assert!(
+                        (fd2 - an2).norm() < 1e-8,
+                        "case {case}: ∂²A_{i}/∂θ_{k}∂θ_{l}"
+                    );
                 }
             }
         }
@@ -133,18 +140,37 @@ fn cached_evaluations_equal_fresh_ones_bit_for_bit() {
         k
     };
     let mut kin = Kinematics::new(&model);
-    let orders = [KinOrder::Pose, KinOrder::Second, KinOrder::First, KinOrder::Pose];
-    let points = [(&q, &charts), (&q, &charts), (&q2, &charts), (&q2, &charts2)];
+    let orders = [
+        KinOrder::Pose,
+        KinOrder::Second,
+        KinOrder::First,
+        KinOrder::Pose,
+    ];
+    let points = [
+        (&q, &charts),
+        (&q, &charts),
+        (&q2, &charts),
+        (&q2, &charts2),
+    ];
     for (at, (qa, ca)) in points.iter().enumerate() {
         for &order in &orders {
             kin.update_cached(&model, qa, ca, order);
             let f = fresh(qa, ca, order);
-            assert!(same_bits(&kin.pose, &f.pose), "point {at}, {order:?}: poses");
+            assert!(
+                same_bits(&kin.pose, &f.pose),
+                "point {at}, {order:?}: poses"
+            );
             if order >= KinOrder::First {
-                assert!(same_bits(&kin.twist, &f.twist), "point {at}, {order:?}: twists");
+                assert!(
+                    same_bits(&kin.twist, &f.twist),
+                    "point {at}, {order:?}: twists"
+                );
             }
             if order >= KinOrder::Second {
-                assert!(same_bits(&kin.twist2, &f.twist2), "point {at}: second twists");
+                assert!(
+                    same_bits(&kin.twist2, &f.twist2),
+                    "point {at}: second twists"
+                );
             }
         }
     }

@@ -121,7 +121,11 @@ fn gradient_dot_step(
     q: &DVector<f64>,
 ) -> f64 {
     let mut d = 0.0;
-    for (g, (a, a0)) in acc.link_grad.iter().zip(kin.pose.iter().zip(ctx.poses_prev)) {
+    for (g, (a, a0)) in acc
+        .link_grad
+        .iter()
+        .zip(kin.pose.iter().zip(ctx.poses_prev))
+    {
         // Σ_entries g (a − a⁰), column-major from 0.0: the order (and bits)
         // of `g.component_mul(&(a − a⁰)).sum()`, without the temporaries.
         let mut link = 0.0;
