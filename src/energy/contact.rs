@@ -40,6 +40,13 @@ pub struct ContactEnergy {
     /// The support range and link poses `hulls` and `pairs` were computed
     /// for (range NaN: never).
     pairs_key: (f64, Vec<Pose>),
+    /// Link-frame box of every hull (see [`WorldHulls::enclosing_box`]).
+    local_boxes: Vec<(nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)>,
+    /// World boxes of the last broad phase.
+    boxes: Vec<crate::geometry::Aabb>,
+    /// Whether hull `h`'s world vertices in `hulls` are those of the last
+    /// broad phase's poses (the candidates' are; the others are stale).
+    fresh: Vec<bool>,
     results: Vec<Result<PairOutcome, contact::ContactError>>,
     /// Vertex-balanced chunks of the pair evaluations (see [`PairWork`]).
     work: PairWork<Result<PairOutcome, contact::ContactError>>,
@@ -61,6 +68,9 @@ impl ContactEnergy {
     pub fn new(model: &Model, settings: ContactSettings) -> Self {
         ContactEnergy {
             params: ContactParams::with_width(settings.s),
+            local_boxes: WorldHulls::new(model).local_boxes(model),
+            boxes: Vec::new(),
+            fresh: Vec::new(),
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
@@ -96,9 +106,33 @@ impl ContactEnergy {
         if self.pairs_key.0.to_bits() == range.to_bits() && same(&self.pairs_key.1, poses) {
             return;
         }
-        self.hulls.update(model, poses);
-        self.broad
-            .candidate_pairs(&self.hulls, range, &self.settings.excluded, &mut self.pairs);
+        self.boxes.clear();
+        self.boxes.extend(
+            self.hulls
+                .ids
+                .iter()
+                .zip(&self.local_boxes)
+                .map(|(id, local)| WorldHulls::enclosing_box(&poses[id.link], local)),
+        );
+        self.broad.candidate_pairs_of_boxes(
+            &self.hulls,
+            &self.boxes,
+            range,
+            &self.settings.excluded,
+            &mut self.pairs,
+        );
+        // World vertices of the candidates only (the diagnostics and the
+        // infeasibility report read them); the contact pairs use the poses.
+        self.fresh.clear();
+        self.fresh.resize(self.hulls.ids.len(), false);
+        for &(a, b) in &self.pairs {
+            for h in [a, b] {
+                if !self.fresh[h] {
+                    self.fresh[h] = true;
+                    self.hulls.update_hull(model, poses, h);
+                }
+            }
+        }
         self.pairs_key.0 = range;
         self.pairs_key.1.clear();
         self.pairs_key.1.extend_from_slice(poses);

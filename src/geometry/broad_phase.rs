@@ -27,6 +27,14 @@
 //! blocks through the sweep only to reject them as same-link pairs; that was
 //! half of a parallel-jaw co-design iteration. Two hull boxes that overlap
 //! lie in link boxes that overlap, so the pair set is unchanged.
+//!
+//! **Boxes without vertices.** The contact term queries with boxes from each
+//! hull's link-frame box ([`BroadPhase::candidate_pairs_of_boxes`],
+//! [`WorldHulls::enclosing_box`]: O(1) per hull, at most √3 × looser), so a
+//! step never transforms the vertices of hulls far from everything (a
+//! designed jaw's blocks: a fifth of a parallel-jaw simulation). The pairs are
+//! then a superset; a pair beyond the range is certified out of range by the
+//! narrow phase and adds nothing to the energy.
 
 use super::aabb::Aabb;
 use super::hulls::WorldHulls;
@@ -94,6 +102,25 @@ impl BroadPhase {
         for h in 0..hulls.ids.len() {
             self.aabbs.push(padded_box(hulls.hull(h), half));
         }
+        self.sweep(hulls, excluded, out);
+    }
+
+    /// As [`BroadPhase::candidate_pairs`], with the hulls' boxes given
+    /// (`boxes[h]`, e.g. [`WorldHulls::enclosing_box`]: any box containing
+    /// hull `h`), each padded by `0.5 range`. `hulls` supplies the links
+    /// only: its vertices are not read.
+    pub fn candidate_pairs_of_boxes(
+        &mut self,
+        hulls: &WorldHulls,
+        boxes: &[Aabb],
+        range: f64,
+        excluded: &BTreeSet<(usize, usize)>,
+        out: &mut Vec<(usize, usize)>,
+    ) {
+        let half = 0.5 * range;
+        self.aabbs.clear();
+        self.aabbs
+            .extend(boxes.iter().take(hulls.ids.len()).map(|b| padded(b, half)));
         self.sweep(hulls, excluded, out);
     }
 

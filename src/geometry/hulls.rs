@@ -50,6 +50,38 @@ impl WorldHulls {
         w
     }
 
+    /// The link-frame box of every hull: `(centre c, half-extents e)` (m).
+    pub fn local_boxes(&self, model: &Model) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+        self.ids
+            .iter()
+            .map(|id| {
+                let b =
+                    crate::geometry::Aabb::of_points(&model.links[id.link].hulls[id.hull].x_local);
+                ((b.lo + b.hi) * 0.5, (b.hi - b.lo) * 0.5)
+            })
+            .collect()
+    }
+
+    /// A world box containing hull `h` at its link pose `A = [R | t]`,
+    /// from its link-frame box `(c, e)` ([`WorldHulls::local_boxes`]):
+    /// centre `R c + t`, half-extents `|R| e` (componentwise absolute
+    /// values), grown by a relative 1e-12 and 1e-15 m so that rounding never
+    /// leaves a vertex outside. At most √3 × the tight box's size; no vertex
+    /// is touched.
+    pub fn enclosing_box(
+        pose: &Pose,
+        local: &(Vector3<f64>, Vector3<f64>),
+    ) -> crate::geometry::Aabb {
+        let r = pose.fixed_view::<3, 3>(0, 0);
+        let centre = r * local.0 + pose.column(3);
+        let half = r.abs() * local.1;
+        let grow = half * 1e-12 + centre.abs() * 1e-15 + Vector3::repeat(1e-15);
+        crate::geometry::Aabb {
+            lo: centre - half - grow,
+            hi: centre + half + grow,
+        }
+    }
+
     /// Recomputes world vertices for link poses `poses`.
     pub fn update(&mut self, model: &Model, poses: &[Pose]) {
         for h in 0..self.ids.len() {
@@ -80,5 +112,58 @@ impl WorldHulls {
     /// World vertices of hull `h`.
     pub fn hull(&self, h: usize) -> &[Vector3<f64>] {
         &self.vertices[self.ranges[h].clone()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Aabb;
+    use crate::math::{pose_from, rpy_to_matrix, transform_point};
+    use rand::{RngExt, SeedableRng};
+
+    /// The enclosing box contains every vertex of the posed hull, also for
+    /// hulls far from the origin and nearly axis-aligned rotations (where
+    /// the tight box is the enclosing one up to rounding), and is at most
+    /// √3 (+ its margin) times the tight box along each axis.
+    #[test]
+    fn enclosing_box_contains_the_posed_hull() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for trial in 0..2000 {
+            let far = if trial % 2 == 0 { 1.0 } else { 1e3 };
+            let pts: Vec<Vector3<f64>> = (0..12)
+                .map(|_| {
+                    Vector3::new(
+                        rng.random_range(-0.3..0.3),
+                        rng.random_range(-0.1..0.1),
+                        rng.random_range(-0.2..0.2),
+                    ) + Vector3::repeat(far)
+                })
+                .collect();
+            let b = Aabb::of_points(&pts);
+            let local = ((b.lo + b.hi) * 0.5, (b.hi - b.lo) * 0.5);
+            let scale = if trial % 3 == 0 { 1e-9 } else { 3.0 };
+            let r = rpy_to_matrix(&[
+                rng.random_range(-scale..scale),
+                rng.random_range(-scale..scale),
+                rng.random_range(-scale..scale),
+            ]);
+            let pose = pose_from(&r, &Vector3::new(far, -far, 0.5 * far));
+            let enc = WorldHulls::enclosing_box(&pose, &local);
+            let world: Vec<Vector3<f64>> = pts.iter().map(|x| transform_point(&pose, x)).collect();
+            let tight = Aabb::of_points(&world);
+            for e in 0..3 {
+                assert!(
+                    enc.lo[e] <= tight.lo[e] && tight.hi[e] <= enc.hi[e],
+                    "trial {trial}"
+                );
+                let (we, wt) = (enc.hi[e] - enc.lo[e], tight.hi[e] - tight.lo[e]);
+                assert!(
+                    we <= 3f64.sqrt() * (b.hi - b.lo).norm() + 1e-9 * far,
+                    "trial {trial}"
+                );
+                assert!(we >= wt);
+            }
+        }
     }
 }
