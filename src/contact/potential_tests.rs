@@ -43,6 +43,18 @@ fn pose_eval(
     pb: &Matrix3x4<f64>,
     need: Need,
 ) -> PairOutcome {
+    pose_eval_warm(la, pa, lb, pb, need, None)
+}
+
+/// [`pose_eval`] from a warm plane.
+fn pose_eval_warm(
+    la: &[Vector3<f64>],
+    pa: &Matrix3x4<f64>,
+    lb: &[Vector3<f64>],
+    pb: &Matrix3x4<f64>,
+    need: Need,
+    warm: Option<Vector4<f64>>,
+) -> PairOutcome {
     let mut sc = ContactScratch::new();
     contact_pair(
         HullPose {
@@ -54,7 +66,7 @@ fn pose_eval(
             x_local: lb,
         },
         &params(),
-        None,
+        warm,
         need,
         &mut sc,
     )
@@ -359,19 +371,8 @@ fn contact_is_zero_beyond_support_distance() {
                     // The certificate, passed back as the warm start,
                     // re-certifies without GJK: out of range again, with a
                     // lower bound of the distance at or above the threshold.
-                    let mut sc = ContactScratch::new();
-                    let (ha, hb) = (
-                        HullPose {
-                            pose: &pa,
-                            x_local: &la,
-                        },
-                        HullPose {
-                            pose: &pb,
-                            x_local: &lb,
-                        },
-                    );
-                    match contact_pair(ha, hb, &params(), Some(plane), Need::Hessian, &mut sc) {
-                        Ok(PairOutcome::OutOfRange { distance: d2, .. }) => {
+                    match pose_eval_warm(&la, &pa, &lb, &pb, Need::Hessian, Some(plane)) {
+                        PairOutcome::OutOfRange { distance: d2, .. } => {
                             assert!(d2 >= thr && d2 <= distance * (1.0 + 1e-9), "{d2}");
                         }
                         other => panic!("{kind:?} at {frac}: warm: {other:?}"),
