@@ -40,7 +40,13 @@ pub struct FrictionEnergy {
     pub settings: ContactSettings,
     pub contact: ContactParams,
     pub friction: FrictionParams,
+    /// The collision hulls (ids and ranges; their world vertices are not
+    /// kept: the pairs use the link poses).
     hulls: WorldHulls,
+    /// Link-frame box of every hull (see [`WorldHulls::enclosing_box`]).
+    local_boxes: Vec<(nalgebra::Vector3<f64>, nalgebra::Vector3<f64>)>,
+    /// World boxes of the last broad phase.
+    boxes: Vec<crate::geometry::Aabb>,
     broad: BroadPhase,
     pairs: Vec<(usize, usize)>,
     warm: HashMap<(usize, usize), Vector4<f64>>,
@@ -65,6 +71,8 @@ impl FrictionEnergy {
             contact: ContactParams::with_width(settings.s),
             friction,
             settings,
+            local_boxes: WorldHulls::new(model).local_boxes(model),
+            boxes: Vec::new(),
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
@@ -91,9 +99,20 @@ impl Energy for FrictionEnergy {
     fn begin_step(&mut self, ctx: &StepContext, _kin_prev: &Kinematics) -> Result<(), EnergyError> {
         let model = ctx.model;
         let poses = ctx.poses_prev;
-        self.hulls.update(model, poses);
-        self.broad.candidate_pairs(
+        // Boxes from the link-frame boxes (no vertex transformed): the pairs
+        // are a superset of the tight boxes' ones, and the extra pairs are out
+        // of range, so they add nothing to the lagged contacts.
+        self.boxes.clear();
+        self.boxes.extend(
+            self.hulls
+                .ids
+                .iter()
+                .zip(&self.local_boxes)
+                .map(|(id, local)| WorldHulls::enclosing_box(&poses[id.link], local)),
+        );
+        self.broad.candidate_pairs_of_boxes(
             &self.hulls,
+            &self.boxes,
             self.contact.support_distance(),
             &self.settings.excluded,
             &mut self.pairs,
