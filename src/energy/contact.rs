@@ -88,12 +88,13 @@ impl ContactEnergy {
         }
     }
 
-    /// World hulls and candidate pairs at `poses`, recomputed only when the
-    /// poses or the support range differ bit for bit from those of the last
-    /// computation (a Newton iteration re-evaluates its accepted trial point
-    /// with derivatives: the same poses). The pairs are a function of the
-    /// poses, the range and the fixed exclusions, so the result is the same
-    /// bits either way.
+    /// Candidate pairs at `poses` (boxes from the link-frame boxes, see
+    /// [`WorldHulls::enclosing_box`]) and the candidates' world vertices,
+    /// recomputed only when the poses or the support range differ bit for
+    /// bit from those of the last computation (a Newton iteration
+    /// re-evaluates its accepted trial point with derivatives: the same
+    /// poses). The pairs are a function of the poses, the range and the
+    /// fixed exclusions, so the result is the same bits either way.
     fn update_pairs(&mut self, model: &Model, poses: &[Pose]) {
         let range = self.params.support_distance();
         let same = |a: &[Pose], b: &[Pose]| {
