@@ -107,14 +107,8 @@ impl ContactEnergy {
         if self.pairs_key.0.to_bits() == range.to_bits() && same(&self.pairs_key.1, poses) {
             return;
         }
-        self.boxes.clear();
-        self.boxes.extend(
-            self.hulls
-                .ids
-                .iter()
-                .zip(&self.local_boxes)
-                .map(|(id, local)| WorldHulls::enclosing_box(&poses[id.link], local)),
-        );
+        self.hulls
+            .enclosing_boxes(&self.local_boxes, poses, &mut self.boxes);
         self.broad.candidate_pairs_of_boxes(
             &self.hulls,
             &self.boxes,

@@ -102,14 +102,8 @@ impl Energy for FrictionEnergy {
         // Boxes from the link-frame boxes (no vertex transformed): the pairs
         // are a superset of the tight boxes' ones, and the extra pairs are out
         // of range, so they add nothing to the lagged contacts.
-        self.boxes.clear();
-        self.boxes.extend(
-            self.hulls
-                .ids
-                .iter()
-                .zip(&self.local_boxes)
-                .map(|(id, local)| WorldHulls::enclosing_box(&poses[id.link], local)),
-        );
+        self.hulls
+            .enclosing_boxes(&self.local_boxes, poses, &mut self.boxes);
         self.broad.candidate_pairs_of_boxes(
             &self.hulls,
             &self.boxes,

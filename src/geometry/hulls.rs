@@ -82,6 +82,23 @@ impl WorldHulls {
         }
     }
 
+    /// [`WorldHulls::enclosing_box`] of every hull at the link poses
+    /// `poses`, from its link-frame box `local[h]`, into `out`.
+    pub fn enclosing_boxes(
+        &self,
+        local: &[(Vector3<f64>, Vector3<f64>)],
+        poses: &[Pose],
+        out: &mut Vec<crate::geometry::Aabb>,
+    ) {
+        out.clear();
+        out.extend(
+            self.ids
+                .iter()
+                .zip(local)
+                .map(|(id, l)| Self::enclosing_box(&poses[id.link], l)),
+        );
+    }
+
     /// Recomputes world vertices for link poses `poses`.
     pub fn update(&mut self, model: &Model, poses: &[Pose]) {
         for h in 0..self.ids.len() {
