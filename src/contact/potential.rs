@@ -302,7 +302,7 @@ fn start_plane(
             distance: gap,
         });
     }
-    let (cold, distance) = match separate(xa, xb, hint, simplex)? {
+    match separate(xa, xb, hint, simplex)? {
         Separation::Separated {
             dir,
             max_a,
@@ -316,35 +316,12 @@ fn start_plane(
             if min_b - max_a >= params.support_distance() {
                 return Ok(Start::OutOfRange { distance, plane: p });
             }
-            (Some((p, plane::value(xa, xb, &p, s))), distance)
+            Ok(Start::Plane { p, distance })
         }
-        Separation::Intersecting => match warm {
-            // GJK cannot resolve gaps below ~1e-8 × hull size, but the warm plane proves
-            // separation; report the gap along its normal as the distance.
-            Some((w, _)) => {
-                let d = Vector3::new(w.x, w.y, w.z).normalize();
-                let (max_a, min_b) = supports_along(xa, xb, &d);
-                (None, min_b - max_a)
-            }
-            None => return Ok(Start::Intersecting),
-        },
-    };
-    // Start from the better of the cold plane and the (strictly feasible) warm plane.
-    let start = match (cold, warm) {
-        (Some((c, vc)), Some((w, vw))) => {
-            if vw <= vc {
-                w
-            } else {
-                c
-            }
-        }
-        (Some((c, _)), None) => c,
-        (None, Some((w, _))) => w,
-        // Not reachable (an intersecting pair without a feasible warm plane returned above);
-        // kept total so that this function cannot panic.
-        (None, None) => return Ok(Start::Intersecting),
-    };
-    Ok(Start::Plane { p: start, distance })
+        // GJK cannot resolve gaps below ~1e-8 × hull size; without a feasible warm plane
+        // to prove separation, the pair counts as intersecting.
+        Separation::Intersecting => Ok(Start::Intersecting),
+    }
 }
 
 /// `P''`-weighted centroid of the vertices at plane `p` (shifted frame): the "centre of
