@@ -117,3 +117,49 @@ fn solution_in_start_chart(
     }
     q
 }
+
+/// Gradient first (`NewtonOptions::gradient_first`): an accepted point that
+/// is likely the solution is evaluated without its Hessian, and again with
+/// it when the stopping test fails. The iterates must be the same bits as
+/// with the Hessian always evaluated — which needs every evaluation at one
+/// point to give the same bits however often the point was evaluated before
+/// (the contact term's warm-started plane solves, `ContactEnergy`). Scenes
+/// with free bodies (rotation charts), contact and friction; both the skip
+/// and the miss path must occur.
+#[test]
+fn gradient_first_changes_no_bit() {
+    let defaults: sdrs::sim::NewtonOptions = serde_yaml::from_str("{}").unwrap();
+    assert!(defaults.gradient_first, "on by default, also from a scene");
+    let (mut skipped, mut missed) = (0, 0);
+    for (name, steps) in [
+        ("parallel_jaw_gripper/scene_cube.yaml", 120),
+        ("box_stack.yaml", 150),
+        ("spider/scene.yaml", 60),
+    ] {
+        let path = common::robots(name);
+        let scene = Scene::load(&path).unwrap();
+        let mut on = scene.simulator();
+        let mut off = scene.simulator();
+        assert!(on.settings.newton.gradient_first);
+        off.settings.newton.gradient_first = false;
+        for step in 0..steps {
+            let d_on = on.step().unwrap();
+            let d_off = off.step().unwrap();
+            assert_eq!(d_off.newton.gradient_first, 0);
+            skipped += d_on.newton.gradient_first - d_on.newton.gradient_first_misses;
+            missed += d_on.newton.gradient_first_misses;
+            let same = on.state.q.len() == off.state.q.len()
+                && on
+                    .state
+                    .q
+                    .iter()
+                    .zip(off.state.q.iter())
+                    .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "{name}: step {step} differs");
+            assert_eq!(d_on.newton.iters, d_off.newton.iters, "{name}: step {step}");
+        }
+    }
+    assert!(skipped > 100, "Hessians skipped: {skipped}");
+    assert!(missed > 0, "no miss exercised");
+    eprintln!("Hessians skipped {skipped}, misses {missed}");
+}

@@ -30,6 +30,13 @@ pub struct NewtonReport {
     /// Iterations whose shifted-Cholesky step ([`crate::sim::Indefinite::Shift`]) found
     /// no acceptable point and were repeated with the clamped eigen step.
     pub shift_fallbacks: usize,
+    /// Accepted points evaluated gradient first ([`crate::sim::newton`],
+    /// "gradient first"): the Hessian was skipped when the point met the
+    /// stopping test.
+    pub gradient_first: usize,
+    /// Of those, points that did not meet it and were evaluated again with
+    /// the Hessian (one extra gradient evaluation each).
+    pub gradient_first_misses: usize,
 }
 
 /// Diagnostics of one completed step.

@@ -30,6 +30,9 @@ use nalgebra::{DVector, Vector4};
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
 
+/// A candidate hull pair and the plane its solve starts from.
+type PairStart = ((usize, usize), Option<Vector4<f64>>);
+
 /// The contact term.
 pub struct ContactEnergy {
     pub settings: ContactSettings,
@@ -51,6 +54,11 @@ pub struct ContactEnergy {
     /// Vertex-balanced chunks of the pair evaluations (see [`PairWork`]).
     work: PairWork<Result<PairOutcome, contact::ContactError>>,
     warm: HashMap<(usize, usize), Vector4<f64>>,
+    /// Each candidate pair with the plane its solve starts from at this
+    /// evaluation (see [`ContactEnergy::start_planes`]).
+    starts: Vec<PairStart>,
+    /// Evaluations so far at the poses of `pairs_key`.
+    evals_here: usize,
     pair_slots: BTreeMap<(usize, usize), usize>,
     /// Time spent in the broad phase since the last [`ContactEnergy::take_broad_phase_time`].
     broad_time: Duration,
@@ -78,6 +86,8 @@ impl ContactEnergy {
             results: Vec::new(),
             work: PairWork::default(),
             warm: HashMap::new(),
+            starts: Vec::new(),
+            evals_here: 0,
             pair_slots: BTreeMap::new(),
             broad_time: Duration::ZERO,
             last_active: 0,
@@ -95,7 +105,8 @@ impl ContactEnergy {
     /// re-evaluates its accepted trial point with derivatives: the same
     /// poses). The pairs are a function of the poses, the range and the
     /// fixed exclusions, so the result is the same bits either way.
-    fn update_pairs(&mut self, model: &Model, poses: &[Pose]) {
+    /// Returns whether they were recomputed (the poses are new).
+    fn update_pairs(&mut self, model: &Model, poses: &[Pose]) -> bool {
         let range = self.params.support_distance();
         let same = |a: &[Pose], b: &[Pose]| {
             a.len() == b.len()
@@ -105,7 +116,7 @@ impl ContactEnergy {
                     .all(|(x, y)| x.to_bits() == y.to_bits())
         };
         if self.pairs_key.0.to_bits() == range.to_bits() && same(&self.pairs_key.1, poses) {
-            return;
+            return false;
         }
         self.hulls
             .enclosing_boxes(&self.local_boxes, poses, &mut self.boxes);
@@ -131,6 +142,30 @@ impl ContactEnergy {
         self.pairs_key.0 = range;
         self.pairs_key.1.clear();
         self.pairs_key.1.extend_from_slice(poses);
+        true
+    }
+
+    /// The planes this evaluation's pair solves start from, into `starts`.
+    ///
+    /// The first evaluation at new poses starts from the warm planes (the
+    /// last solves' results); the second from the first one's results
+    /// (typically the solution already). Every later evaluation at the same
+    /// poses starts where the second did, so it repeats the second's solves
+    /// bit for bit: an evaluation's result does not depend on how often
+    /// the point was evaluated before (Newton may evaluate an accepted
+    /// point with the gradient and then again with the Hessian, see
+    /// [`crate::sim::newton`]).
+    fn start_planes(&mut self, new_poses: bool) {
+        if new_poses {
+            self.evals_here = 0;
+        }
+        if self.evals_here < 2 {
+            let warm = &self.warm;
+            self.starts.clear();
+            self.starts
+                .extend(self.pairs.iter().map(|&p| (p, warm.get(&p).copied())));
+        }
+        self.evals_here += 1;
     }
 
     /// The smallest GJK distance estimate over the last evaluation's
@@ -215,22 +250,22 @@ impl Energy for ContactEnergy {
     ) -> Result<(), EnergyError> {
         let model = ctx.model;
         let t0 = ctx.timed.then(Instant::now);
-        self.update_pairs(model, &kin.pose);
+        let new_poses = self.update_pairs(model, &kin.pose);
         self.broad_time += t0.map_or(Duration::ZERO, |t| t.elapsed());
+        self.start_planes(new_poses);
 
         let cneed = match need {
             Need::Value => contact::Need::Value,
             Need::Gradient => contact::Need::Gradient,
             Need::Hessian => contact::Need::Hessian,
         };
-        let (hulls, params, warm) = (&self.hulls, &self.params, &self.warm);
+        let (hulls, params) = (&self.hulls, &self.params);
         let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
         self.work.map(
-            &self.pairs,
-            |&(a, b)| hulls.ranges[a].len() + hulls.ranges[b].len(),
+            &self.starts,
+            |&((a, b), _)| hulls.ranges[a].len() + hulls.ranges[b].len(),
             ContactScratch::new,
-            |scratch, &(a, b)| {
-                let w = warm.get(&(a, b)).copied();
+            |scratch, &((a, b), w)| {
                 let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
                 if let Err(e) = &res {
                     let case =

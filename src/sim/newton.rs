@@ -89,6 +89,14 @@ pub struct NewtonOptions {
     /// every other chain ten times. Same solution to within `tol`.
     /// Default `true`.
     pub settle_blocks: bool,
+    /// Evaluate an accepted point's gradient before its Hessian when the
+    /// point is likely the solution (see [`Solve::eval_accepted`]). The
+    /// iterates and the result are the same bits either way; only the
+    /// work differs. Default `true`. Not a scene key (an implementation
+    /// choice; the tests compare both).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub gradient_first: bool,
 }
 
 /// Positive-definite Newton model of an indefinite (or nearly singular)
@@ -147,6 +155,7 @@ impl Default for NewtonOptions {
             predictor: Predictor::Extrapolate,
             indefinite: Indefinite::Shift,
             settle_blocks: true,
+            gradient_first: true,
         }
     }
 }
@@ -263,6 +272,12 @@ pub struct NewtonScratch {
     row_sums: Vec<f64>,
     /// Block-wise Cholesky / clamped-eigen solver and its work space.
     pub(crate) linear: BlockSolver,
+    /// Iterations of the last solve that met the stopping test (the
+    /// gradient-first prediction, see [`Solve::eval_accepted`]).
+    last_iters: Option<usize>,
+    /// Whether `hess` is the Hessian at the current point (false after a
+    /// gradient-first evaluation that met the stopping test).
+    hess_current: bool,
 }
 
 /// Minimizes `obj` starting from `q` (updated in place).
@@ -305,6 +320,7 @@ pub fn minimize_from(
     for iter in 0..=opts.max_iters {
         let grad_inf = run.scratch.grad.amax();
         if let Some(done) = run.converged(q, iter, value, grad_inf)? {
+            run.scratch.last_iters = Some(iter);
             return Ok(done);
         }
         if iter == opts.max_iters {
@@ -315,7 +331,7 @@ pub fn minimize_from(
             return run.finish_failed(iter, grad_inf, resolvable);
         }
         std::mem::swap(q, &mut run.scratch.trial);
-        value = run.eval(q, Need::Hessian)?;
+        value = run.eval_accepted(q, iter + 1)?;
     }
     let mut report = run.report;
     if report.grad_inf <= report.grad_floor {
@@ -369,9 +385,37 @@ impl Solve<'_> {
     /// `O(q)` with gradient and Hessian into the scratch buffers.
     fn eval(&mut self, q: &DVector<f64>, need: Need) -> Result<f64, NewtonError> {
         let s = &mut *self.scratch;
+        s.hess_current = need >= Need::Hessian;
         Ok(self
             .obj
             .eval(q, need, &mut s.grad, &mut s.hess, self.timers)?)
+    }
+
+    /// The derivatives at the point just accepted, the `iters`-th.
+    ///
+    /// Gradient first: the Hessian at the solution is never read (the
+    /// solve stops on `‖∇O‖∞ < tol`, which needs only the gradient), so
+    /// when this point is likely the solution — the last solve met the
+    /// stopping test after at most `iters` iterations (a trajectory's
+    /// steps are alike) — the gradient is evaluated alone, and the Hessian
+    /// only if the test fails (the gradient is then evaluated again with
+    /// it: a miss costs one gradient evaluation). The gradient's bits do
+    /// not depend on `need`, so the iterates and the result are the same
+    /// whichever way the point is evaluated; only the work differs
+    /// ([`NewtonReport::gradient_first`], [`NewtonReport::gradient_first_misses`]).
+    /// A Hessian that would be non-finite at the solution is then not
+    /// checked here (the next step's first evaluation checks its own).
+    fn eval_accepted(&mut self, q: &DVector<f64>, iters: usize) -> Result<f64, NewtonError> {
+        if self.opts.gradient_first && self.scratch.last_iters.is_some_and(|n| iters >= n) {
+            self.report.gradient_first += 1;
+            let value = self.eval(q, Need::Gradient)?;
+            let grad_inf = self.scratch.grad.amax();
+            if value.is_finite() && grad_inf < self.opts.tol {
+                return Ok(value);
+            }
+            self.report.gradient_first_misses += 1;
+        }
+        self.eval(q, Need::Hessian)
     }
 
     /// Phase 0: the start point. The guess replaces `q` when its objective
@@ -395,6 +439,7 @@ impl Solve<'_> {
             let reachable = self.obj.max_step(q, &self.scratch.dir, self.timers)? >= 1.0;
             let at_g = if reachable {
                 let s = &mut *self.scratch;
+                s.hess_current = true;
                 self.obj
                     .eval(g, Need::Hessian, &mut s.grad, &mut s.hess, self.timers)
             } else {
@@ -439,7 +484,7 @@ impl Solve<'_> {
             .obj
             .hessian_envelope()
             .filter(|e| e.len() == s.hess.nrows());
-        if !grad_inf.is_finite() || envelope::any_non_finite(&s.hess, env) {
+        if !grad_inf.is_finite() || (s.hess_current && envelope::any_non_finite(&s.hess, env)) {
             return Err(NewtonError::NonFinite { iter });
         }
         if grad_inf < self.opts.tol {
