@@ -1,5 +1,5 @@
 //! The solver options that change only a step's cost — the initial guess
-//! (`solver.predictor`), the Newton model of indefinite Hessian blocks
+//! (`solver.predictor`: `previous`, `extrapolate`, `quadratic`), the Newton model of indefinite Hessian blocks
 //! (`solver.indefinite`) and the zero step of independent blocks already
 //! below the tolerance (`solver.settle_blocks`) — do not change its solution
 //! beyond the Newton tolerance. Along a four-chain trajectory with contact, each step is
@@ -38,8 +38,10 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         (Predictor::Previous, Indefinite::Shift, false),
         (Predictor::Extrapolate, Indefinite::Shift, false),
         (Predictor::Previous, Indefinite::Clamp, true),
-        // The defaults.
         (Predictor::Extrapolate, Indefinite::Shift, true),
+        (Predictor::Quadratic, Indefinite::Clamp, false),
+        // The defaults.
+        (Predictor::Quadratic, Indefinite::Shift, true),
     ];
     let mut worst = vec![0.0f64; variants.len()];
     let mut contact_steps = 0;

@@ -142,6 +142,26 @@ fn gradient_dot_step(
         .sum::<f64>()
 }
 
+/// The initial guess of the next step's solve ([`Predictor`]):
+/// `2θ^t − θ^{t−1}` (constant generalized velocity), or with
+/// [`Predictor::Quadratic`] and `θ^{t−2}` known, `3(θ^t − θ^{t−1}) + θ^{t−2}`
+/// (constant generalized acceleration: the parabola through the last three
+/// states, one step on).
+fn predict_guess(state: &SimState, predictor: Predictor, guess: &mut DVector<f64>) {
+    match (predictor, &state.q_prev2) {
+        (Predictor::Quadratic, Some(q2)) if q2.len() == state.q.len() => {
+            guess.clone_from(&state.q);
+            *guess -= &state.q_prev;
+            *guess *= 3.0;
+            *guess += q2;
+        }
+        _ => {
+            guess.clone_from(&state.q);
+            guess.axpy(-1.0, &state.q_prev, 2.0);
+        }
+    }
+}
+
 impl Objective for StepObjective<'_> {
     fn eval(
         &mut self,
@@ -467,11 +487,11 @@ impl Simulator {
         // The predictor (`Predictor`) starts the ordinary solve; a solve
         // that fails from it is repeated from θ^t (with collision detection
         // on, that is the certified fallback below).
-        let predict = self.settings.newton.predictor == Predictor::Extrapolate;
+        let predictor = self.settings.newton.predictor;
+        let predict = predictor != Predictor::Previous;
         let mut guess = std::mem::take(&mut self.scratch.guess);
         if predict {
-            guess.clone_from(&self.state.q);
-            guess.axpy(-1.0, &self.state.q_prev, 2.0);
+            predict_guess(&self.state, predictor, &mut guess);
         }
         let guess_ref = predict.then_some(&guess);
         let ccd = self.energies.iter().any(|e| e.certifies());
@@ -556,7 +576,8 @@ impl Simulator {
             diag.ccd.fallbacks += 1;
         }
         let st = &mut self.state;
-        st.q_prev = std::mem::replace(&mut st.q, q);
+        let older = std::mem::replace(&mut st.q_prev, std::mem::replace(&mut st.q, q));
+        st.q_prev2 = Some(older);
         st.poses_prev = std::mem::replace(&mut st.poses, new_poses);
         st.step = step_index;
         st.time = step_index as f64 * self.settings.dt;

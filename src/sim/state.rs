@@ -1,5 +1,6 @@
 //! Persistent simulation state: the two most recent configurations (the
-//! position-level scheme is a two-step method) and the rotation charts.
+//! position-level scheme is a two-step method), the one before them (for
+//! the Newton solve's initial guess only) and the rotation charts.
 
 use crate::kinematics::link_poses;
 use crate::math::{Pose, so3};
@@ -21,6 +22,11 @@ pub struct SimState {
     pub q: DVector<f64>,
     /// `θ^{t−1}` (in the same charts as `q`).
     pub q_prev: DVector<f64>,
+    /// `θ^{t−2}` (in the same charts as `q`) when known: `None` in an
+    /// initial state. Read only by the quadratic predictor
+    /// ([`crate::sim::Predictor::Quadratic`]), i.e. by the initial guess of
+    /// the next step's Newton solve, never by the dynamics.
+    pub q_prev2: Option<DVector<f64>>,
     /// Chart centres `R_c` of spherical/free joints.
     pub charts: Vec<Matrix3<f64>>,
     /// `A^t`.
@@ -50,6 +56,7 @@ impl SimState {
             time: 0.0,
             q: q0,
             q_prev,
+            q_prev2: None,
             charts,
             poses,
             poses_prev,
@@ -58,7 +65,8 @@ impl SimState {
 
     /// Moves a chart centre onto the current orientation when its rotation
     /// vector grew past [`CHART_RECENTER`]: `R_c ← R_c exp(φ^t)`, `φ^t ← 0`,
-    /// `φ^{t−1} ← log(R_c'ᵀ R_c exp(φ^{t−1}))`. Poses are unchanged.
+    /// `φ^{t−1} ← log(R_c'ᵀ R_c exp(φ^{t−1}))` (and `φ^{t−2}` alike). Poses
+    /// are unchanged.
     pub fn recenter_charts(&mut self, model: &Model) {
         for link in &model.links {
             let Some(c) = link.chart else { continue };
@@ -69,12 +77,16 @@ impl SimState {
             }
             let old = self.charts[c];
             let new = old * so3::exp(&phi);
-            let phi_prev = Vector3::new(self.q_prev[o], self.q_prev[o + 1], self.q_prev[o + 2]);
-            let phi_prev_new = so3::log(&(new.transpose() * old * so3::exp(&phi_prev)));
-            for e in 0..3 {
-                self.q[o + e] = 0.0;
-                self.q_prev[o + e] = phi_prev_new[e];
+            let rechart = |q: &mut DVector<f64>| {
+                let phi = Vector3::new(q[o], q[o + 1], q[o + 2]);
+                let phi_new = so3::log(&(new.transpose() * old * so3::exp(&phi)));
+                q.rows_mut(o, 3).copy_from(&phi_new);
+            };
+            rechart(&mut self.q_prev);
+            if let Some(q2) = &mut self.q_prev2 {
+                rechart(q2);
             }
+            self.q.rows_mut(o, 3).fill(0.0);
             self.charts[c] = new;
         }
     }
