@@ -200,6 +200,12 @@ fn quick_suite_report_browser_gate_and_resume() {
     std::fs::remove_file(out.join("parts/codesign_spider.json")).unwrap();
     std::fs::remove_file(out.join("parts/codesign_spider/mesh_baseline__coarse_cage.json"))
         .unwrap();
+    // Interrupted before its first checkpoint (a row resumed from its
+    // checkpoint: `mesh_baseline_row_resumes_from_its_checkpoint`).
+    std::fs::remove_file(
+        out.join("parts/codesign_spider/mesh_baseline__coarse_cage.checkpoint.json"),
+    )
+    .unwrap();
     let o = run_compare(&["--suite", "quick"], &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
@@ -348,6 +354,53 @@ fn quick_suite_report_browser_gate_and_resume() {
     );
     let html = std::fs::read_to_string(out2.join("report.html")).unwrap();
     assert!(html.contains("REGRESSED"));
+}
+
+/// A co-design row is checkpointed after every iteration and continues
+/// from its checkpoint: the spider's three methods (co-design,
+/// controller-only, the coarse-cage mesh baseline) run 1 iteration, then
+/// the same entry with 2 iterations resumes each after iteration 1, and
+/// every final loss equals that of an uninterrupted 2-iteration run.
+#[test]
+fn mesh_baseline_row_resumes_from_its_checkpoint() {
+    let dir = scratch_dir("compare_checkpoint");
+    let task = root().join("robots/spider/task.yaml");
+    let suite = |iters: usize| {
+        let f = dir.join(format!("suite{iters}.yaml"));
+        std::fs::write(
+            &f,
+            format!(
+                "suite: ckpt\ncodesign:\n  - {{name: spider, task: {}, iters: {iters}, horizon: 30, fd_check: false, cages: [coarse]}}\n",
+                task.display()
+            ),
+        )
+        .unwrap();
+        f
+    };
+    let (s1, s2) = (suite(1), suite(2));
+    let out = dir.join("resumed");
+    let o = run_compare(&["--suite", s1.to_str().unwrap()], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run_compare(&["--suite", s2.to_str().unwrap()], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert_eq!(
+        stderr.matches("spider: resuming after iteration 1").count(),
+        3,
+        "{stderr}"
+    );
+    let fresh = dir.join("fresh");
+    let o = run_compare(&["--suite", s2.to_str().unwrap()], &fresh);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !e.contains("resuming"), "{e}");
+    let runs = |d: &Path| json(&d.join("results.json"))["codesign"][0]["runs"].clone();
+    let (a, b) = (runs(&out), runs(&fresh));
+    assert_eq!(a.as_array().unwrap().len(), 3);
+    for k in 0..3 {
+        assert_eq!(a[k]["method"], b[k]["method"]);
+        assert_eq!(a[k]["final_loss"], b[k]["final_loss"], "{}", a[k]["method"]);
+        assert_eq!(a[k]["history"], b[k]["history"], "{}", a[k]["method"]);
+    }
 }
 
 #[test]
