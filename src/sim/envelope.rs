@@ -110,36 +110,30 @@ fn rows(env: Option<&ColumnEnvelope>, l: usize, n: usize) -> Range<usize> {
     env.map_or(0..n, |e| e.rows(l))
 }
 
-/// Whether any entry of `h` is NaN or infinite, reading only the
-/// envelope's rows when one is given (the entries outside it are zeros).
-pub fn any_non_finite(h: &DMatrix<f64>, env: Option<&ColumnEnvelope>) -> bool {
-    let n = h.nrows();
-    h.as_slice()
-        .chunks_exact(n.max(1))
-        .enumerate()
-        .any(|(l, col)| col[rows(env, l, n)].iter().any(|v| !v.is_finite()))
-}
-
 /// `max_k Σ_l |h_kl|` (`‖h‖∞`), accumulated column by column (contiguous in
 /// the column-major `h`; a row-wise walk strides by `n`), so each row still
 /// adds its entries in the order `l = 0, 1, …` from the same start. Over
 /// the envelope's rows when one is given: the same bits as the full sum,
-/// the skipped entries being zeros. `sums` is scratch.
-pub fn max_row_sum(h: &DMatrix<f64>, env: Option<&ColumnEnvelope>, sums: &mut Vec<f64>) -> f64 {
+/// the skipped entries being zeros. `None` when a row sum is not finite:
+/// some entry is NaN or infinite (or the sum overflows), so one pass both
+/// checks the Hessian and measures it. `sums` is scratch.
+pub fn finite_max_row_sum(
+    h: &DMatrix<f64>,
+    env: Option<&ColumnEnvelope>,
+    sums: &mut Vec<f64>,
+) -> Option<f64> {
     let n = h.nrows();
     sums.clear();
     // `Sum for f64` folds from −0.0; the same start keeps every bit.
     sums.resize(n, -0.0);
-    if n == 0 {
-        return 0.0;
-    }
-    for (l, col) in h.as_slice().chunks_exact(n).enumerate() {
+    for (l, col) in h.as_slice().chunks_exact(n.max(1)).enumerate() {
         let r = rows(env, l, n);
         for (s, v) in sums[r.clone()].iter_mut().zip(&col[r]) {
             *s += v.abs();
         }
     }
-    sums.iter().copied().fold(0.0, f64::max)
+    sums.iter()
+        .try_fold(0.0, |m: f64, s| s.is_finite().then(|| m.max(*s)))
 }
 
 #[cfg(test)]
@@ -293,13 +287,18 @@ robots:
                 }
             }
             let (mut s1, mut s2) = (Vec::new(), Vec::new());
+            let norm = finite_max_row_sum(&reused, Some(env), &mut s1).unwrap();
             assert_eq!(
-                max_row_sum(&reused, Some(env), &mut s1).to_bits(),
-                max_row_sum(&reused, None, &mut s2).to_bits()
+                norm.to_bits(),
+                finite_max_row_sum(&reused, None, &mut s2)
+                    .unwrap()
+                    .to_bits()
             );
-            assert!(!any_non_finite(&reused, Some(env)));
-            reused[(env.rows(n - 1).start, n - 1)] = f64::NAN;
-            assert!(any_non_finite(&reused, Some(env)));
+            assert!(norm > 0.0);
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                reused[(env.rows(n - 1).start, n - 1)] = bad;
+                assert_eq!(finite_max_row_sum(&reused, Some(env), &mut s1), None);
+            }
             reused[(env.rows(n - 1).start, n - 1)] = 0.0;
         }
     }
