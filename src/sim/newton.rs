@@ -144,10 +144,9 @@ pub enum Predictor {
     /// acceleration: second order, exact for uniformly accelerated
     /// motion), with the same fallback to `θ^t`; `2θ^t − θ^{t−1}` when
     /// `θ^{t−2}` is not known (the first step from an initial state,
-    /// [`crate::sim::SimState::q_prev2`]). Measured on the four chains
-    /// (callgrind, 600 steps; 300 at 16 links): Newton iterations per step
-    /// 1.28 → 1.00, 2.58 → 1.96, 2.57 → 1.92 at 2, 8 and 16 links per chain,
-    /// and 12–20 % fewer instructions (`notes/performance.md`).
+    /// [`crate::sim::SimState::q_prev2`]). On the four chains it takes
+    /// about a quarter fewer Newton iterations per step than `extrapolate`
+    /// (figures: `docs/performance.md`, seventh session).
     #[default]
     Quadratic,
 }
