@@ -88,7 +88,15 @@ pub fn run(
         pb.set_message(format!("{}: {method}", spec.name));
         let t0 = Instant::now();
         let ckpt = parts.join(format!("{}.checkpoint.json", slug(&method)));
-        let (out, resumed) = optimize_resumable(&p, &task, design, iters, spec, &ckpt, force, pb)
+        let row = Row {
+            spec,
+            task: &task,
+            iters,
+            force,
+            pb,
+        };
+        let (out, resumed) = row
+            .optimize(&p, design, &ckpt)
             .with_context(|| format!("{}: {method}", spec.name))?;
         // A resumed run's wall time is the sessions' sum (the history's
         // cumulative clock).
@@ -206,70 +214,86 @@ pub fn finished(
 }
 
 /// A file name for a method ("mesh baseline, fine cage" → `mesh_baseline__fine_cage`).
-/// One method's optimization, checkpointed after every iteration into
-/// `ckpt` (the suite entry without `iters`, the task's
-/// [`checkpoint::RunKey`] and the optimizer state), and resumed from there
-/// when the entry, the task and scene files and the design flag are those
-/// of the checkpoint and it is at most `iters` iterations in (otherwise, or
-/// with `--force`, it starts afresh): a mesh-baseline row that takes longer
-/// than a session continues where it stopped, bitwise as the uninterrupted
-/// run would (see [`sdrs::optimize::checkpoint`]), and a finished row can
-/// be continued to more iterations. The checkpoint is kept after the run.
-/// Returns the outcome and whether it was resumed.
-#[allow(clippy::too_many_arguments)]
-fn optimize_resumable(
-    p: &Problem,
-    task: &Path,
-    design: bool,
+/// What every method of one co-design row shares.
+#[derive(Clone, Copy)]
+struct Row<'a> {
+    spec: &'a CodesignSpec,
+    /// The task file (resolved against the suite's directory).
+    task: &'a Path,
     iters: usize,
-    spec: &CodesignSpec,
-    ckpt: &Path,
+    /// `--force`: start afresh, ignoring checkpoints.
     force: bool,
-    pb: &ProgressBar,
-) -> Result<(sdrs::optimize::Outcome, bool)> {
-    let key = checkpoint::RunKey::new(task, &p.first().scene.source, design, 0)
-        .with_context(|| format!("{}: cannot hash the task and scene", task.display()))?;
-    // The entry without its iteration count: a run may be continued to more
-    // iterations (as `sdrs optimize --resume`).
-    let mut entry = serde_json::to_value(spec)?;
-    if let Some(m) = entry.as_object_mut() {
-        m.remove("iters");
+    pb: &'a ProgressBar,
+}
+
+impl Row<'_> {
+    /// One method's optimization, checkpointed after every iteration into
+    /// `ckpt` (the suite entry without `iters`, the task's
+    /// [`checkpoint::RunKey`] and the optimizer state), and resumed from there
+    /// when the entry, the task and scene files and the design flag are those
+    /// of the checkpoint and it is at most `iters` iterations in (otherwise, or
+    /// with `--force`, it starts afresh): a mesh-baseline row that takes longer
+    /// than a session continues where it stopped, bitwise as the uninterrupted
+    /// run would (see [`sdrs::optimize::checkpoint`]), and a finished row can
+    /// be continued to more iterations. The checkpoint is kept after the run.
+    /// Returns the outcome and whether it was resumed.
+    fn optimize(
+        &self,
+        p: &Problem,
+        design: bool,
+        ckpt: &Path,
+    ) -> Result<(sdrs::optimize::Outcome, bool)> {
+        let Row {
+            spec,
+            task,
+            iters,
+            force,
+            pb,
+        } = *self;
+        let key = checkpoint::RunKey::new(task, &p.first().scene.source, design, 0)
+            .with_context(|| format!("{}: cannot hash the task and scene", task.display()))?;
+        // The entry without its iteration count: a run may be continued to more
+        // iterations (as `sdrs optimize --resume`).
+        let mut entry = serde_json::to_value(spec)?;
+        if let Some(m) = entry.as_object_mut() {
+            m.remove("iters");
+        }
+        let resume = if force {
+            None
+        } else {
+            super::load_part::<_, (checkpoint::RunKey, checkpoint::State)>(ckpt, &entry)?
+                .filter(|(k, s)| *k == key && s.iter <= iters)
+                .map(|(_, s)| s)
+        };
+        if let Some(s) = &resume {
+            pb.inc(s.iter as u64 + 1);
+            pb.suspend(|| {
+                eprintln!(
+                    "{}: resuming after iteration {} ({})",
+                    spec.name,
+                    s.iter,
+                    ckpt.display()
+                )
+            });
+        }
+        let resumed = resume.is_some();
+        let opts = sdrs::optimize::RunOptions { seed: 0, resume };
+        let out = sdrs::optimize::optimize_with(
+            p,
+            iters,
+            &opts,
+            |_, _| pb.inc(1),
+            |state| {
+                super::store_part(ckpt, &entry, &(&key, state)).map_err(|e| {
+                    checkpoint::CheckpointError::Write {
+                        path: ckpt.to_path_buf(),
+                        msg: format!("{e:#}"),
+                    }
+                })
+            },
+        )?;
+        Ok((out, resumed))
     }
-    let resume = if force {
-        None
-    } else {
-        super::load_part::<_, (checkpoint::RunKey, checkpoint::State)>(ckpt, &entry)?
-            .filter(|(k, s)| *k == key && s.iter <= iters)
-            .map(|(_, s)| s)
-    };
-    if let Some(s) = &resume {
-        pb.inc(s.iter as u64 + 1);
-        pb.suspend(|| {
-            eprintln!(
-                "{}: resuming after iteration {} ({})",
-                spec.name,
-                s.iter,
-                ckpt.display()
-            )
-        });
-    }
-    let resumed = resume.is_some();
-    let opts = sdrs::optimize::RunOptions { seed: 0, resume };
-    let out = sdrs::optimize::optimize_with(
-        p,
-        iters,
-        &opts,
-        |_, _| pb.inc(1),
-        |state| {
-            super::store_part(ckpt, &entry, &(&key, state)).map_err(|e| {
-                checkpoint::CheckpointError::Write {
-                    path: ckpt.to_path_buf(),
-                    msg: format!("{e:#}"),
-                }
-            })
-        },
-    )?;
-    Ok((out, resumed))
 }
 
 fn slug(method: &str) -> String {
