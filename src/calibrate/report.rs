@@ -15,8 +15,8 @@
 //! effect         documented name of the chosen effect (pairs: "a+b"), null for none
 //! candidate      chosen candidate label ("joint_damping/all"), null for none
 //! parameters     {"<effect>/<joint|link|all>[:<param>]": value (SI)}, extrapolated to
-//!                Δt → 0 (refit at Δt/2, Richardson order 1, when the data are fitted
-//!                better at Δt/2: calibrate::select), else as fitted at Δt
+//!                Δt → 0 (refit at Δt/2, Richardson order 1, when the data come from a
+//!                finer step, judged per channel: calibrate::select), else as fitted at Δt
 //! parameters_at_dt  the same keys as fitted at the scene's Δt (in calibrated.yaml)
 //! confidence     {key: {value, low, high}}  95 % from the Gauss–Newton Hessian
 //!                (low/high null when the parameter is not identifiable)
