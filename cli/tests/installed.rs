@@ -13,6 +13,23 @@ const MODEL: &str = r#"<mujoco model="installed"><worldbody>
     <body name="b" pos="0.3 0 0"><joint type="hinge" axis="0 1 0"/><geom type="sphere" size="0.05"/></body>
   </body></worldbody></mujoco>"#;
 
+/// Runs `cmd`, retrying while the kernel reports the executable busy: the
+/// two tests copy a binary (or write a script) and run it at the same time,
+/// and a copy's write descriptor, inherited by the other test's child
+/// between its fork and exec, makes `exec` fail with `ETXTBSY` until that
+/// child has exec'd (seen once in a full local run).
+fn output(cmd: &mut std::process::Command) -> std::process::Output {
+    for _ in 0..50 {
+        match cmd.output() {
+            Err(e) if e.kind() == std::io::ErrorKind::ExecutableFileBusy => {
+                std::thread::sleep(std::time::Duration::from_millis(20))
+            }
+            r => return r.unwrap(),
+        }
+    }
+    cmd.output().unwrap()
+}
+
 /// The binary copied into a scratch folder, the model next to it, and the
 /// command run there with no `SDRS_ROOT`.
 fn installed(dir: &std::path::Path) -> std::process::Command {
@@ -42,10 +59,7 @@ fn a_binary_outside_the_source_tree_imports_mjcf_with_its_own_helpers() {
             .any(|d| d.join("tools/helpers/mjcf_dump.py").is_file()),
         "the scratch folder must not be inside a source tree"
     );
-    let out = installed(&dir)
-        .env("SDRS_PYTHON", root().join(".venv/bin/python"))
-        .output()
-        .unwrap();
+    let out = output(installed(&dir).env("SDRS_PYTHON", root().join(".venv/bin/python")));
     assert!(
         out.status.success(),
         "{}",
@@ -73,10 +87,7 @@ fn a_python_without_mujoco_gets_the_package_name_and_install_command() {
     .unwrap();
     use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(&wrapper, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let out = installed(&dir)
-        .env("SDRS_PYTHON", &wrapper)
-        .output()
-        .unwrap();
+    let out = output(installed(&dir).env("SDRS_PYTHON", &wrapper));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
