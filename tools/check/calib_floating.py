@@ -147,6 +147,12 @@ def apply_hidden(model, hidden):
             q = np.zeros(4)
             mujoco.mju_mat2Quat(q, rot.flatten())
             model.body_iquat[b] = q
+            # The compiler marked the torso's inertial frame as its body frame
+            # (`body_sameframe`), and MuJoCo then ignores `body_ipos`: until
+            # 2026-11-29 the hidden payload acted at the torso's centre (its
+            # 5 cm offset only in the inertia), so the data could not tell it
+            # from a mass scale (notes/calibration.md, session 12).
+            model.body_sameframe[b] = 0
         elif key.startswith("contact_mu/"):
             model.geom_friction[:, 0] = v["mu"]
         else:
