@@ -159,6 +159,20 @@ def apply_hidden(model, hidden):
             fail(f"unknown hidden effect {key}")
 
 
+def check_payloads(model, data, hidden):
+    """Each hidden payload's centre of mass is where MuJoCo computes the
+    body's: its inertial frame in the body frame, from the kinematics (a
+    changed `body_ipos` that MuJoCo ignores fails here)."""
+    for key, v in hidden:
+        if not key.startswith("payload/"):
+            continue
+        b = model.body(key.split("/")[-1]).id
+        rot = data.xmat[b].reshape(3, 3)
+        got = rot.T @ (data.xipos[b] - data.xpos[b])
+        if np.abs(got - model.body_ipos[b]).max() > 1e-9:
+            fail(f"{key}: MuJoCo puts the body's centre of mass at {got}, not at {model.body_ipos[b]}")
+
+
 def simulate_mujoco(args, sc, hidden, out_csv, seed):
     model = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, "ant.xml"))
     model.opt.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + args.integrator.upper())
@@ -172,6 +186,7 @@ def simulate_mujoco(args, sc, hidden, out_csv, seed):
     for j in JOINTS:
         data.qpos[model.joint(j).qposadr[0]] = rob["initial"][j]["q"][0]
     mujoco.mj_forward(model, data)
+    check_payloads(model, data, hidden)
     gains = ctrl["gains"]
     rng = np.random.default_rng(seed)
     cols = ["t", "ant/root:x", "ant/root:y", "ant/root:z"] + ["ant/" + j for j in JOINTS]
