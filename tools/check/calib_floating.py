@@ -189,7 +189,8 @@ def simulate_mujoco(args, sc, hidden, out_csv, seed):
     check_payloads(model, data, hidden)
     gains = ctrl["gains"]
     rng = np.random.default_rng(seed)
-    cols = ["t", "ant/root:x", "ant/root:y", "ant/root:z"] + ["ant/" + j for j in JOINTS]
+    torso = ["x", "y", "z"] if args.torso_xy else ["z"]
+    cols = ["t"] + ["ant/root:" + a for a in torso] + ["ant/" + j for j in JOINTS]
     if args.orientation:
         cols += ["ant/root:rx", "ant/root:ry", "ant/root:rz"]
     rows, next_sample = [], 0.0
@@ -197,7 +198,7 @@ def simulate_mujoco(args, sc, hidden, out_csv, seed):
     for k in range(steps + 1):
         t = k * args.timestep
         if t >= next_sample - 1e-12:
-            vals = list(data.qpos[:3]) + [data.qpos[model.joint(j).qposadr[0]] for j in JOINTS]
+            vals = [data.qpos["xyz".index(a)] for a in torso] + [data.qpos[model.joint(j).qposadr[0]] for j in JOINTS]
             if args.orientation:
                 vals += list(rotation_vector(data.qpos[3:7]))
             rows.append([t] + [x + args.noise * rng.standard_normal() for x in vals])
@@ -264,6 +265,10 @@ def main():
                     help="hips in phase (pushups) or alternating (scissor: the feet slide)")
     ap.add_argument("--orientation", action="store_true",
                     help="also measure the torso's orientation (rotation vector), as an IMU would")
+    ap.add_argument("--no-torso-xy", dest="torso_xy", action="store_false",
+                    help="do not measure the torso's horizontal position (its drift under an off-centre "
+                         "payload depends on MuJoCo's own contact settings by centimetres: "
+                         "notes/calibration.md, session 12)")
     ap.add_argument("--data-only", action="store_true", help="write scenes and data, do not calibrate")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
