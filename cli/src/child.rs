@@ -10,7 +10,7 @@
 //!   import starts helpers from rayon's worker threads, which live as long
 //!   as the process.)
 //! - A temporary folder the core creates for a helper is registered
-//!   ([`Runner::track_folder`]) and removed by the same handler when `sdrs`
+//!   ([`Runner::create_folder`]) and removed by the same handler when `sdrs`
 //!   is interrupted, before it exits with `128 + signal` (130 for `SIGINT`;
 //!   `ctrlc` does not say which signal came, so 130 is used for all). The
 //!   core removes it itself when it is done with it.
@@ -33,12 +33,16 @@ fn install_handler() {
     HANDLER.call_once(|| {
         let _ = ctrlc::set_handler(|| {
             cleanup();
-            std::process::exit(130);
         });
     });
 }
 
-/// Kills every registered helper and removes every registered folder.
+/// Kills every registered helper, removes every registered folder and
+/// exits with 130. The folder list stays locked until the exit, so a
+/// folder that another thread is about to create ([`Runner::create_folder`]
+/// creates and registers under the same lock) is never made: a worker
+/// that went on to its next mesh once left two folders behind
+/// (`child_cleanup`, seen in CI).
 fn cleanup() {
     if let Ok(children) = CHILDREN.lock() {
         for &pid in children.iter() {
@@ -51,11 +55,13 @@ fn cleanup() {
             let _ = pid;
         }
     }
-    if let Ok(folders) = FOLDERS.lock() {
+    let folders = FOLDERS.lock();
+    if let Ok(folders) = &folders {
         for f in folders.iter() {
             let _ = std::fs::remove_dir_all(f);
         }
     }
+    std::process::exit(130);
 }
 
 /// The `sdrs` binary's helper runner (see the module doc).
@@ -92,11 +98,14 @@ impl HelperRunner for Runner {
         out
     }
 
-    fn track_folder(&self, path: &Path) {
+    fn create_folder(&self, path: &Path) -> std::io::Result<()> {
         install_handler();
-        if let Ok(mut f) = FOLDERS.lock() {
-            f.push(path.to_path_buf());
-        }
+        let mut f = FOLDERS
+            .lock()
+            .map_err(|_| std::io::Error::other("the temporary-folder list is poisoned"))?;
+        std::fs::create_dir_all(path)?;
+        f.push(path.to_path_buf());
+        Ok(())
     }
 
     fn forget_folder(&self, path: &Path) {

@@ -45,10 +45,15 @@ pub trait HelperRunner: Send + Sync {
     /// Runs `cmd` to completion and collects its status, stdout and stderr,
     /// like [`Command::output`].
     fn output(&self, cmd: Command) -> std::io::Result<Output>;
-    /// `path`, a temporary folder just created for a helper, is to be
-    /// removed if the program is interrupted before [`Self::forget_folder`].
-    /// Default: nothing.
-    fn track_folder(&self, _path: &Path) {}
+    /// Creates `path` (and its parents), a temporary folder for a helper,
+    /// to be removed if the program is interrupted before
+    /// [`Self::forget_folder`]. A runner that removes folders on an
+    /// interruption must create and register the folder as one step with
+    /// respect to that removal, or a folder made by another thread between
+    /// the removal and the exit is left behind. Default: creates it.
+    fn create_folder(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::create_dir_all(path)
+    }
     /// `path` is gone (removed by [`TempDir`]'s drop). Default: nothing.
     fn forget_folder(&self, _path: &Path) {}
 }
@@ -86,10 +91,10 @@ pub struct TempDir {
 }
 
 impl TempDir {
-    /// Creates `path` (and its parents) and tells the runner.
+    /// Creates `path` (and its parents) through the runner
+    /// ([`HelperRunner::create_folder`]).
     pub fn create(path: PathBuf) -> std::io::Result<TempDir> {
-        std::fs::create_dir_all(&path)?;
-        runner().track_folder(&path);
+        runner().create_folder(&path)?;
         Ok(TempDir { path })
     }
 
