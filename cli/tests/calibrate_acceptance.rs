@@ -15,19 +15,11 @@ fn reacher_clean_is_none_and_damping_is_named_alone() {
         return;
     }
     let dir = support::scratch_dir("calibrate-acceptance");
-    let o = support::python()
-        .arg(support::root().join("tools/check/calib_acceptance.py"))
-        .args(["--cases", "quick", "--duration", "2.0", "--sdrs"])
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
-        .arg("--out")
-        .arg(&*dir)
-        .output()
-        .unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    eprintln!("{out}{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
-    let cases = summary.as_array().unwrap();
+    let (ok, cases) = support::calibration_check(
+        "calib_acceptance.py",
+        &["--cases", "quick", "--duration", "2.0"],
+        &dir,
+    );
     assert_eq!(cases.len(), 2);
     let clean = &cases[0];
     assert_eq!(clean["verdict"], "none", "{}", clean["reason"]);
@@ -37,5 +29,5 @@ fn reacher_clean_is_none_and_damping_is_named_alone() {
     assert_eq!(damp["candidate"], "joint_damping/all", "{}", damp["reason"]);
     let c = damp["parameters"]["joint_damping/all"].as_f64().unwrap();
     assert!((c / 0.5 - 1.0).abs() <= 0.1, "damping {c} (true 0.5)");
-    assert!(o.status.success());
+    assert!(ok);
 }

@@ -25,25 +25,16 @@ fn ant_clean_is_none_and_ground_friction_is_named_alone() {
         return;
     }
     let dir = support::scratch_dir("calibrate-floating");
-    let o = support::python()
-        .arg(support::root().join("tools/check/calib_floating.py"))
-        .args([
+    let (ok, cases) = support::calibration_check(
+        "calib_floating.py",
+        &[
             "--cases",
             "clean,mu",
             "--effects",
             "contact_mu,link_mass_scale",
-            "--sdrs",
-        ])
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
-        .arg("--out")
-        .arg(&*dir)
-        .output()
-        .unwrap();
-    let out = String::from_utf8_lossy(&o.stdout);
-    eprintln!("{out}{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
-    let cases = summary.as_array().unwrap();
+        ],
+        &dir,
+    );
     assert_eq!(cases.len(), 2);
     let clean = &cases[0];
     assert_eq!(clean["verdict"], "none", "{}", clean["reason"]);
@@ -51,5 +42,5 @@ fn ant_clean_is_none_and_ground_friction_is_named_alone() {
     assert_eq!(mu["candidate"], "contact_mu/all", "{}", mu["reason"]);
     let v = mu["parameters"]["contact_mu/all"].as_f64().unwrap();
     assert!((v / 0.3 - 1.0).abs() <= 0.15, "μ {v} (true 0.3)");
-    assert!(o.status.success());
+    assert!(ok);
 }

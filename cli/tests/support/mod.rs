@@ -102,3 +102,31 @@ pub fn files_under(
     out.sort();
     out
 }
+
+/// Runs the calibration check script `tools/check/<script>` with `args`, this
+/// package's `sdrs` and `--out dir` in the project's Python; prints its
+/// output and returns its exit success and the cases of its
+/// `summary.json`.
+pub fn calibration_check(
+    script: &str,
+    args: &[&str],
+    dir: &std::path::Path,
+) -> (bool, Vec<serde_json::Value>) {
+    let o = python()
+        .arg(root().join("tools/check").join(script))
+        .args(args)
+        .arg("--sdrs")
+        .arg(env!("CARGO_BIN_EXE_sdrs"))
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap();
+    eprintln!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    (o.status.success(), summary.as_array().unwrap().clone())
+}
