@@ -395,16 +395,17 @@ fn channel_rss(m: &Measured, split: usize, a: &Simulated, mask: &[bool]) -> Vec<
     channel_sums(m, split, a, None, mask).0
 }
 
-/// [`channel_rss`] and, when `b` is given, `Σ(a − b)²` per channel.
+/// Per channel in `mask`: `Σ(a − y)²` and, when `b` is given, `Σ(b − y)²`
+/// and `Σ(a − b)²` (one pass over the samples).
 fn channel_sums(
     m: &Measured,
     split: usize,
     a: &Simulated,
     b: Option<&Simulated>,
     mask: &[bool],
-) -> (Vec<f64>, Vec<f64>) {
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let n = m.channels.len();
-    let (mut ra, mut d) = (vec![0.0; n], vec![0.0; n]);
+    let (mut ra, mut rb, mut d) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     for (c, ch) in m.channels.iter().enumerate().filter(|(c, _)| mask[*c]) {
         for (i, &t) in m.times[..split].iter().enumerate() {
             let Some(y) = ch.values[i] else { continue };
@@ -412,11 +413,12 @@ fn channel_sums(
             ra[c] += (va - y) * (va - y);
             if let Some(b) = b {
                 let vb = b.at(ch.dof, t);
+                rb[c] += (vb - y) * (vb - y);
                 d[c] += (va - vb) * (va - vb);
             }
         }
     }
-    (ra, d)
+    (ra, rb, d)
 }
 
 /// The channels whose measurements are significantly closer to `b` (the
@@ -435,8 +437,7 @@ pub fn finer_step_channels(
     noise: f64,
 ) -> Vec<bool> {
     let all = vec![true; m.channels.len()];
-    let (ra, d2) = channel_sums(m, split, a, Some(b), &all);
-    let rb = channel_rss(m, split, b, &all);
+    let (ra, rb, d2) = channel_sums(m, split, a, Some(b), &all);
     (0..all.len())
         .map(|c| {
             let (s, dc) = (ra[c] - rb[c], d2[c].sqrt());
