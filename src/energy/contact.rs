@@ -108,14 +108,7 @@ impl ContactEnergy {
     /// Returns whether they were recomputed (the poses are new).
     fn update_pairs(&mut self, model: &Model, poses: &[Pose]) -> bool {
         let range = self.params.support_distance();
-        let same = |a: &[Pose], b: &[Pose]| {
-            a.len() == b.len()
-                && a.iter()
-                    .flat_map(|p| p.iter())
-                    .zip(b.iter().flat_map(|p| p.iter()))
-                    .all(|(x, y)| x.to_bits() == y.to_bits())
-        };
-        if self.pairs_key.0.to_bits() == range.to_bits() && same(&self.pairs_key.1, poses) {
+        if self.pairs_key.0.to_bits() == range.to_bits() && self.last_at(poses) {
             return false;
         }
         self.hulls
@@ -147,6 +140,19 @@ impl ContactEnergy {
 
     /// The planes this evaluation's pair solves start from, into `starts`.
     ///
+    /// Whether the last computation of `pairs` (and so the last evaluation,
+    /// which `results` holds) was at exactly `poses`, bit for bit.
+    fn last_at(&self, poses: &[Pose]) -> bool {
+        self.pairs_key.1.len() == poses.len()
+            && self
+                .pairs_key
+                .1
+                .iter()
+                .flat_map(|p| p.iter())
+                .zip(poses.iter().flat_map(|p| p.iter()))
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+    }
+
     /// The first evaluation at new poses starts from the warm planes (the
     /// last solves' results); the second from the first one's results
     /// (typically the solution already). Every later evaluation at the same
@@ -220,6 +226,27 @@ impl Energy for ContactEnergy {
 
     fn kind(&self) -> crate::energy::TermKind {
         crate::energy::TermKind::Contact
+    }
+
+    /// The planes of the last evaluation's results, when it was at `poses`:
+    /// the optimal plane of each separated pair and the certifying plane of
+    /// each pair out of range (no plane for an intersecting pair or a failed
+    /// solve).
+    fn planes_at(&self, poses: &[Pose], out: &mut HashMap<(usize, usize), Vector4<f64>>) {
+        if !self.last_at(poses) || self.results.len() != self.pairs.len() {
+            return;
+        }
+        for (&pair, res) in self.pairs.iter().zip(&self.results) {
+            match res {
+                Ok(PairOutcome::Separated(c)) => {
+                    out.insert(pair, c.plane);
+                }
+                Ok(PairOutcome::OutOfRange { plane, .. }) => {
+                    out.insert(pair, *plane);
+                }
+                _ => {}
+            }
+        }
     }
 
     fn explain_infeasible(&self, model: &Model) -> Option<String> {

@@ -36,7 +36,8 @@ pub use pd::PdController;
 use crate::kinematics::Kinematics;
 use crate::math::Pose;
 use crate::model::Model;
-use nalgebra::{DVector, Matrix3x4, Matrix4, SMatrix, Vector3};
+use nalgebra::{DVector, Matrix3x4, Matrix4, SMatrix, Vector3, Vector4};
+use std::collections::HashMap;
 
 /// 12×12 Hessian block over `vec(A_i)`.
 pub type PoseHessian = SMatrix<f64, 12, 12>;
@@ -83,6 +84,12 @@ pub struct StepContext<'a> {
     /// ([`crate::counters::StageTimers::set_detailed`]). Without it no term
     /// reads the clock inside an evaluation.
     pub timed: bool,
+    /// Optimal separating planes at `poses_prev` by hull pair, when a
+    /// contact term's last evaluation was at exactly those poses
+    /// ([`Energy::planes_at`]); empty otherwise. The friction term starts
+    /// its lagged contact solves from them (they are then already solved).
+    /// `None` outside [`Energy::begin_step`].
+    pub planes_prev: Option<&'a HashMap<(usize, usize), Vector4<f64>>>,
 }
 
 /// Output buffers for the terms; reused across evaluations.
@@ -199,6 +206,13 @@ pub trait Energy: Send + Sync {
     ) -> Result<(), EnergyError> {
         Ok(())
     }
+
+    /// Adds to `out` the optimal separating plane of every hull pair this
+    /// term evaluated at `poses`, if its last evaluation was at exactly
+    /// (bit for bit) those poses; nothing otherwise. Read by the other
+    /// terms' `begin_step` through [`StepContext::planes_prev`]. Default:
+    /// nothing.
+    fn planes_at(&self, _poses: &[Pose], _out: &mut HashMap<(usize, usize), Vector4<f64>>) {}
 
     /// After an accepted step: adds the term's statistics at the accepted
     /// state (its last evaluation) and sub-stage times.

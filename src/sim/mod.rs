@@ -34,6 +34,8 @@ use crate::model::Model;
 use assemble::AssembleScratch;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use newton::{NewtonScratch, Objective};
+use nalgebra::Vector4;
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// Largest change of a rotation-vector coordinate in one Newton iteration
@@ -93,6 +95,9 @@ struct StepScratch {
     guess: DVector<f64>,
     /// Per-term work of the current step (when `energy_balance` is on).
     work: StepWork,
+    /// The contact planes at `θ^t` ([`StepContext::planes_prev`]), gathered
+    /// by [`Simulator::begin_next_step`].
+    planes_prev: HashMap<(usize, usize), Vector4<f64>>,
 }
 
 /// The step objective `O(θ^{t+1})` as seen by Newton.
@@ -345,6 +350,7 @@ impl Simulator {
             targets: Vec::new(),
             guess: DVector::zeros(0),
             work: StepWork::default(),
+            planes_prev: HashMap::new(),
         };
         Simulator {
             model,
@@ -364,7 +370,11 @@ impl Simulator {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         self.controller
             .targets_at(t_next, &mut self.scratch.targets);
-        let ctx = make_context(
+        self.scratch.planes_prev.clear();
+        for e in self.energies.iter() {
+            e.planes_at(&self.state.poses, &mut self.scratch.planes_prev);
+        }
+        let mut ctx = make_context(
             &self.model,
             &self.settings,
             &self.state,
@@ -373,6 +383,7 @@ impl Simulator {
             t_next,
             self.timers.detailed(),
         );
+        ctx.planes_prev = Some(&self.scratch.planes_prev);
         self.scratch.kin_start.update(
             &self.model,
             &self.state.q,
@@ -635,6 +646,7 @@ fn make_context<'a>(
         targets,
         pose_targets,
         timed,
+        planes_prev: None,
     }
 }
 
@@ -675,6 +687,7 @@ fn step_objective(
         targets,
         work,
         guess: _,
+        planes_prev: _,
     } = scratch;
     let ctx = make_context(
         model,
