@@ -143,14 +143,14 @@ impl ContactEnergy {
     /// Whether the last computation of `pairs` (and so the last evaluation,
     /// which `results` holds) was at exactly `poses`, bit for bit.
     fn last_at(&self, poses: &[Pose]) -> bool {
-        self.pairs_key.1.len() == poses.len()
-            && self
-                .pairs_key
-                .1
-                .iter()
-                .flat_map(|p| p.iter())
-                .zip(poses.iter().flat_map(|p| p.iter()))
-                .all(|(x, y)| x.to_bits() == y.to_bits())
+        let key = &self.pairs_key.1;
+        key.len() == poses.len()
+            && key.iter().zip(poses).all(|(a, b)| {
+                a.as_slice()
+                    .iter()
+                    .zip(b.as_slice())
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            })
     }
 
     /// The first evaluation at new poses starts from the warm planes (the
@@ -228,23 +228,20 @@ impl Energy for ContactEnergy {
         crate::energy::TermKind::Contact
     }
 
-    /// The planes of the last evaluation's results, when it was at `poses`:
-    /// the optimal plane of each separated pair and the certifying plane of
-    /// each pair out of range (no plane for an intersecting pair or a failed
-    /// solve).
-    fn planes_at(&self, poses: &[Pose], out: &mut HashMap<(usize, usize), Vector4<f64>>) {
-        if !self.last_at(poses) || self.results.len() != self.pairs.len() {
+    /// The optimal planes of the last evaluation's separated pairs, when it
+    /// was at `poses` (`pairs` is sorted, so they are appended in order).
+    fn planes_at(&self, poses: &[Pose], out: &mut Vec<super::PairPlane>) {
+        let separated = |r: &Result<PairOutcome, _>| matches!(r, Ok(PairOutcome::Separated(_)));
+        if !self.results.iter().any(separated)
+            || self.results.len() != self.pairs.len()
+            || !self.last_at(poses)
+        {
             return;
         }
+        debug_assert!(self.pairs.windows(2).all(|w| w[0] < w[1]));
         for (&pair, res) in self.pairs.iter().zip(&self.results) {
-            match res {
-                Ok(PairOutcome::Separated(c)) => {
-                    out.insert(pair, c.plane);
-                }
-                Ok(PairOutcome::OutOfRange { plane, .. }) => {
-                    out.insert(pair, *plane);
-                }
-                _ => {}
+            if let Ok(PairOutcome::Separated(c)) = res {
+                out.push((pair, c.plane));
             }
         }
     }

@@ -127,11 +127,12 @@ impl Energy for FrictionEnergy {
                     hulls.hull_pose(model, poses, a),
                     hulls.hull_pose(model, poses, b),
                 );
-                let warm = ctx
-                    .planes_prev
-                    .and_then(|m| m.get(&(a, b)))
-                    .or_else(|| warm_planes.get(&(a, b)))
-                    .copied();
+                let shared = ctx.planes_prev.and_then(|v| {
+                    v.binary_search_by_key(&(a, b), |e| e.0)
+                        .ok()
+                        .map(|i| v[i].1)
+                });
+                let warm = shared.or_else(|| warm_planes.get(&(a, b)).copied());
                 match contact::contact_pair(pa, pb, params, warm, contact::Need::Value, scratch) {
                     Ok(PairOutcome::Separated(c)) => Ok(Some((
                         (a, b),

@@ -34,8 +34,6 @@ use crate::model::Model;
 use assemble::AssembleScratch;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use newton::{NewtonScratch, Objective};
-use nalgebra::Vector4;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// Largest change of a rotation-vector coordinate in one Newton iteration
@@ -97,7 +95,7 @@ struct StepScratch {
     work: StepWork,
     /// The contact planes at `θ^t` ([`StepContext::planes_prev`]), gathered
     /// by [`Simulator::begin_next_step`].
-    planes_prev: HashMap<(usize, usize), Vector4<f64>>,
+    planes_prev: Vec<crate::energy::PairPlane>,
 }
 
 /// The step objective `O(θ^{t+1})` as seen by Newton.
@@ -350,7 +348,7 @@ impl Simulator {
             targets: Vec::new(),
             guess: DVector::zeros(0),
             work: StepWork::default(),
-            planes_prev: HashMap::new(),
+            planes_prev: Vec::new(),
         };
         Simulator {
             model,
