@@ -228,24 +228,6 @@ impl Energy for ContactEnergy {
         crate::energy::TermKind::Contact
     }
 
-    /// The optimal planes of the last evaluation's separated pairs, when it
-    /// was at `poses` (`pairs` is sorted, so they are appended in order).
-    fn planes_at(&self, poses: &[Pose], out: &mut Vec<super::PairPlane>) {
-        let separated = |r: &Result<PairOutcome, _>| matches!(r, Ok(PairOutcome::Separated(_)));
-        if !self.results.iter().any(separated)
-            || self.results.len() != self.pairs.len()
-            || !self.last_at(poses)
-        {
-            return;
-        }
-        debug_assert!(self.pairs.windows(2).all(|w| w[0] < w[1]));
-        for (&pair, res) in self.pairs.iter().zip(&self.results) {
-            if let Ok(PairOutcome::Separated(c)) = res {
-                out.push((pair, c.plane));
-            }
-        }
-    }
-
     fn explain_infeasible(&self, model: &Model) -> Option<String> {
         let (a, b) = self.last_intersecting?;
         let depth = contact::separation::penetration_depth(self.hulls.hull(a), self.hulls.hull(b))

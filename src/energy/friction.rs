@@ -4,13 +4,9 @@
 //! bases are computed at the step-`t` poses and frozen (lagged, as in the
 //! paper); every Newton evaluation then solves each active pair's inner
 //! problem over the plane's in-plane velocity `u` and spin `ω`.
-//! The lagged planes are recomputed here (value-only contact solves) rather
-//! than borrowed from the contact term, which keeps the two terms
-//! independent. Each solve starts from the contact term's optimal plane at
-//! the same poses when there is one ([`StepContext::planes_prev`]: the
-//! contact term's last evaluation was the accepted state, so the solve
-//! starts at its solution and stops after one evaluation), else from this
-//! term's plane of the previous step.
+//! The lagged planes are recomputed here (value-only contact solves, warm
+//! started) rather than borrowed from the contact term, which keeps the two
+//! terms independent; it costs one contact evaluation per step.
 //!
 //! Normal forces include the stiffness `κ`, so `U_f` is not multiplied by
 //! `κ` again (the paper's eq. `SDRS` scales both sums by one constant; the
@@ -127,12 +123,7 @@ impl Energy for FrictionEnergy {
                     hulls.hull_pose(model, poses, a),
                     hulls.hull_pose(model, poses, b),
                 );
-                let shared = ctx.planes_prev.and_then(|v| {
-                    v.binary_search_by_key(&(a, b), |e| e.0)
-                        .ok()
-                        .map(|i| v[i].1)
-                });
-                let warm = shared.or_else(|| warm_planes.get(&(a, b)).copied());
+                let warm = warm_planes.get(&(a, b)).copied();
                 match contact::contact_pair(pa, pb, params, warm, contact::Need::Value, scratch) {
                     Ok(PairOutcome::Separated(c)) => Ok(Some((
                         (a, b),

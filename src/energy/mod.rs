@@ -36,11 +36,7 @@ pub use pd::PdController;
 use crate::kinematics::Kinematics;
 use crate::math::Pose;
 use crate::model::Model;
-use nalgebra::{DVector, Matrix3x4, Matrix4, SMatrix, Vector3, Vector4};
-
-/// A hull pair (indices into the world hulls) and a separating plane
-/// `(n, o)` of it, world frame.
-pub type PairPlane = ((usize, usize), Vector4<f64>);
+use nalgebra::{DVector, Matrix3x4, Matrix4, SMatrix, Vector3};
 
 /// 12×12 Hessian block over `vec(A_i)`.
 pub type PoseHessian = SMatrix<f64, 12, 12>;
@@ -87,12 +83,6 @@ pub struct StepContext<'a> {
     /// ([`crate::counters::StageTimers::set_detailed`]). Without it no term
     /// reads the clock inside an evaluation.
     pub timed: bool,
-    /// Optimal separating planes at `poses_prev` of the hull pairs in
-    /// contact, sorted by pair, when a contact term's last evaluation was
-    /// at exactly those poses ([`Energy::planes_at`]); empty otherwise. The
-    /// friction term starts its lagged contact solves from them (they are
-    /// then already solved). `None` outside [`Energy::begin_step`].
-    pub planes_prev: Option<&'a [PairPlane]>,
 }
 
 /// Output buffers for the terms; reused across evaluations.
@@ -209,14 +199,6 @@ pub trait Energy: Send + Sync {
     ) -> Result<(), EnergyError> {
         Ok(())
     }
-
-    /// Appends to `out`, in increasing pair order, the optimal separating
-    /// plane of every hull pair in contact (separated, within the barrier's
-    /// support) at this term's last evaluation, if that evaluation was at
-    /// exactly (bit for bit) `poses`; nothing otherwise. Read by the other
-    /// terms' `begin_step` through [`StepContext::planes_prev`]. Default:
-    /// nothing.
-    fn planes_at(&self, _poses: &[Pose], _out: &mut Vec<PairPlane>) {}
 
     /// After an accepted step: adds the term's statistics at the accepted
     /// state (its last evaluation) and sub-stage times.

@@ -93,9 +93,6 @@ struct StepScratch {
     guess: DVector<f64>,
     /// Per-term work of the current step (when `energy_balance` is on).
     work: StepWork,
-    /// The contact planes at `θ^t` ([`StepContext::planes_prev`]), gathered
-    /// by [`Simulator::begin_next_step`].
-    planes_prev: Vec<crate::energy::PairPlane>,
 }
 
 /// The step objective `O(θ^{t+1})` as seen by Newton.
@@ -348,7 +345,6 @@ impl Simulator {
             targets: Vec::new(),
             guess: DVector::zeros(0),
             work: StepWork::default(),
-            planes_prev: Vec::new(),
         };
         Simulator {
             model,
@@ -368,11 +364,7 @@ impl Simulator {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         self.controller
             .targets_at(t_next, &mut self.scratch.targets);
-        self.scratch.planes_prev.clear();
-        for e in self.energies.iter() {
-            e.planes_at(&self.state.poses, &mut self.scratch.planes_prev);
-        }
-        let mut ctx = make_context(
+        let ctx = make_context(
             &self.model,
             &self.settings,
             &self.state,
@@ -381,7 +373,6 @@ impl Simulator {
             t_next,
             self.timers.detailed(),
         );
-        ctx.planes_prev = Some(&self.scratch.planes_prev);
         self.scratch.kin_start.update(
             &self.model,
             &self.state.q,
@@ -644,7 +635,6 @@ fn make_context<'a>(
         targets,
         pose_targets,
         timed,
-        planes_prev: None,
     }
 }
 
@@ -685,7 +675,6 @@ fn step_objective(
         targets,
         work,
         guess: _,
-        planes_prev: _,
     } = scratch;
     let ctx = make_context(
         model,
