@@ -138,10 +138,9 @@ impl ContactEnergy {
         true
     }
 
-    /// The planes this evaluation's pair solves start from, into `starts`.
-    ///
-    /// Whether the last computation of `pairs` (and so the last evaluation,
-    /// which `results` holds) was at exactly `poses`, bit for bit.
+    /// Whether the last computation of `pairs` was at exactly `poses`, bit
+    /// for bit (pose by pose: a `flat_map` over all the entries cost ~15
+    /// instructions per entry).
     fn last_at(&self, poses: &[Pose]) -> bool {
         let key = &self.pairs_key.1;
         key.len() == poses.len()
@@ -153,6 +152,8 @@ impl ContactEnergy {
             })
     }
 
+    /// The planes this evaluation's pair solves start from, into `starts`.
+    ///
     /// The first evaluation at new poses starts from the warm planes (the
     /// last solves' results); the second from the first one's results
     /// (typically the solution already). Every later evaluation at the same
