@@ -21,9 +21,18 @@ export PYO3_ENVIRONMENT_SIGNATURE
 # Every tier: a test that needs .venv or Chromium fails instead of skipping
 # (tests/common/mod.rs, `skip_without_venv`).
 export SDRS_TEST_ALL_TIERS=1
-cargo test --release --workspace --all-targets
+# cargo-nextest (on every machine of this kind) runs the tests of all the
+# targets as one pool, each test in its own process, so the long single-test
+# targets overlap with the rest: 825 s of tests against cargo test's ~1036 s
+# on 2 cores (2026-11-30, notes/ci-time.md). Plain cargo test where it is
+# missing.
+if cargo nextest --version >/dev/null 2>&1; then
+  cargo nextest run --release --workspace --all-targets
+else
+  cargo test --release --workspace --all-targets
+fi
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
-# `cargo test` above built the CLI the Python tests compare against.
+# The Rust tests above built the CLI the Python tests compare against.
 SDRS_CLI="$PWD/${CARGO_TARGET_DIR:-target}/release/sdrs" \
   .venv/bin/python -m pytest python/tests -q -p no:cacheprovider
