@@ -6,17 +6,14 @@
 
 mod support;
 
-use support::{pybullet_data, python, root, scratch_dir, sdrs};
+use support::{check_script, pybullet_data, root, scratch_dir, sdrs};
 
 /// Runs a convergence script of `tools/check/` (`--sdrs`, `--work`, `--json` added)
 /// with `args`, asserts it succeeded and returns its JSON table.
 fn table(dir: &std::path::Path, script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
     let json = dir.join("table.json");
-    let o = python()
-        .arg(root().join("tools/check").join(script))
+    let o = check_script(script)
         .args(args)
-        .arg("--sdrs")
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
         .arg("--work")
         .arg(dir.join("work"))
         .arg("--json")

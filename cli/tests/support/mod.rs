@@ -103,6 +103,17 @@ pub fn files_under(
     out
 }
 
+/// `python tools/check/SCRIPT --sdrs <the CLI under test>`: a check script
+/// of `tools/check/`, run by the project's Python with this build's `sdrs`;
+/// callers add the script's own arguments.
+pub fn check_script(script: &str) -> std::process::Command {
+    let mut cmd = python();
+    cmd.arg(root().join("tools/check").join(script))
+        .arg("--sdrs")
+        .arg(env!("CARGO_BIN_EXE_sdrs"));
+    cmd
+}
+
 /// Runs the calibration check script `tools/check/<script>` with `args`, this
 /// package's `sdrs` and `--out dir` in the project's Python; prints its
 /// output and returns its exit success and the cases of its
@@ -112,11 +123,8 @@ pub fn calibration_check(
     args: &[&str],
     dir: &std::path::Path,
 ) -> (bool, Vec<serde_json::Value>) {
-    let o = python()
-        .arg(root().join("tools/check").join(script))
+    let o = check_script(script)
         .args(args)
-        .arg("--sdrs")
-        .arg(env!("CARGO_BIN_EXE_sdrs"))
         .arg("--out")
         .arg(dir)
         .output()
