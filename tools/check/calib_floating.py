@@ -28,6 +28,7 @@ changes after an outcome are listed in notes/calibration.md with it.
 """
 
 import argparse
+import copy
 import json
 import os
 import subprocess
@@ -247,7 +248,6 @@ def generator_step_error(args, sc, hidden, case_dir):
     (MuJoCo's own ankles move by up to 8e-3 in 0.4 s windows when its step is
     halved, at every step from 1e-4 to 1.25e-5 s), the clean and centred cases
     and the standing and scissor excitations pass it."""
-    import copy
     runs = []
     for ts in (args.timestep, args.timestep / 2):
         a = copy.copy(args)
