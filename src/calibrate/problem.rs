@@ -200,7 +200,7 @@ impl<'a> Problem<'a> {
     /// Simulates `sc` (this problem's scene, possibly changed) for `steps`
     /// steps; `None` when a step fails.
     pub fn simulate_scene(&self, sc: &Scene, steps: usize) -> Option<Simulated> {
-        let mut sim = sc.simulator();
+        let mut sim = quiet_simulator(sc);
         let traj = crate::sim::run::run(&mut sim, steps, |_| {}).ok()?;
         let mut contact = vec![false];
         contact.extend(traj.diagnostics.iter().map(|d| d.contact_pairs > 0));
@@ -215,7 +215,7 @@ impl<'a> Problem<'a> {
         sc: &Scene,
         steps: usize,
     ) -> Option<(Simulated, Simulator, Tape)> {
-        let mut sim = sc.simulator();
+        let mut sim = quiet_simulator(sc);
         let (mut states, mut contact) = (Vec::with_capacity(steps + 1), vec![false]);
         let tape = record_observed(&mut sim, steps, |_, sim, d| {
             states.push(sim.state.reported_q(&sim.model));
@@ -295,4 +295,13 @@ impl<'a> Problem<'a> {
         }
         Some(r)
     }
+}
+
+/// `sc`'s simulator without its energy balance (each term's work per step,
+/// [`Simulator::energy_balance`]): no calibration output reads it, and it
+/// does not change the trajectory (`tests/energy_balance.rs`).
+fn quiet_simulator(sc: &Scene) -> Simulator {
+    let mut sim = sc.simulator();
+    sim.energy_balance = false;
+    sim
 }
