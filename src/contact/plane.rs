@@ -490,8 +490,74 @@ fn extrapolate(
     LineSearch::Accepted(trial, eval(xa, xb, &trial, s), best_alpha)
 }
 
+/// Full Newton steps taken at most by [`polish`].
+pub const POLISH_STEPS: usize = 3;
+
+/// Past the solve's stopping test: up to [`POLISH_STEPS`] full Newton steps, each kept only
+/// while `‖∇U*‖` strictly drops and `U*` does not rise beyond its rounding; returns the last
+/// point kept and the steps taken.
+///
+/// Why: the stopping tests end at the gradient's worst-case rounding bound (`noise`) or at
+/// Newton's decrement below the value's rounding, where the true gradient is often still
+/// 10²–10³ times above its actual rounding. Where the solve stops then depends on its warm
+/// start, i.e. on the history of the trajectory, and the plane's error (≈ 1e-12 in the offset on
+/// the spider's feet) is multiplied by the contact's stiffness in the offset (≈ 1e6) into the
+/// step objective's gradient. The envelope theorem the adjoint relies on (`∂U_c/∂X = ∂U*/∂X` at
+/// the optimal plane) does not see that dependence: the spider's design gradient was off by
+/// 1.1e-4 of a component (5.2e-6 absolute), smoothly in the design, and a fresh evaluation of
+/// the step gradient at a recorded solution gave 1.7e-6 where Newton had converged to 1e-10.
+/// With the polish both fall to the level of components without contact (offset −8e-9,
+/// residual 3e-9), and the outer Newton solve needs fewer iterations (its gradient no longer
+/// carries the planes' warm-start noise). Investigation: `notes/performance.md`, 2026-11-30.
+fn polish(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    mut p: Vector4<f64>,
+    mut ev: PlaneEval,
+    s: f64,
+) -> (Vector4<f64>, PlaneEval, usize) {
+    let mut steps = 0;
+    while steps < POLISH_STEPS {
+        let dir = newton_direction(&ev.hess, &ev.grad);
+        if !dir.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        let trial = p + dir;
+        if trial == p {
+            break;
+        }
+        let et = eval(xa, xb, &trial, s);
+        if !(et.value.is_finite()
+            && et.value <= ev.value + ev.value_noise
+            && et.grad.norm() < ev.grad.norm())
+        {
+            break;
+        }
+        (p, ev) = (trial, et);
+        steps += 1;
+    }
+    (p, ev, steps)
+}
+
+/// The solution at `p`, polished ([`polish`]).
+fn finish(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    p: Vector4<f64>,
+    ev: PlaneEval,
+    s: f64,
+    iterations: usize,
+) -> PlaneSolution {
+    let (p, eval, steps) = polish(xa, xb, p, ev, s);
+    PlaneSolution {
+        p,
+        eval,
+        iterations: iterations + steps,
+    }
+}
+
 /// Newton's method with a feasibility-preserving Armijo backtracking line search from a
-/// strictly feasible `p0`.
+/// strictly feasible `p0`, then [`polish`].
 pub fn solve(
     xa: &[Vector3<f64>],
     xb: &[Vector3<f64>],
@@ -506,11 +572,7 @@ pub fn solve(
         let gnorm = ev.grad.norm();
         let tol = ev.noise.max(set.tol.min(set.rtol * ev.scale));
         if gnorm <= tol {
-            return Ok(PlaneSolution {
-                p,
-                eval: ev,
-                iterations,
-            });
+            return Ok(finish(xa, xb, p, ev, s, iterations));
         }
         if iterations >= set.max_iters {
             return Err(ContactError::PlaneNotConverged {
@@ -568,11 +630,7 @@ pub fn solve(
                 // Noise floor: Newton's predicted decrease ½ gᵀH⁻¹g (on the resolvable
                 // components) is below the rounding of U*, so no representable step can be told
                 // apart from p (this test does not rely on the worst-case gradient bound).
-                return Ok(PlaneSolution {
-                    p,
-                    eval: ev,
-                    iterations,
-                });
+                return Ok(finish(xa, xb, p, ev, s, iterations));
             }
             // Newton's direction can be spoiled by rounding when U*_pp spans many decades;
             // the diagonally scaled gradient is a descent direction regardless.
