@@ -14,8 +14,8 @@ cd "$(dirname "$0")/../.."
 OUT=${OUT:-out/grasping}
 TASKS=${TASKS:-"parallel_jaw_gripper single_jaw_gripper single_jaw_cross three_finger_hand"}
 PY=${PY:-.venv/bin/python}
-[ -n "${SKIP_BUILD:-}" ] || cargo build --release -q  # SKIP_BUILD=1: use the built binary
-BIN=target/release/sdrs
+[ -n "${SKIP_BUILD:-}${SDRS_BIN:-}" ] || cargo build --release -q  # SKIP_BUILD=1: use the built binary
+BIN=${SDRS_BIN:-target/release/sdrs}  # SDRS_BIN: a fixed copy of the binary
 mkdir -p "$OUT"
 for t in $TASKS; do
   task=robots/$t/task.yaml

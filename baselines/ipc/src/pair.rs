@@ -129,8 +129,8 @@ pub fn evaluate_pair(
         }
         let (x, side, loc) = geo.stencil(ids);
         match evaluate_with(kind, &x, dhat2, derivatives, project) {
-            Primitive::Inactive => {
-                out.min_d2 = out.min_d2.min(stencil_distance(kind, &x).0);
+            Primitive::Inactive { distance2 } => {
+                out.min_d2 = out.min_d2.min(distance2);
             }
             Primitive::Touching => {
                 out.value = f64::INFINITY;

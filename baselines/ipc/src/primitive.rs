@@ -55,8 +55,10 @@ pub struct PrimitiveEval {
 /// Outcome of a primitive evaluation.
 #[derive(Clone, Debug)]
 pub enum Primitive {
-    /// `d ≥ d̂²`: no potential.
-    Inactive,
+    /// `d ≥ d̂²`: no potential. Carries the classified squared distance
+    /// `d` (m²), so callers that track the smallest distance need not
+    /// classify the stencil again.
+    Inactive { distance2: f64 },
     /// `d ≤ 0`: touching or crossing (the configuration is infeasible).
     Touching,
     Active(Box<PrimitiveEval>),
@@ -102,7 +104,7 @@ pub fn evaluate_with(
         return Primitive::Touching;
     }
     if d >= dhat2 {
-        return Primitive::Inactive;
+        return Primitive::Inactive { distance2: d };
     }
     let moll = mollified(kind, x);
     let mut out = PrimitiveEval {

@@ -24,7 +24,7 @@ fn flat(x: &[V3<f64>; 4]) -> Vec12 {
 fn value(kind: PrimitiveKind, v: &Vec12) -> f64 {
     match evaluate(kind, &unflat(v), DHAT * DHAT, false) {
         sdrs_ipc::primitive::Primitive::Active(e) => e.value,
-        sdrs_ipc::primitive::Primitive::Inactive => 0.0,
+        sdrs_ipc::primitive::Primitive::Inactive { .. } => 0.0,
         sdrs_ipc::primitive::Primitive::Touching => f64::INFINITY,
     }
 }
