@@ -406,8 +406,21 @@ where
             shift(scratch, world_a(), world_b(), &c0);
         }
     }
-    let sol = plane::solve(&scratch.xa, &scratch.xb, p, &params.settings())?;
-    Ok((Core::Separated { sol, distance }, c0))
+    match plane::solve(&scratch.xa, &scratch.xb, p, &params.settings()) {
+        Ok(sol) => Ok((Core::Separated { sol, distance }, c0)),
+        // A warm plane can be a poor start at the edge of the support: with the pair within a
+        // fraction of a percent of `2s/(1−s)`, every barrier argument is close to `s`, `U*` is
+        // tiny and nearly flat in the plane's orientation, and Newton turns a badly oriented
+        // warm plane so slowly that it reaches the iteration cap (issue 30, the single jaw's
+        // cross: seven captures at 0.9985–1.0001 of the support distance, each crawling through
+        // 100 iterations from its warm plane; from GJK's closest direction each converged in 6–7
+        // iterations or was certified out of range). Such a failure is retried once from the
+        // cold start; a solve that converges from its warm plane is unchanged.
+        Err(
+            ContactError::PlaneNotConverged { .. } | ContactError::PlaneLineSearchStalled { .. },
+        ) if warm_plane.is_some() => solve_core(scratch, world_a, world_b, params, None),
+        Err(e) => Err(e),
+    }
 }
 
 /// Inverse of the (symmetric positive semi-definite) plane Hessian `U*_pp`: Cholesky when it

@@ -173,6 +173,77 @@ fn plane_solve_stops_at_noise_floor_for_mirror_symmetric_pair() {
     }
 }
 
+/// Seven pairs of the single jaw's cross task (issue 30), captured where the optimizer's
+/// trials failed: a jaw block against the cross's pointed tip, 0.9985–1.0001 of the support
+/// distance `2s/(1−s)` apart (s = 1 mm). From their warm planes the solve crawled (the plane
+/// turns by 0.2 rad over 100 iterations while `U*` falls 2.6 → 7e-8) and hit the iteration
+/// cap: four line-search trials (rejected as infeasible) and three derivative evaluations at
+/// accepted iterates (which failed the optimizer's trial). A failed warm solve is now retried
+/// from GJK's cold start (`solve_core`). Each must give a physically consistent outcome: out of
+/// range (`U = 0`) exactly when the hulls are at least the support distance apart (four
+/// cases), otherwise a positive potential whose plane balances its barrier forces, with a
+/// finite Hessian and few iterations (three). Without the retry every case fails.
+#[test]
+fn plane_solve_at_the_support_edge_recovers_from_a_poor_warm_plane() {
+    let cases = [
+        include_str!("regressions/contact_cross_support_edge_0.json"),
+        include_str!("regressions/contact_cross_support_edge_1.json"),
+        include_str!("regressions/contact_cross_support_edge_2.json"),
+        include_str!("regressions/contact_cross_support_edge_3.json"),
+        include_str!("regressions/contact_cross_support_edge_4.json"),
+        include_str!("regressions/contact_cross_support_edge_5.json"),
+        include_str!("regressions/contact_cross_support_edge_6.json"),
+    ];
+    let (mut inside, mut outside) = (0, 0);
+    for text in cases {
+        let case = contact_case(text);
+        assert!(case.error.contains("did not converge"), "{}", case.error);
+        assert!(case.warm.is_some(), "captured with a warm plane");
+        let support = case.params.support_distance();
+        let mut full = case.clone();
+        full.need = "Hessian".into();
+        for c in [&case, &full] {
+            match c.run().expect("the plane solve recovers") {
+                PairOutcome::OutOfRange { distance, .. } => {
+                    assert!(distance >= support, "{distance:e} < {support:e}");
+                    outside += 1;
+                }
+                PairOutcome::Separated(out) => {
+                    assert!(out.distance < support && out.distance > 0.998 * support);
+                    assert!(out.value.is_finite() && out.value > 0.0, "{:e}", out.value);
+                    assert!(out.iterations <= 20, "{} iterations", out.iterations);
+                    if let Some(h) = &out.hessian {
+                        assert!(h.iter().all(|v| v.is_finite()));
+                    }
+                    let (ha, hb) = (
+                        HullPose {
+                            pose: &c.pose_a,
+                            x_local: &c.local_a,
+                        },
+                        HullPose {
+                            pose: &c.pose_b,
+                            x_local: &c.local_b,
+                        },
+                    );
+                    let (mut fa, mut fb) = (vec![], vec![]);
+                    out.normal_forces_into(ha, hb, c.params.s, &mut fa, &mut fb);
+                    let net: Vector3<f64> = fa.iter().chain(&fb).sum();
+                    let scale: f64 = fa.iter().chain(&fb).map(|f| f.norm()).sum();
+                    assert!(
+                        net.norm() <= 1e-6 * scale,
+                        "net force {:e}",
+                        net.norm() / scale
+                    );
+                    inside += 1;
+                }
+                PairOutcome::Intersecting => panic!("separated hulls reported intersecting"),
+            }
+        }
+    }
+    // Both regimes are covered (each case twice: value and Hessian).
+    assert_eq!((inside, outside), (6, 8));
+}
+
 /// A random unit vector.
 fn unit(r: &mut rand_chacha::ChaCha8Rng) -> Unit<Vector3<f64>> {
     loop {

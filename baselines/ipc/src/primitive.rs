@@ -58,7 +58,9 @@ pub enum Primitive {
     /// `d ≥ d̂²`: no potential. Carries the classified squared distance
     /// `d` (m²), so callers that track the smallest distance need not
     /// classify the stencil again.
-    Inactive { distance2: f64 },
+    Inactive {
+        distance2: f64,
+    },
     /// `d ≤ 0`: touching or crossing (the configuration is infeasible).
     Touching,
     Active(Box<PrimitiveEval>),
