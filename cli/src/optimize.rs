@@ -158,6 +158,9 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             "metrics": metrics_json,
             // Why the run ended before its last iteration, else null.
             "stopped": outcome.stopped,
+            // Trial points that could not be simulated (this session's;
+            // each counted as a rejected trust-region step).
+            "failed_trials": outcome.failed_trials,
         }),
     )?;
     let label = sdrs::optimize::output::run_label(&problem, a.design != "off");
@@ -190,6 +193,14 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         outcome.history.last().map_or(0, |r| r.iter),
         out.display()
     );
+    let failed = &outcome.failed_trials;
+    if let Some((it, e)) = failed.first.first() {
+        eprintln!(
+            "warning: {} trial point(s) could not be simulated and counted as rejected steps \
+             (summary.json `failed_trials`); the first, at iteration {it}: {e}",
+            failed.count
+        );
+    }
     if let Some(m) = metrics_json.get("final") {
         eprintln!(
             "distance {:.3} m (initial {:.3}), upright at H: {}, first fall: {}",

@@ -35,6 +35,8 @@ fn optimize_cli_writes_outputs_and_the_design_reproduces_the_loss() {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let final_loss = summary["final_loss"].as_f64().unwrap();
+    // Every trial of chain reaching simulates: the record is there and empty.
+    assert_eq!(summary["extra"]["failed_trials"]["count"], 0, "{summary}");
     // The written design is a complete scene: simulating it gives the same loss.
     let p = Problem::load(&task(), true).unwrap();
     let scene = sdrs::scene::Scene::load(out.join("design.yaml")).unwrap();

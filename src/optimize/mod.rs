@@ -385,6 +385,32 @@ pub struct Outcome {
     /// causes (an Adam step that could not be simulated at any of its
     /// [`ADAM_RETRIES`] shortenings); `None` when it ran every iteration.
     pub stopped: Option<String>,
+    /// Trial points of this session that could not be simulated (a failed
+    /// Newton or contact solve, an interpenetrating start): the trust region
+    /// counts each as a rejected step, so many of them shrink its radii to
+    /// nothing without any loss being compared.
+    pub failed_trials: FailedTrials,
+}
+
+/// Trial points that could not be simulated: how many, and the first
+/// [`FailedTrials::KEPT`] with their errors.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FailedTrials {
+    pub count: usize,
+    /// `(iteration, error and its causes)` of the first failures.
+    pub first: Vec<(usize, String)>,
+}
+
+impl FailedTrials {
+    /// How many failures keep their error message: 3.
+    pub const KEPT: usize = 3;
+
+    fn push(&mut self, it: usize, e: &dyn std::error::Error) {
+        self.count += 1;
+        if self.first.len() < Self::KEPT {
+            self.first.push((it, error_chain(e)));
+        }
+    }
 }
 
 /// How many times Adam halves a step whose trial cannot be simulated (a
@@ -541,6 +567,8 @@ struct Run {
     t0: Instant,
     /// The loss at the run's start (of the first session, after a resume).
     initial_loss: f64,
+    /// This session's trial points that could not be simulated.
+    failed: FailedTrials,
 }
 
 impl Run {
@@ -563,6 +591,7 @@ impl Run {
             wall0: 0.0,
             t0: Instant::now(),
             initial_loss: f64::NAN,
+            failed: FailedTrials::default(),
         };
         if let Some(s) = &opts.resume {
             if s.design.len() != run.d.len() || s.controller.len() != run.c.len() {
@@ -724,8 +753,9 @@ impl Run {
                 self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, &e, &d_new, ev.loss, false, on_iter);
             }
-            (Method::TrustRegion, Err(_)) => {
+            (Method::TrustRegion, Err(e)) => {
                 // A trial point that cannot be simulated is a rejected step.
+                self.failed.push(it, &e);
                 self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, ev, &d_new, ev.loss, false, on_iter);
             }
@@ -768,6 +798,7 @@ impl Run {
                 initial_loss: self.initial_loss,
                 iter: b.iter,
                 stopped: None,
+                failed_trials: self.failed,
             },
             _ => Outcome {
                 history: self.history,
@@ -777,6 +808,7 @@ impl Run {
                 initial_loss: self.initial_loss,
                 iter: last_iter,
                 stopped: None,
+                failed_trials: self.failed,
             },
         }
     }
@@ -850,5 +882,24 @@ mod tests {
         let s = error_chain(&e);
         assert!(s.starts_with("iteration 3: "), "{s}");
         assert!(s.contains("bad"), "{s}");
+    }
+
+    #[test]
+    fn failed_trials_count_every_failure_and_keep_the_first_errors() {
+        let mut f = FailedTrials::default();
+        for it in 1..=5 {
+            let e = OptimizeError::Invalid {
+                element: format!("trial {it}"),
+                msg: "no Newton decrease".into(),
+            };
+            f.push(it * 2, &e);
+        }
+        assert_eq!(f.count, 5);
+        assert_eq!(f.first.len(), FailedTrials::KEPT);
+        assert_eq!(
+            f.first.iter().map(|(i, _)| *i).collect::<Vec<_>>(),
+            [2, 4, 6]
+        );
+        assert!(f.first[2].1.contains("trial 3") && f.first[2].1.contains("no Newton decrease"));
     }
 }

@@ -17,8 +17,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 OUT=${OUT:-out/single_jaw_cross}
 PY=${PY:-.venv/bin/python}
-[ -n "${SKIP_BUILD:-}" ] || cargo build --release -q
-BIN=$PWD/target/release/sdrs
+[ -n "${SKIP_BUILD:-}${SDRS_BIN:-}" ] || cargo build --release -q
+BIN=${SDRS_BIN:-$PWD/target/release/sdrs}  # SDRS_BIN: a fixed copy of the binary
 TASK=robots/single_jaw_cross/task.yaml
 mkdir -p "$OUT"
 cp robots/single_jaw_cross/scene.yaml "$OUT/scene.yaml"
