@@ -170,6 +170,21 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     )?;
     sdrs::output::write_atomic(&out.join("convergence.svg"), convergence.as_bytes())?;
     sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
+    // Each kept failed trial as runnable scenes: `sdrs simulate` reproduces it.
+    for t in &outcome.failed_trials.first {
+        let dir = out
+            .join("failed_trials")
+            .join(format!("iteration_{}", t.iteration));
+        sdrs::optimize::grasp_metrics::write_scenes_at(
+            &dir,
+            &problem,
+            (&t.design, &t.controller),
+            &format!(
+                "the trial design of iteration {} (it could not be simulated)",
+                t.iteration
+            ),
+        )?;
+    }
     let shapes = sdrs::output::codesign::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
     if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
@@ -194,11 +209,19 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         out.display()
     );
     let failed = &outcome.failed_trials;
-    if let Some((it, e)) = failed.first.first() {
+    if let Some(sdrs::optimize::FailedTrial {
+        iteration: it,
+        error: e,
+        ..
+    }) = failed.first.first()
+    {
         eprintln!(
             "warning: {} trial point(s) could not be simulated and counted as rejected steps \
-             (summary.json `failed_trials`); the first, at iteration {it}: {e}",
-            failed.count
+             (summary.json `failed_trials`; the first {} as scenes in {}); the first, at \
+             iteration {it}: {e}",
+            failed.count,
+            failed.first.len(),
+            out.join("failed_trials").display()
         );
     }
     if let Some(m) = metrics_json.get("final") {

@@ -47,11 +47,23 @@ pub fn topologies(p: &Problem, d: &DVector<f64>) -> Result<serde_json::Value, Op
 /// Writes `scenes/<scene file name>` for every trajectory: its scene with
 /// the optimized design and controller (`sdrs simulate` runs it).
 pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> Result<(), OptimizeError> {
+    write_scenes_at(dir, p, (&o.design, &o.controller), "the design optimized")
+}
+
+/// [`write_scenes`] for any design and controller vectors `(d, c)`, e.g. a
+/// trial point that could not be simulated; `what` names them in each
+/// file's header ("# <scene> with <what> by `sdrs optimize <task>`").
+pub fn write_scenes_at(
+    dir: &Path,
+    p: &Problem,
+    (d, c): (&DVector<f64>, &DVector<f64>),
+    what: &str,
+) -> Result<(), OptimizeError> {
     for q in &p.trajectories {
         let mut model = q.model.clone();
-        p.design.apply(&mut model, &o.design);
+        p.design.apply(&mut model, d);
         let mut controller = q.controller.clone();
-        p.controls.apply(&mut controller, &o.controller);
+        p.controls.apply(&mut controller, c);
         let spec = output::design_scene(&q.scene.spec, &model, &controller);
         let name = q
             .scene
@@ -60,7 +72,7 @@ pub fn write_scenes(dir: &Path, p: &Problem, o: &Outcome) -> Result<(), Optimize
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "scene.yaml".into());
         let header = format!(
-            "# {} with the design optimized by `sdrs optimize {}`; horizon {} steps.\n",
+            "# {} with {what} by `sdrs optimize {}`; horizon {} steps.\n",
             q.scene.source.display(),
             p.task_path.display(),
             q.horizon

@@ -393,22 +393,46 @@ pub struct Outcome {
 }
 
 /// Trial points that could not be simulated: how many, and the first
-/// [`FailedTrials::KEPT`] with their errors.
+/// [`FailedTrials::KEPT`] with their errors and parameters (so that the
+/// application can write each as a scene that reproduces the failure).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FailedTrials {
     pub count: usize,
-    /// `(iteration, error and its causes)` of the first failures.
-    pub first: Vec<(usize, String)>,
+    /// The first failures.
+    pub first: Vec<FailedTrial>,
+}
+
+/// One trial point that could not be simulated.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FailedTrial {
+    pub iteration: usize,
+    /// The error and its causes, `: `-separated.
+    pub error: String,
+    /// The trial's design and controller vectors (not serialized).
+    #[serde(skip)]
+    pub design: DVector<f64>,
+    #[serde(skip)]
+    pub controller: DVector<f64>,
 }
 
 impl FailedTrials {
     /// How many failures keep their error message: 3.
     pub const KEPT: usize = 3;
 
-    fn push(&mut self, it: usize, e: &dyn std::error::Error) {
+    fn push(
+        &mut self,
+        it: usize,
+        e: &dyn std::error::Error,
+        (d, c): (&DVector<f64>, &DVector<f64>),
+    ) {
         self.count += 1;
         if self.first.len() < Self::KEPT {
-            self.first.push((it, error_chain(e)));
+            self.first.push(FailedTrial {
+                iteration: it,
+                error: error_chain(e),
+                design: d.clone(),
+                controller: c.clone(),
+            });
         }
     }
 }
@@ -755,7 +779,7 @@ impl Run {
             }
             (Method::TrustRegion, Err(e)) => {
                 // A trial point that cannot be simulated is a rejected step.
-                self.failed.push(it, &e);
+                self.failed.push(it, &e, (&d_new, &c_new));
                 self.radii = self.radii.after(&rs, moved, false);
                 self.record(it, ev, &d_new, ev.loss, false, on_iter);
             }
@@ -892,14 +916,18 @@ mod tests {
                 element: format!("trial {it}"),
                 msg: "no Newton decrease".into(),
             };
-            f.push(it * 2, &e);
+            f.push(it * 2, &e, (&DVector::zeros(1), &DVector::zeros(0)));
         }
         assert_eq!(f.count, 5);
         assert_eq!(f.first.len(), FailedTrials::KEPT);
         assert_eq!(
-            f.first.iter().map(|(i, _)| *i).collect::<Vec<_>>(),
+            f.first.iter().map(|t| t.iteration).collect::<Vec<_>>(),
             [2, 4, 6]
         );
-        assert!(f.first[2].1.contains("trial 3") && f.first[2].1.contains("no Newton decrease"));
+        let e = &f.first[2].error;
+        assert!(
+            e.contains("trial 3") && e.contains("no Newton decrease"),
+            "{e}"
+        );
     }
 }
