@@ -388,7 +388,8 @@ pub struct Outcome {
     /// Trial points of this session that could not be simulated (a failed
     /// Newton or contact solve, an interpenetrating start): the trust region
     /// counts each as a rejected step, so many of them shrink its radii to
-    /// nothing without any loss being compared.
+    /// nothing without any loss being compared; Adam retries the step at
+    /// half length (each such iteration counts once).
     pub failed_trials: FailedTrials,
 }
 
@@ -750,6 +751,9 @@ impl Run {
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => self.adam_move(it, ev, (d_new, c_new, e), on_iter),
             (Method::Adam, Err(first)) => {
+                // Counted once per iteration: the full step's failure (its
+                // shortened retries are not trial points of their own).
+                self.failed.push(it, &first, (&d_new, &c_new));
                 let step = shorten_until_simulated(
                     (&self.d, &self.c),
                     (d_new.clone(), c_new),
