@@ -527,13 +527,17 @@ pub fn optimize_with<E: Into<OptimizeError>>(
     Ok(outcome)
 }
 
-/// `e` and its causes, `: `-separated.
+/// `e` and its causes, `: `-separated; a cause whose text the message
+/// already ends with (an error that prints its source) is not repeated.
 fn error_chain(e: &dyn std::error::Error) -> String {
     let mut msg = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {
-        msg.push_str(": ");
-        msg.push_str(&c.to_string());
+        let text = c.to_string();
+        if !msg.ends_with(&text) {
+            msg.push_str(": ");
+            msg.push_str(&text);
+        }
         cause = c.source();
     }
     msg
@@ -910,6 +914,21 @@ mod tests {
         let s = error_chain(&e);
         assert!(s.starts_with("iteration 3: "), "{s}");
         assert!(s.contains("bad"), "{s}");
+        assert_eq!(s.matches("bad").count(), 1, "{s}");
+    }
+
+    /// An error whose message already prints its source (as the backward
+    /// pass's does) is not followed by that source again.
+    #[test]
+    fn the_error_chain_does_not_repeat_a_printed_source() {
+        #[derive(Debug, thiserror::Error)]
+        #[error("backward pass at step 7: {0}")]
+        struct Outer(#[source] Inner);
+        #[derive(Debug, thiserror::Error)]
+        #[error("plane did not converge")]
+        struct Inner;
+        let s = error_chain(&Outer(Inner));
+        assert_eq!(s, "backward pass at step 7: plane did not converge");
     }
 
     #[test]
