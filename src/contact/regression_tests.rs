@@ -147,30 +147,43 @@ fn plane_solve_stops_at_noise_floor_for_mirror_symmetric_pair() {
         let PairOutcome::Separated(out) = c.run().expect("plane solve converges") else {
             panic!("expected a separated pair");
         };
-        assert!(out.iterations <= 20, "{} iterations", out.iterations);
-        assert!(out.value.is_finite() && out.value > 0.0);
-        if let Some(h) = &out.hessian {
-            assert!(h.iter().all(|v| v.is_finite()));
-        }
+        assert_solved(&out, 20);
         // Force balance of the plane, to the rounding of the barrier arguments amplified by
         // P' ~ y⁻⁶ (see `contact_solver_is_robust_on_random_pairs`).
-        let (ha, hb) = (
-            HullPose {
-                pose: &c.pose_a,
-                x_local: &c.local_a,
-            },
-            HullPose {
-                pose: &c.pose_b,
-                x_local: &c.local_b,
-            },
-        );
-        let (mut fa, mut fb) = (vec![], vec![]);
-        out.normal_forces_into(ha, hb, c.params.s, &mut fa, &mut fb);
-        let net: Vector3<f64> = fa.iter().chain(&fb).sum();
-        let scale: f64 = fa.iter().chain(&fb).map(|f| f.norm()).sum();
+        let imbalance = plane_force_imbalance(c, &out);
         let bound = 1e3 * f64::EPSILON * 0.4 / out.distance;
-        assert!(net.norm() <= bound * scale, "{:e}", net.norm() / scale);
+        assert!(imbalance <= bound, "{imbalance:e}");
     }
+}
+
+/// A replayed separated pair: positive finite potential, finite Hessian (when computed),
+/// at most `max_iters` inner iterations.
+fn assert_solved(out: &ContactPair, max_iters: usize) {
+    assert!(out.iterations <= max_iters, "{} iterations", out.iterations);
+    assert!(out.value.is_finite() && out.value > 0.0, "{:e}", out.value);
+    if let Some(h) = &out.hessian {
+        assert!(h.iter().all(|v| v.is_finite()));
+    }
+}
+
+/// The net normal force on the massless plane relative to the sum of the forces' magnitudes
+/// (0 at the plane's equilibrium).
+fn plane_force_imbalance(c: &ContactCase, out: &ContactPair) -> f64 {
+    let (ha, hb) = (
+        HullPose {
+            pose: &c.pose_a,
+            x_local: &c.local_a,
+        },
+        HullPose {
+            pose: &c.pose_b,
+            x_local: &c.local_b,
+        },
+    );
+    let (mut fa, mut fb) = (vec![], vec![]);
+    out.normal_forces_into(ha, hb, c.params.s, &mut fa, &mut fb);
+    let net: Vector3<f64> = fa.iter().chain(&fb).sum();
+    let scale: f64 = fa.iter().chain(&fb).map(|f| f.norm()).sum();
+    net.norm() / scale
 }
 
 /// Seven pairs of the single jaw's cross task (issue 30), captured where the optimizer's
@@ -210,30 +223,9 @@ fn plane_solve_at_the_support_edge_recovers_from_a_poor_warm_plane() {
                 }
                 PairOutcome::Separated(out) => {
                     assert!(out.distance < support && out.distance > 0.998 * support);
-                    assert!(out.value.is_finite() && out.value > 0.0, "{:e}", out.value);
-                    assert!(out.iterations <= 20, "{} iterations", out.iterations);
-                    if let Some(h) = &out.hessian {
-                        assert!(h.iter().all(|v| v.is_finite()));
-                    }
-                    let (ha, hb) = (
-                        HullPose {
-                            pose: &c.pose_a,
-                            x_local: &c.local_a,
-                        },
-                        HullPose {
-                            pose: &c.pose_b,
-                            x_local: &c.local_b,
-                        },
-                    );
-                    let (mut fa, mut fb) = (vec![], vec![]);
-                    out.normal_forces_into(ha, hb, c.params.s, &mut fa, &mut fb);
-                    let net: Vector3<f64> = fa.iter().chain(&fb).sum();
-                    let scale: f64 = fa.iter().chain(&fb).map(|f| f.norm()).sum();
-                    assert!(
-                        net.norm() <= 1e-6 * scale,
-                        "net force {:e}",
-                        net.norm() / scale
-                    );
+                    assert_solved(&out, 20);
+                    let imbalance = plane_force_imbalance(c, &out);
+                    assert!(imbalance <= 1e-6, "net force {imbalance:e}");
                     inside += 1;
                 }
                 PairOutcome::Intersecting => panic!("separated hulls reported intersecting"),
