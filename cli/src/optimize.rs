@@ -13,7 +13,9 @@ pub struct OptimizeArgs {
     pub task: PathBuf,
     /// Output directory: history.csv, convergence.svg, design.yaml,
     /// meshes/<robot>_<link>.obj, shapes.svg, robot.svg, report.html,
-    /// playback/ (for `sdrs view`), summary.json, checkpoint.json.
+    /// playback/ (for `sdrs view`), summary.json, checkpoint.json, scenes/,
+    /// and failed_trials/iteration_<k>/scenes/ when trial points could not be
+    /// simulated (the first three; `sdrs simulate` reproduces each).
     #[arg(long, required_unless_present = "resume")]
     pub out: Option<PathBuf>,
     /// Continue the run whose outputs (and checkpoint.json) are in this
