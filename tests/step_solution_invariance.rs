@@ -1,7 +1,9 @@
 //! The solver options that change only a step's cost — the initial guess
 //! (`solver.predictor`: `previous`, `extrapolate`, `quadratic`), the Newton model of indefinite Hessian blocks
-//! (`solver.indefinite`) and the zero step of independent blocks already
-//! below the tolerance (`solver.settle_blocks`) — do not change its solution
+//! (`solver.indefinite`), the zero step of independent blocks already
+//! below the tolerance (`solver.settle_blocks`) and the derivatives
+//! evaluated at the line search's first trial point
+//! (`NewtonOptions::derivatives_at_trial`) — do not change its solution
 //! beyond the Newton tolerance. Along a four-chain trajectory with contact, each step is
 //! solved from the same state `θ^t` with the paper's settings (`θ^t` start,
 //! clamped eigenvalues) and with every other combination; the two solutions
@@ -33,15 +35,18 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
     let mut sim = scene.simulator();
     let tol = sim.settings.newton.tol;
     let n = sim.model.ndof();
+    // (predictor, indefinite model, settle blocks, derivatives at the trial)
     let variants = [
-        (Predictor::Extrapolate, Indefinite::Clamp, false),
-        (Predictor::Previous, Indefinite::Shift, false),
-        (Predictor::Extrapolate, Indefinite::Shift, false),
-        (Predictor::Previous, Indefinite::Clamp, true),
-        (Predictor::Extrapolate, Indefinite::Shift, true),
-        (Predictor::Quadratic, Indefinite::Clamp, false),
+        (Predictor::Extrapolate, Indefinite::Clamp, false, true),
+        (Predictor::Previous, Indefinite::Shift, false, true),
+        (Predictor::Extrapolate, Indefinite::Shift, false, true),
+        (Predictor::Previous, Indefinite::Clamp, true, true),
+        (Predictor::Extrapolate, Indefinite::Shift, true, true),
+        (Predictor::Quadratic, Indefinite::Clamp, false, true),
+        (Predictor::Previous, Indefinite::Clamp, false, true),
+        (Predictor::Quadratic, Indefinite::Shift, true, false),
         // The defaults.
-        (Predictor::Quadratic, Indefinite::Shift, true),
+        (Predictor::Quadratic, Indefinite::Shift, true, true),
     ];
     let mut worst = vec![0.0f64; variants.len()];
     let mut contact_steps = 0;
@@ -51,6 +56,7 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         sim.settings.newton.predictor = Predictor::Previous;
         sim.settings.newton.indefinite = Indefinite::Clamp;
         sim.settings.newton.settle_blocks = false;
+        sim.settings.newton.derivatives_at_trial = false;
         let d = sim.step().unwrap();
         contact_steps += usize::from(d.contact_pairs > 0);
         let q_ref = sim.state.q.clone();
@@ -67,18 +73,19 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         let lmin = h.symmetric_eigen().eigenvalues.min();
         assert!(lmin > 0.0, "step {step}: solution is not a strict minimum");
         let bound = 2.0 * (n as f64).sqrt() * tol / lmin;
-        for (v, &(p, ind, settle)) in variants.iter().enumerate() {
+        for (v, &(p, ind, settle, at_trial)) in variants.iter().enumerate() {
             sim.state = start.clone();
             sim.settings.newton.predictor = p;
             sim.settings.newton.indefinite = ind;
             sim.settings.newton.settle_blocks = settle;
+            sim.settings.newton.derivatives_at_trial = at_trial;
             sim.step().unwrap();
             assert_eq!(sim.state.charts, charts_ref, "step {step}: charts differ");
             let diff = (&sim.state.q - &q_ref).amax();
             worst[v] = worst[v].max(diff / bound);
             assert!(
                 diff <= bound,
-                "step {step}, {p:?}/{ind:?}/settle {settle}: solutions differ by {diff:.2e} > {bound:.2e}"
+                "step {step}, {p:?}/{ind:?}/settle {settle}/at trial {at_trial}: solutions differ by {diff:.2e} > {bound:.2e}"
             );
         }
         sim.state = after;
@@ -127,7 +134,13 @@ fn solution_in_start_chart(
 /// point to give the same bits however often the point was evaluated before
 /// (the contact term's warm-started plane solves, `ContactEnergy`). Scenes
 /// with free bodies (rotation charts), contact and friction; both the skip
-/// and the miss path must occur.
+/// and the miss path must occur. With `derivatives_at_trial` (the default)
+/// gradient-first also decides whether the first trial point is evaluated
+/// with its Hessian, and a miss is then a point's second evaluation, whose
+/// plane solves start from the first one's results: the bits differ there
+/// by round-off (its solutions stay within the Newton tolerance:
+/// `predictor_and_indefinite_model_keep_every_step_solution`). The
+/// property is checked with the trial evaluated by value, as it was built.
 #[test]
 fn gradient_first_changes_no_bit() {
     let defaults: sdrs::sim::NewtonOptions = serde_yaml::from_str("{}").unwrap();
@@ -144,6 +157,8 @@ fn gradient_first_changes_no_bit() {
         let mut off = scene.simulator();
         assert!(on.settings.newton.gradient_first);
         off.settings.newton.gradient_first = false;
+        on.settings.newton.derivatives_at_trial = false;
+        off.settings.newton.derivatives_at_trial = false;
         for step in 0..steps {
             let d_on = on.step().unwrap();
             let d_off = off.step().unwrap();

@@ -97,6 +97,17 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub gradient_first: bool,
+    /// Evaluate the first trial point of each line search with the
+    /// derivatives the point will need if it is accepted (see
+    /// [`Solve::first_trial_need`]) instead of its value alone: a full
+    /// Newton step is usually accepted at once, and it is then not
+    /// evaluated a second time. Same solution to within `tol` (the
+    /// contact planes of the one evaluation start from the previous
+    /// point's, so the iterates differ at round-off). Default `true`. Not a
+    /// scene key (an implementation choice; the tests compare both).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub derivatives_at_trial: bool,
 }
 
 /// Positive-definite Newton model of an indefinite (or nearly singular)
@@ -164,6 +175,7 @@ impl Default for NewtonOptions {
             indefinite: Indefinite::Shift,
             settle_blocks: true,
             gradient_first: true,
+            derivatives_at_trial: true,
         }
     }
 }
@@ -284,8 +296,13 @@ pub struct NewtonScratch {
     /// gradient-first prediction, see [`Solve::eval_accepted`]).
     last_iters: Option<usize>,
     /// Whether `hess` is the Hessian at the current point (false after a
-    /// gradient-first evaluation that met the stopping test).
+    /// gradient-first evaluation that met the stopping test, and after a
+    /// trial point was evaluated with its Hessian).
     hess_current: bool,
+    /// What the last trial point was evaluated with, and its value (see
+    /// [`NewtonOptions::derivatives_at_trial`]).
+    trial_need: Option<Need>,
+    trial_value: f64,
 }
 
 /// Minimizes `obj` starting from `q` (updated in place).
@@ -323,6 +340,7 @@ pub fn minimize_from(
         scratch,
         timers,
         report: NewtonReport::default(),
+        next_iter: 0,
     };
     let mut value = run.start(q, guess)?;
     for iter in 0..=opts.max_iters {
@@ -334,6 +352,7 @@ pub fn minimize_from(
         if iter == opts.max_iters {
             break;
         }
+        run.next_iter = iter + 1;
         let (accepted, resolvable) = run.search(q, value, grad_inf)?;
         if !accepted {
             return run.finish_failed(iter, grad_inf, resolvable);
@@ -373,6 +392,8 @@ struct Solve<'a> {
     scratch: &'a mut NewtonScratch,
     timers: &'a mut StageTimers,
     report: NewtonReport,
+    /// The index the point accepted by the current line search will have.
+    next_iter: usize,
 }
 
 /// What the line search of one iteration knows about the current point.
@@ -414,7 +435,30 @@ impl Solve<'_> {
     /// A Hessian that would be non-finite at the solution is then not
     /// checked here (the next step's first evaluation checks its own).
     fn eval_accepted(&mut self, q: &DVector<f64>, iters: usize) -> Result<f64, NewtonError> {
-        if self.opts.gradient_first && self.scratch.last_iters.is_some_and(|n| iters >= n) {
+        if self.opts.derivatives_at_trial {
+            let s = &mut *self.scratch;
+            match s.trial_need.take() {
+                Some(Need::Hessian) => {
+                    std::mem::swap(&mut s.grad, &mut s.trial_grad);
+                    s.hess_current = true;
+                    return Ok(s.trial_value);
+                }
+                Some(Need::Gradient) => {
+                    std::mem::swap(&mut s.grad, &mut s.trial_grad);
+                    s.hess_current = false;
+                    let (value, grad_inf) = (s.trial_value, s.grad.amax());
+                    let likely = self.likely_solution(iters);
+                    self.report.gradient_first += usize::from(likely);
+                    if value.is_finite() && grad_inf < self.opts.tol {
+                        return Ok(value);
+                    }
+                    self.report.gradient_first_misses += usize::from(likely);
+                    return self.eval(q, Need::Hessian);
+                }
+                _ => {}
+            }
+        }
+        if self.likely_solution(iters) {
             self.report.gradient_first += 1;
             let value = self.eval(q, Need::Gradient)?;
             let grad_inf = self.scratch.grad.amax();
@@ -424,6 +468,30 @@ impl Solve<'_> {
             self.report.gradient_first_misses += 1;
         }
         self.eval(q, Need::Hessian)
+    }
+
+    /// Whether the `iters`-th point is likely the solution: the last solve
+    /// met the stopping test after at most `iters` iterations (with
+    /// [`NewtonOptions::gradient_first`]).
+    fn likely_solution(&self, iters: usize) -> bool {
+        self.opts.gradient_first && self.scratch.last_iters.is_some_and(|n| iters >= n)
+    }
+
+    /// What the first trial point of a line search is evaluated with
+    /// ([`NewtonOptions::derivatives_at_trial`]): the derivatives
+    /// [`Solve::eval_accepted`] would ask for if it is accepted (its
+    /// gradient alone when it is likely the solution, else gradient and
+    /// Hessian). A rejected trial costs the derivatives' share of one
+    /// evaluation (and, with a Hessian, the current point's Hessian, which
+    /// only the `shift` fallback reads again: see [`Solve::search`]).
+    fn first_trial_need(&self) -> Need {
+        if !self.opts.derivatives_at_trial {
+            Need::Value
+        } else if self.likely_solution(self.next_iter) {
+            Need::Gradient
+        } else {
+            Need::Hessian
+        }
     }
 
     /// Phase 0: the start point. The guess replaces `q` when its objective
@@ -568,6 +636,10 @@ impl Solve<'_> {
             }
             mode = Mode::Clamped { abs: false };
             self.report.shift_fallbacks += 1;
+            if !self.scratch.hess_current {
+                // A rejected trial point's Hessian replaced the current one.
+                self.eval(q, Need::Hessian)?;
+            }
         }
     }
 
@@ -630,9 +702,14 @@ impl Solve<'_> {
         s.trial.clone_from(q);
         s.trial.axpy(alpha, &s.dir, 1.0);
         let te = self.timers.start_laps();
+        if need >= Need::Hessian {
+            s.hess_current = false;
+        }
         let v = self
             .obj
             .eval(&s.trial, need, &mut s.trial_grad, &mut s.hess, self.timers)?;
+        s.trial_need = Some(need);
+        s.trial_value = v;
         *in_evals += te.map_or(std::time::Duration::ZERO, |t| t.elapsed());
         Ok(v)
     }
@@ -650,11 +727,13 @@ impl Solve<'_> {
         in_evals: &mut std::time::Duration,
     ) -> Result<(bool, f64), NewtonError> {
         let mut alpha = start;
+        let mut need = self.first_trial_need();
         for _ in 0..=self.opts.max_backtracks {
             if alpha * at.predicted <= 10.0 * at.floor {
                 break;
             }
-            let v = self.trial(q, alpha, Need::Value, in_evals)?;
+            let v = self.trial(q, alpha, need, in_evals)?;
+            need = Need::Value;
             if v.is_finite() && v < at.value - 1e-4 * alpha * at.predicted {
                 return Ok((true, alpha));
             }
