@@ -11,25 +11,35 @@
 //!   (composite-rigid-body style, O(|θ|²));
 //! - Hessian, second-order part: `⟨Q_b, S_k S_l⟩` when `k`'s joint is a proper
 //!   ancestor of `l`'s joint `b`, and `⟨Q_a, S_kl⟩` within one joint `a`.
+//! - general blocks (contact, friction, pose targets) in twist form: with
+//!   `s_k = (ω_k, v_k)` the world twist of coordinate `k` as a 6-vector and
+//!   `vec(S_k Ã_i) = L_i s_k` ([`twist_jacobian`]), `J_iᵀ H_ij J_j` has the
+//!   entries `s_kᵀ M_ij s_l` with the 6×6 `M_ij = L_iᵀ H_ij L_j`. Diagonal
+//!   blocks are summed into subtree composites `Σ_{i ∈ subtree(b)} M_ii`
+//!   and enter the tree pass like the inertia's (entry `(k, l)` of the
+//!   deeper joint `b`: `s_kᵀ (Σ M_ii) s_l`); pair blocks are contracted pair
+//!   by pair, six products per entry.
 
 use super::envelope::ColumnEnvelope;
 use crate::energy::{EnergyAccumulator, Need, PoseHessian};
 use crate::kinematics::Kinematics;
+use crate::math::frob;
 use crate::math::homogeneous;
-use crate::math::{frob, twist_apply};
 use crate::model::Model;
-use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, SMatrix};
+use nalgebra::{DMatrix, DVector, Matrix3x4, Matrix4, Matrix6, SMatrix, Vector6};
 
 /// Scratch buffers of the assembler (allocated once).
 #[derive(Clone, Debug, Default)]
 pub struct AssembleScratch {
     q_sub: Vec<Matrix3x4<f64>>,
     composite: Vec<Matrix4<f64>>,
-    jac: Vec<SMatrix<f64, 12, 1>>,
-    jac2: Vec<SMatrix<f64, 12, 1>>,
-    hj: Vec<SMatrix<f64, 12, 1>>,
     /// `(ω_k, v_k)` of every coordinate's twist ([`twist_vector`]).
     twist6: Vec<[f64; 6]>,
+    /// Subtree sums of the diagonal blocks in twist form,
+    /// `Σ_{i ∈ subtree(b)} L_iᵀ H_ii L_i` ([`fill_twist_composites`]).
+    twist_composite: Vec<Matrix6<f64>>,
+    /// `M s_l` of a pair block for every coordinate `l` of the second link.
+    pair_u: Vec<[f64; 6]>,
     envelope: ColumnEnvelope,
     /// Address and size of the buffer the last Hessian was written into.
     written: Option<(usize, usize)>,
@@ -98,41 +108,86 @@ pub fn assemble(
     if need < Need::Hessian {
         return;
     }
-    add_link_blocks(model, kin, acc, hess, scratch);
+    scratch.twist6.clear();
+    scratch.twist6.extend(kin.twist.iter().map(twist_vector));
+    let blocks = fill_twist_composites(model, kin, acc, &mut scratch.twist_composite);
     if acc.link_moment_set {
         fill_composites(model, kin, acc, &mut scratch.composite);
     }
-    add_tree_terms(model, kin, acc.link_moment_set, hess, scratch);
+    add_tree_terms(model, kin, acc.link_moment_set, blocks, hess, scratch);
     for (i, j, h) in &acc.pair_hess {
         add_pair_block(model, kin, *i, *j, h, hess, scratch);
     }
     mirror_upper(&scratch.envelope, hess);
 }
 
-/// First-order part of the diagonal link blocks, `J_iᵀ H_ii J_i`, into the
-/// upper triangle (`k ≤ l`; the ancestor list is ascending).
-fn add_link_blocks(
+/// `L` with `vec(S Ã) = L s` for every twist `S = [[ω]× | v]`, `s = (ω, v)`,
+/// at the pose `A = [R | t]` (12×6, `vec` column by column): `S Ã = [[ω]× R |
+/// [ω]× t + v]`, and `[ω]× x = −[x]× ω` for each column `x` of `R` and for `t`.
+fn twist_jacobian(a: &Matrix3x4<f64>) -> SMatrix<f64, 12, 6> {
+    let mut l = SMatrix::<f64, 12, 6>::zeros();
+    for c in 0..4 {
+        let x = a.column(c);
+        let mut block = l.fixed_view_mut::<3, 3>(3 * c, 0);
+        block[(0, 1)] = x[2];
+        block[(0, 2)] = -x[1];
+        block[(1, 0)] = -x[2];
+        block[(1, 2)] = x[0];
+        block[(2, 0)] = x[1];
+        block[(2, 1)] = -x[0];
+    }
+    l[(9, 3)] = 1.0;
+    l[(10, 4)] = 1.0;
+    l[(11, 5)] = 1.0;
+    l
+}
+
+/// `L_aᵀ H L_b` ([`twist_jacobian`]): a pose-space block `∂²E/∂A_a∂A_b` as
+/// the 6×6 form on the two links' world twists.
+fn twist_block(h: &SMatrix<f64, 12, 12>, a: &Matrix3x4<f64>, b: &Matrix3x4<f64>) -> Matrix6<f64> {
+    let hl = h * twist_jacobian(b);
+    twist_jacobian(a).tr_mul(&hl)
+}
+
+/// Subtree composites of the diagonal blocks in twist form,
+/// `Σ_{i ∈ subtree(b)} L_iᵀ H_ii L_i` (leaves up); false (and nothing
+/// filled) when no link has a diagonal block.
+fn fill_twist_composites(
     model: &Model,
     kin: &Kinematics,
     acc: &EnergyAccumulator,
-    hess: &mut DMatrix<f64>,
-    scratch: &mut AssembleScratch,
-) {
-    for i in 0..model.links.len() {
-        if !acc.link_hess_set[i] {
-            continue;
-        }
-        let anc = &model.ancestor_dofs[i];
-        fill_jacobian(kin, i, anc, &mut scratch.jac);
-        let h = &acc.link_hess[i];
-        scratch.hj.clear();
-        scratch.hj.extend(scratch.jac.iter().map(|c| h * c));
-        for (b, &l) in anc.iter().enumerate() {
-            for (a, &k) in anc.iter().enumerate().take(b + 1) {
-                hess[(k, l)] += scratch.jac[a].dot(&scratch.hj[b]);
-            }
+    composite: &mut Vec<Matrix6<f64>>,
+) -> bool {
+    if !acc.link_hess_set.iter().any(|&set| set) {
+        return false;
+    }
+    composite.clear();
+    composite.resize(model.links.len(), Matrix6::zeros());
+    for (i, c) in composite.iter_mut().enumerate() {
+        if acc.link_hess_set[i] {
+            *c = twist_block(&acc.link_hess[i], &kin.pose[i], &kin.pose[i]);
         }
     }
+    for i in (0..model.links.len()).rev() {
+        if let Some(p) = model.links[i].parent {
+            let c = composite[i];
+            composite[p] += c;
+        }
+    }
+    true
+}
+
+/// `s_kᵀ u` of two 6-vectors.
+#[inline]
+fn dot6(s: &[f64; 6], u: &[f64; 6]) -> f64 {
+    s[0] * u[0] + s[1] * u[1] + s[2] * u[2] + s[3] * u[3] + s[4] * u[4] + s[5] * u[5]
+}
+
+/// `M s` as a 6-array.
+#[inline]
+fn mul6(m: &Matrix6<f64>, s: &[f64; 6]) -> [f64; 6] {
+    let u = m * Vector6::from_column_slice(s);
+    [u[0], u[1], u[2], u[3], u[4], u[5]]
 }
 
 /// Subtree composites `C_b = Σ_{i ∈ subtree(b)} Ã_i W_i Ã_iᵀ` (leaves up).
@@ -175,11 +230,10 @@ fn add_tree_terms(
     model: &Model,
     kin: &Kinematics,
     composites: bool,
+    blocks: bool,
     hess: &mut DMatrix<f64>,
     scratch: &mut AssembleScratch,
 ) {
-    scratch.twist6.clear();
-    scratch.twist6.extend(kin.twist.iter().map(twist_vector));
     let n = hess.nrows();
     let h = hess.as_mut_slice();
     for (b, link) in model.links.iter().enumerate() {
@@ -198,21 +252,23 @@ fn add_tree_terms(
             let p = qb * sl.transpose();
             let mut z_rot = z.fixed_view_mut::<3, 3>(0, 0);
             z_rot += p;
-            let w = axial_and_translation(&z);
+            let mut w = axial_and_translation(&z);
+            // The diagonal blocks' composite of `b`: `u = (Σ M_ii) s_l`.
+            let u = blocks.then(|| mul6(&scratch.twist_composite[b], &scratch.twist6[l]));
+            if let Some(u) = &u {
+                w.iter_mut().zip(u).for_each(|(w, u)| *w += u);
+            }
             let col = &mut h[l * n..(l + 1) * n];
             for &k in proper {
-                let t = &scratch.twist6[k];
-                col[k] += t[0] * w[0]
-                    + t[1] * w[1]
-                    + t[2] * w[2]
-                    + t[3] * w[3]
-                    + t[4] * w[4]
-                    + t[5] * w[5];
+                col[k] += dot6(&scratch.twist6[k], &w);
             }
             for (k, c) in col.iter_mut().enumerate().take(l + 1).skip(ob) {
                 let mut v = frob(kin.twist2(model, b, k, l), qb);
                 if let Some(y) = &y {
                     v += frob(&kin.twist[k], y);
+                }
+                if let Some(u) = &u {
+                    v += dot6(&scratch.twist6[k], u);
                 }
                 *c += v;
             }
@@ -314,14 +370,8 @@ pub fn contract_gradient(
     g
 }
 
-fn fill_jacobian(kin: &Kinematics, link: usize, anc: &[usize], out: &mut Vec<SMatrix<f64, 12, 1>>) {
-    out.clear();
-    out.extend(anc.iter().map(|&k| {
-        let d = twist_apply(&kin.twist[k], &kin.pose[link]);
-        SMatrix::<f64, 12, 1>::from_column_slice(d.as_slice())
-    }));
-}
-
+/// `J_iᵀ H_ij J_j` and its transpose into the upper triangle, in twist form
+/// (`s_kᵀ M_ij s_l`, see the module docs), column by column.
 fn add_pair_block(
     model: &Model,
     kin: &Kinematics,
@@ -331,20 +381,23 @@ fn add_pair_block(
     hess: &mut DMatrix<f64>,
     scratch: &mut AssembleScratch,
 ) {
+    let m = twist_block(h, &kin.pose[i], &kin.pose[j]);
     let anc_i = &model.ancestor_dofs[i];
     let anc_j = &model.ancestor_dofs[j];
-    fill_jacobian(kin, i, anc_i, &mut scratch.jac);
-    fill_jacobian(kin, j, anc_j, &mut scratch.jac2);
-    scratch.hj.clear();
-    scratch.hj.extend(scratch.jac2.iter().map(|c| h * c));
-    for (a, &k) in anc_i.iter().enumerate() {
-        for (b, &l) in anc_j.iter().enumerate() {
-            let v = scratch.jac[a].dot(&scratch.hj[b]);
+    scratch.pair_u.clear();
+    scratch
+        .pair_u
+        .extend(anc_j.iter().map(|&l| mul6(&m, &scratch.twist6[l])));
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
+    for (u, &l) in scratch.pair_u.iter().zip(anc_j) {
+        for &k in anc_i {
+            let v = dot6(&scratch.twist6[k], u);
             // The block and its transpose: twice on the diagonal.
-            if k == l {
-                hess[(k, k)] += v + v;
-            } else {
-                hess[(k.min(l), k.max(l))] += v;
+            match k.cmp(&l) {
+                std::cmp::Ordering::Less => h[k + l * n] += v,
+                std::cmp::Ordering::Greater => h[l + k * n] += v,
+                std::cmp::Ordering::Equal => h[k + k * n] += v + v,
             }
         }
     }
