@@ -27,7 +27,7 @@ use crate::kinematics::Kinematics;
 use crate::math::Pose;
 use crate::model::Model;
 use nalgebra::{DVector, Vector4};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 /// A candidate hull pair and the plane its solve starts from.
@@ -59,7 +59,6 @@ pub struct ContactEnergy {
     starts: Vec<PairStart>,
     /// Evaluations so far at the poses of `pairs_key`.
     evals_here: usize,
-    pair_slots: BTreeMap<(usize, usize), usize>,
     /// Time spent in the broad phase since the last [`ContactEnergy::take_broad_phase_time`].
     broad_time: Duration,
     /// Statistics of the last evaluation.
@@ -88,7 +87,6 @@ impl ContactEnergy {
             warm: HashMap::new(),
             starts: Vec::new(),
             evals_here: 0,
-            pair_slots: BTreeMap::new(),
             broad_time: Duration::ZERO,
             last_active: 0,
             last_intersecting: None,
@@ -284,7 +282,6 @@ impl Energy for ContactEnergy {
             &mut self.results,
         );
 
-        self.pair_slots.clear();
         self.last_intersecting = None;
         let mut active = 0;
         // A value-only evaluation is a line-search trial point: if a pair's
@@ -323,7 +320,6 @@ impl Energy for ContactEnergy {
                     scatter_pair(
                         model,
                         acc,
-                        &mut self.pair_slots,
                         need,
                         links,
                         kappa,

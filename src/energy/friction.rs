@@ -29,7 +29,7 @@ use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use nalgebra::{DVector, Vector4};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 
 /// A hull pair (indices into the world hulls) in contact at step `t`, its
 /// lagged data and the step-`t` plane `p*` it came from (for the adjoint).
@@ -59,7 +59,6 @@ pub struct FrictionEnergy {
     /// The same for the lagged contact solves of [`Energy::begin_step`].
     begin_work: PairWork<Result<Option<LaggedPair>, EnergyError>>,
     lagged_work: Vec<Result<Option<LaggedPair>, EnergyError>>,
-    pair_slots: BTreeMap<(usize, usize), usize>,
 }
 
 impl FrictionEnergy {
@@ -82,7 +81,6 @@ impl FrictionEnergy {
             work: PairWork::default(),
             begin_work: PairWork::default(),
             lagged_work: Vec::new(),
-            pair_slots: BTreeMap::new(),
         }
     }
 }
@@ -207,7 +205,6 @@ impl Energy for FrictionEnergy {
             },
             &mut self.results,
         );
-        self.pair_slots.clear();
         // As in the contact term: an unsolvable inner problem at a
         // line-search trial point rejects the point.
         if need == Need::Value && self.results.iter().any(|r| r.is_err()) {
@@ -225,7 +222,6 @@ impl Energy for FrictionEnergy {
             scatter_pair(
                 model,
                 acc,
-                &mut self.pair_slots,
                 need,
                 links,
                 1.0,

@@ -105,6 +105,11 @@ pub struct EnergyAccumulator {
     /// Off-diagonal pose Hessian blocks `∂²E/∂A_i∂A_j` (`i ≠ j`, each
     /// unordered pair once; the assembler adds the transpose).
     pub pair_hess: Vec<(usize, usize, PoseHessian)>,
+    /// Where each link pair's block is in `pair_hess`: the terms that write
+    /// pair blocks ([`pairs::scatter_pair`]: contact and friction) merge
+    /// theirs into one block per link pair, so the assembler contracts each
+    /// pair once.
+    pair_slots: std::collections::BTreeMap<(usize, usize), usize>,
     /// `∂E/∂θ` from terms written directly in coordinates.
     pub dof_grad: DVector<f64>,
     /// `∂²E/∂θ²` from terms written directly in coordinates (sparse: a
@@ -124,6 +129,7 @@ impl EnergyAccumulator {
             link_moment: vec![Matrix4::zeros(); n],
             link_moment_set: false,
             pair_hess: Vec::new(),
+            pair_slots: std::collections::BTreeMap::new(),
             dof_grad: DVector::zeros(m),
             dof_hess: DofHessian::zeros(m),
         }
@@ -148,6 +154,7 @@ impl EnergyAccumulator {
                 self.link_moment_set = false;
             }
             self.pair_hess.clear();
+            self.pair_slots.clear();
             self.dof_hess.clear();
         }
     }

@@ -4,18 +4,17 @@
 use super::{EnergyAccumulator, Need, PoseHessian};
 use crate::model::Model;
 use nalgebra::{Matrix3x4, SMatrix};
-use std::collections::BTreeMap;
 
 /// Adds `scale·E` of a pair of links `(la, lb)` with `∂E/∂A_a`, `∂E/∂A_b`
 /// and the 24×24 Hessian over `[vec A_a; vec A_b]`. Links without
 /// coordinates (static obstacles) receive nothing. Off-diagonal blocks of
-/// the same link pair are merged through `pair_slots`.
+/// the same link pair are merged (within a term and across terms) through
+/// the accumulator's slots.
 // Arguments kept separate: hot inner loop of every contact pair: the slices and blocks are borrowed from different owners, so a struct would be rebuilt per pair.
 #[allow(clippy::too_many_arguments)]
 pub fn scatter_pair(
     model: &Model,
     acc: &mut EnergyAccumulator,
-    pair_slots: &mut BTreeMap<(usize, usize), usize>,
     need: Need,
     (la, lb): (usize, usize),
     scale: f64,
@@ -51,10 +50,10 @@ pub fn scatter_pair(
         } else {
             (lb, la, h.fixed_view::<12, 12>(12, 0) * scale)
         };
-        match pair_slots.get(&(i, j)) {
+        match acc.pair_slots.get(&(i, j)) {
             Some(&k) => acc.pair_hess[k].2 += block,
             None => {
-                pair_slots.insert((i, j), acc.pair_hess.len());
+                acc.pair_slots.insert((i, j), acc.pair_hess.len());
                 acc.pair_hess.push((i, j, block));
             }
         }

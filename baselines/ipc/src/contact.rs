@@ -22,7 +22,6 @@ use sdrs::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use sdrs::kinematics::Kinematics;
 use sdrs::model::Model;
 use sdrs::sim::{Stage, StageTimers, StepDiagnostics};
-use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 /// Parameters of the IPC contact term.
@@ -46,7 +45,6 @@ pub struct IpcContact {
     boxes: Vec<PrimitiveBoxes>,
     cands: Vec<Candidates>,
     results: Vec<PairEval>,
-    pair_slots: BTreeMap<(usize, usize), usize>,
     ccd: CcdScratch,
     time_broad: Duration,
     time_ccd: Duration,
@@ -93,7 +91,6 @@ impl IpcContact {
             boxes: vec![PrimitiveBoxes::default(); n],
             cands: vec![Candidates::default(); link_pairs.len()],
             results: Vec::new(),
-            pair_slots: BTreeMap::new(),
             ccd: CcdScratch::default(),
             meshes,
             link_pairs,
@@ -191,7 +188,6 @@ impl Energy for IpcContact {
                 evaluate_pair(&geo, c, dhat2, derivs, hess, project)
             })
             .collect_into_vec(&mut self.results);
-        self.pair_slots.clear();
         let kappa = self.params.kappa;
         let (mut active, mut min_d2) = (0, f64::INFINITY);
         for (k, r) in self.results.iter().enumerate() {
@@ -208,7 +204,6 @@ impl Energy for IpcContact {
             scatter_pair(
                 ctx.model,
                 acc,
-                &mut self.pair_slots,
                 need,
                 self.link_pairs[k],
                 kappa,

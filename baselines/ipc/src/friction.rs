@@ -17,7 +17,6 @@ use sdrs::energy::pairs::scatter_pair;
 use sdrs::energy::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use sdrs::kinematics::Kinematics;
 use sdrs::model::Model;
-use std::collections::BTreeMap;
 
 /// Friction parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,7 +46,6 @@ pub struct IpcFriction {
     world_prev: Vec<Vec<Vector3<f64>>>,
     world: Vec<Vec<Vector3<f64>>>,
     contacts: Vec<Contact>,
-    pair_slots: BTreeMap<(usize, usize), usize>,
     /// Whether `κ` is the scene's `contact.kappa` (then `∂Φ/∂κ` goes to the
     /// physical gradient); false when the baseline chose it.
     pub kappa_given: bool,
@@ -81,7 +79,6 @@ impl IpcFriction {
             world,
             meshes,
             contacts: Vec::new(),
-            pair_slots: BTreeMap::new(),
             kappa_given: true,
         }
     }
@@ -248,7 +245,6 @@ impl Energy for IpcFriction {
         transform(&self.meshes, &kin.pose, &mut self.world);
         let eps = self.params.eps_v * self.params.dt;
         let derivs = need >= Need::Gradient;
-        self.pair_slots.clear();
         let mut k = 0;
         while k < self.contacts.len() {
             let pair = self.contacts[k].pair;
@@ -275,7 +271,6 @@ impl Energy for IpcFriction {
                 scatter_pair(
                     ctx.model,
                     acc,
-                    &mut self.pair_slots,
                     need,
                     (la, lb),
                     1.0,
