@@ -384,12 +384,33 @@ fn add_pair_block(
     let m = twist_block(h, &kin.pose[i], &kin.pose[j]);
     let anc_i = &model.ancestor_dofs[i];
     let anc_j = &model.ancestor_dofs[j];
+    let n = hess.nrows();
+    let h = hess.as_mut_slice();
+    // Every coordinate of one side below every one of the other (links of
+    // different branches, the usual contact pair): the block lies in the
+    // upper triangle whole, column by column of the later side.
+    let before = |a: &[usize], b: &[usize]| a.last() < b.first();
+    let split = if before(anc_i, anc_j) {
+        Some((m, anc_i, anc_j))
+    } else if before(anc_j, anc_i) {
+        Some((m.transpose(), anc_j, anc_i))
+    } else {
+        None
+    };
+    if let Some((m, rows, cols)) = split {
+        for &l in cols {
+            let u = mul6(&m, &scratch.twist6[l]);
+            let col = &mut h[l * n..(l + 1) * n];
+            for &k in rows {
+                col[k] += dot6(&scratch.twist6[k], &u);
+            }
+        }
+        return;
+    }
     scratch.pair_u.clear();
     scratch
         .pair_u
         .extend(anc_j.iter().map(|&l| mul6(&m, &scratch.twist6[l])));
-    let n = hess.nrows();
-    let h = hess.as_mut_slice();
     for (u, &l) in scratch.pair_u.iter().zip(anc_j) {
         for &k in anc_i {
             let v = dot6(&scratch.twist6[k], u);
