@@ -386,22 +386,14 @@ fn add_pair_block(
     let anc_j = &model.ancestor_dofs[j];
     let n = hess.nrows();
     let h = hess.as_mut_slice();
-    // Every coordinate of one side below every one of the other (links of
+    // Every coordinate of `i`'s path below every one of `j`'s (`i < j` in
     // different branches, the usual contact pair): the block lies in the
-    // upper triangle whole, column by column of the later side.
-    let before = |a: &[usize], b: &[usize]| a.last() < b.first();
-    let split = if before(anc_i, anc_j) {
-        Some((m, anc_i, anc_j))
-    } else if before(anc_j, anc_i) {
-        Some((m.transpose(), anc_j, anc_i))
-    } else {
-        None
-    };
-    if let Some((m, rows, cols)) = split {
-        for &l in cols {
+    // upper triangle whole, column by column.
+    if anc_i.last() < anc_j.first() {
+        for &l in anc_j {
             let u = mul6(&m, &scratch.twist6[l]);
             let col = &mut h[l * n..(l + 1) * n];
-            for &k in rows {
+            for &k in anc_i {
                 col[k] += dot6(&scratch.twist6[k], &u);
             }
         }

@@ -229,6 +229,77 @@ robots:
         acc
     }
 
+    /// The twist-form contraction of general pose blocks (diagonal blocks
+    /// through subtree composites; pair blocks within one tree, where the
+    /// two ancestor paths overlap, and across trees) equals the explicit
+    /// `Σ_i J_iᵀ H_ii J_i + Σ_(i,j) (J_iᵀ H_ij J_j + J_jᵀ H_ijᵀ J_i)` with the
+    /// 12-vector columns `vec(S_k Ã_i)` (`crate::math::twist_apply`), to
+    /// round-off. No gradients and no moments, so only these blocks enter.
+    #[test]
+    fn twist_form_blocks_equal_the_explicit_jacobian_contraction() {
+        use nalgebra::SMatrix;
+        let scene = Scene::from_str(SCENE, Path::new("envelope.yaml")).unwrap();
+        let model = &scene.model;
+        let (n, nl) = (model.ndof(), model.links.len());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut kin = Kinematics::new(model);
+        let mut grad = DVector::zeros(n);
+        let mut worst = 0.0f64;
+        for _ in 0..40 {
+            let q = DVector::from_fn(n, |_, _| rng.random_range(-0.5..0.5));
+            let charts = vec![nalgebra::Matrix3::identity(); model.nchart];
+            kin.update(model, &q, &charts, KinOrder::Second);
+            let mut acc = EnergyAccumulator::new(model);
+            acc.reset(Need::Hessian);
+            for i in 0..nl {
+                if rng.random_range(0.0..1.0) < 0.6 {
+                    let b = random_block(&mut rng);
+                    acc.add_link_hess(i, &(b + b.transpose()));
+                }
+            }
+            for i in 0..nl {
+                for j in i + 1..nl {
+                    if rng.random_range(0.0..1.0) < 0.5 {
+                        acc.pair_hess.push((i, j, random_block(&mut rng)));
+                    }
+                }
+            }
+            let jac = |i: usize| {
+                let mut jm = SMatrix::<f64, 12, 0>::zeros().resize_horizontally(n, 0.0);
+                for &k in &model.ancestor_dofs[i] {
+                    let d = crate::math::twist_apply(&kin.twist[k], &kin.pose[i]);
+                    jm.column_mut(k).copy_from_slice(d.as_slice());
+                }
+                jm
+            };
+            let mut expect = DMatrix::<f64>::zeros(n, n);
+            for i in 0..nl {
+                if acc.link_hess_set[i] {
+                    let ji = jac(i);
+                    expect += ji.transpose() * acc.link_hess[i] * &ji;
+                }
+            }
+            for (i, j, h) in &acc.pair_hess {
+                let c = jac(*i).transpose() * h * jac(*j);
+                expect += &c + c.transpose();
+            }
+            let mut got = DMatrix::zeros(n, n);
+            assemble(
+                model,
+                &kin,
+                &acc,
+                Need::Hessian,
+                &mut grad,
+                &mut got,
+                &mut AssembleScratch::default(),
+            );
+            let err = (&got - &expect).amax() / expect.amax().max(1e-300);
+            worst = worst.max(err);
+            assert!(err <= 1e-12, "relative error {err:.2e}");
+        }
+        eprintln!("twist form vs explicit Jacobians: worst relative error {worst:.2e}");
+    }
+
     /// Assembling into a reused buffer (cleared over the last envelope
     /// only) gives the bits of assembling into a fresh zero matrix; every
     /// non-zero lies in the envelope; the result is exactly symmetric; the
