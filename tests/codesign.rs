@@ -167,3 +167,39 @@ fn adam_gradient_clip_is_validated_and_wired() {
     assert!(grad0 > 0.0);
     assert_ne!(run(Some(1e-3 * grad0)), free);
 }
+
+/// `optimizer.step_decay`: a fraction outside (0, 1] is refused naming the
+/// field; 1 leaves Adam's run bitwise unchanged; 0.01 keeps the first
+/// iteration's step (factor 1) and changes the later ones (the schedule
+/// itself is unit-tested in `optimize::method`).
+#[test]
+fn adam_step_decay_is_validated_and_wired() {
+    use sdrs::optimize::task::TaskSpec;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/python/chain_reach_adam.yaml");
+    let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for bad in [0.0, 1.5, f64::NAN] {
+        let mut s = spec.clone();
+        s.optimizer.step_decay = Some(bad);
+        let err = Problem::from_spec(&path, s, true)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("optimizer.step_decay"), "{err}");
+    }
+    let run = |decay: Option<f64>| {
+        let mut s = spec.clone();
+        s.optimizer.step_decay = decay;
+        let p = Problem::from_spec(&path, s, true).unwrap();
+        let out = optimize(&p, 6, |_, _| {}).unwrap();
+        out.history
+            .iter()
+            .map(|r| r.loss.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let free = run(None);
+    assert_eq!(run(Some(1.0)), free);
+    let decayed = run(Some(0.01));
+    assert_eq!(decayed[..2], free[..2], "iteration 1 at the full rate");
+    assert_ne!(decayed[2..], free[2..]);
+}

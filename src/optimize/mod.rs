@@ -513,7 +513,7 @@ pub fn optimize_with<E: Into<OptimizeError>>(
     }
     let mut stopped = None;
     for it in run.first..=iters {
-        let (d_new, c_new) = run.propose(p, &ev);
+        let (d_new, c_new) = run.propose(p, it, &ev);
         let trial = p.evaluate(&d_new, &c_new);
         let stop = run.settle(p, it, &mut ev, (d_new, c_new), trial, &mut on_iter)?;
         on_state(&run.state(it)).map_err(Into::into)?;
@@ -589,8 +589,9 @@ struct Run {
     adam: (Adam, Adam),
     history: Vec<IterRecord>,
     best: Option<BestIterate>,
-    /// The first iteration this session runs.
+    /// The first iteration this session runs, and the run's last.
     first: usize,
+    iters: usize,
     /// Wall time (s) of the sessions before a resume, and this session's clock.
     wall0: f64,
     t0: Instant,
@@ -617,6 +618,7 @@ impl Run {
             history: Vec::with_capacity(iters + 1),
             best: None,
             first: 1,
+            iters,
             wall0: 0.0,
             t0: Instant::now(),
             initial_loss: f64::NAN,
@@ -709,23 +711,28 @@ impl Run {
     /// The trial point of the next iteration from the gradients of `ev`:
     /// a trust-region step (design: projected-gradient step within the
     /// radius; controller: the normalized gradient scaled by the radius) or
-    /// an Adam step on the clipped gradients; the design is projected onto
-    /// its bounds.
-    fn propose(&mut self, p: &Problem, ev: &Evaluation) -> (DVector<f64>, DVector<f64>) {
+    /// an Adam step on the clipped gradients at iteration `it`'s rates
+    /// (`optimizer.step_decay`); the design is projected onto its bounds.
+    fn propose(&mut self, p: &Problem, it: usize, ev: &Evaluation) -> (DVector<f64>, DVector<f64>) {
         let o = &p.task.optimizer;
+        let scale = method::decay_factor(o.step_decay, it, self.iters);
         let (dd, dc) = match o.method {
             Method::TrustRegion => self.radii.trial(
                 (&ev.grad_design, &ev.grad_controller),
                 (&self.d, &p.design.lower(), &p.design.upper()),
             ),
             Method::Adam => (
-                self.adam.0.step(&method::clip_norm(
-                    &method::clip_parts(&ev.grad_design, &ev.parts_design, o.clip_trajectory),
-                    o.clip_design,
-                )),
-                self.adam
-                    .1
-                    .step(&method::clip_norm(&ev.grad_controller, o.clip_controller)),
+                self.adam.0.step_scaled(
+                    &method::clip_norm(
+                        &method::clip_parts(&ev.grad_design, &ev.parts_design, o.clip_trajectory),
+                        o.clip_design,
+                    ),
+                    scale,
+                ),
+                self.adam.1.step_scaled(
+                    &method::clip_norm(&ev.grad_controller, o.clip_controller),
+                    scale,
+                ),
             ),
         };
         let mut d_new = &self.d + dd;

@@ -22,6 +22,7 @@
 //!   step_design: 0.05            # trust-region radius ᾱ_d (m) / Adam learning rate
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
 //!   init_noise: 0.0              # uniform ± perturbation of the initial controller (seeded by --seed)
+//!   step_decay: 0.01             # Adam: cosine decay of the rates to this fraction (default: constant)
 //! metrics:                       # optional task metrics in summary.json (see optimize::metrics)
 //!   robot: spider                # whose COM is tracked
 //!   torso: spider/body           # link whose tilt decides "upright" and "fall"
@@ -332,6 +333,14 @@ pub struct OptimizerSpec {
     /// scale every other trajectory's gradient down by that factor. Default
     /// none (the plain sum). `history.csv` keeps the unclipped norm.
     pub clip_trajectory: Option<f64>,
+    /// Adam only: the learning rates follow a cosine from their value at the
+    /// first iteration down to this fraction of it at the run's last,
+    /// `α_k = α (f + (1 − f)(1 + cos(π (k − 1)/(K − 1)))/2)` for
+    /// iteration k of K, so that the last iterate settles instead of
+    /// oscillating at the step's scale around a minimum (a run whose loss
+    /// jumps between regimes ends wherever its last step lands). Default
+    /// none (constant rates, the paper's Adam).
+    pub step_decay: Option<f64>,
     /// Trust region only: how the radii change after a trial. Default
     /// `adaptive` (see [`RadiusRule`]).
     pub radius: RadiusRule,
@@ -358,6 +367,7 @@ impl Default for OptimizerSpec {
             clip_design: None,
             clip_controller: None,
             clip_trajectory: None,
+            step_decay: None,
             radius: RadiusRule::Adaptive,
             newton_tol: None,
         }

@@ -94,6 +94,12 @@ fn check_optimizer(path: &Path, task: &TaskSpec) -> Result<(), TaskError> {
             ));
         }
     }
+    if let Some(f) = o.step_decay.filter(|f| !(*f > 0.0 && *f <= 1.0)) {
+        return Err(invalid(
+            "optimizer.step_decay",
+            format!("must be a fraction in (0, 1], got {f}"),
+        ));
+    }
     if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
         return Err(invalid(
             "optimizer.init_noise",
