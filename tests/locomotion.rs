@@ -228,14 +228,23 @@ fn full_horizon_design_gradients_match_central_differences() {
 }
 
 /// The exported `design.yaml` (a complete scene with the optimized feet and
-/// gait) reproduces the final loss when simulated on its own.
+/// gait) reproduces the final loss when simulated on its own. The run is two
+/// Adam iterations at the task's steps, returning the last iterate (until
+/// 2026-11-30 two trust-region iterations, which had to improve the loss:
+/// with the biped's new initial gait the first two trials at H = 120 are
+/// rejected and the first accepted one, the third, moves only the
+/// controller, and the test needs a moved design; changed after that
+/// failure). Adam moves both blocks at every iteration.
 #[test]
 fn exported_optimized_scene_reproduces_the_final_loss() {
+    use sdrs::optimize::task::{Method, ResultIterate};
     let dir = scratch_dir("loco-export");
     let mut p = Problem::load(&task("biped"), true).unwrap();
     p.first_mut().horizon = 120;
+    p.task.optimizer.method = Method::Adam;
+    p.task.optimizer.result = ResultIterate::Last;
     let out = optimize(&p, 2, |_, _| {}).unwrap();
-    assert!(out.loss < out.initial_loss, "2 iterations improve the loss");
+    assert_eq!(out.iter, 2, "the last iterate");
     sdrs::optimize::output::write_all(&dir, &p, &out, serde_json::Value::Null).unwrap();
     // A controller-only task on the exported scene, same loss and horizon.
     let task_yaml = format!(
@@ -264,7 +273,9 @@ fn exported_optimized_scene_reproduces_the_final_loss() {
 }
 
 /// Metrics: the standing spider (zero gait) neither walks nor falls; the
-/// initial biped falls (tilt → ~90°) early, as in the paper's setup.
+/// initial biped falls (tilt → ~90°) before H, as in the paper's setup (its
+/// gait walks on flat soles; on the imported feet it falls at 2.63 s since
+/// 2026-11-30, at 0.78 s with the earlier hand-written gait).
 #[test]
 fn metrics_distinguish_standing_from_falling() {
     let p = Problem::load(&task("biped"), false).unwrap();
@@ -277,7 +288,7 @@ fn metrics_distinguish_standing_from_falling() {
         )
         .unwrap();
     assert!(!t.upright_at_horizon && t.tilt_final_deg > 60.0, "{t:?}");
-    assert!(t.first_fall_time.unwrap() < 2.0, "{t:?}");
+    assert!(t.first_fall_time.unwrap() < t.horizon_time, "{t:?}");
     // Spider with every sine amplitude zero (the gait's offsets are 0: the
     // PD holds the initial pose): stands still on the slope.
     let mut p = Problem::load(&task("spider"), false).unwrap();
