@@ -203,3 +203,50 @@ fn adam_step_decay_is_validated_and_wired() {
     assert_eq!(decayed[..2], free[..2], "iteration 1 at the full rate");
     assert_ne!(decayed[2..], free[2..]);
 }
+
+/// `optimizer.design_norm: max` on chain reaching (trust region): the first
+/// trial moves every design coordinate whose gradient is non-zero by exactly
+/// the radius `step_design` (0.05; the bounds, ±0.3, do not bind), where the
+/// Euclidean default moves the trial by 0.05 in norm; the step itself is
+/// unit-tested in `optimize::method`.
+#[test]
+fn trust_region_design_norm_max_is_wired() {
+    use sdrs::optimize::task::{DesignNorm, TaskSpec};
+    let path = task();
+    let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let first_trial = |norm: DesignNorm| {
+        let mut s = spec.clone();
+        s.optimizer.design_norm = norm;
+        let p = Problem::from_spec(&path, s, true).unwrap();
+        let d0 = p.design.values(&p.first().model);
+        let g = p
+            .evaluate(&d0, &p.controls.values(&p.first().controller))
+            .unwrap()
+            .grad_design;
+        let mut trial = None;
+        optimize(&p, 1, |r, d| {
+            if r.iter == 1 {
+                trial = Some(d - &d0);
+            }
+        })
+        .unwrap();
+        (trial.unwrap(), g)
+    };
+    let (dm, g) = first_trial(DesignNorm::Max);
+    let (de, _) = first_trial(DesignNorm::Euclidean);
+    assert!((de.norm() - 0.05).abs() < 1e-9, "{}", de.norm());
+    let moved = g.iter().filter(|v| **v != 0.0).count();
+    assert!(moved >= 2);
+    for i in 0..g.len() {
+        let want = if g[i] == 0.0 {
+            0.0
+        } else {
+            -0.05 * g[i].signum()
+        };
+        assert!(
+            (dm[i] - want).abs() < 1e-12,
+            "coordinate {i}: {} vs {want}",
+            dm[i]
+        );
+    }
+}

@@ -1,6 +1,6 @@
 //! Update rules.
 
-use super::task::RadiusRule;
+use super::task::{DesignNorm, RadiusRule};
 use nalgebra::DVector;
 
 /// The paper's trust-region projected-gradient step for one block:
@@ -51,6 +51,28 @@ pub fn trust_region_step(
     delta(b.exp())
 }
 
+/// The design step of the trust region in the max-norm:
+/// `argmin_Δ gᵀΔ  s.t. max_i |Δ_i| ≤ r, lo ≤ x + Δ ≤ hi`, separable:
+/// `Δ_i = clamp(−r sign(g_i), lo_i − x_i, hi_i − x_i)` (0 where `g_i = 0`).
+pub fn trust_region_step_max(
+    g: &DVector<f64>,
+    x: &DVector<f64>,
+    lo: &DVector<f64>,
+    hi: &DVector<f64>,
+    r: f64,
+) -> DVector<f64> {
+    DVector::from_fn(g.len(), |i, _| {
+        let d = if g[i] > 0.0 {
+            -r
+        } else if g[i] < 0.0 {
+            r
+        } else {
+            0.0
+        };
+        d.clamp(lo[i] - x[i], hi[i] - x[i])
+    })
+}
+
 /// Which blocks the next trust-region trial moves ([`RadiusRule::Split`];
 /// always `Joint` under the other rules).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -96,18 +118,20 @@ impl Radii {
     }
 
     /// The trial steps at iterate `(d, c)` with gradients `(g_d, g_c)` and
-    /// design box `[lo, hi]`: `Δd = TR(g_d, r_d)` ([`trust_region_step`];
-    /// zero in the controller phase) and `Δc = −r_c g_c/‖g_c‖` (zero in the
-    /// design phase or if `g_c = 0`).
+    /// design box `[lo, hi]`: `Δd = TR(g_d, r_d)` in the design norm `norm`
+    /// ([`trust_region_step`], [`trust_region_step_max`]; zero in the
+    /// controller phase) and `Δc = −r_c g_c/‖g_c‖` (zero in the design phase
+    /// or if `g_c = 0`).
     pub fn trial(
         &self,
         (g_d, g_c): (&DVector<f64>, &DVector<f64>),
         (d, lo, hi): (&DVector<f64>, &DVector<f64>, &DVector<f64>),
+        norm: DesignNorm,
     ) -> (DVector<f64>, DVector<f64>) {
-        let dd = if self.phase == Phase::Controller {
-            DVector::zeros(d.len())
-        } else {
-            trust_region_step(g_d, d, lo, hi, self.design)
+        let dd = match (self.phase, norm) {
+            (Phase::Controller, _) => DVector::zeros(d.len()),
+            (_, DesignNorm::Euclidean) => trust_region_step(g_d, d, lo, hi, self.design),
+            (_, DesignNorm::Max) => trust_region_step_max(g_d, d, lo, hi, self.design),
         };
         let n = g_c.norm();
         let dc = if n > 0.0 && self.phase != Phase::Design {
@@ -402,7 +426,7 @@ mod tests {
         let (mut log, mut accepted) = (Vec::new(), 0);
         for _ in 0..n {
             let (gd, gc) = grad(&d, &c);
-            let (dd, dc) = r.trial((&gd, &gc), (&d, &lo, &hi));
+            let (dd, dc) = r.trial((&gd, &gc), (&d, &lo, &hi), DesignNorm::Euclidean);
             let (td, tc) = (&d + &dd, &c + &dc);
             let ok = f(&td, &tc) < f(&d, &c);
             r = r.after(&s, (td != d, tc != c), ok);
@@ -508,5 +532,35 @@ mod tests {
         let small = DVector::from_vec(vec![0.01, 0.01]);
         let d = trust_region_step(&g, &x, &(-&small), &small, 0.5);
         assert!((d - DVector::from_vec(vec![-0.01, 0.01])).norm() < 1e-12);
+    }
+
+    /// The max-norm step minimises `gᵀΔ` over `max|Δ_i| ≤ r` within the
+    /// bounds (checked against a grid of the feasible square), moves every
+    /// coordinate with a non-zero gradient by `r` where the bounds allow,
+    /// and leaves a zero-gradient coordinate alone.
+    #[test]
+    fn max_norm_step_is_optimal_on_its_box() {
+        let g = DVector::from_vec(vec![3.0, -4.0, 0.0]);
+        let x = DVector::from_vec(vec![0.0, 0.0, 0.0]);
+        let lo = DVector::from_vec(vec![-1.0, -1.0, -1.0]);
+        let hi = DVector::from_vec(vec![1.0, 0.2, 1.0]);
+        let d = trust_region_step_max(&g, &x, &lo, &hi, 0.5);
+        assert_eq!(d, DVector::from_vec(vec![-0.5, 0.2, 0.0]));
+        let best = (0..=200)
+            .flat_map(|i| {
+                (0..=200).map(move |j| (-0.5 + i as f64 / 200.0, -0.5 + j as f64 / 200.0))
+            })
+            .filter(|(_, b)| *b <= 0.2)
+            .map(|(a, b)| 3.0 * a - 4.0 * b)
+            .fold(f64::INFINITY, f64::min);
+        assert!(g.dot(&d) <= best + 1e-12);
+        // Against the Euclidean step of the same radius: n = 100 equal
+        // components move by r each, not r/√n.
+        let g = DVector::repeat(100, 1.0);
+        let (x, big) = (DVector::zeros(100), DVector::repeat(100, 1e3));
+        let dm = trust_region_step_max(&g, &x, &(-&big), &big, 4e-3);
+        let de = trust_region_step(&g, &x, &(-&big), &big, 4e-3);
+        assert!((dm.amax() - 4e-3).abs() < 1e-15);
+        assert!((de.amax() - 4e-4).abs() < 1e-12);
     }
 }

@@ -720,6 +720,7 @@ impl Run {
             Method::TrustRegion => self.radii.trial(
                 (&ev.grad_design, &ev.grad_controller),
                 (&self.d, &p.design.lower(), &p.design.upper()),
+                o.design_norm,
             ),
             Method::Adam => (
                 self.adam.0.step_scaled(

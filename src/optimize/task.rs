@@ -23,6 +23,7 @@
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
 //!   init_noise: 0.0              # uniform ± perturbation of the initial controller (seeded by --seed)
 //!   step_decay: 0.01             # Adam: cosine decay of the rates to this fraction (default: constant)
+//!   design_norm: euclidean       # trust region: norm of the design step's bound (or max)
 //! metrics:                       # optional task metrics in summary.json (see optimize::metrics)
 //!   robot: spider                # whose COM is tracked
 //!   torso: spider/body           # link whose tilt decides "upright" and "fall"
@@ -294,6 +295,22 @@ impl RadiusRule {
     }
 }
 
+/// The norm of the design block's trust region, `‖Δd‖ ≤ r_d` (the paper's
+/// `‖Δd‖ ≤ ᾱ_d` leaves it open).
+#[derive(
+    Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum DesignNorm {
+    /// `‖Δd‖₂ ≤ r_d` over all design coordinates: with n coordinates moving
+    /// alike, each moves about `r_d/√n`.
+    #[default]
+    Euclidean,
+    /// `max_i |Δd_i| ≤ r_d`: every coordinate may move by up to `r_d`; the
+    /// step is `clamp(−r_d sign(g_i), lo_i − d_i, hi_i − d_i)`.
+    Max,
+}
+
 /// Optimizer settings (defaults documented on each field).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
@@ -344,6 +361,9 @@ pub struct OptimizerSpec {
     /// Trust region only: how the radii change after a trial. Default
     /// `adaptive` (see [`RadiusRule`]).
     pub radius: RadiusRule,
+    /// Trust region only: the norm of the design step's bound. Default
+    /// `euclidean` (see [`DesignNorm`]).
+    pub design_norm: DesignNorm,
     /// Newton tolerance (`‖∇O‖∞`, the scene's `solver.tol`) of every
     /// forward pass of this task, replacing the scene's. The adjoint
     /// gradient is the derivative of the loss at an exact step minimiser; a
@@ -369,6 +389,7 @@ impl Default for OptimizerSpec {
             clip_trajectory: None,
             step_decay: None,
             radius: RadiusRule::Adaptive,
+            design_norm: DesignNorm::Euclidean,
             newton_tol: None,
         }
     }
