@@ -480,3 +480,66 @@ fn split_radius_backtracks_the_design_and_the_controller_separately() {
     };
     assert_eq!(losses(RadiusRule::Split), losses(RadiusRule::Reset));
 }
+
+/// The biped's committed initial gait is the family of
+/// `tools/gen/make_locomotion_scenes.py::biped_gait` (the scene is written
+/// from it, `--biped-gait-only`; this catches a hand edit or a drift): at
+/// every time, each sole stays parallel to the torso (hip + knee + ankle
+/// pitch = 0, hip + ankle roll = 0), the knees do not roll, the legs' hip
+/// pitches are opposite, and the right knee lags the left by half a period.
+#[test]
+fn biped_initial_gait_keeps_the_soles_parallel_and_the_legs_in_anti_phase() {
+    let text = std::fs::read_to_string(robots("biped/scene.yaml")).unwrap();
+    let scene: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    let targets = &scene["robots"][0]["controller"]["targets"];
+    // (θ*_x, θ*_y) of joint `name` at time t: offset + Σ a sin(2π f t + φ).
+    let eval = |name: &str, t: f64| -> [f64; 2] {
+        let axes = targets[name].as_sequence().unwrap();
+        let mut out = [0.0; 2];
+        for (k, s) in axes.iter().enumerate() {
+            out[k] = s["offset"].as_f64().unwrap();
+            for term in s["terms"].as_sequence().unwrap() {
+                let (a, f, p) = (
+                    term["amplitude"].as_f64().unwrap(),
+                    term["frequency"].as_f64().unwrap(),
+                    term["phase"].as_f64().unwrap(),
+                );
+                out[k] += a * (std::f64::consts::TAU * f * t + p).sin();
+            }
+        }
+        out
+    };
+    let f = targets["left_hip_x+left_hip_y"][1]["terms"][0]["frequency"]
+        .as_f64()
+        .unwrap();
+    for i in 0..=400 {
+        let t = i as f64 * 0.01;
+        for side in ["left", "right"] {
+            let hip = eval(&format!("{side}_hip_x+{side}_hip_y"), t);
+            let knee = eval(&format!("{side}_knee_x+{side}_knee_y"), t);
+            let ankle = eval(&format!("{side}_ankle_x+{side}_ankle_y"), t);
+            assert!(
+                (hip[1] + knee[1] + ankle[1]).abs() < 1e-12,
+                "{side} pitch at {t}"
+            );
+            assert!((hip[0] + ankle[0]).abs() < 1e-12, "{side} roll at {t}");
+            assert!(knee[0].abs() < 1e-15, "{side} knee roll at {t}");
+        }
+        let (l, r) = (
+            eval("left_hip_x+left_hip_y", t),
+            eval("right_hip_x+right_hip_y", t),
+        );
+        assert!(
+            (l[1] + r[1]).abs() < 1e-12 && (l[0] - r[0]).abs() < 1e-15,
+            "hips at {t}"
+        );
+        let kl = eval("left_knee_x+left_knee_y", t);
+        let kr = eval("right_knee_x+right_knee_y", t + 0.5 / f);
+        assert!((kl[1] - kr[1]).abs() < 1e-9, "knees at {t}");
+    }
+    // It moves: the hip pitch swings by more than 0.1 rad.
+    let swing = (0..100)
+        .map(|i| eval("left_hip_x+left_hip_y", i as f64 * 0.01)[1])
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(swing > 0.1, "{swing}");
+}
