@@ -72,8 +72,7 @@ fn chain_reaching_codesign_beats_controller_only_by_ninety_percent() {
 #[test]
 fn adam_returns_its_best_iterate_or_on_request_its_last() {
     use sdrs::optimize::task::ResultIterate;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples/python/chain_reach_adam.yaml");
+    let (path, _) = adam_task();
     let mut p = Problem::load(&path, true).unwrap();
     p.task.optimizer.step_design = 0.05;
     p.task.optimizer.step_controller = 0.5;
@@ -119,16 +118,37 @@ fn adam_returns_its_best_iterate_or_on_request_its_last() {
     assert_eq!(again.to_bits(), last.loss.to_bits());
 }
 
+/// The Adam variant of chain reaching (`examples/python/chain_reach_adam.yaml`)
+/// and its task spec, for the optimizer-option tests below.
+fn adam_task() -> (std::path::PathBuf, sdrs::optimize::task::TaskSpec) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/python/chain_reach_adam.yaml");
+    let spec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    (path, spec)
+}
+
+/// The loss bits of `iters` iterations of `spec` with `edit` applied to its
+/// optimizer settings.
+fn loss_bits(
+    path: &std::path::Path,
+    spec: &sdrs::optimize::task::TaskSpec,
+    iters: usize,
+    edit: impl Fn(&mut sdrs::optimize::task::OptimizerSpec),
+) -> Vec<u64> {
+    let mut s = spec.clone();
+    edit(&mut s.optimizer);
+    let p = Problem::from_spec(path, s, true).unwrap();
+    let out = optimize(&p, iters, |_, _| {}).unwrap();
+    out.history.iter().map(|r| r.loss.to_bits()).collect()
+}
+
 /// `optimizer.clip_design`: a non-positive value is refused naming the
 /// field; a bound that never binds leaves Adam's run bitwise unchanged, and
 /// one that binds changes it (the clipping itself is unit-tested in
 /// `optimize::method`).
 #[test]
 fn adam_gradient_clip_is_validated_and_wired() {
-    use sdrs::optimize::task::TaskSpec;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples/python/chain_reach_adam.yaml");
-    let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let (path, spec) = adam_task();
     let mut nan = spec.clone();
     nan.optimizer.clip_trajectory = Some(f64::NAN);
     let err = Problem::from_spec(&path, nan, true)
@@ -146,16 +166,7 @@ fn adam_gradient_clip_is_validated_and_wired() {
         err.contains("optimizer.clip_design") && err.contains("-1"),
         "{err}"
     );
-    let run = |clip: Option<f64>| {
-        let mut s = spec.clone();
-        s.optimizer.clip_design = clip;
-        let p = Problem::from_spec(&path, s, true).unwrap();
-        let out = optimize(&p, 6, |_, _| {}).unwrap();
-        out.history
-            .iter()
-            .map(|r| r.loss.to_bits())
-            .collect::<Vec<_>>()
-    };
+    let run = |clip: Option<f64>| loss_bits(&path, &spec, 6, |o| o.clip_design = clip);
     let free = run(None);
     assert_eq!(run(Some(1e300)), free);
     let p0 = Problem::load(&path, true).unwrap();
@@ -174,10 +185,7 @@ fn adam_gradient_clip_is_validated_and_wired() {
 /// itself is unit-tested in `optimize::method`).
 #[test]
 fn adam_step_decay_is_validated_and_wired() {
-    use sdrs::optimize::task::TaskSpec;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples/python/chain_reach_adam.yaml");
-    let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let (path, spec) = adam_task();
     for bad in [0.0, 1.5, f64::NAN] {
         let mut s = spec.clone();
         s.optimizer.step_decay = Some(bad);
@@ -187,16 +195,7 @@ fn adam_step_decay_is_validated_and_wired() {
             .to_string();
         assert!(err.contains("optimizer.step_decay"), "{err}");
     }
-    let run = |decay: Option<f64>| {
-        let mut s = spec.clone();
-        s.optimizer.step_decay = decay;
-        let p = Problem::from_spec(&path, s, true).unwrap();
-        let out = optimize(&p, 6, |_, _| {}).unwrap();
-        out.history
-            .iter()
-            .map(|r| r.loss.to_bits())
-            .collect::<Vec<_>>()
-    };
+    let run = |decay: Option<f64>| loss_bits(&path, &spec, 6, |o| o.step_decay = decay);
     let free = run(None);
     assert_eq!(run(Some(1.0)), free);
     let decayed = run(Some(0.01));
