@@ -64,6 +64,25 @@ fn g_atr(g: &Matrix3x4<f64>, a: &Matrix3x4<f64>) -> Matrix3x4<f64> {
     out
 }
 
+/// [`assemble`] of the Hessian into a fresh zero matrix with a fresh
+/// scratch (the gradient is computed and dropped): for one-off assemblies
+/// (the mass matrix, reference checks) that reuse no buffer.
+pub fn assemble_hessian(model: &Model, kin: &Kinematics, acc: &EnergyAccumulator) -> DMatrix<f64> {
+    let n = model.ndof();
+    let (mut grad, mut hess) = (DVector::zeros(n), DMatrix::zeros(n, n));
+    let mut scratch = AssembleScratch::default();
+    assemble(
+        model,
+        kin,
+        acc,
+        Need::Hessian,
+        &mut grad,
+        &mut hess,
+        &mut scratch,
+    );
+    hess
+}
+
 /// Adds the pose-space derivatives in `acc` (plus its direct coordinate
 /// terms) into `grad` and `hess` (overwritten), as required by `need`.
 ///

@@ -142,7 +142,7 @@ mod tests {
     use crate::energy::{Need, PoseHessian};
     use crate::kinematics::{KinOrder, Kinematics};
     use crate::scene::Scene;
-    use crate::sim::assemble::{AssembleScratch, assemble};
+    use crate::sim::assemble::{AssembleScratch, assemble, assemble_hessian};
     use nalgebra::{DVector, Matrix3x4};
     use rand::{RngExt, SeedableRng};
     type Rng = rand_chacha::ChaCha8Rng;
@@ -243,7 +243,6 @@ robots:
         let (n, nl) = (model.ndof(), model.links.len());
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let mut kin = Kinematics::new(model);
-        let mut grad = DVector::zeros(n);
         let mut worst = 0.0f64;
         for _ in 0..40 {
             let q = DVector::from_fn(n, |_, _| rng.random_range(-0.5..0.5));
@@ -283,16 +282,7 @@ robots:
                 let c = jac(*i).transpose() * h * jac(*j);
                 expect += &c + c.transpose();
             }
-            let mut got = DMatrix::zeros(n, n);
-            assemble(
-                model,
-                &kin,
-                &acc,
-                Need::Hessian,
-                &mut grad,
-                &mut got,
-                &mut AssembleScratch::default(),
-            );
+            let got = assemble_hessian(model, &kin, &acc);
             let err = (&got - &expect).amax() / expect.amax().max(1e-300);
             worst = worst.max(err);
             assert!(err <= 1e-12, "relative error {err:.2e}");
@@ -319,17 +309,7 @@ robots:
             let charts = vec![nalgebra::Matrix3::identity(); model.nchart];
             kin.update(model, &q, &charts, KinOrder::Second);
             let acc = random_acc(model, &mut rng);
-            let mut fresh = DMatrix::zeros(n, n);
-            let mut fresh_scratch = AssembleScratch::default();
-            assemble(
-                model,
-                &kin,
-                &acc,
-                Need::Hessian,
-                &mut grad,
-                &mut fresh,
-                &mut fresh_scratch,
-            );
+            let fresh = assemble_hessian(model, &kin, &acc);
             assemble(
                 model,
                 &kin,

@@ -13,8 +13,8 @@
 //! second moments `M_i` only, i.e. exactly the inertia term's Hessian at
 //! `Δt = 1` and zero velocity.
 
-use super::assemble::{AssembleScratch, assemble};
-use crate::energy::{EnergyAccumulator, Need};
+use super::assemble::assemble_hessian;
+use crate::energy::EnergyAccumulator;
 use crate::kinematics::{KinOrder, Kinematics};
 use crate::model::Model;
 use nalgebra::{DMatrix, DVector, Matrix3};
@@ -29,20 +29,7 @@ pub fn mass_matrix(model: &Model, q: &DVector<f64>, charts: &[Matrix3<f64>]) -> 
         *m = *w;
     }
     acc.link_moment_set = true;
-    let n = model.ndof();
-    let mut grad = DVector::zeros(n);
-    let mut hess = DMatrix::zeros(n, n);
-    let mut scratch = AssembleScratch::default();
-    assemble(
-        model,
-        &kin,
-        &acc,
-        Need::Hessian,
-        &mut grad,
-        &mut hess,
-        &mut scratch,
-    );
-    hess
+    assemble_hessian(model, &kin, &acc)
 }
 
 #[cfg(test)]
