@@ -1,5 +1,5 @@
 //! The solver options that change only a step's cost — the initial guess
-//! (`solver.predictor`: `previous`, `extrapolate`, `quadratic`), the Newton model of indefinite Hessian blocks
+//! (`solver.predictor`: `previous`, `extrapolate`, `quadratic`, `cubic`, `adaptive`), the Newton model of indefinite Hessian blocks
 //! (`solver.indefinite`), the zero step of independent blocks already
 //! below the tolerance (`solver.settle_blocks`) and the derivatives
 //! evaluated at the line search's first trial point
@@ -45,8 +45,10 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         (Predictor::Quadratic, Indefinite::Clamp, false, true),
         (Predictor::Previous, Indefinite::Clamp, false, true),
         (Predictor::Quadratic, Indefinite::Shift, true, false),
-        // The defaults.
+        (Predictor::Cubic, Indefinite::Shift, true, true),
         (Predictor::Quadratic, Indefinite::Shift, true, true),
+        // The defaults.
+        (Predictor::Adaptive, Indefinite::Shift, true, true),
     ];
     let mut worst = vec![0.0f64; variants.len()];
     let mut contact_steps = 0;

@@ -11,7 +11,7 @@
 //!   max_iters: 100
 //!   eig_clamp: 1.0e-3        #   Hessian eigenvalue floor
 //!   max_backtracks: 60
-//!   predictor: quadratic     #   start at 3(θ^t − θ^{t−1}) + θ^{t−2} (`extrapolate`: 2θ^t − θ^{t−1}; `previous`: θ^t)
+//!   predictor: adaptive      #   start at the cubic or quadratic extrapolation, whichever was closer last step (`cubic`, `quadratic`, `extrapolate`: 2θ^t − θ^{t−1}; `previous`: θ^t)
 //!   indefinite: shift        #   Newton model of blocks with λ ≤ eig_clamp (or `clamp`)
 //!   settle_blocks: true      #   no re-solve of independent blocks already below tol
 //! robots:

@@ -70,10 +70,12 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub eig_abs: bool,
-    /// Starting point of each step's Newton solve. Default `quadratic`
-    /// (`3(θ^t − θ^{t−1}) + θ^{t−2}`, falling back to `θ^t` where the
-    /// objective is not finite): fewer iterations, same solution to within
-    /// `tol` (see [`Predictor`]).
+    /// Starting point of each step's Newton solve. Default `adaptive`
+    /// (the cubic extrapolation `4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}` or the
+    /// quadratic `3(θ^t − θ^{t−1}) + θ^{t−2}`, whichever predicted the last
+    /// step better; falling back to `θ^t` where the objective is not finite
+    /// or larger): fewer iterations, same solution to within `tol` (see
+    /// [`Predictor`]).
     pub predictor: Predictor,
     /// Newton model on Hessian blocks with an eigenvalue `≤ eig_clamp`
     /// (elsewhere the model is the Hessian itself). Default `shift`
@@ -158,8 +160,25 @@ pub enum Predictor {
     /// [`crate::sim::SimState::q_prev2`]). On the four chains it takes
     /// about a quarter fewer Newton iterations per step than `extrapolate`
     /// (figures: `docs/performance.md`, seventh session).
-    #[default]
     Quadratic,
+    /// `θ^{t+1}_0 = 4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}` (constant
+    /// generalized jerk: the cubic through the last four states, one step
+    /// on; third order, exact for motion with a constant third time
+    /// derivative), with the same fallback to `θ^t`; the quadratic guess
+    /// while `θ^{t−3}` is not known ([`crate::sim::SimState::q_prev3`]).
+    /// Its coefficients amplify round-off in the states by
+    /// `√(4² + 6² + 4² + 1) ≈ 8.3` (quadratic: `√19 ≈ 4.4`), far below the
+    /// Newton tolerance's own spread of the states.
+    Cubic,
+    /// The cubic or the quadratic guess, whichever was closer (max norm) to
+    /// the previous step's solution ([`crate::sim::SimState::cubic_closer`]):
+    /// smooth motion gets the cubic, impacts and stick–slip (where the third
+    /// difference is noise) the quadratic. The default: on the four chains
+    /// it takes 15–32 % fewer Newton iterations than `quadratic` at 8–32
+    /// links per chain, and no bundled scene more than 5 % more
+    /// (`notes/performance.md`, 2026-11-30, sixth session).
+    #[default]
+    Adaptive,
 }
 
 impl Default for NewtonOptions {

@@ -27,6 +27,15 @@ pub struct SimState {
     /// ([`crate::sim::Predictor::Quadratic`]), i.e. by the initial guess of
     /// the next step's Newton solve, never by the dynamics.
     pub q_prev2: Option<DVector<f64>>,
+    /// `θ^{t−3}` (in the same charts as `q`) when known, for the cubic
+    /// predictor ([`crate::sim::Predictor::Cubic`]) only; `None` until three
+    /// steps have been taken from an initial state.
+    pub q_prev3: Option<DVector<f64>>,
+    /// Whether the cubic guess of the last step was closer (max norm) to its
+    /// solution than the quadratic one (both formed from the states before
+    /// it; `false` until both exist). Read only by
+    /// [`crate::sim::Predictor::Adaptive`].
+    pub cubic_closer: bool,
     /// Chart centres `R_c` of spherical/free joints.
     pub charts: Vec<Matrix3<f64>>,
     /// `A^t`.
@@ -57,6 +66,8 @@ impl SimState {
             q: q0,
             q_prev,
             q_prev2: None,
+            q_prev3: None,
+            cubic_closer: false,
             charts,
             poses,
             poses_prev,
@@ -65,7 +76,7 @@ impl SimState {
 
     /// Moves a chart centre onto the current orientation when its rotation
     /// vector grew past [`CHART_RECENTER`]: `R_c ← R_c exp(φ^t)`, `φ^t ← 0`,
-    /// `φ^{t−1} ← log(R_c'ᵀ R_c exp(φ^{t−1}))` (and `φ^{t−2}` alike). Poses
+    /// `φ^{t−1} ← log(R_c'ᵀ R_c exp(φ^{t−1}))` (and `φ^{t−2}`, `φ^{t−3}` alike). Poses
     /// are unchanged.
     pub fn recenter_charts(&mut self, model: &Model) {
         for link in &model.links {
@@ -83,8 +94,8 @@ impl SimState {
                 q.rows_mut(o, 3).copy_from(&phi_new);
             };
             rechart(&mut self.q_prev);
-            if let Some(q2) = &mut self.q_prev2 {
-                rechart(q2);
+            for older in [&mut self.q_prev2, &mut self.q_prev3].into_iter().flatten() {
+                rechart(older);
             }
             self.q.rows_mut(o, 3).fill(0.0);
             self.charts[c] = new;

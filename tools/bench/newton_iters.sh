@@ -11,18 +11,27 @@
 # tolerance per step; over many steps of a chaotic scene the difference
 # grows like any round-off).
 #
+# `--before` / `--after PREDICTOR/INDEFINITE` compare two other solver settings
+# (e.g. `--before quadratic/shift --after cubic/shift`); the defaults are the
+# comparison above.
+#
 #   tools/bench/newton_iters.sh [--steps 300] [--sdrs target/release/sdrs] [--json out.json]
+#                               [--before previous/clamp] [--after extrapolate/shift]
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$(dirname "$here")")"
 steps=300
 sdrs="$root/target/release/sdrs"
 json=""
+before="previous/clamp"
+after="extrapolate/shift"
 while [ $# -gt 0 ]; do
   case "$1" in
     --steps) steps="$2"; shift 2 ;;
     --sdrs) sdrs="$2"; shift 2 ;;
     --json) json="$2"; shift 2 ;;
+    --before) before="$2"; shift 2 ;;
+    --after) after="$2"; shift 2 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
 done
@@ -30,11 +39,13 @@ py="${PYTHON:-$root/.venv/bin/python}"
 [ -x "$py" ] || py=python3
 [ -x "$sdrs" ] || { echo "no sdrs binary at $sdrs (cargo build --release)" >&2; exit 2; }
 echo "load: $(uptime)"
-"$py" - "$root" "$sdrs" "$steps" "$json" <<'EOF'
+echo "before: $before, after: $after"
+"$py" - "$root" "$sdrs" "$steps" "$json" "$before" "$after" <<'EOF'
 import glob, json, os, subprocess, sys, tempfile
 import yaml
 
 root, sdrs, cap, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+settings = {"before": tuple(sys.argv[5].split("/")), "after": tuple(sys.argv[6].split("/"))}
 scenes = []
 for p in sorted(glob.glob(os.path.join(root, "robots", "**", "*.yaml"), recursive=True)):
     with open(p) as f:
@@ -51,7 +62,8 @@ for path, spec in scenes:
     rel = os.path.relpath(path, root)
     steps = min(int(spec.get("steps", cap)), cap)
     res = {}
-    for pred, ind in (("previous", "clamp"), ("extrapolate", "shift")):
+    for label in ("before", "after"):
+        pred, ind = settings[label]
         s = dict(spec)
         s["solver"] = dict(s.get("solver") or {}, predictor=pred, indefinite=ind)
         # Next to the original, so relative mesh paths resolve.
@@ -64,13 +76,13 @@ for path, spec in scenes:
                 r = subprocess.run([sdrs, "simulate", tmp, "--steps", str(steps), "--json", sj, "-q"],
                                    capture_output=True, text=True)
                 if r.returncode != 0:
-                    res[pred] = {"error": (r.stderr.strip().splitlines() or ["?"])[-1]}
+                    res[label] = {"error": (r.stderr.strip().splitlines() or ["?"])[-1]}
                     continue
                 with open(sj) as f:
-                    res[pred] = json.load(f)
+                    res[label] = json.load(f)
         finally:
             os.unlink(tmp)
-    b, a = res["previous"], res["extrapolate"]
+    b, a = res["before"], res["after"]
     if "error" in b or "error" in a:
         print(f"| {rel} | {steps} | {b.get('error', '')} | {a.get('error', '')} | | | | | |")
         rows.append({"scene": rel, "steps": steps, "before": b.get("error"), "after": a.get("error")})
