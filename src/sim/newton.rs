@@ -190,7 +190,7 @@ impl Default for NewtonOptions {
             max_backtracks: 60,
             step_floor: 1e-9,
             eig_abs: false,
-            predictor: Predictor::Quadratic,
+            predictor: Predictor::default(),
             indefinite: Indefinite::Shift,
             settle_blocks: true,
             gradient_first: true,
