@@ -13,6 +13,7 @@ pub mod envelope;
 pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
+mod predictor;
 pub mod run;
 pub mod small_cholesky;
 pub mod state;
@@ -34,6 +35,7 @@ use crate::model::Model;
 use assemble::AssembleScratch;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use newton::{NewtonScratch, Objective};
+use predictor::{cubic_was_closer, predict_guess};
 use std::time::Instant;
 
 /// Largest change of a rotation-vector coordinate in one Newton iteration
@@ -140,70 +142,6 @@ fn gradient_dot_step(
         .zip(q.iter().zip(ctx.q_prev.iter()))
         .map(|(g, (a, b))| g * (a - b))
         .sum::<f64>()
-}
-
-/// The initial guess of the next step's solve ([`Predictor`]):
-/// `2θ^t − θ^{t−1}` (constant generalized velocity); with
-/// [`Predictor::Quadratic`] and `θ^{t−2}` known, `3(θ^t − θ^{t−1}) + θ^{t−2}`
-/// (constant generalized acceleration: the parabola through the last three
-/// states, one step on); with [`Predictor::Cubic`] and `θ^{t−3}` known as
-/// well, `4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}` (the cubic through the last
-/// four), else the quadratic guess; with [`Predictor::Adaptive`] the cubic
-/// guess when it was the closer one last step ([`cubic_was_closer`]).
-fn predict_guess(state: &SimState, predictor: Predictor, guess: &mut DVector<f64>) {
-    fn known(q: &Option<DVector<f64>>, n: usize) -> Option<&DVector<f64>> {
-        q.as_ref().filter(|q| q.len() == n)
-    }
-    let n = state.q.len();
-    let cubic = match predictor {
-        Predictor::Cubic => true,
-        Predictor::Adaptive => state.cubic_closer,
-        _ => false,
-    };
-    match (
-        predictor,
-        known(&state.q_prev2, n),
-        known(&state.q_prev3, n),
-    ) {
-        (_, Some(q2), Some(q3)) if cubic => {
-            guess.clone_from(&state.q);
-            *guess *= 4.0;
-            guess.axpy(-6.0, &state.q_prev, 1.0);
-            guess.axpy(4.0, q2, 1.0);
-            *guess -= q3;
-        }
-        (Predictor::Quadratic | Predictor::Cubic | Predictor::Adaptive, Some(q2), _) => {
-            guess.clone_from(&state.q);
-            *guess -= &state.q_prev;
-            *guess *= 3.0;
-            *guess += q2;
-        }
-        _ => {
-            guess.clone_from(&state.q);
-            guess.axpy(-1.0, &state.q_prev, 2.0);
-        }
-    }
-}
-
-/// Whether the cubic guess of the step just solved (from `θ^t … θ^{t−3}` in
-/// `state`) lies closer to its solution `q` than the quadratic guess, in
-/// the max norm: `‖q − g_c‖∞ < ‖q − g_q‖∞`, with `g_q = 3(θ^t − θ^{t−1}) +
-/// θ^{t−2}` and `g_c = 4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}`. `false` while
-/// `θ^{t−3}` is not known.
-fn cubic_was_closer(state: &SimState, q: &DVector<f64>) -> bool {
-    let (Some(q2), Some(q3)) = (&state.q_prev2, &state.q_prev3) else {
-        return false;
-    };
-    if q2.len() != q.len() || q3.len() != q.len() {
-        return false;
-    }
-    let (mut err_q, mut err_c) = (0.0f64, 0.0f64);
-    for k in 0..q.len() {
-        let (t0, t1, t2, t3) = (state.q[k], state.q_prev[k], q2[k], q3[k]);
-        err_q = err_q.max((q[k] - (3.0 * (t0 - t1) + t2)).abs());
-        err_c = err_c.max((q[k] - (4.0 * t0 - 6.0 * t1 + 4.0 * t2 - t3)).abs());
-    }
-    err_c < err_q
 }
 
 impl Objective for StepObjective<'_> {
