@@ -647,7 +647,7 @@ pub fn contact_pair(
         let hinv = plane_hessian_inverse(&sol.eval.hess);
         let w = hinv * bmat.transpose(); // 4×24
         hess -= bmat * w;
-        out.hessian = Some(Box::new((hess + hess.transpose()) * 0.5));
+        out.hessian = Some(crate::math::symmetric_part_boxed(&hess));
     }
     Ok(PairOutcome::Separated(out))
 }

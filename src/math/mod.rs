@@ -16,7 +16,7 @@
 pub mod polytope;
 pub mod so3;
 
-use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector3};
+use nalgebra::{Matrix3, Matrix3x4, Matrix4, SMatrix, Vector3};
 
 /// A rigid (or, for design derivatives, general affine) transform `[R | t]`.
 pub type Pose = Matrix3x4<f64>;
@@ -92,6 +92,24 @@ pub fn frob(x: &Matrix3x4<f64>, y: &Matrix3x4<f64>) -> f64 {
     x.component_mul(y).sum()
 }
 
+/// The symmetric part `(H + Hᵀ)/2` of a square matrix, boxed, formed in
+/// place: entry `(i, j)` and `(j, i)` both become `(h_ij + h_ji) · 0.5` (the
+/// same bits as `(H + H.transpose()) * 0.5`, addition being commutative),
+/// the diagonal `(h_ii + h_ii) · 0.5 = h_ii` exactly. One copy into the box
+/// instead of three 24×24 temporaries (the pair Hessians of contact and
+/// friction).
+pub fn symmetric_part_boxed<const N: usize>(h: &SMatrix<f64, N, N>) -> Box<SMatrix<f64, N, N>> {
+    let mut out = Box::new(*h);
+    for j in 0..N {
+        for i in 0..j {
+            let v = (out[(i, j)] + out[(j, i)]) * 0.5;
+            out[(i, j)] = v;
+            out[(j, i)] = v;
+        }
+    }
+    out
+}
+
 /// Skew-symmetric matrix `[v]×` with `[v]× w = v × w`.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
@@ -105,6 +123,21 @@ pub fn rpy_to_matrix(rpy: &[f64; 3]) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn symmetric_part_boxed_has_the_bits_of_the_expression() {
+        // Entries of mixed magnitudes and signs, so the sums round.
+        let h = SMatrix::<f64, 24, 24>::from_fn(|r, c| {
+            let x = ((r * 31 + c * 17) % 29) as f64 - 14.0;
+            x * 10f64.powi(((r + 2 * c) % 9) as i32 - 4) / 3.0
+        });
+        let want = (h + h.transpose()) * 0.5;
+        let got = symmetric_part_boxed(&h);
+        for (a, b) in got.iter().zip(want.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        assert_eq!(*got, got.transpose());
+    }
 
     #[test]
     fn twist_apply_matches_homogeneous_product() {

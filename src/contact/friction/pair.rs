@@ -162,7 +162,7 @@ pub fn friction_pair(
     let hdiag = hess;
     let w = core.hinv * cmat.transpose(); // 3×24
     hess -= cmat * w;
-    out.hessian = Some(Box::new((hess + hess.transpose()) * 0.5));
+    out.hessian = Some(crate::math::symmetric_part_boxed(&hess));
     if need == FrictionNeed::HessianAndMixed {
         let nx = cross_matrix(&frame.normal);
         let qm = Matrix3::identity() / dt + nx * core.q.z;
