@@ -13,14 +13,27 @@ use super::newton::Predictor;
 use super::state::SimState;
 use nalgebra::DVector;
 
+/// The quadratic extrapolation of one coordinate, `3(θ^t − θ^{t−1}) + θ^{t−2}`
+/// (the parabola through the last three values, one step on).
+#[inline]
+fn quadratic_at(t0: f64, t1: f64, t2: f64) -> f64 {
+    (t0 - t1) * 3.0 + t2
+}
+
+/// The cubic extrapolation of one coordinate, `4θ^t − 6θ^{t−1} + 4θ^{t−2} −
+/// θ^{t−3}` (the cubic through the last four values, one step on).
+#[inline]
+fn cubic_at(t0: f64, t1: f64, t2: f64, t3: f64) -> f64 {
+    4.0 * t0 - 6.0 * t1 + 4.0 * t2 - t3
+}
+
 /// The initial guess of the next step's solve ([`Predictor`]):
 /// `2θ^t − θ^{t−1}` (constant generalized velocity); with
-/// [`Predictor::Quadratic`] and `θ^{t−2}` known, `3(θ^t − θ^{t−1}) + θ^{t−2}`
-/// (constant generalized acceleration: the parabola through the last three
-/// states, one step on); with [`Predictor::Cubic`] and `θ^{t−3}` known as
-/// well, `4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}` (the cubic through the last
-/// four), else the quadratic guess; with [`Predictor::Adaptive`] the cubic
-/// guess when it was the closer one last step ([`cubic_was_closer`]).
+/// [`Predictor::Quadratic`] and `θ^{t−2}` known, [`quadratic_at`] (constant
+/// generalized acceleration); with [`Predictor::Cubic`] and `θ^{t−3}` known
+/// as well, [`cubic_at`], else the quadratic guess; with
+/// [`Predictor::Adaptive`] the cubic guess when it was the closer one last
+/// step ([`cubic_was_closer`]).
 pub(super) fn predict_guess(state: &SimState, predictor: Predictor, guess: &mut DVector<f64>) {
     fn known(q: &Option<DVector<f64>>, n: usize) -> Option<&DVector<f64>> {
         q.as_ref().filter(|q| q.len() == n)
@@ -31,36 +44,39 @@ pub(super) fn predict_guess(state: &SimState, predictor: Predictor, guess: &mut 
         Predictor::Adaptive => state.cubic_closer,
         _ => false,
     };
+    let (q0, q1) = (&state.q, &state.q_prev);
     match (
         predictor,
         known(&state.q_prev2, n),
         known(&state.q_prev3, n),
     ) {
         (_, Some(q2), Some(q3)) if cubic => {
-            guess.clone_from(&state.q);
-            *guess *= 4.0;
-            guess.axpy(-6.0, &state.q_prev, 1.0);
-            guess.axpy(4.0, q2, 1.0);
-            *guess -= q3;
+            fill(guess, n, |k| cubic_at(q0[k], q1[k], q2[k], q3[k]));
         }
         (Predictor::Quadratic | Predictor::Cubic | Predictor::Adaptive, Some(q2), _) => {
-            guess.clone_from(&state.q);
-            *guess -= &state.q_prev;
-            *guess *= 3.0;
-            *guess += q2;
+            fill(guess, n, |k| quadratic_at(q0[k], q1[k], q2[k]));
         }
         _ => {
-            guess.clone_from(&state.q);
-            guess.axpy(-1.0, &state.q_prev, 2.0);
+            guess.clone_from(q0);
+            guess.axpy(-1.0, q1, 2.0);
         }
+    }
+}
+
+/// `guess[k] = f(k)` for `k < n`, reusing the buffer when it has `n` entries.
+fn fill(guess: &mut DVector<f64>, n: usize, f: impl Fn(usize) -> f64) {
+    if guess.len() != n {
+        *guess = DVector::zeros(n);
+    }
+    for (k, g) in guess.iter_mut().enumerate() {
+        *g = f(k);
     }
 }
 
 /// Whether the cubic guess of the step just solved (from `θ^t … θ^{t−3}` in
 /// `state`) lies closer to its solution `q` than the quadratic guess, in
-/// the max norm: `‖q − g_c‖∞ < ‖q − g_q‖∞`, with `g_q = 3(θ^t − θ^{t−1}) +
-/// θ^{t−2}` and `g_c = 4θ^t − 6θ^{t−1} + 4θ^{t−2} − θ^{t−3}`. `false` while
-/// `θ^{t−3}` is not known.
+/// the max norm: `‖q − g_c‖∞ < ‖q − g_q‖∞` ([`cubic_at`], [`quadratic_at`]).
+/// `false` while `θ^{t−3}` is not known.
 pub(super) fn cubic_was_closer(state: &SimState, q: &DVector<f64>) -> bool {
     let (Some(q2), Some(q3)) = (&state.q_prev2, &state.q_prev3) else {
         return false;
@@ -71,8 +87,8 @@ pub(super) fn cubic_was_closer(state: &SimState, q: &DVector<f64>) -> bool {
     let (mut err_q, mut err_c) = (0.0f64, 0.0f64);
     for k in 0..q.len() {
         let (t0, t1, t2, t3) = (state.q[k], state.q_prev[k], q2[k], q3[k]);
-        err_q = err_q.max((q[k] - (3.0 * (t0 - t1) + t2)).abs());
-        err_c = err_c.max((q[k] - (4.0 * t0 - 6.0 * t1 + 4.0 * t2 - t3)).abs());
+        err_q = err_q.max((q[k] - quadratic_at(t0, t1, t2)).abs());
+        err_c = err_c.max((q[k] - cubic_at(t0, t1, t2, t3)).abs());
     }
     err_c < err_q
 }
