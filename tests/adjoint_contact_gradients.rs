@@ -3,7 +3,7 @@
 //! active at every step; adjoint gradients against central finite
 //! differences. Also: the loss is C¹ through contact onset.
 
-mod common;
+use crate::common;
 
 use common::adjoint::{Setup, check, fd, push_loss};
 use nalgebra::Vector3;

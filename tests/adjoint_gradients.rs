@@ -1,7 +1,7 @@
 //! Whole-trajectory gradients by the adjoint method against central finite
 //! differences of the loss (re-simulating the whole trajectory).
 
-mod common;
+use crate::common;
 
 use common::adjoint::{Setup, fd};
 use nalgebra::Vector3;

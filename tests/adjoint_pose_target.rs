@@ -4,7 +4,7 @@
 //! (initial state, every signal parameter, gains, vertices of a child link)
 //! match central finite differences.
 
-mod common;
+use crate::common;
 
 use common::adjoint::{Setup, check, fd};
 use nalgebra::Vector3;

@@ -2,7 +2,7 @@
 //! typed error naming the file, the column and the line; nothing is written
 //! to the output directory on error; inputs are never overwritten.
 
-mod common;
+use crate::common;
 
 use sdrs::calibrate::{CalibrateError, CalibrateOptions, run};
 use sdrs::energy::effects::EffectKind;

@@ -4,8 +4,8 @@
 //! whole-trajectory adjoint gradient w.r.t. every effect parameter against
 //! central differences of the re-simulated loss.
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use nalgebra::{DMatrix, DVector};
 use sdrs::diff::{Loss, LossTerm, When, backward, loss_of, record};

@@ -2,8 +2,8 @@
 //! adjoint pass) against central finite differences of `½‖r‖²`
 //! (re-simulating), on both calibration robots, away from the optimum.
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use rayon::prelude::*;

@@ -5,8 +5,8 @@
 //! an engine more accurate than ours). Data with a hidden effect on the
 //! same fine step must still name the effect.
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use nalgebra::DVector;

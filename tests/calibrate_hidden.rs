@@ -7,8 +7,8 @@
 //! 10 %, the held-out error shrinking by ≥ 90 %; on clean data (noise and
 //! resampling only) the verdict is "none" in every case.
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use rayon::prelude::*;

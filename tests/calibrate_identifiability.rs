@@ -14,8 +14,8 @@
 //! component, now relative to the eigenvector's largest (see the module
 //! doc).
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use sdrs::calibrate::candidates::{candidates, pair};

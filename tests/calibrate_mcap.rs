@@ -6,7 +6,7 @@
 //! and nothing is written on error. Files are written here with the
 //! `mcap` crate's writer and a small CDR encoder: no Python needed.
 
-mod common;
+use crate::common;
 
 use mcap::records::MessageHeader;
 use rand::{RngExt, SeedableRng};

@@ -17,8 +17,8 @@
 //! (the test is of the fit across recordings, not of the selection),
 //! holdout 0.3.
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use sdrs::calibrate::adjoint::residual_gradient;

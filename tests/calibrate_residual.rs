@@ -6,8 +6,8 @@
 //! no term of comparable size. The data from MuJoCo (delay, velocity-squared
 //! drag) are the acceptance script's (`tools/check/calib_acceptance.py`).
 
-mod calibrate_support;
-mod common;
+use crate::calibrate_support;
+use crate::common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};
 use sdrs::calibrate::data::Measured;

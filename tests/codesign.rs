@@ -1,6 +1,6 @@
 //! Co-design on the paper's chain-reaching task.
 
-mod common;
+use crate::common;
 
 use common::robots;
 use sdrs::optimize::{Problem, optimize};

@@ -2,7 +2,7 @@
 //! sliding, sticking, resting, momentum conservation, and non-interpenetration
 //! confirmed by an independent checker (python-fcl).
 
-mod common;
+use crate::common;
 
 use common::{python, robots, scratch_dir};
 use nalgebra::Vector3;

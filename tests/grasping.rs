@@ -4,7 +4,7 @@
 //! optimizer iterations. Horizons are shortened here (CI cost); the full
 //! horizons are checked by `tools/bench/bench_grasping.sh` and `FULL=1` below.
 
-mod common;
+use crate::common;
 
 use common::robots;
 use nalgebra::DVector;

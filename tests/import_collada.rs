@@ -11,7 +11,7 @@
 //!   same hulls as the same URDF with the `.STL` twins, and the report names
 //!   the files' `Y_UP` axis, which is not applied.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::import::import;

@@ -3,7 +3,7 @@
 //! diagonal of, the link's hulls — checked independently with trimesh
 //! (tools/check/check_coverage.py through the project venv) and by our report.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use rayon::prelude::*;

@@ -1,7 +1,7 @@
 //! Both decomposers (V-HACD in Rust, CoACD through tools/helpers/coacd_decompose.py)
 //! and the `hull` / `none` modes.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::import::{Decomposer, ImportOptions, import};

@@ -7,7 +7,7 @@
 //! rad/s at t = 1 s; bound 1e-3 rad/s. A joint merged into a ball joint
 //! cannot take a per-axis coefficient: a report line says so.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::energy::effects::EffectKind;

@@ -2,7 +2,7 @@
 //! configurations to 1e-9 (tools/check/check_fk_pinocchio.py through the project
 //! venv: `bash tools/setup/setup_python.sh`).
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::import::fkcheck::fk_samples;

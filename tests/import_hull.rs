@@ -9,7 +9,7 @@
 //! the hull, which changes the volume by far less); every input point lies
 //! inside the hull to 1e-9 × extent.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use nalgebra::{Rotation3, Vector3};

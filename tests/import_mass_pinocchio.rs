@@ -3,7 +3,7 @@
 //! the URDF to 1e-9 relative at 20 random configurations
 //! (tools/check/check_mass_matrix_pinocchio.py through the project venv).
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use nalgebra::{DMatrix, DVector, Matrix3};

@@ -6,7 +6,7 @@
 //! 20 random configurations (tools/check/check_mass_matrix_mujoco.py); bad files give
 //! MuJoCo's message naming the element and line.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};

@@ -4,7 +4,7 @@
 //! tendon and site transmissions and activation dynamics get report lines;
 //! the import's PD hold keeps the joints no actuator drives.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::control::Signal;

@@ -3,7 +3,7 @@
 //! the plane, in the collision element's frame; a `<cdf>` collision uses the
 //! link's visual geometry; both are named in the report.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use nalgebra::{Matrix3, Vector3};

@@ -2,7 +2,7 @@
 //! make_robots`) import into connected design spaces whose ties leave every
 //! hull unchanged, write their outputs, and simulate.
 
-mod import_support;
+use crate::import_support;
 // The robot generator, called in-process by `make_robots_output_is_reproducible`.
 #[path = "../examples/make_robots.rs"]
 #[allow(dead_code)]

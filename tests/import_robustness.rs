@@ -1,7 +1,7 @@
 //! Inputs that used to fail for numerical or pedantic reasons and must
 //! import (reproducers from `shared/repro/`).
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::import::polytope::convex_hull;

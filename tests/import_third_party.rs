@@ -2,7 +2,7 @@
 //! `pybullet` package installed by tools/setup/setup_python.sh; not committed)
 //! imports with V-HACD into a connected design and simulates.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::*;
 use sdrs::import::{ImportOptions, import};

@@ -3,7 +3,7 @@
 //! driven past its limit stopping inside the barrier's support without ever
 //! crossing, the adjoint through an active limit, and bad limits.
 
-mod common;
+use crate::common;
 
 use common::adjoint::{Setup, fd};
 use nalgebra::DVector;

@@ -2,7 +2,7 @@
 //! biped. CI runs smoke versions (2 optimizer iterations, shortened-horizon
 //! gradient checks); the full benchmarks are `tools/bench/bench_locomotion.sh`.
 
-mod common;
+use crate::common;
 
 use common::{robots, scratch_dir};
 use nalgebra::DVector;

@@ -4,7 +4,7 @@
 //! (including a vertex moving from inside a hull through a face), and the
 //! `given` model against the scene's inertial.
 
-mod import_support;
+use crate::import_support;
 
 use import_support::{run_tool, temp_dir};
 use nalgebra::{Matrix4, Vector3, Vector4};

@@ -11,7 +11,7 @@
 //! `‖∇O‖∞ < tol`, so each solution lies within `‖H⁻¹‖₂ √n tol` of the exact
 //! minimizer (to first order), and two of them within twice that.
 
-mod common;
+use crate::common;
 
 use nalgebra::DVector;
 use sdrs::energy::Need;

@@ -6,7 +6,7 @@
 //! for the captured pairs). Same as
 //! `sdrs simulate robots/stress/four_chains_a10.yaml -q` (and `…_a13.yaml`).
 
-mod common;
+use crate::common;
 
 use common::robots;
 use sdrs::scene::Scene;

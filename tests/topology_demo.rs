@@ -6,7 +6,7 @@
 //! connectivities. Cheap (seconds): the task is 40 steps of one fixed
 //! plate and one peg on a prismatic joint.
 
-mod common;
+use crate::common;
 
 use common::robots;
 use nalgebra::DVector;

@@ -8,7 +8,7 @@
 //! catch tunnelling in part of the grid (the test can fail). The full grid
 //! is `cargo run --release --example tunnel_grid`.
 
-mod common;
+use crate::common;
 #[path = "common/tunnel.rs"]
 mod tunnel;
 

@@ -6,7 +6,7 @@
 //! body's mass, centre of mass and principal inertia equal those of the
 //! SDRS link (lumped vertex masses), and its degrees of freedom are SDRS's.
 
-mod support;
+use crate::support;
 
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use support::{python, root, scratch_dir};

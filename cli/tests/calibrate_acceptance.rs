@@ -7,7 +7,7 @@
 //! (two robots, clean, one and two effects) is the script without
 //! `--cases quick`; see `notes/calibration.md`.
 
-mod support;
+use crate::support;
 
 #[test]
 fn reacher_clean_is_none_and_damping_is_named_alone() {

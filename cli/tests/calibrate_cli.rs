@@ -4,7 +4,7 @@
 
 #[path = "../../tests/calibrate_support/mod.rs"]
 mod calibrate_support;
-mod support;
+use crate::support;
 use support as common;
 
 use calibrate_support::{Sampling, measured_csv, with_effects};

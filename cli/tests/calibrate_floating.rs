@@ -17,7 +17,7 @@
 //! integrator bias the floor did not count); recorded in
 //! `notes/calibration.md` (session 12) as open, and the registered 3 s kept.
 
-mod support;
+use crate::support;
 
 #[test]
 fn ant_clean_is_none_and_ground_friction_is_named_alone() {

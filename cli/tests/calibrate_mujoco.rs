@@ -7,7 +7,7 @@
 //! and shrink the held-out gap by ≥ 80 %. Clean MuJoCo data measure what the
 //! integrator difference alone leaves, and must give the verdict "none".
 
-mod support;
+use crate::support;
 use support as common;
 
 use rayon::prelude::*;

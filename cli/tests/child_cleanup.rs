@@ -1,7 +1,7 @@
 //! `SIGTERM` to `sdrs import --decomposer coacd` stops the Python helper and
 //! removes its temporary folder (shared/repro README: both used to remain).
 
-mod support;
+use crate::support;
 
 use std::time::{Duration, Instant};
 use support::{robots, scratch_dir, sdrs};

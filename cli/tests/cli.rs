@@ -1,6 +1,6 @@
 //! End-to-end checks of the `sdrs` binary.
 
-mod support;
+use crate::support;
 
 use support::{robots, scratch_dir, sdrs};
 

@@ -4,7 +4,7 @@
 //! run and fails — naming the metric — on a degraded one, and a re-run
 //! resumes finished benchmarks.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use support::browser::{chromium, console_messages, file_url};

@@ -8,7 +8,7 @@
 //! state interpenetrates (our GJK at every step, python-fcl every 10th step
 //! of the export). Bounds chosen before the runs, from the issue (32, item 3).
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use support::{pybullet_data, python, scratch_dir, sdrs};
@@ -182,7 +182,7 @@ fn a_wheeled_robot_rests_on_the_ground() {
 }
 
 #[test]
-#[ignore = "slow: cargo test --release -p sdrs-cli --test first_hour -- --ignored"]
+#[ignore = "slow: cargo test --release -p sdrs-cli --test integration -- --ignored first_hour::"]
 fn laikago_stands_on_the_ground() {
     if support::skip_without_venv() {
         return;
@@ -191,7 +191,7 @@ fn laikago_stands_on_the_ground() {
 }
 
 #[test]
-#[ignore = "slow: cargo test --release -p sdrs-cli --test first_hour -- --ignored"]
+#[ignore = "slow: cargo test --release -p sdrs-cli --test integration -- --ignored first_hour::"]
 fn minitaur_stands_on_the_ground() {
     if support::skip_without_venv() {
         return;

@@ -4,7 +4,7 @@
 //! every design variable stays within its bounds. Full runs:
 //! `tools/bench/bench_grasping.sh`.
 
-mod support;
+use crate::support;
 
 use sdrs::optimize::Problem;
 use sdrs::scene::schema::{HullSpec, SceneSpec};

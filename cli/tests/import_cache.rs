@@ -6,7 +6,7 @@
 //! - links in parallel: one thread and two write the same bytes (the spider's
 //!   four identical legs share decompositions across threads).
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use support::{files_under, root, run_ok, scratch_dir, sdrs};

@@ -3,7 +3,7 @@
 //! without the `mujoco` package gets an error naming it and the install
 //! command (issue 32, item 4).
 
-mod support;
+use crate::support;
 
 use support::{root, scratch_dir};
 

@@ -3,7 +3,7 @@
 //! the export, identical output bytes for a contact-free scene under both
 //! models, and bad `--dhat` input.
 
-mod support;
+use crate::support;
 
 use support::{robots, scratch_dir, sdrs};
 

@@ -5,7 +5,7 @@
 //! mesh and names it; `sdrs optimize` refuses hull-vertex designs of a
 //! source-surface link (the cage is the way) and cages the source mesh.
 
-mod support;
+use crate::support;
 
 #[path = "../../baselines/ipc/tests/support/meshes.rs"]
 mod meshes;

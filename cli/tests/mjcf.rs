@@ -3,7 +3,7 @@
 //! exported step checked by an independent checker (python-fcl): no
 //! interpenetration, and contact actually happened.
 
-mod support;
+use crate::support;
 
 use support::{python, scratch_dir};
 

@@ -20,7 +20,7 @@
 //!   → `export-mjcf --actuators` → equal joint-space laws (K, C, F) to
 //!   1e-9 relative.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use support::{python, root, scratch_dir, sdrs};

@@ -1,7 +1,7 @@
 //! End-to-end: `sdrs optimize` outputs on the chain-reaching task, and an
 //! imported robot's shared-vertex ties held while optimizing.
 
-mod support;
+use crate::support;
 
 use sdrs::optimize::{Problem, optimize};
 use support::{robots, scratch_dir, sdrs};

@@ -5,7 +5,7 @@
 //! lowers the loss; the gradient the optimizer starts from matches central
 //! differences; bad combinations are rejected with the element named.
 
-mod support;
+use crate::support;
 
 use nalgebra::DVector;
 use sdrs::optimize::Problem;

@@ -3,7 +3,7 @@
 //! checkpoint refuses a different seed; `--seed` drives `init_noise`; the
 //! locomotion task metrics and the shapes picture are written.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use support::{robots, scratch_dir, sdrs};

@@ -1,7 +1,7 @@
 //! `sdrs plot`: co-design against controller-only on one plot, labelled by
 //! task and mode, with a titled, ticked loss axis; bad input named.
 
-mod support;
+use crate::support;
 
 use support::{robots, scratch_dir, sdrs};
 

@@ -11,7 +11,7 @@
 //! test (`cli/tests/import_cache.rs`) shows that a cached import writes the same
 //! bytes as a new one.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use support::{files_under, pybullet_data, python, root, run_ok, scratch_dir, sdrs};

@@ -2,7 +2,7 @@
 //! types) names every key the bundled files use, describes every property,
 //! and rejects what the loaders reject.
 
-mod support;
+use crate::support;
 
 use serde_json::Value;
 use support::{robots, scratch_dir, sdrs};

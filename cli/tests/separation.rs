@@ -1,7 +1,7 @@
 //! End-to-end: the tangling four-chain scene through `sdrs simulate
 //! --export`, checked pair by pair by an independent checker (python-fcl).
 
-mod support;
+use crate::support;
 
 use support::{robots, scratch_dir};
 

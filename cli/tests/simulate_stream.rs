@@ -11,7 +11,7 @@
 //! (diagnostics, coordinates, CSV text), i.e. ≥ 45 MB for the extra
 //! 180 000 steps, so the check separates the two behaviours.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use std::process::{Command, Stdio};

@@ -4,7 +4,7 @@
 //! shrinks at first order with Δt (SDRS's implicit scheme). The full table
 //! (1 s, Δt = 1e-2 … 1e-4) is in `notes/mass-models.md`.
 
-mod support;
+use crate::support;
 
 use support::{check_script, pybullet_data, root, scratch_dir, sdrs};
 

@@ -9,7 +9,7 @@
 //! the ground throughout), python-fcl finds no interpenetration, and
 //! co-design ends with a lower loss than controller-only.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use std::process::Command;

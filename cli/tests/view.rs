@@ -5,7 +5,7 @@
 //! = trajectory length, last keyframe = last recorded pose); an optimize
 //! result shows both designs; bad input is a clear error.
 
-mod support;
+use crate::support;
 
 use std::path::Path;
 use support::browser::{body_attr, chromium, console_messages, file_url, png_pixels};

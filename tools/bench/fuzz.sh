@@ -15,5 +15,5 @@ start=$(date +%s)
 env_seconds=()
 if [ "$seconds" != 0 ]; then env_seconds=(SDRS_FUZZ_SECONDS="$seconds"); fi
 env SDRS_FUZZ_CASES="$cases" "${env_seconds[@]}" \
-  cargo test --release --test fuzz_inputs -- --nocapture --test-threads 3 2>&1 | tee target/fuzz.log
+  cargo test --release --test integration -- --nocapture --test-threads 3 fuzz_inputs:: 2>&1 | tee target/fuzz.log
 echo "fuzz: 3 readers in $(( $(date +%s) - start )) s; cases per reader above ('fuzz <reader>: N cases'), no panic, no hang"

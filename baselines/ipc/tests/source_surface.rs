@@ -4,7 +4,7 @@
 //! convex hull; the start check follows the surface; bad meshes are errors
 //! naming the scene file, the key and the triangle or edge.
 
-mod support;
+use crate::support;
 
 use sdrs::scene::Scene;
 use sdrs::sim::run::run;
