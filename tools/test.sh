@@ -1,24 +1,14 @@
 #!/usr/bin/env bash
 # The whole test suite, on a fresh clone: installs what the tests need
 # (Debian packages such as chromium, then the Python helpers' packages into
-# .venv/), runs every Rust test, builds the `sdrs` Python package from
-# python/ into .venv, then runs its pytest suite (python/tests/; torch and
-# ray are required there: a missing one fails, never skips). Prints the
-# time at the end of each phase.
+# .venv/, and the `sdrs` Python package built from python/), then runs
+# every Rust test, then the Python package's pytest suite (python/tests/;
+# torch and ray are required there: a missing one fails, never skips).
 # `.ci/run` calls exactly this.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-start=$SECONDS
-phase() { echo "test.sh: $1 done at $((SECONDS - start)) s"; }
 bash tools/setup/setup_system.sh
-# The pinned Python packages first (the Rust tests' independent checkers
-# need them); the `sdrs` Python package after the Rust tests, whose build
-# has by then compiled everything it links: so the core, the baseline and
-# the CLI library compile in one cargo run together with the tests, and
-# both cores stay busy (the package first left one core idle for ~80 s
-# while the core crate compiled alone; notes/ci-time.md, 2026-11-30).
-bash tools/setup/setup_python.sh --packages
-phase "Python packages"
+bash tools/setup/setup_python.sh
 # The release profile: the same build as the README's main command
 # (`cargo run --release`), so a fresh clone compiles the project once.
 # The workspace includes the Python package's crate (python/): give cargo
@@ -41,12 +31,8 @@ if cargo nextest --version >/dev/null 2>&1; then
 else
   cargo test --release --workspace --all-targets
 fi
-phase "Rust build and tests"
-bash tools/setup/setup_python.sh --sdrs
-phase "sdrs Python package"
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
 # The Rust tests above built the CLI the Python tests compare against.
 SDRS_CLI="$PWD/${CARGO_TARGET_DIR:-target}/release/sdrs" \
   .venv/bin/python -m pytest python/tests -q -p no:cacheprovider
-phase "pytest"

@@ -7,16 +7,7 @@
 # once). Idempotent: the pip step is skipped when the requirements are
 # installed; the package build is incremental (cargo) and always runs, so
 # .venv has the current sources.
-#
-#   bash tools/setup/setup_python.sh               # packages, then the sdrs package
-#   bash tools/setup/setup_python.sh --packages    # the pinned packages only
-#   bash tools/setup/setup_python.sh --sdrs        # the sdrs package only
 set -euo pipefail
-what="${1:-all}"
-case "$what" in
-  all|--packages|--sdrs) ;;
-  *) echo "setup_python: unknown option '$what' (use --packages, --sdrs or nothing)" >&2; exit 2 ;;
-esac
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 venv="$root/.venv"
 req="$root/tools/setup/requirements.txt"
@@ -29,33 +20,24 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "setup_python: creating $venv"
   "$py" -m venv "$venv"
 fi
-if [ "$what" != --sdrs ]; then
-  stamp="$venv/.requirements.sha256"
-  uv_version=0.13.9
-  want="$(sha256sum "$req" | cut -d' ' -f1) uv $uv_version"
-  if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
-    echo "setup_python: $venv packages are up to date"
-  else
-    echo "setup_python: installing $(grep -cv '^\s*\(#\|$\)' "$req") pinned packages from tools/setup/requirements.txt"
-    # uv (pinned) installs the same pinned set as `pip install -r` would, with
-    # parallel downloads: 26 s instead of pip's 133 s on a fresh 2-core machine
-    # (2026-11-29; same `pip freeze` either way).
-    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "uv==$uv_version"
-    # uv reads no pip configuration: pass on the machine's pip settings.
-    [ -n "${PIP_INDEX_URL:-}" ] && export UV_INDEX_URL="$PIP_INDEX_URL"
-    [ -n "${PIP_EXTRA_INDEX_URL:-}" ] && export UV_EXTRA_INDEX_URL="$PIP_EXTRA_INDEX_URL"
-    [ -n "${PIP_FIND_LINKS:-}" ] && export UV_FIND_LINKS="$PIP_FIND_LINKS"
-    [ -n "${PIP_CERT:-}" ] && export SSL_CERT_FILE="$PIP_CERT"
-    "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -r "$req"
-    echo "$want" > "$stamp"
-  fi
-fi
-if [ "$what" = --packages ]; then
-  exit 0
-fi
-if [ ! -x "$venv/bin/maturin" ]; then
-  echo "setup_python: $venv has no maturin: run tools/setup/setup_python.sh without --sdrs first" >&2
-  exit 1
+stamp="$venv/.requirements.sha256"
+uv_version=0.13.9
+want="$(sha256sum "$req" | cut -d' ' -f1) uv $uv_version"
+if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
+  echo "setup_python: $venv packages are up to date"
+else
+  echo "setup_python: installing $(grep -cv '^\s*\(#\|$\)' "$req") pinned packages from tools/setup/requirements.txt"
+  # uv (pinned) installs the same pinned set as `pip install -r` would, with
+  # parallel downloads: 26 s instead of pip's 133 s on a fresh 2-core machine
+  # (2026-11-29; same `pip freeze` either way).
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "uv==$uv_version"
+  # uv reads no pip configuration: pass on the machine's pip settings.
+  [ -n "${PIP_INDEX_URL:-}" ] && export UV_INDEX_URL="$PIP_INDEX_URL"
+  [ -n "${PIP_EXTRA_INDEX_URL:-}" ] && export UV_EXTRA_INDEX_URL="$PIP_EXTRA_INDEX_URL"
+  [ -n "${PIP_FIND_LINKS:-}" ] && export UV_FIND_LINKS="$PIP_FIND_LINKS"
+  [ -n "${PIP_CERT:-}" ] && export SSL_CERT_FILE="$PIP_CERT"
+  "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -r "$req"
+  echo "$want" > "$stamp"
 fi
 # The `sdrs` Python package: `maturin develop` builds python/ (release
 # profile, the workspace's target/) and installs it into .venv.
