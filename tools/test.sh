@@ -7,8 +7,13 @@
 # `.ci/run` calls exactly this.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Each phase prints the time at which it ended (where CI's 30 minutes go:
+# notes/ci-time.md).
+start=$SECONDS
+phase() { echo "test.sh: $1 done at $((SECONDS - start)) s"; }
 bash tools/setup/setup_system.sh
 bash tools/setup/setup_python.sh
+phase "setup (Python packages, the sdrs Python package)"
 # The release profile: the same build as the README's main command
 # (`cargo run --release`), so a fresh clone compiles the project once.
 # The workspace includes the Python package's crate (python/): give cargo
@@ -31,8 +36,10 @@ if cargo nextest --version >/dev/null 2>&1; then
 else
   cargo test --release --workspace --all-targets
 fi
+phase "Rust build and tests"
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
 # The Rust tests above built the CLI the Python tests compare against.
 SDRS_CLI="$PWD/${CARGO_TARGET_DIR:-target}/release/sdrs" \
   .venv/bin/python -m pytest python/tests -q -p no:cacheprovider
+phase "pytest"
