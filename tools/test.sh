@@ -31,13 +31,10 @@ export SDRS_TEST_ALL_TIERS=1
 # targets overlap with the rest: 825 s of tests against cargo test's ~1036 s
 # on 2 cores (2026-11-30, notes/ci-time.md). Plain cargo test where it is
 # missing.
-# The Python package's crate has no Rust tests (`test = false`; pytest tests
-# it below, from the build setup_python.sh made), but `--all-targets` would
-# still compile a test harness of it (15.6 s, 2026-11-30): excluded.
 if cargo nextest --version >/dev/null 2>&1; then
-  cargo nextest run --release --workspace --exclude sdrs-py --all-targets
+  cargo nextest run --release --workspace --all-targets
 else
-  cargo test --release --workspace --exclude sdrs-py --all-targets
+  cargo test --release --workspace --all-targets
 fi
 phase "Rust build and tests"
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
