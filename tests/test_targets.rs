@@ -45,10 +45,34 @@ fn orphans(package: &Path) -> Vec<String> {
         .collect()
 }
 
+/// The workspace's packages with Rust integration tests (`.rs` files in
+/// `tests/`; the Python package's `tests/` is pytest's): the root and the
+/// `members` of its manifest.
+fn packages_with_tests() -> Vec<std::path::PathBuf> {
+    let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    let members = manifest
+        .lines()
+        .find_map(|l| l.strip_prefix("members = "))
+        .expect("Cargo.toml: no `members = [...]` line");
+    let names = members.trim_matches(|c| c == '[' || c == ']');
+    std::iter::once(root().to_path_buf())
+        .chain(
+            names
+                .split(',')
+                .map(|m| root().join(m.trim().trim_matches('"'))),
+        )
+        .filter(|d| d.join("tests").is_dir() && !test_file_stems(&d.join("tests")).is_empty())
+        .collect()
+}
+
 #[test]
 fn every_test_file_is_a_module_of_the_integration_binary_or_a_target() {
-    for package in ["", "cli", "baselines/ipc"] {
-        let dir = root().join(package);
+    let packages = packages_with_tests();
+    assert!(
+        packages.len() > 1,
+        "no workspace member with tests: {packages:?}"
+    );
+    for dir in packages {
         let lost = orphans(&dir);
         assert!(
             lost.is_empty(),

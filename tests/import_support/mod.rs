@@ -1,9 +1,9 @@
 //! Shared helpers of the `import_*` integration tests.
 #![allow(dead_code, unused_imports)]
 
-#[allow(unused_imports)]
-#[path = "../common/mod.rs"]
-mod common;
+// The binary's own `common` (declared by its root: `tests/integration.rs`,
+// or `tests/import_bad_input.rs`), not a second copy of it.
+use crate::common;
 pub use common::{skip_without_chromium, skip_without_venv};
 
 use std::path::{Path, PathBuf};
