@@ -51,6 +51,39 @@ pub struct OptimizeArgs {
 }
 
 pub fn run(a: OptimizeArgs) -> Result<()> {
+    let out = output_dir(&a)?;
+    let run = prepare(&a, &out)?;
+    std::fs::create_dir_all(&out).with_context(|| format!("{}: cannot create", out.display()))?;
+    announce(&a, &run);
+    let resumed_from = run.resume.as_ref().map(|s| s.iter);
+    let Prepared {
+        problem,
+        metrics,
+        key,
+        resume,
+        iters,
+    } = run;
+    let (outcome, designs) = iterate(&a, &out, &problem, &key, resume, iters)?;
+    let (d0, c0) = sdrs::optimize::start(&problem, a.seed);
+    // The grasp, topology and (with a `metrics:` section) locomotion
+    // metrics side by side under `extra.metrics`.
+    let metrics_json = sdrs::optimize::metric::summarize(&problem, &metrics, (&d0, &c0), &outcome)?;
+    write_summary(&a, &out, &problem, &outcome, resumed_from, &metrics_json)?;
+    let design_on = a.design != "off";
+    write_figures(&out, &problem, design_on, (&d0, &c0), &outcome, &designs)?;
+    report_end(&out, &outcome, &metrics_json);
+    if let Some(why) = &outcome.stopped {
+        anyhow::bail!(
+            "the run {why}; the outputs in {} are for the iterations that ran (`--resume` retries from there)",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// The output directory (`--resume`'s or `--out`), refused when it is not
+/// empty for a new run without `--force`.
+fn output_dir(a: &OptimizeArgs) -> Result<PathBuf> {
     let out = a
         .resume
         .clone()
@@ -68,6 +101,24 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             out.display()
         );
     }
+    Ok(out)
+}
+
+/// The loaded task and what the run needs before its first iteration.
+struct Prepared {
+    problem: sdrs::optimize::Problem,
+    metrics: Vec<Box<dyn sdrs::optimize::metric::Metric>>,
+    key: checkpoint::RunKey,
+    /// The checkpoint to continue from (`--resume`).
+    resume: Option<checkpoint::State>,
+    /// Iterations in total.
+    iters: usize,
+}
+
+/// Loads the task (contact model and cage applied), its metrics, the run's
+/// checkpoint key and, with `--resume`, the checkpoint (checked against the
+/// iteration count).
+fn prepare(a: &OptimizeArgs, out: &std::path::Path) -> Result<Prepared> {
     let design_on = a.design == "on";
     let mut problem = sdrs::optimize::Problem::load(&a.task, design_on)?;
     crate::contact_model::configure_problem(
@@ -99,20 +150,46 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             s.iter
         );
     }
-    std::fs::create_dir_all(&out).with_context(|| format!("{}: cannot create", out.display()))?;
+    Ok(Prepared {
+        problem,
+        metrics,
+        key,
+        resume,
+        iters,
+    })
+}
+
+/// The run's first line: variables, horizon, iterations, resume point.
+fn announce(a: &OptimizeArgs, run: &Prepared) {
+    let problem = &run.problem;
     eprintln!(
         "{}: {} design and {} controller variables, horizon {} steps, {} iterations{}",
         a.task.display(),
         problem.design.len(),
         problem.controls.len(),
         problem.first().horizon,
-        iters,
-        resume
+        run.iters,
+        run.resume
             .as_ref()
             .map(|s| format!(" (resuming after iteration {})", s.iter))
             .unwrap_or_default()
     );
-    let resumed_from = resume.as_ref().map(|s| s.iter);
+}
+
+/// The iterations, with a progress bar and a checkpoint after each; also
+/// every iteration's design, for the viewer's design-at-iteration slider
+/// (after a resume: the iterations of this session).
+fn iterate(
+    a: &OptimizeArgs,
+    out: &std::path::Path,
+    problem: &sdrs::optimize::Problem,
+    key: &checkpoint::RunKey,
+    resume: Option<checkpoint::State>,
+    iters: usize,
+) -> Result<(
+    sdrs::optimize::Outcome,
+    Vec<sdrs::output::codesign::IterDesign>,
+)> {
     let pb = progress(iters + 1, a.quiet);
     pb.set_style(
         ProgressStyle::with_template(
@@ -124,11 +201,9 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
         seed: a.seed,
         resume,
     };
-    // Every iteration's design, for the viewer's design-at-iteration slider
-    // (after a resume: the iterations of this session).
     let mut designs: Vec<sdrs::output::codesign::IterDesign> = Vec::new();
     let outcome = sdrs::optimize::optimize_with(
-        &problem,
+        problem,
         iters,
         &opts,
         |r, d| {
@@ -136,17 +211,27 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             pb.set_position(r.iter as u64 + 1);
             pb.set_message(format!("loss {:.4e} (best {:.4e})", r.loss, r.best_loss));
         },
-        |state| checkpoint::save(&out, &key, state),
+        |state| checkpoint::save(out, key, state),
     )?;
     pb.finish_and_clear();
-    let (d0, c0) = sdrs::optimize::start(&problem, a.seed);
-    // The grasp, topology and (with a `metrics:` section) locomotion
-    // metrics side by side under `extra.metrics`.
-    let metrics_json = sdrs::optimize::metric::summarize(&problem, &metrics, (&d0, &c0), &outcome)?;
+    Ok((outcome, designs))
+}
+
+/// `summary.json`, `history.csv`, `design.yaml` and the meshes
+/// ([`sdrs::optimize::output::write_all`]), with the run's settings and
+/// metrics.
+fn write_summary(
+    a: &OptimizeArgs,
+    out: &std::path::Path,
+    problem: &sdrs::optimize::Problem,
+    outcome: &sdrs::optimize::Outcome,
+    resumed_from: Option<usize>,
+    metrics_json: &serde_json::Value,
+) -> Result<()> {
     sdrs::optimize::output::write_all(
-        &out,
-        &problem,
-        &outcome,
+        out,
+        problem,
+        outcome,
         serde_json::json!({
             "design": a.design,
             "seed": a.seed,
@@ -165,21 +250,34 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             "failed_trials": outcome.failed_trials,
         }),
     )?;
-    let label = sdrs::optimize::output::run_label(&problem, a.design != "off");
+    Ok(())
+}
+
+/// `convergence.svg`, the scenes (`scenes/`, and `failed_trials/` for the
+/// kept failed trials: `sdrs simulate` reproduces each), `shapes.svg`, and
+/// the pictures ([`write_pictures`]; a failure there is a warning).
+fn write_figures(
+    out: &std::path::Path,
+    problem: &sdrs::optimize::Problem,
+    design_on: bool,
+    (d0, c0): (&nalgebra::DVector<f64>, &nalgebra::DVector<f64>),
+    outcome: &sdrs::optimize::Outcome,
+    designs: &[sdrs::output::codesign::IterDesign],
+) -> Result<()> {
+    let label = sdrs::optimize::output::run_label(problem, design_on);
     let convergence = sdrs_cli::svg::convergence_svg(
         &format!("{label}, best loss per iteration"),
         &[(&label, &outcome.history)],
     )?;
     sdrs::output::write_atomic(&out.join("convergence.svg"), convergence.as_bytes())?;
-    sdrs::optimize::grasp_metrics::write_scenes(&out, &problem, &outcome)?;
-    // Each kept failed trial as runnable scenes: `sdrs simulate` reproduces it.
+    sdrs::optimize::grasp_metrics::write_scenes(out, problem, outcome)?;
     for t in &outcome.failed_trials.first {
         let dir = out
             .join("failed_trials")
             .join(format!("iteration_{}", t.iteration));
         sdrs::optimize::grasp_metrics::write_scenes_at(
             &dir,
-            &problem,
+            problem,
             (&t.design, &t.controller),
             &format!(
                 "the trial design of iteration {} (it could not be simulated)",
@@ -187,21 +285,23 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             ),
         )?;
     }
-    let shapes = sdrs::output::codesign::initial_vs_optimized_svg(&problem, &d0, &outcome.design);
+    let shapes = sdrs::output::codesign::initial_vs_optimized_svg(problem, d0, &outcome.design);
     if let Some(svg) = &shapes {
         sdrs::output::write_atomic(&out.join("shapes.svg"), svg.as_bytes())?;
     }
     // The main outputs are written: a failure here (a rollout) is a warning.
-    if let Err(e) = write_pictures(
-        &out,
-        &problem,
-        (&d0, &c0),
-        &outcome,
-        &designs,
-        shapes.as_deref(),
-    ) {
+    if let Err(e) = write_pictures(out, problem, (d0, c0), outcome, designs, shapes.as_deref()) {
         eprintln!("warning: report.html, robot.svg and playback/ not written: {e:#}");
     }
+    Ok(())
+}
+
+/// The closing lines: the loss, the failed trials, the locomotion metrics.
+fn report_end(
+    out: &std::path::Path,
+    outcome: &sdrs::optimize::Outcome,
+    metrics_json: &serde_json::Value,
+) {
     eprintln!(
         "loss {:.4e} -> {:.4e} ({:.1}% lower) in {} iterations; outputs in {}",
         outcome.initial_loss,
@@ -237,13 +337,6 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
             m["first_fall_time"]
         );
     }
-    if let Some(why) = &outcome.stopped {
-        anyhow::bail!(
-            "the run {why}; the outputs in {} are for the iterations that ran (`--resume` retries from there)",
-            out.display()
-        );
-    }
-    Ok(())
 }
 
 /// `playback/` (the rollouts of the initial and optimized designs, for

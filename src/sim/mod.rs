@@ -145,11 +145,7 @@ fn gradient_dot_step(
             }
         }
     }
-    let (g, a, a0) = (
-        acc.dof_grad.as_slice(),
-        q.as_slice(),
-        ctx.q_prev.as_slice(),
-    );
+    let (g, a, a0) = (acc.dof_grad.as_slice(), q.as_slice(), ctx.q_prev.as_slice());
     let n = g.len().min(a.len()).min(a0.len());
     let mut k = 0;
     while k + 4 <= n {

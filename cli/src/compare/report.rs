@@ -3,7 +3,9 @@
 //! figure next to the paper's and says which is better.
 
 use super::gate::{Verdict, markdown as gate_markdown};
-use super::results::{ChainsPart, CodesignPart, PotentialPart, Results};
+use super::results::{
+    ChainsPart, CodesignPart, CodesignRun, FdCheck, FrictionRow, PotentialPart, Results,
+};
 use anyhow::Result;
 use sdrs::output::write_atomic;
 use sdrs_cli::html::{self, Page};
@@ -104,6 +106,32 @@ struct Section {
 }
 
 fn potential_section(p: &PotentialPart) -> Result<Section> {
+    let mut text = potential_text(p);
+    let mut tables = vec![potential_table(p)];
+    let mut plots = vec![(
+        "potential_cost".to_string(),
+        "Cost of one contact-potential evaluation vs hull size".to_string(),
+        potential_plot(p)?,
+    )];
+    if !p.friction.is_empty() {
+        text.push("Friction: both models lag their contact data at step t (not timed; once per step), then hull b slides 1 mm and turns 0.01 rad; one value + gradient + Hessian evaluation at step t+1 is timed. SDRS's U_f solves a small inner problem for the plane's velocity over every force-carrying vertex; IPC sums its lagged stencils, which are few when the hulls are coarse, so IPC is cheaper there. The paper's Fig. cost-time shows this comparison without numbers in its text.".into());
+        tables.push(friction_table(p));
+        plots.push((
+            "friction_cost".into(),
+            "Cost of one friction-potential evaluation vs hull size".into(),
+            friction_plot(p)?,
+        ));
+    }
+    Ok(Section {
+        heading: "Contact and friction potential cost".into(),
+        text,
+        tables,
+        plots,
+    })
+}
+
+/// The contact potential's timings per hull size, against the paper's range.
+fn potential_table(p: &PotentialPart) -> Table {
     let (lo, hi) = paper::POTENTIAL_SPEEDUP;
     let mut t = Table {
         name: "potential",
@@ -137,6 +165,12 @@ fn potential_section(p: &PotentialPart) -> Result<Section> {
             },
         ]);
     }
+    t
+}
+
+/// The contact potential's cost against hull size, log–log (ipc-toolkit's
+/// dashed when timed).
+fn potential_plot(p: &PotentialPart) -> Result<String> {
     let mut series = vec![
         Series {
             label: "SDRS U_c".into(),
@@ -164,7 +198,7 @@ fn potential_section(p: &PotentialPart) -> Result<Section> {
             dashed: true,
         });
     }
-    let svg = line_plot(
+    line_plot(
         &Axes {
             title: "Contact potential cost (paper Fig. cost-time)",
             x: "vertices per hull",
@@ -173,7 +207,13 @@ fn potential_section(p: &PotentialPart) -> Result<Section> {
             log_y: true,
         },
         &series,
-    )?;
+    )
+}
+
+/// The section's first paragraphs: the measured range against the paper's,
+/// and how ipc-toolkit was timed (or why not).
+fn potential_text(p: &PotentialPart) -> Vec<String> {
+    let (lo, hi) = paper::POTENTIAL_SPEEDUP;
     let (rmin, rmax) = p.rows.iter().fold((f64::INFINITY, 0.0f64), |(a, b), r| {
         (a.min(r.ratio), b.max(r.ratio))
     });
@@ -187,85 +227,67 @@ fn potential_section(p: &PotentialPart) -> Result<Section> {
         (None, Some(n)) => format!("ipc-toolkit not timed: {n}"),
         (None, None) => "ipc-toolkit not timed.".into(),
     });
-    let mut tables = vec![t];
-    let mut plots = vec![(
-        "potential_cost".to_string(),
-        "Cost of one contact-potential evaluation vs hull size".to_string(),
-        svg,
-    )];
-    if !p.friction.is_empty() {
-        let mut f = Table {
-            name: "friction",
-            title: "Friction potential, value + gradient + Hessian (median µs per evaluation)"
-                .into(),
-            header: [
-                "vertices/hull",
-                "SDRS U_f µs",
-                "IPC friction µs",
-                "IPC/SDRS (same run)",
-                "IPC lagged stencils",
-                "better",
-            ]
-            .map(String::from)
-            .to_vec(),
-            rows: vec![],
-        };
-        for r in &p.friction {
-            f.rows.push(vec![
-                r.vertices.to_string(),
-                g(r.sdrs_us),
-                g(r.ipc_us),
-                format!("{:.2}×", r.ratio),
-                format!("{:.0}", r.ipc_contacts),
-                if r.ratio > 1.0 {
-                    "SDRS".into()
-                } else {
-                    "IPC".into()
-                },
-            ]);
-        }
-        text.push("Friction: both models lag their contact data at step t (not timed; once per step), then hull b slides 1 mm and turns 0.01 rad; one value + gradient + Hessian evaluation at step t+1 is timed. SDRS's U_f solves a small inner problem for the plane's velocity over every force-carrying vertex; IPC sums its lagged stencils, which are few when the hulls are coarse, so IPC is cheaper there. The paper's Fig. cost-time shows this comparison without numbers in its text.".into());
-        tables.push(f);
-        plots.push((
-            "friction_cost".into(),
-            "Cost of one friction-potential evaluation vs hull size".into(),
-            line_plot(
-                &Axes {
-                    title: "Friction potential cost (paper Fig. cost-time, right)",
-                    x: "vertices per hull",
-                    y: "µs per evaluation (value+grad+Hessian)",
-                    log_x: true,
-                    log_y: true,
-                },
-                &[
-                    Series {
-                        label: "SDRS U_f".into(),
-                        points: p
-                            .friction
-                            .iter()
-                            .map(|r| (r.vertices as f64, r.sdrs_us))
-                            .collect(),
-                        dashed: false,
-                    },
-                    Series {
-                        label: "IPC lagged friction".into(),
-                        points: p
-                            .friction
-                            .iter()
-                            .map(|r| (r.vertices as f64, r.ipc_us))
-                            .collect(),
-                        dashed: false,
-                    },
-                ],
-            )?,
-        ));
+    text
+}
+
+/// The friction potential's timings per hull size.
+fn friction_table(p: &PotentialPart) -> Table {
+    let mut f = Table {
+        name: "friction",
+        title: "Friction potential, value + gradient + Hessian (median µs per evaluation)".into(),
+        header: [
+            "vertices/hull",
+            "SDRS U_f µs",
+            "IPC friction µs",
+            "IPC/SDRS (same run)",
+            "IPC lagged stencils",
+            "better",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![],
+    };
+    for r in &p.friction {
+        f.rows.push(vec![
+            r.vertices.to_string(),
+            g(r.sdrs_us),
+            g(r.ipc_us),
+            format!("{:.2}×", r.ratio),
+            format!("{:.0}", r.ipc_contacts),
+            if r.ratio > 1.0 {
+                "SDRS".into()
+            } else {
+                "IPC".into()
+            },
+        ]);
     }
-    Ok(Section {
-        heading: "Contact and friction potential cost".into(),
-        text,
-        tables,
-        plots,
-    })
+    f
+}
+
+/// The friction potential's cost against hull size, log–log.
+fn friction_plot(p: &PotentialPart) -> Result<String> {
+    let series = |label: &str, us: fn(&FrictionRow) -> f64| Series {
+        label: label.into(),
+        points: p
+            .friction
+            .iter()
+            .map(|r| (r.vertices as f64, us(r)))
+            .collect(),
+        dashed: false,
+    };
+    line_plot(
+        &Axes {
+            title: "Friction potential cost (paper Fig. cost-time, right)",
+            x: "vertices per hull",
+            y: "µs per evaluation (value+grad+Hessian)",
+            log_x: true,
+            log_y: true,
+        },
+        &[
+            series("SDRS U_f", |r| r.sdrs_us),
+            series("IPC lagged friction", |r| r.ipc_us),
+        ],
+    )
 }
 
 fn chains_section(c: &ChainsPart) -> Result<Section> {
@@ -391,6 +413,41 @@ fn chains_section(c: &ChainsPart) -> Result<Section> {
 }
 
 fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
+    let (t, caged) = codesign_table(b);
+    let mut tables = vec![t];
+    if let Some(fd) = &b.fd {
+        tables.push(fd_table(&b.name, fd));
+    }
+    let mut plots = vec![(
+        format!("convergence_{}", b.name),
+        format!("{}: best loss per iteration", b.name),
+        codesign_plot(b)?,
+    )];
+    if let Some(svg) = b
+        .shapes_svg
+        .as_ref()
+        .and_then(|f| std::fs::read_to_string(dir.join(f)).ok())
+    {
+        plots.push((
+            format!("shapes_{}", b.name),
+            format!(
+                "{}: designed links, initial (grey) and optimized (blue)",
+                b.name
+            ),
+            svg,
+        ));
+    }
+    Ok(Section {
+        heading: format!("Co-design: {}", b.name),
+        text: codesign_text(b, caged),
+        tables,
+        plots,
+    })
+}
+
+/// One row per method (runs, then unfinished ones, then the mesh
+/// baseline's empty rows when it was not run); whether it was run.
+fn codesign_table(b: &CodesignPart) -> (Table, bool) {
     let mut t = Table {
         name: "codesign",
         title: format!("Co-design: {}", b.name),
@@ -414,29 +471,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
         rows: vec![],
     };
     for r in &b.runs {
-        t.rows.push(vec![
-            r.method.clone(),
-            r.design_variables.to_string(),
-            r.controller_variables.to_string(),
-            g(r.initial_loss),
-            g(r.final_loss),
-            format!("{:.1}%", 100.0 * (1.0 - r.final_loss / r.initial_loss)),
-            format!("{:.1}", r.wall_seconds),
-            g(r.forward_seconds_mean),
-            g(r.backward_seconds_mean),
-            opt(r.min_distance),
-            opt(r.distance),
-            match (r.upright_at_horizon, r.first_fall_time) {
-                (Some(true), _) => "yes".into(),
-                (Some(false), Some(t)) => format!("no (falls at {t:.2} s)"),
-                (Some(false), None) => "no".into(),
-                (None, _) => "—".into(),
-            },
-            match (r.grasped, r.grasp_trajectories) {
-                (Some(g), Some(n)) => format!("{g} of {n}"),
-                _ => "—".into(),
-            },
-        ]);
+        t.rows.push(codesign_row(r));
     }
     for m in &b.unfinished {
         let mut row = vec![m.clone()];
@@ -456,6 +491,39 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
             t.rows.push(row);
         }
     }
+    (t, caged)
+}
+
+/// One method's row of the co-design table.
+fn codesign_row(r: &CodesignRun) -> Vec<String> {
+    vec![
+        r.method.clone(),
+        r.design_variables.to_string(),
+        r.controller_variables.to_string(),
+        g(r.initial_loss),
+        g(r.final_loss),
+        format!("{:.1}%", 100.0 * (1.0 - r.final_loss / r.initial_loss)),
+        format!("{:.1}", r.wall_seconds),
+        g(r.forward_seconds_mean),
+        g(r.backward_seconds_mean),
+        opt(r.min_distance),
+        opt(r.distance),
+        match (r.upright_at_horizon, r.first_fall_time) {
+            (Some(true), _) => "yes".into(),
+            (Some(false), Some(t)) => format!("no (falls at {t:.2} s)"),
+            (Some(false), None) => "no".into(),
+            (None, _) => "—".into(),
+        },
+        match (r.grasped, r.grasp_trajectories) {
+            (Some(g), Some(n)) => format!("{g} of {n}"),
+            _ => "—".into(),
+        },
+    ]
+}
+
+/// The section's paragraphs: the settings, unfinished runs, co-design
+/// against controller-only next to the paper's figure, the mesh baseline.
+fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
     let mut text = vec![format!(
         "Horizon {} steps, {} optimizer iterations per method, from the same start.",
         b.horizon, b.iters
@@ -481,38 +549,44 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
     } else {
         "The mesh-based baseline with cage deformation (Xu et al. 2021) was not run in this suite (`cages: [coarse, fine]` in its co-design entry): its rows are empty.".into()
     });
-    let mut tables = vec![t];
-    if let Some(fd) = &b.fd {
-        tables.push(Table {
-            name: "fd",
-            title: format!("Gradient check, {}", b.name),
-            header: [
-                "variable",
-                "adjoint",
-                "central difference",
-                "h",
-                "Newton tolerance",
-                "relative error",
-                "noise of the difference",
-            ]
-            .map(String::from)
-            .to_vec(),
-            rows: vec![vec![
-                format!("`{}`", fd.variable),
-                format!("{:.6e}", fd.adjoint),
-                format!("{:.6e}", fd.central_difference),
-                format!("{:.1e}", fd.h),
-                fd.newton_tol
-                    .map_or("the task's".into(), |t| format!("{t:.0e}")),
-                format!("{:.2e}", fd.relative_error),
-                match (fd.difference_noise, fd.resolved) {
-                    (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
-                    (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
-                    _ => "not measured (plain central difference)".into(),
-                },
-            ]],
-        });
+    text
+}
+
+/// The task's gradient check: the adjoint against a central difference.
+fn fd_table(name: &str, fd: &FdCheck) -> Table {
+    Table {
+        name: "fd",
+        title: format!("Gradient check, {name}"),
+        header: [
+            "variable",
+            "adjoint",
+            "central difference",
+            "h",
+            "Newton tolerance",
+            "relative error",
+            "noise of the difference",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![vec![
+            format!("`{}`", fd.variable),
+            format!("{:.6e}", fd.adjoint),
+            format!("{:.6e}", fd.central_difference),
+            format!("{:.1e}", fd.h),
+            fd.newton_tol
+                .map_or("the task's".into(), |t| format!("{t:.0e}")),
+            format!("{:.2e}", fd.relative_error),
+            match (fd.difference_noise, fd.resolved) {
+                (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
+                (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
+                _ => "not measured (plain central difference)".into(),
+            },
+        ]],
     }
+}
+
+/// Best loss per iteration of every method, log scale.
+fn codesign_plot(b: &CodesignPart) -> Result<String> {
     let series: Vec<Series> = b
         .runs
         .iter()
@@ -528,7 +602,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
         })
         .collect();
     let title = format!("{}: convergence", b.name);
-    let svg = line_plot(
+    line_plot(
         &Axes {
             title: &title,
             x: "iteration",
@@ -537,34 +611,7 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
             log_y: true,
         },
         &series,
-    )?;
-    Ok(Section {
-        heading: format!("Co-design: {}", b.name),
-        text,
-        tables,
-        plots: {
-            let mut v = vec![(
-                format!("convergence_{}", b.name),
-                format!("{}: best loss per iteration", b.name),
-                svg,
-            )];
-            if let Some(svg) = b
-                .shapes_svg
-                .as_ref()
-                .and_then(|f| std::fs::read_to_string(dir.join(f)).ok())
-            {
-                v.push((
-                    format!("shapes_{}", b.name),
-                    format!(
-                        "{}: designed links, initial (grey) and optimized (blue)",
-                        b.name
-                    ),
-                    svg,
-                ));
-            }
-            v
-        },
-    })
+    )
 }
 
 /// Writes `report.md`, `report.html`, `plots/*.svg` and `tables/*.csv`.
