@@ -2,7 +2,6 @@
 //! left behind (one test each). Runs the command's entry point
 //! (`run_job`, what `sdrs import` runs) with the job its flags select.
 
-#[allow(dead_code, unused_imports)]
 mod common;
 mod import_support;
 

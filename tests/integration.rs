@@ -4,11 +4,8 @@
 //! `cargo nextest run --release -E 'test(/^FILE::/)'` or
 //! `cargo test --release --test integration FILE::`.
 
-#[allow(dead_code, unused_imports)]
 mod calibrate_support;
-#[allow(dead_code, unused_imports)]
 mod common;
-#[allow(dead_code, unused_imports)]
 mod import_support;
 
 mod adjoint_contact_gradients;

@@ -4,7 +4,6 @@
 //! `cargo nextest run --release -E 'test(/^FILE::/)'` or
 //! `cargo test --release --test integration FILE::`.
 
-#[allow(dead_code, unused_imports)]
 mod support;
 
 mod bench_mujoco;

@@ -9,11 +9,7 @@
 //! primitive Hessians) and linearized by the backward pass with exact ones
 //! ([`sdrs_ipc::IpcFactory::adjoint`]).
 
-#[path = "../../../tests/common/adjoint.rs"]
-#[allow(dead_code)]
-mod adjoint;
-
-use adjoint::{Setup, check, fd, push_loss};
+use crate::common::adjoint::{Setup, check, fd, push_loss};
 use sdrs::diff::Loss;
 use sdrs_ipc::IpcFactory;
 

@@ -7,6 +7,10 @@
 #[allow(dead_code, unused_imports)]
 mod support;
 
+/// The core's shared test helpers (`tests/common`), once for the binary.
+#[path = "../../../tests/common/mod.rs"]
+mod common;
+
 mod adjoint_stencil_fd;
 mod adjoint_trajectory;
 mod cage;

@@ -28,8 +28,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
-#[path = "../../../tests/common/mod.rs"]
-mod common;
+use crate::common;
 
 const DHAT: f64 = 1e-3;
 
