@@ -13,7 +13,8 @@ like spring K). The equilibrium y* and K are set from the ratio K / (kappa P_s''
 starts at y0 < y* (inside the barrier, as after an impact) and stops at |f'| <= 1e-8 |kappa
 P_s'(y*)|. Full steps, halved until f decreases (the simulator's Armijo search, simplified).
 
-Prints, per case, the iterations of plain Newton and of Newton with the barrier model. The
+Prints, per case, the iterations of plain Newton, of Newton with the barrier model, and of the
+model with the geometric mean of the two curvatures (tried second; also no gain in the simulator). The
 model wins by a factor 2-4 when the barrier dominates the curvature (K / kappa P'' = 0.01), is
 even at 1, and loses when the spring dominates (100): its dual is the spring's force at the
 current point, and the gap that force implies is far from the equilibrium when the spring's
@@ -57,17 +58,20 @@ def inverse_slope(lam, lo):
     return 0.5 * (a + b)
 
 
-def model(y, lam):
-    """Slope and curvature the direction uses at y for the dual lam (primal without a softer dual)."""
+def model(y, lam, geometric=False):
+    """Slope and curvature the direction uses at y for the dual lam (primal without a softer
+    dual): the barrier's second-order model about the dual's gap xb; with `geometric`, its
+    curvature is sqrt(P''(xb) P''(y)) (the session's second registration, R2)."""
     p1, p2 = d1(y), d2(y)
     r = lam / p1 if p1 < 0 else 2.0
     if not r < 1:
         return p1, p2
     xb = inverse_slope(max(r, R_MIN) * p1, y)
-    return d1(xb) + d2(xb) * (y - xb), d2(xb)
+    c = math.sqrt(d2(xb) * p2) if geometric else d2(xb)
+    return d1(xb) + c * (y - xb), c
 
 
-def newton(kappa, k, yhat, y0, with_model, tol):
+def newton(kappa, k, yhat, y0, variant, tol):
     def f(y):
         return kappa * p(y) + 0.5 * k * (y - yhat) ** 2
 
@@ -76,7 +80,10 @@ def newton(kappa, k, yhat, y0, with_model, tol):
 
     y, lam, it = y0, -math.inf, 0
     while abs(g(y)) > tol and it < 200:
-        m1, m2 = model(y, lam) if with_model else (d1(y), d2(y))
+        if variant == "plain":
+            m1, m2 = d1(y), d2(y)
+        else:
+            m1, m2 = model(y, lam, geometric=variant == "geometric")
         dy = -(kappa * m1 + k * (y - yhat)) / (kappa * m2 + k)
         a = 1.0
         while (y + a * dy <= 0 or f(y + a * dy) > f(y)) and a > 1e-12:
@@ -88,8 +95,9 @@ def newton(kappa, k, yhat, y0, with_model, tol):
 
 
 def main():
-    print("| y*/s | y0/s | K / (kappa P''(y*)) | plain Newton | with the barrier model |")
-    print("|---:|---:|---:|---:|---:|")
+    print("| y*/s | y0/s | K / (kappa P''(y*)) | plain Newton | barrier model | geometric-mean curvature |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    totals = {"plain": 0, "model": 0, "geometric": 0}
     kappa = 1.0
     for ystar_s in (0.2, 0.4, 0.6, 0.75, 0.85, 0.95):
         ys = ystar_s * S
@@ -99,9 +107,14 @@ def main():
             tol = 1e-8 * abs(kappa * d1(ys))
             for start in (0.5, 0.8):
                 y0 = start * ys
-                plain = newton(kappa, k, yhat, y0, False, tol)
-                modelled = newton(kappa, k, yhat, y0, True, tol)
-                print(f"| {ystar_s:.2f} | {start * ystar_s:.2f} | {ratio:g} | {plain} | {modelled} |")
+                its = {v: newton(kappa, k, yhat, y0, v, tol) for v in totals}
+                for v, n in its.items():
+                    totals[v] += n
+                print(
+                    f"| {ystar_s:.2f} | {start * ystar_s:.2f} | {ratio:g} | {its['plain']} "
+                    f"| {its['model']} | {its['geometric']} |"
+                )
+    print(f"\ntotal iterations: {totals}")
 
 
 if __name__ == "__main__":
