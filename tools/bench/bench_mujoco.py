@@ -189,8 +189,8 @@ def summarize(path):
     for r in rows:
         by.setdefault(r["links_per_chain"], {}).setdefault(r["engine"], []).append(r)
     ns = sorted(by)
-    print("| links/chain | dof | sdrs ms/step | MuJoCo ms/step | ratio | Newton it/step | linear_solve % | contact % | broad phase % |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| links/chain | dof | sdrs ms/step | MuJoCo ms/step | ratio | ratio per round (min–max) | Newton it/step | linear_solve % | contact % | broad phase % |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     med = lambda v: sorted(v)[len(v) // 2]
     table = []
     for n in ns:
@@ -202,7 +202,11 @@ def summarize(path):
         r0 = s[0]
         share = lambda name: med([_share(r, name) for r in s])
         table.append((n, sm, mm))
+        # Each round ran the two engines back to back: its own ratio shows how
+        # much the machine moved between rounds.
+        per_round = [a["ms_per_step"] / b["ms_per_step"] for a, b in zip(s, m)]
         print(f"| {n} | {r0['dof']} | {sm:.3f} | {mm:.4f} | {sm / mm:.2f} | "
+              f"{min(per_round):.2f}–{max(per_round):.2f} | "
               f"{r0['newton_iterations_per_step']:.2f} | {share('linear_solve'):.1f} | "
               f"{share('contact'):.1f} | {share('broad_phase'):.1f} |")
     big = [t for t in table if t[0] >= 8]
