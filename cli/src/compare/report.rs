@@ -46,6 +46,16 @@ struct Table {
 }
 
 impl Table {
+    /// An empty table with these column headings.
+    fn new(name: &'static str, title: impl Into<String>, header: &[&str]) -> Table {
+        Table {
+            name,
+            title: title.into(),
+            header: header.iter().map(|h| h.to_string()).collect(),
+            rows: vec![],
+        }
+    }
+
     fn md(&self) -> String {
         let mut s = format!(
             "| {} |\n|{}\n",
@@ -133,10 +143,10 @@ fn potential_section(p: &PotentialPart) -> Result<Section> {
 /// The contact potential's timings per hull size, against the paper's range.
 fn potential_table(p: &PotentialPart) -> Table {
     let (lo, hi) = paper::POTENTIAL_SPEEDUP;
-    let mut t = Table {
-        name: "potential",
-        title: "Contact potential, value + gradient + Hessian (median µs per evaluation)".into(),
-        header: [
+    let mut t = Table::new(
+        "potential",
+        "Contact potential, value + gradient + Hessian (median µs per evaluation)",
+        &[
             "vertices/hull",
             "SDRS µs",
             "IPC baseline µs",
@@ -144,11 +154,8 @@ fn potential_table(p: &PotentialPart) -> Table {
             "ipctk µs",
             "paper IPC/SDRS",
             "better",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: vec![],
-    };
+        ],
+    );
     for r in &p.rows {
         let ipctk = p.ipctk.as_ref().and_then(|m| m.get(&r.vertices).copied());
         t.rows.push(vec![
@@ -232,21 +239,18 @@ fn potential_text(p: &PotentialPart) -> Vec<String> {
 
 /// The friction potential's timings per hull size.
 fn friction_table(p: &PotentialPart) -> Table {
-    let mut f = Table {
-        name: "friction",
-        title: "Friction potential, value + gradient + Hessian (median µs per evaluation)".into(),
-        header: [
+    let mut f = Table::new(
+        "friction",
+        "Friction potential, value + gradient + Hessian (median µs per evaluation)",
+        &[
             "vertices/hull",
             "SDRS U_f µs",
             "IPC friction µs",
             "IPC/SDRS (same run)",
             "IPC lagged stencils",
             "better",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: vec![],
-    };
+        ],
+    );
     for r in &p.friction {
         f.rows.push(vec![
             r.vertices.to_string(),
@@ -291,10 +295,10 @@ fn friction_plot(p: &PotentialPart) -> Result<String> {
 }
 
 fn chains_section(c: &ChainsPart) -> Result<Section> {
-    let mut t = Table {
-        name: "chains",
-        title: "Four rotating chains".into(),
-        header: [
+    let mut t = Table::new(
+        "chains",
+        "Four rotating chains",
+        &[
             "model",
             "links/chain",
             "DOF",
@@ -304,11 +308,8 @@ fn chains_section(c: &ChainsPart) -> Result<Section> {
             "steps in contact",
             "min distance (m)",
             "python-fcl min distance (m)",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: vec![],
-    };
+        ],
+    );
     for r in &c.rows {
         t.rows.push(vec![
             r.model.clone(),
@@ -372,17 +373,14 @@ fn chains_section(c: &ChainsPart) -> Result<Section> {
         let total = r.ms_per_step + bw;
         let other = total - uc - uf - bw;
         let ours = [uc, uf, bw, other].map(|x| 100.0 * x / total);
-        let mut b = Table {
-            name: "breakdown",
-            title: format!(
+        let mut b = Table::new(
+            "breakdown",
+            format!(
                 "Time breakdown, SDRS, {} links per chain (% of forward + backward)",
                 r.links
             ),
-            header: ["part", "ours %", "paper %", "note"]
-                .map(String::from)
-                .to_vec(),
-            rows: vec![],
-        };
+            &["part", "ours %", "paper %", "note"],
+        );
         for (k, (name, paper)) in paper::BREAKDOWN.iter().enumerate() {
             let note = match *name {
                 "U_c" => "contact + broad phase stages",
@@ -448,10 +446,10 @@ fn codesign_section(b: &CodesignPart, dir: &Path) -> Result<Section> {
 /// One row per method (runs, then unfinished ones, then the mesh
 /// baseline's empty rows when it was not run); whether it was run.
 fn codesign_table(b: &CodesignPart) -> (Table, bool) {
-    let mut t = Table {
-        name: "codesign",
-        title: format!("Co-design: {}", b.name),
-        header: [
+    let mut t = Table::new(
+        "codesign",
+        format!("Co-design: {}", b.name),
+        &[
             "method",
             "design vars",
             "controller vars",
@@ -465,11 +463,8 @@ fn codesign_table(b: &CodesignPart) -> (Table, bool) {
             "distance walked (m)",
             "upright at H",
             "grasped",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: vec![],
-    };
+        ],
+    );
     for r in &b.runs {
         t.rows.push(codesign_row(r));
     }
@@ -554,10 +549,10 @@ fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
 
 /// The task's gradient check: the adjoint against a central difference.
 fn fd_table(name: &str, fd: &FdCheck) -> Table {
-    Table {
-        name: "fd",
-        title: format!("Gradient check, {name}"),
-        header: [
+    let mut t = Table::new(
+        "fd",
+        format!("Gradient check, {name}"),
+        &[
             "variable",
             "adjoint",
             "central difference",
@@ -565,24 +560,23 @@ fn fd_table(name: &str, fd: &FdCheck) -> Table {
             "Newton tolerance",
             "relative error",
             "noise of the difference",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: vec![vec![
-            format!("`{}`", fd.variable),
-            format!("{:.6e}", fd.adjoint),
-            format!("{:.6e}", fd.central_difference),
-            format!("{:.1e}", fd.h),
-            fd.newton_tol
-                .map_or("the task's".into(), |t| format!("{t:.0e}")),
-            format!("{:.2e}", fd.relative_error),
-            match (fd.difference_noise, fd.resolved) {
-                (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
-                (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
-                _ => "not measured (plain central difference)".into(),
-            },
-        ]],
-    }
+        ],
+    );
+    t.rows.push(vec![
+        format!("`{}`", fd.variable),
+        format!("{:.6e}", fd.adjoint),
+        format!("{:.6e}", fd.central_difference),
+        format!("{:.1e}", fd.h),
+        fd.newton_tol
+            .map_or("the task's".into(), |t| format!("{t:.0e}")),
+        format!("{:.2e}", fd.relative_error),
+        match (fd.difference_noise, fd.resolved) {
+            (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
+            (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
+            _ => "not measured (plain central difference)".into(),
+        },
+    ]);
+    t
 }
 
 /// Best loss per iteration of every method, log scale.
