@@ -69,8 +69,14 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     // metrics side by side under `extra.metrics`.
     let metrics_json = sdrs::optimize::metric::summarize(&problem, &metrics, (&d0, &c0), &outcome)?;
     write_summary(&a, &out, &problem, &outcome, resumed_from, &metrics_json)?;
-    let design_on = a.design != "off";
-    write_figures(&out, &problem, design_on, (&d0, &c0), &outcome, &designs)?;
+    write_figures(
+        &out,
+        &problem,
+        a.design == "on",
+        (&d0, &c0),
+        &outcome,
+        &designs,
+    )?;
     report_end(&out, &outcome, &metrics_json);
     if let Some(why) = &outcome.stopped {
         anyhow::bail!(

@@ -134,30 +134,26 @@ fn gradient_dot_step(
         .iter()
         .zip(kin.pose.iter().zip(ctx.poses_prev))
     {
-        let chunks = g.as_slice().chunks_exact(4).zip(
-            a.as_slice()
-                .chunks_exact(4)
-                .zip(a0.as_slice().chunks_exact(4)),
-        );
-        for (g, (a, a0)) in chunks {
-            for l in 0..4 {
-                lanes[l] += g[l] * (a[l] - a0[l]);
-            }
-        }
+        add_lanes(&mut lanes, g.as_slice(), a.as_slice(), a0.as_slice());
     }
-    let (g, a, a0) = (acc.dof_grad.as_slice(), q.as_slice(), ctx.q_prev.as_slice());
-    let n = g.len().min(a.len()).min(a0.len());
-    let mut k = 0;
-    while k + 4 <= n {
-        for l in 0..4 {
-            lanes[l] += g[k + l] * (a[k + l] - a0[k + l]);
-        }
-        k += 4;
-    }
-    for j in k..n {
-        lanes[j - k] += g[j] * (a[j] - a0[j]);
-    }
+    add_lanes(
+        &mut lanes,
+        acc.dof_grad.as_slice(),
+        q.as_slice(),
+        ctx.q_prev.as_slice(),
+    );
     (lanes[0] + lanes[1]) + (lanes[2] + lanes[3])
+}
+
+/// `lanes[l] += Σ_k g[4k + l] (a[4k + l] − a0[4k + l])`, the remainder into
+/// the first lanes (see [`gradient_dot_step`]).
+fn add_lanes(lanes: &mut [f64; 4], g: &[f64], a: &[f64], a0: &[f64]) {
+    let (g, a, a0) = (g.chunks(4), a.chunks(4), a0.chunks(4));
+    for (g, (a, a0)) in g.zip(a.zip(a0)) {
+        for (l, ((g, a), a0)) in g.iter().zip(a).zip(a0).enumerate() {
+            lanes[l] += g * (a - a0);
+        }
+    }
 }
 
 impl Objective for StepObjective<'_> {
