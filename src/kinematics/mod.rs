@@ -255,6 +255,32 @@ impl Kinematics {
         }
     }
 
+    /// As [`Kinematics::update`]`(model, q, charts, KinOrder::Pose)`, but
+    /// when `other`'s last full evaluation was at `q` and `charts` bit for
+    /// bit, its poses are copied instead (the same bits as a fresh
+    /// evaluation; `other` is left as it was, so a cache hit there stays
+    /// one). The simulator's step starts at the state its last step
+    /// accepted, whose kinematics that step evaluated. `model` must be the
+    /// model of `other`'s evaluation.
+    pub fn update_or_copy(
+        &mut self,
+        other: &Kinematics,
+        model: &Model,
+        q: &DVector<f64>,
+        charts: &[Matrix3<f64>],
+    ) {
+        if !other.key.matches(q, charts) || other.pose.len() != self.pose.len() {
+            return self.update(model, q, charts, KinOrder::Pose);
+        }
+        self.order = KinOrder::Pose;
+        self.pose.copy_from_slice(&other.pose);
+        self.pre.copy_from_slice(&other.pre);
+        for (mine, theirs) in self.local.iter_mut().zip(&other.local) {
+            mine.value = theirs.value;
+        }
+        self.key.set(q, charts);
+    }
+
     /// Link `i`'s pose (when `with_pose`; otherwise the stored `pre`, `pose`
     /// are those of `q`) and its twists up to `order`.
     fn update_link(

@@ -182,6 +182,56 @@ fn cached_evaluations_equal_fresh_ones_bit_for_bit() {
     assert!(same_bits(&kin.twist2, &f.twist2) && same_bits(&kin.pose, &f.pose));
 }
 
+/// `update_or_copy` gives the bits of a fresh pose evaluation, whether it
+/// copies (the other object was last evaluated at the point, with any
+/// derivative order) or evaluates (a new point, a new chart, or a partial
+/// pose update in the other object since); the copy leaves `pre` and the
+/// joint values as a fresh evaluation, and a later `update_cached` with
+/// derivatives from it still matches a fresh one.
+#[test]
+fn poses_copied_from_a_matching_evaluation_equal_fresh_ones_bit_for_bit() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let model = every_joint_model(&mut rng);
+    let charts = random_charts(&mut rng, &model);
+    let charts2 = random_charts(&mut rng, &model);
+    let q = coordinates(&mut rng, &model, 0);
+    let q2 = coordinates(&mut rng, &model, 0);
+    let fresh = |q: &DVector<f64>, charts: &[Matrix3<f64>], order| {
+        let mut k = Kinematics::new(&model);
+        k.update(&model, q, charts, order);
+        k
+    };
+    let mut other = Kinematics::new(&model);
+    other.update(&model, &q, &charts, KinOrder::Second);
+    let mut start = Kinematics::new(&model);
+    let cases: [(&DVector<f64>, &[Matrix3<f64>]); 3] =
+        [(&q, &charts), (&q2, &charts), (&q, &charts2)];
+    for (case, (qa, ca)) in cases.into_iter().enumerate() {
+        start.update_or_copy(&other, &model, qa, ca);
+        let f = fresh(qa, ca, KinOrder::Pose);
+        assert!(same_bits(&start.pose, &f.pose), "case {case}: poses");
+        assert!(
+            same_bits(&start.pre, &f.pre),
+            "case {case}: pre-joint frames"
+        );
+        start.update_cached(&model, qa, ca, KinOrder::Second);
+        let f = fresh(qa, ca, KinOrder::Second);
+        assert!(
+            same_bits(&start.twist2, &f.twist2),
+            "case {case}: second twists"
+        );
+    }
+    // A partial pose update in the other object since its evaluation: no copy.
+    let mut needed = vec![false; model.links.len()];
+    needed[0] = true;
+    other.update_poses_where(&model, &q2, &charts, &needed);
+    start.update_or_copy(&other, &model, &q, &charts);
+    assert!(same_bits(
+        &start.pose,
+        &fresh(&q, &charts, KinOrder::Pose).pose
+    ));
+}
+
 /// Every joint kind's value with derivatives is `transform`'s, bit for bit
 /// (so a pose does not depend on the derivative order it was asked with).
 #[test]

@@ -358,6 +358,8 @@ impl Simulator {
         let t_next = (self.state.step + 1) as f64 * self.settings.dt;
         self.controller
             .targets_at(t_next, &mut self.scratch.targets);
+        let StepScratch { kin, kin_start, .. } = &mut self.scratch;
+        kin_start.update_or_copy(kin, &self.model, &self.state.q, &self.state.charts);
         let ctx = make_context(
             &self.model,
             &self.settings,
@@ -366,12 +368,6 @@ impl Simulator {
             &self.controller.pose_targets,
             t_next,
             self.timers.detailed(),
-        );
-        self.scratch.kin_start.update(
-            &self.model,
-            &self.state.q,
-            &self.state.charts,
-            KinOrder::Pose,
         );
         for e in self.energies.iter_mut() {
             e.begin_step(&ctx, &self.scratch.kin_start)?;
