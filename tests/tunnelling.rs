@@ -13,7 +13,7 @@ use crate::common;
 mod tunnel;
 
 use sdrs::scene::Scene;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tunnel::Case;
 
 /// The default grid: the issue's ranges at their ends and middle.
@@ -63,22 +63,45 @@ fn run(scene: &Scene, sides: &Case, export: Option<&Path>) -> Outcome {
     }
 }
 
-fn fcl_check(dir: &Path) {
+/// python-fcl on every step of each export in `dirs`, in one Python process
+/// (a start per export was 21 of the grid test's 22 s): every pair
+/// separated, more than one step checked, per export.
+fn fcl_check(dirs: &[PathBuf]) {
     let out = common::python()
         .arg(common::root().join("tools/check/check_separation.py"))
-        .arg(dir)
+        .args(dirs)
         .output()
         .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let reports: Vec<serde_json::Value> = match dirs.len() {
+        1 => serde_json::from_str(&stdout).map(|r| vec![r]),
+        _ => serde_json::from_str(&stdout),
+    }
+    .unwrap_or_else(|e| {
+        panic!(
+            "python-fcl: {e}:\n{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    assert_eq!(reports.len(), dirs.len());
+    for (dir, r) in dirs.iter().zip(&reports) {
+        assert_eq!(
+            r["violation_count"],
+            0,
+            "python-fcl found interpenetration in {}:\n{r}",
+            dir.display()
+        );
+        assert!(
+            r["steps_checked"].as_u64().unwrap() > 1,
+            "{}: {r}",
+            dir.display()
+        );
+    }
     assert!(
         out.status.success(),
-        "python-fcl found interpenetration in {}:\n{}\n{}",
-        dir.display(),
-        String::from_utf8_lossy(&out.stdout),
+        "python-fcl failed:\n{stdout}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(r["violation_count"], 0);
-    assert!(r["steps_checked"].as_u64().unwrap() > 1);
 }
 
 #[test]
@@ -89,6 +112,7 @@ fn no_body_tunnels_through_a_thin_obstacle_with_ccd_and_python_fcl_agrees() {
     let dir = common::scratch_dir("tunnelling");
     let mut failures = Vec::new();
     let (mut caps, mut fallbacks) = (0, 0);
+    let mut exports = Vec::new();
     for (k, case) in grid(true).iter().enumerate() {
         let scene = Scene::from_str(&case.yaml, Path::new(&case.name)).unwrap();
         let sub = dir.join(format!("{k}"));
@@ -97,8 +121,9 @@ fn no_body_tunnels_through_a_thin_obstacle_with_ccd_and_python_fcl_agrees() {
         caps += o.ccd.alpha_caps;
         fallbacks += o.ccd.fallbacks;
         assert!(o.ccd.segments > 0, "{}: CCD did not run", case.name);
-        fcl_check(&sub);
+        exports.push(sub);
     }
+    fcl_check(&exports);
     assert!(failures.is_empty(), "tunnelling:\n{}", failures.join("\n"));
     // CCD did the work (the barrier alone does not stop these, see below):
     // straight step paths that could not be certified, steps solved again
@@ -171,6 +196,7 @@ fn issue_19_reproducers_stay_on_their_side() {
         return;
     }
     let dir = common::scratch_dir("tunnel-repro");
+    let mut exports = Vec::new();
     for (file, side) in tunnel::reproducers() {
         let path = common::root().join("tests/data/tunnel").join(file);
         let scene = Scene::load(&path).unwrap();
@@ -182,8 +208,9 @@ fn issue_19_reproducers_stay_on_their_side() {
         let sub = dir.join(file);
         let o = run(&scene, &case, Some(&sub));
         assert!(o.crossings.is_empty(), "{:?}", o.crossings);
-        fcl_check(&sub);
+        exports.push(sub);
     }
+    fcl_check(&exports);
     // The shot bounces back: it ends on the near side, moving away.
     let scene =
         Scene::load(common::root().join("tests/data/tunnel/tunnel_shot_wall_v20_dt0.01.yaml"))
