@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Independent coverage check of an imported design (trimesh).
 
-Usage: check_coverage.py SOURCE DESIGN.yaml [--samples N] [--tol-frac 0.02] [--min 0.95] [--seed 0]
+Usage: check_coverage.py SOURCE DESIGN.yaml [SOURCE DESIGN.yaml ...] [--samples N] [--tol-frac 0.02]
+                         [--min 0.95] [--seed 0]
 
 SOURCE is the imported .urdf (collision geometry, else visual; meshes and
 box/cylinder/sphere primitives) or a bare .obj/.stl. For every source mesh,
@@ -9,6 +10,12 @@ N points are sampled uniformly on its surface (in the link frame); a point is
 covered when it lies inside one of the link's hulls or within tol-frac of the
 mesh's bounding-box diagonal of one. Prints a JSON report and exits 1 when a
 link's coverage is below --min, 3 when a package is missing.
+
+Several SOURCE DESIGN pairs may be given (one Python start for many
+imports: the start, mostly trimesh's and scipy's imports, is most of a
+small check's time): the report is then a JSON list with one entry per
+pair (its "source" and "design" added; an entry that could not be
+checked holds its "error"), and the exit code the worst of them.
 """
 import argparse
 import json
@@ -148,39 +155,55 @@ def coverage(mesh, hulls, n, tol_frac, seed):
     return float((dist <= tol).mean()), float(dist.max()), tol
 
 
+def check(source, design, a):
+    """The check of one pair: (exit code, report or None, error message or None)."""
+    hulls = design_hulls(design)
+    if source.lower().endswith((".urdf", ".xml")):
+        sources = urdf_sources(source)
+    else:
+        if len(hulls) != 1:
+            return 2, None, "a bare mesh source needs a one-link design"
+        sources = {next(iter(hulls)): [trimesh.load(source, force="mesh", process=False)]}
+    report = {}
+    worst = 1.0
+    for link, meshes in sources.items():
+        if link not in hulls:
+            return 1, None, f"link '{link}' has geometry in the source but is missing from the design"
+        covs = [coverage(m, hulls[link], a.samples, a.tol_frac, a.seed + k) for k, m in enumerate(meshes)]
+        c = min(x[0] for x in covs)
+        report[link] = {"coverage": c, "max_distance": max(x[1] for x in covs), "meshes": len(meshes)}
+        worst = min(worst, c)
+    out = {"links": report, "min_coverage": worst, "threshold": a.min}
+    if worst < a.min:
+        bad = [l for l, r in report.items() if r["coverage"] < a.min]
+        return 1, out, f"coverage below {a.min}: {', '.join(bad)}"
+    return 0, out, None
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("source")
-    ap.add_argument("design")
+    ap.add_argument("files", nargs="+", metavar="SOURCE DESIGN", help="source and design, pairwise")
     ap.add_argument("--samples", type=int, default=4000)
     ap.add_argument("--tol-frac", type=float, default=0.02)
     ap.add_argument("--min", type=float, default=0.95)
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args()
-    hulls = design_hulls(a.design)
-    if a.source.lower().endswith((".urdf", ".xml")):
-        sources = urdf_sources(a.source)
+    if len(a.files) % 2:
+        ap.error("give SOURCE DESIGN pairs")
+    pairs = list(zip(a.files[::2], a.files[1::2]))
+    results = []
+    for source, design in pairs:
+        code, report, err = check(source, design, a)
+        if err:
+            print(err if len(pairs) == 1 else f"{source}: {err}", file=sys.stderr)
+        results.append((code, report, err))
+    if len(pairs) == 1:
+        if results[0][1] is not None:
+            print(json.dumps(results[0][1]))
     else:
-        if len(hulls) != 1:
-            print("a bare mesh source needs a one-link design", file=sys.stderr)
-            return 2
-        sources = {next(iter(hulls)): [trimesh.load(a.source, force="mesh", process=False)]}
-    report = {}
-    worst = 1.0
-    for link, meshes in sources.items():
-        if link not in hulls:
-            print(f"link '{link}' has geometry in the source but is missing from the design", file=sys.stderr)
-            return 1
-        covs = [coverage(m, hulls[link], a.samples, a.tol_frac, a.seed + k) for k, m in enumerate(meshes)]
-        c = min(x[0] for x in covs)
-        report[link] = {"coverage": c, "max_distance": max(x[1] for x in covs), "meshes": len(meshes)}
-        worst = min(worst, c)
-    print(json.dumps({"links": report, "min_coverage": worst, "threshold": a.min}))
-    if worst < a.min:
-        bad = [l for l, r in report.items() if r["coverage"] < a.min]
-        print(f"coverage below {a.min}: {', '.join(bad)}", file=sys.stderr)
-        return 1
-    return 0
+        print(json.dumps([{"source": s, "design": d, **(r if r is not None else {"error": e})}
+                          for (s, d), (_, r, e) in zip(pairs, results)]))
+    return max(code for code, _, _ in results)
 
 
 if __name__ == "__main__":
