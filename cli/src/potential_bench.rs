@@ -92,10 +92,25 @@ fn world(mesh: &LinkMesh, p: &Matrix3x4<f64>) -> Vec<Vector3<f64>> {
         .collect()
 }
 
+/// The IPC mesh distance of two hulls (every primitive pair of the 0.5 m
+/// test hulls), for the tests.
+#[cfg(test)]
 fn ipc_distance(mesh: [&LinkMesh; 2], world: [&Vec<Vector3<f64>>; 2]) -> f64 {
+    ipc_distance_within(mesh, world, 0.5)
+}
+
+/// The IPC mesh distance over the primitive pairs whose boxes, each padded
+/// by `pad`, meet: every pair closer than `pad` is among them, so the
+/// result is the mesh distance whenever that is below `pad`, and `≥ pad`
+/// otherwise. [`potential_cases`]' bisection asks only whether the distance
+/// is below half the range: with that padding it gets the same answers as
+/// with [`ipc_distance`]'s 0.5 m (every pair of the 0.5 m test hulls), at
+/// a fraction of the pairs (the quick suite's eight cases: 12.2 s → under
+/// 0.2 s; the same cases, bit for bit).
+fn ipc_distance_within(mesh: [&LinkMesh; 2], world: [&Vec<Vector3<f64>>; 2], pad: f64) -> f64 {
     let (mut ba, mut bb) = (PrimitiveBoxes::default(), PrimitiveBoxes::default());
-    ba.build(mesh[0], world[0], None, 0.5);
-    bb.build(mesh[1], world[1], None, 0.5);
+    ba.build(mesh[0], world[0], None, pad);
+    bb.build(mesh[1], world[1], None, pad);
     let mut c = Candidates::default();
     candidates(&ba, &bb, &mut c);
     PairGeometry {
@@ -153,7 +168,8 @@ pub fn potential_cases(
                     Ok(PairOutcome::Intersecting)
                 );
                 let wb = world(&mb, &p);
-                if inter || ipc_distance([&ma, &mb], [&wa, &wb]) < 0.5 * range {
+                let half = 0.5 * range;
+                if inter || ipc_distance_within([&ma, &mb], [&wa, &wb], half) < half {
                     lo = mid
                 } else {
                     hi = mid
