@@ -123,12 +123,18 @@ pub fn calibration_check(
     args: &[&str],
     dir: &std::path::Path,
 ) -> (bool, Vec<serde_json::Value>) {
-    let o = check_script(script)
-        .args(args)
-        .arg("--out")
-        .arg(dir)
-        .output()
-        .unwrap();
+    calibration_check_with(check_script(script).args(args), dir)
+}
+
+/// [`calibration_check`] of a [`check_script`] command the caller has
+/// given its arguments (and environment): adds `--out dir`, runs it, prints
+/// its output and returns its exit success and the cases of its
+/// `summary.json`.
+pub fn calibration_check_with(
+    cmd: &mut std::process::Command,
+    dir: &std::path::Path,
+) -> (bool, Vec<serde_json::Value>) {
+    let o = cmd.arg("--out").arg(dir).output().unwrap();
     eprintln!(
         "{}{}",
         String::from_utf8_lossy(&o.stdout),
