@@ -12,7 +12,7 @@ use sdrs::diff::{Loss, LossTerm, When, backward, record};
 use sdrs::output::{Summary, export_run};
 use sdrs::scene::{Scene, SceneSpec};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub fn run(
@@ -29,6 +29,8 @@ pub fn run(
         .with_context(|| format!("{}: malformed scene", path.display()))?;
     pb.set_length((spec.links.len() * spec.models.len() * spec.repeats) as u64);
     let mut rows = Vec::new();
+    // (row, export directory) of every run python-fcl is to check.
+    let mut exports = Vec::new();
     let mut dt = 0.0;
     for &n in &spec.links {
         let mut s = base.clone();
@@ -54,7 +56,10 @@ pub fn run(
         for rep in 0..spec.repeats {
             for (k, model) in spec.models.iter().enumerate() {
                 pb.set_message(format!("{model}, {n} links per chain, run {}", rep + 1));
-                let r = one(&scenes[k], model, n, spec, work, rep == 0)?;
+                let (r, export) = one(&scenes[k], model, n, spec, work, rep == 0)?;
+                if let Some(dir) = export {
+                    exports.push((rows.len() + k, dir));
+                }
                 best[k] = Some(match best[k].take() {
                     None => r,
                     Some(b) if r.ms_per_step < b.ms_per_step => ChainRow {
@@ -70,6 +75,7 @@ pub fn run(
         }
         rows.extend(best.into_iter().flatten());
     }
+    fcl_check(&mut rows, &exports);
     Ok(ChainsPart {
         steps: spec.steps,
         repeats: spec.repeats,
@@ -79,6 +85,24 @@ pub fn run(
     })
 }
 
+/// python-fcl's minimum distances of the exported runs, into their rows
+/// (a note instead when a check failed): all in one Python process.
+fn fcl_check(rows: &mut [ChainRow], exports: &[(usize, PathBuf)]) {
+    if exports.is_empty() {
+        return;
+    }
+    let dirs: Vec<PathBuf> = exports.iter().map(|(_, d)| d.clone()).collect();
+    for ((i, _), r) in exports.iter().zip(super::fcl::check_all(&dirs)) {
+        match r {
+            Ok(d) => rows[*i].fcl_min_distance = d,
+            Err(e) => rows[*i].fcl_note = Some(format!("{e:#}")),
+        }
+    }
+}
+
+/// One timed run of `model` with `n` links per chain; on the first
+/// repetition with python-fcl requested, its states are exported and the
+/// export directory returned (checked by [`fcl_check`] after every run).
 fn one(
     scene: &Scene,
     model: &str,
@@ -86,7 +110,7 @@ fn one(
     spec: &ChainsSpec,
     work: &Path,
     first: bool,
-) -> Result<ChainRow> {
+) -> Result<(ChainRow, Option<PathBuf>)> {
     let steps = spec.steps;
     let mut sim = crate::contact_model::simulator(scene)?;
     sim.timers.set_detailed(true);
@@ -123,7 +147,7 @@ fn one(
     } else {
         None
     };
-    let (fcl_min_distance, fcl_note) = if !first {
+    let (export, fcl_note) = if !first {
         (None, None)
     } else if spec.fcl {
         let dir = work.join(format!("chains_{model}_{n}"));
@@ -134,14 +158,11 @@ fn one(
             .map(|c| c.excluded.iter().copied().collect::<Vec<_>>())
             .unwrap_or_default();
         export_run(&dir, &scene.model, excluded, &traj)?;
-        match super::fcl::check(&dir) {
-            Ok(d) => (d, None),
-            Err(e) => (None, Some(format!("{e:#}"))),
-        }
+        (Some(dir), None)
     } else {
         (None, Some("not requested by the suite".into()))
     };
-    Ok(ChainRow {
+    let row = ChainRow {
         model: model.into(),
         links: n,
         dof: scene.model.ndof(),
@@ -151,7 +172,8 @@ fn one(
         backward_ms_per_step,
         steps_in_contact: summary.contact.steps_in_contact,
         min_distance: summary.contact.min_distance,
-        fcl_min_distance,
+        fcl_min_distance: None,
         fcl_note,
-    })
+    };
+    Ok((row, export))
 }
