@@ -106,22 +106,47 @@ def read_surfaces(dir: Path) -> dict:
     return surfaces
 
 
+class Item:
+    """A hull, or a link's source-mesh surface, in its link's frame. Its
+    triangles (Qhull's, for a hull) and FCL models are made when a near pair
+    first needs them: most hulls of a robot never come within 0.05 m of
+    another's (pybullet_data's 186 exports: half the check's time went to
+    making them all)."""
+
+    def __init__(self, link: int, hull: int, v, tri=None):
+        self.link, self.hull, self.v, self._tri = link, hull, v, tri
+        self._convex, self._mesh = None, None
+
+    def tri(self):
+        if self._tri is None:
+            self._tri = ConvexHull(self.v).simplices
+        return self._tri
+
+    def convex(self):
+        """FCL's convex shape of a hull (None for a surface)."""
+        if self._convex is None and self.hull >= 0:
+            tri = self.tri()
+            faces = np.hstack([np.full((len(tri), 1), 3), tri]).ravel()
+            self._convex = fcl.Convex(self.v, len(tri), faces)
+        return self._convex
+
+    def mesh(self):
+        """FCL's BVH model of the triangles (for pairs with a surface)."""
+        if self._mesh is None:
+            self._mesh = bvh(self.v, self.tri())
+        return self._mesh
+
+
 def geometry(hulls: dict, surfaces: dict) -> list:
-    """Local geometry: FCL convex shapes from Qhull triangles, and BVH models
-    (built only when the export has source-mesh surfaces: a hull's BVH is
-    used only in a pair with a surface). One tuple per item: (link, hull
-    index (-1: surface mesh), local vertices, triangles, fcl convex, fcl BVH)."""
+    """Every hull of every link, or the link's surface mesh when it has one."""
     items = []
     for li, link in enumerate(hulls["links"]):
         if li in surfaces:
             v, tri = surfaces[li]
-            items.append((li, -1, v, tri, None, bvh(v, tri)))
+            items.append(Item(li, -1, v, tri))
             continue
         for hi, verts in enumerate(link["hulls"]):
-            v = np.asarray(verts, dtype=float)
-            tri = ConvexHull(v).simplices
-            faces = np.hstack([np.full((len(tri), 1), 3), tri]).ravel()
-            items.append((li, hi, v, tri, fcl.Convex(v, len(tri), faces), bvh(v, tri) if surfaces else None))
+            items.append(Item(li, hi, np.asarray(verts, dtype=float)))
     return items
 
 
@@ -131,36 +156,40 @@ class Step:
 
     def __init__(self, items: list, pose: dict):
         self.items, self.x, self.objects = items, [], {}
-        for li, _, v, _, _, _ in items:
-            r, t = pose[li]
-            self.x.append(v @ r.T + t)
+        for it in items:
+            r, t = pose[it.link]
+            self.x.append(it.v @ r.T + t)
         self.lo = np.array([x.min(axis=0) for x in self.x]).reshape(-1, 3)
         self.hi = np.array([x.max(axis=0) for x in self.x]).reshape(-1, 3)
         self.pose = pose
 
-    def objects_of(self, i: int):
-        """(convex object or None, BVH object or None) of item `i`."""
-        if i not in self.objects:
-            li, _, _, _, geom, mesh = self.items[i]
-            tf = fcl.Transform(*self.pose[li])
-            self.objects[i] = (geom and fcl.CollisionObject(geom, tf),
-                               mesh and fcl.CollisionObject(mesh, tf))
-        return self.objects[i]
+    def convex_object(self, i: int):
+        """Item `i`'s FCL convex collision object at this step."""
+        if ("c", i) not in self.objects:
+            it = self.items[i]
+            self.objects["c", i] = fcl.CollisionObject(it.convex(), fcl.Transform(*self.pose[it.link]))
+        return self.objects["c", i]
+
+    def mesh_object(self, i: int):
+        """Item `i`'s FCL BVH collision object at this step."""
+        if ("m", i) not in self.objects:
+            it = self.items[i]
+            self.objects["m", i] = fcl.CollisionObject(it.mesh(), fcl.Transform(*self.pose[it.link]))
+        return self.objects["m", i]
 
 
 def near_distance(step: Step, a: int, b: int, request, counts: list) -> float:
     """FCL's distance of items `a` and `b` (whose boxes are within 0.05 m);
     `counts` = [FCL calls, mesh calls], updated."""
     items = step.items
-    (oa, ma), (ob, mb) = step.objects_of(a), step.objects_of(b)
     counts[0] += 1
-    if items[a][1] >= 0 and items[b][1] >= 0:
-        return fcl.distance(oa, ob, request, fcl.DistanceResult())
+    if items[a].hull >= 0 and items[b].hull >= 0:
+        return fcl.distance(step.convex_object(a), step.convex_object(b), request, fcl.DistanceResult())
     counts[1] += 1
-    d = fcl.distance(ma, mb, request, fcl.DistanceResult())
+    d = fcl.distance(step.mesh_object(a), step.mesh_object(b), request, fcl.DistanceResult())
     lo_a, hi_a, lo_b, hi_b = step.lo[a], step.hi[a], step.lo[b], step.hi[b]
     if d > 0 and (nested(lo_a, hi_a, lo_b, hi_b) or nested(lo_b, hi_b, lo_a, hi_a)):
-        xa, ta, xb, tb = step.x[a], items[a][3], step.x[b], items[b][3]
+        xa, ta, xb, tb = step.x[a], items[a].tri(), step.x[b], items[b].tri()
         if winding(xb, tb, xa[0]) > 0.5 or winding(xa, ta, xb[0]) > 0.5:
             d = 0.0  # one solid inside the other
     return d
@@ -184,7 +213,7 @@ def check(dir: Path, every: int) -> tuple[int, dict]:
         return 2, {"error": f"cannot read surfaces.json: {e}"}
     items = geometry(hulls, surfaces)
     pairs = [(a, b) for a in range(len(items)) for b in range(a + 1, len(items))
-             if items[a][0] != items[b][0] and tuple(sorted((items[a][0], items[b][0]))) not in excluded]
+             if items[a].link != items[b].link and tuple(sorted((items[a].link, items[b].link))) not in excluded]
     ia = np.array([a for a, _ in pairs], dtype=np.int64)
     ib = np.array([b for _, b in pairs], dtype=np.int64)
     request = fcl.DistanceRequest(enable_nearest_points=False)
@@ -202,7 +231,7 @@ def check(dir: Path, every: int) -> tuple[int, dict]:
                 d = near_distance(step, a, b, request, counts)
                 step_min = min(step_min, d)
                 if d <= 0.0:
-                    bad.append({"step": k, "pair": [hulls["links"][items[a][0]]["name"], hulls["links"][items[b][0]]["name"]], "distance": d})
+                    bad.append({"step": k, "pair": [hulls["links"][items[a].link]["name"], hulls["links"][items[b].link]["name"]], "distance": d})
         checked += 1
         if step_min < min_d:
             min_d, min_at = step_min, k
