@@ -23,14 +23,6 @@ export PYO3_PYTHON="$PWD/.venv/bin/python" PYTHON_SYS_EXECUTABLE="$PWD/.venv/bin
 export PYO3_BUILD_EXTENSION_MODULE=1
 PYO3_ENVIRONMENT_SIGNATURE="$("$PYO3_PYTHON" -c 'import platform, sys; v = sys.version_info; print(f"{sys.implementation.name}-{v[0]}.{v[1]}-{platform.architecture()[0]}")')"
 export PYO3_ENVIRONMENT_SIGNATURE
-# Python may write the bytecode of the modules it compiles (numpy, scipy,
-# trimesh, mujoco, fcl, ...) into .venv, so that later starts read it:
-# machines of this kind set PYTHONDONTWRITEBYTECODE=1, and the pinned
-# packages come without bytecode (uv does not compile by default), so each
-# of the tests' Python starts compiled its imports from source again,
-# 0.5-1.3 s a start. The 71 tests that start Python outside the seven
-# longest: 176 -> 154 CPU-s (105.7 -> 82.7 s wall) on the first run.
-unset PYTHONDONTWRITEBYTECODE
 # Every tier: a test that needs .venv or Chromium fails instead of skipping
 # (tests/common/mod.rs, `skip_without_venv`).
 export SDRS_TEST_ALL_TIERS=1
