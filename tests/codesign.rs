@@ -249,3 +249,33 @@ fn trust_region_design_norm_max_is_wired() {
         );
     }
 }
+
+/// A trust-region run ends early at a converged iterate when a trial rounds
+/// to the iterate in a phase where every later trial would too
+/// (`optimize::method::no_op_is_final`). With radii of 1e-300 the trials
+/// move only the coordinates that are exactly 0 (by subnormal amounts);
+/// each rejection halves the radii until even those round away, and the run
+/// stops there — long before its 400 iterations — on the start's loss (to
+/// the last few bits), with `converged` naming the iteration. With the
+/// task's radii a short run ends normally.
+#[test]
+fn trust_region_run_ends_when_its_trials_round_to_the_iterate() {
+    use sdrs::optimize::task::TaskSpec;
+    let path = task();
+    let spec: TaskSpec = serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let mut tiny = spec.clone();
+    tiny.optimizer.step_design = 1e-300;
+    tiny.optimizer.step_controller = 1e-300;
+    let p = Problem::from_spec(&path, tiny, true).unwrap();
+    let out = optimize(&p, 400, |_, _| {}).unwrap();
+    let why = out.converged.expect("converged");
+    let n = out.history.len() - 1;
+    assert!((2..400).contains(&n), "{n}");
+    assert!(why.contains(&format!("iteration {n} of 400")), "{why}");
+    assert!(!out.history[n].accepted);
+    assert!((out.loss - out.initial_loss).abs() <= 1e-12 * out.initial_loss);
+    let p = Problem::from_spec(&path, spec, true).unwrap();
+    let out = optimize(&p, 3, |_, _| {}).unwrap();
+    assert!(out.converged.is_none());
+    assert_eq!(out.history.len(), 4);
+}

@@ -251,6 +251,9 @@ fn write_summary(
             "metrics": metrics_json,
             // Why the run ended before its last iteration, else null.
             "stopped": outcome.stopped,
+            // A trust-region run that ended early at a converged iterate
+            // (no later trial could move it), else null.
+            "converged": outcome.converged,
             // Trial points that could not be simulated (this session's;
             // each counted as a rejected trust-region step).
             "failed_trials": outcome.failed_trials,
@@ -316,6 +319,9 @@ fn report_end(
         outcome.history.last().map_or(0, |r| r.iter),
         out.display()
     );
+    if let Some(why) = &outcome.converged {
+        eprintln!("{why} (summary.json `converged`)");
+    }
     let failed = &outcome.failed_trials;
     if let Some(sdrs::optimize::FailedTrial {
         iteration: it,

@@ -276,7 +276,9 @@ impl PyTask {
     /// Runs the Rust optimizer of `sdrs optimize` (the task's method, step
     /// sizes and bounds) for `iters` iterations (default: the task's) from
     /// the start for `seed`, GIL released. Returns `{loss, initial_loss,
-    /// history (loss per iteration), design, controller}` — the same numbers
+    /// history (loss per iteration), design, controller, stopped,
+    /// converged}` (`converged`: why a trust-region run ended early at a
+    /// converged iterate, else None) — the same numbers
     /// as `sdrs optimize TASK --seed SEED --iters ITERS`: `design`,
     /// `controller` and `loss` are the iterate `optimizer.result` selects
     /// (default `best`, the lowest loss seen).
@@ -311,6 +313,7 @@ impl PyTask {
         // Why the run ended early (an Adam step that could not be
         // simulated), else None.
         out.set_item("stopped", o.stopped)?;
+        out.set_item("converged", o.converged)?;
         Ok(out)
     }
 

@@ -183,6 +183,27 @@ impl Radii {
     }
 }
 
+/// Whether a trust-region trial that left the iterate bitwise unchanged
+/// (`no_op`: the projected trial design and controller equal the iterate's,
+/// the step rounding away or the gradient being zero), tried in `phase`,
+/// means that no later trial can move either: the run has converged at
+/// the current iterate.
+///
+/// Such a trial has the iterate's loss, so it is rejected (acceptance needs
+/// a strictly lower loss), and a rejection never grows a radius; a step
+/// that rounds away at radius `r` rounds away at `r/2` (coordinate by
+/// coordinate `|r u_i| < ½ ulp(x_i)` holds for the smaller radius too, and
+/// the projection onto the box keeps an unchanged coordinate unchanged).
+/// In the *joint* phase (every rule but `split` is always joint) both
+/// blocks were tried at their radii, so every later trial, joint or single
+/// block, is a no-op. In `split`'s *controller* phase a rejection keeps the
+/// phase, so every later trial is the same controller no-op. Only a no-op
+/// in the *design* phase is not final: the controller phase comes next
+/// with its own radius.
+pub fn no_op_is_final(no_op: bool, phase: Phase) -> bool {
+    no_op && phase != Phase::Design
+}
+
 /// `g` rescaled to Euclidean norm at most `max`: `g · min(1, max/‖g‖)`
 /// (`g` itself when `max` is `None`).
 pub fn clip_norm(g: &DVector<f64>, max: Option<f64>) -> std::borrow::Cow<'_, DVector<f64>> {
@@ -274,6 +295,21 @@ pub fn decay_factor(final_fraction: Option<f64>, it: usize, iters: usize) -> f64
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_no_op_trial_is_final_except_in_the_design_phase() {
+        for phase in [Phase::Joint, Phase::Controller] {
+            assert!(no_op_is_final(true, phase));
+            assert!(!no_op_is_final(false, phase));
+        }
+        assert!(!no_op_is_final(true, Phase::Design));
+        // A no-op stays a no-op at half the radius: the step of a tiny
+        // radius rounds away at 1.0 and so does half of it.
+        let (x, u) = (1.0_f64, 0.6_f64);
+        let r = 1e-17;
+        assert_eq!(x + r * u, x);
+        assert_eq!(x + 0.5 * r * u, x);
+    }
+
     use super::*;
 
     /// Clipping bounds the norm and keeps the direction; with it, one

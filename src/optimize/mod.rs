@@ -385,6 +385,12 @@ pub struct Outcome {
     /// causes (an Adam step that could not be simulated at any of its
     /// [`ADAM_RETRIES`] shortenings); `None` when it ran every iteration.
     pub stopped: Option<String>,
+    /// Why a trust-region run ended before its last iteration at a
+    /// converged iterate: a trial rounded to the iterate where no later
+    /// trial can move ([`method::no_op_is_final`]); every iteration it
+    /// skips would have been the same rejected trial, so the result is the
+    /// one the full run returns. `None` otherwise.
+    pub converged: Option<String>,
     /// Trial points of this session that could not be simulated (a failed
     /// Newton or contact solve, an interpenetrating start): the trust region
     /// counts each as a rejected step, so many of them shrink its radii to
@@ -511,9 +517,12 @@ pub fn optimize_with<E: Into<OptimizeError>>(
         run.record(0, &ev, &d, ev.loss, true, &mut on_iter);
         on_state(&run.state(0)).map_err(Into::into)?;
     }
-    let mut stopped = None;
+    let (mut stopped, mut converged) = (None, None);
     for it in run.first..=iters {
         let (d_new, c_new) = run.propose(p, it, &ev);
+        let final_no_op = p.task.optimizer.method == Method::TrustRegion
+            && method::no_op_is_final(d_new == run.d && c_new == run.c, run.radii.phase);
+        let radii = (run.radii.design, run.radii.controller);
         let trial = p.evaluate(&d_new, &c_new);
         let stop = run.settle(p, it, &mut ev, (d_new, c_new), trial, &mut on_iter)?;
         on_state(&run.state(it)).map_err(Into::into)?;
@@ -521,9 +530,17 @@ pub fn optimize_with<E: Into<OptimizeError>>(
             stopped = Some(format!("stopped at iteration {it}: {}", error_chain(&e)));
             break;
         }
+        if final_no_op && it < iters {
+            converged = Some(format!(
+                "converged at iteration {it} of {iters}: the trust-region trial at radii (design {:.3e}, controller {:.3e}) rounds to the iterate, and so would every later one",
+                radii.0, radii.1
+            ));
+            break;
+        }
     }
     let mut outcome = run.outcome(p, ev);
     outcome.stopped = stopped;
+    outcome.converged = converged;
     Ok(outcome)
 }
 
@@ -838,6 +855,7 @@ impl Run {
                 initial_loss: self.initial_loss,
                 iter: b.iter,
                 stopped: None,
+                converged: None,
                 failed_trials: self.failed,
             },
             _ => Outcome {
@@ -848,6 +866,7 @@ impl Run {
                 initial_loss: self.initial_loss,
                 iter: last_iter,
                 stopped: None,
+                converged: None,
                 failed_trials: self.failed,
             },
         }
