@@ -195,7 +195,7 @@ fn design_gradient_with_a_block_shrunk_to_a_sliver_matches_central_differences()
 }
 
 /// Ties and bounds at every iterate of the committed task's 40 iterations
-/// (≈ 1 s), for both connectivities; the shared-vertex space has one
+/// (or up to the iteration at which the run converged; ≈ 1 s), for both connectivities; the shared-vertex space has one
 /// auxiliary point per face-neighbour pair (24 in a 4 × 4 plate) tied
 /// between exactly two blocks, the corner space points shared by up to 4
 /// blocks; in both, some tied point moves (so the tie is exercised).
@@ -215,7 +215,7 @@ fn ties_and_bounds_hold_at_every_iterate_for_both_connectivities() {
             .filter(|&i| p.design.vars[i].targets.len() >= 2)
             .collect();
         let (mut checked, mut moved) = (0, false);
-        optimize(&p, 40, |_, d: &DVector<f64>| {
+        let out = optimize(&p, 40, |_, d: &DVector<f64>| {
             let mut model = p.first().model.clone();
             p.design.apply(&mut model, d);
             p.design.check(&model).unwrap();
@@ -223,7 +223,13 @@ fn ties_and_bounds_hold_at_every_iterate_for_both_connectivities() {
             moved |= tied.iter().any(|&i| d[i] != d0[i]);
         })
         .unwrap();
-        assert_eq!(checked, 41, "{task}");
+        // Every iterate, the start included; a run that converged early
+        // (its trial rounds to the iterate: `Outcome::converged`) has fewer.
+        assert_eq!(checked, out.history.len(), "{task}");
+        assert!(
+            checked == 41 || out.converged.is_some(),
+            "{task}: {checked}"
+        );
         assert!(moved, "{task}: no tied point moved");
     }
 }
