@@ -295,6 +295,8 @@ pub fn decay_factor(final_fraction: Option<f64>, it: usize, iters: usize) -> f64
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn a_no_op_trial_is_final_except_in_the_design_phase() {
         for phase in [Phase::Joint, Phase::Controller] {
@@ -309,8 +311,6 @@ mod tests {
         assert_eq!(x + r * u, x);
         assert_eq!(x + 0.5 * r * u, x);
     }
-
-    use super::*;
 
     /// Clipping bounds the norm and keeps the direction; with it, one
     /// gradient spike 1e6 times the others no longer shrinks Adam's later
