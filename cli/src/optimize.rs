@@ -27,7 +27,7 @@ pub struct OptimizeArgs {
     /// Seed of the run's randomness (`optimizer.init_noise`).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Iterations in total (default: the task's `optimizer.iters`).
+    /// Iterations in total (default: the task's `optimizer.iters`); a trust-region run ends earlier, at the same result, once its trials round to the iterate (summary.json `converged`).
     #[arg(long)]
     pub iters: Option<usize>,
     /// `off` optimizes the controller alone (for comparison).
