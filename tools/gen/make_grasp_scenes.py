@@ -7,7 +7,7 @@ paper's block design space; the three-fingered hand: `--decomposer vhacd
 OBJ, V-HACD hulls) on a ground plane, with the prescribed base path and the
 closed-pose targets of the task header. Run from the repository root after `cargo build --release`:
 
-    .venv/bin/python tools/gen/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,single_jaw,single_jaw_cross,three_finger]
+    .venv/bin/python tools/gen/make_grasp_scenes.py [--blocks 156] [--which parallel_jaw,parallel_jaw_stand,single_jaw,single_jaw_cross,three_finger]
 
 The outputs are committed; rerun only to regenerate them.
 """
@@ -90,6 +90,64 @@ def parallel_jaw(blocks, tmp):
         write(d / f"scene_{name}.yaml", scene,
               f"# Parallel-jaw gripper grasping the {name} (written by tools/gen/make_grasp_scenes.py;\n"
               f"# see task.yaml for the settings). Lift rise {rise} m.\n")
+
+
+# Parallel jaw, second task (robots/parallel_jaw_stand/task.yaml;
+# notes/grasping-parallel-jaw-stand.md): each object on a static post so that
+# a jaw point can get below it, the jaws' feet starting STAND_C above the
+# object's lowest point (the first task: 0.025, feet 2.5 cm above the ground).
+STAND_TOP = 0.06        # post top above the ground (m)
+STAND_HALF = 0.010      # post half-width in x and y (m)
+STAND_C = 0.005         # jaw feet's bottom above the object's lowest point (m), by the plan's rule
+JAW_FOOT_BELOW_PALM = 0.16   # the jaw mesh's lowest point below the palm frame (m)
+PALM_URDF_Z = 0.4            # the palm frame's height at lift = 0 (m)
+
+
+def parallel_jaw_stand(blocks, tmp, c, out_dir):
+    first = ROOT / "robots" / "parallel_jaw_gripper"
+    g = sdrs_import(first / "parallel_jaw_gripper.urdf", Path(tmp) / "pj.yaml", "--decomposer", "grid",
+                    "--max-hulls", str(blocks), "--designable", "jaw_left,jaw_right")
+    robot = g["robots"][0]
+    robot["name"] = "gripper"
+    g["contact"]["exclude"] = [[a.replace("parallel_jaw_gripper/", "gripper/") for a in pair]
+                               for pair in g["contact"]["exclude"]]
+    bottom = STAND_TOP + 0.001  # every object's lowest point (1 mm above the post)
+    lift0 = round(bottom + c + JAW_FOOT_BELOW_PALM - PALM_URDF_Z, 6)
+    h = STAND_HALF
+    post = {"name": "stand", "hulls": [{"vertices": [[x, y, z] for x in (-h, h) for y in (-h, h)
+                                                     for z in (0.0, STAND_TOP)]}]}
+    rng = random.Random(12)  # the first task's rises, drawn in the same order
+    for name, convex in [("cube", True), ("cylinder", True), ("ball", True), ("plus", False)]:
+        rise = round(rng.uniform(0.10, 0.20), 3)
+        hulls = object_hulls(first / "objects" / f"{name}.obj", tmp, convex)
+        zmin = min(v[2] for hh in hulls for v in hh["vertices"])
+        r = dict(robot)
+        r["controller"] = {
+            "kp": 0.3, "kd": 0.003,
+            "gains": {"lift": {"kp": 3000.0, "kd": 30.0}},
+            "targets": {
+                "lift": {"type": "table", "times": [0.0, 0.6, 1.4], "values": [lift0, lift0, round(lift0 + rise, 6)]},
+                "jaw_left_pivot_x+jaw_left_pivot_y": [{"type": "constant", "value": 0.0},
+                                                      {"type": "constant", "value": -0.3}],
+                "jaw_right_pivot_x+jaw_right_pivot_y": [{"type": "constant", "value": 0.0},
+                                                        {"type": "constant", "value": 0.3}],
+            },
+        }
+        r["initial"] = {"lift": {"q": [lift0]}}
+        scene = {
+            "version": 1, "dt": 0.01, "steps": 180,
+            "solver": {"tol": 1e-6, "max_iters": 100, "predictor": "extrapolate"},
+            "robots": [r],
+            "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
+                         "initial": {"q": [0.0, 0.0, round(bottom - zmin, 6), 0.0, 0.0, 0.0]}}],
+            "obstacles": [post],
+            "ground": {"height": 0.0},
+            "contact": {**g["contact"], "s": 0.003, "mu": 0.05},
+        }
+        write(out_dir / f"scene_{name}.yaml", scene,
+              f"# Parallel-jaw gripper, the {name} on a stand (written by tools/gen/make_grasp_scenes.py\n"
+              f"# --which parallel_jaw_stand; see task.yaml). Jaw feet {c} m above the object's lowest\n"
+              f"# point; lift rise {rise} m.\n")
 
 
 # Single-jaw path (task.yaml header): four stages of 1.2 s (H = 480, dt = 0.01):
@@ -352,16 +410,22 @@ def main():
     ap.add_argument("--blocks", type=int, default=156)
     ap.add_argument("--which", default="parallel_jaw")
     ap.add_argument("--out-dir", type=Path, default=None,
-                    help="single_jaw_cross: where to write scene.yaml and scene_hole.yaml (default robots/single_jaw_cross)")
+                    help="single_jaw_cross / parallel_jaw_stand: where to write the scenes (default robots/<task>)")
+    ap.add_argument("--stand-c", type=float, default=STAND_C,
+                    help="parallel_jaw_stand: jaw feet's bottom above the object's lowest point (m)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        if "parallel_jaw" in a.which:
+        which = a.which.split(",")
+        if "parallel_jaw" in which:
             parallel_jaw(a.blocks, tmp)
-        if "single_jaw_cross" in a.which:
+        if "parallel_jaw_stand" in which:
+            parallel_jaw_stand(a.blocks, tmp, a.stand_c,
+                               a.out_dir or ROOT / "robots" / "parallel_jaw_stand")
+        if "single_jaw_cross" in which:
             single_jaw_cross(a.blocks, tmp, a.out_dir or ROOT / "robots" / "single_jaw_cross")
-        elif "single_jaw" in a.which:
+        if "single_jaw" in which:
             single_jaw(a.blocks, tmp)
-        if "three_finger" in a.which:
+        if "three_finger" in which:
             three_finger(tmp)
 
 
