@@ -203,6 +203,121 @@ fn adam_step_decay_is_validated_and_wired() {
     assert_ne!(decayed[2..], free[2..]);
 }
 
+/// `optimizer.plateau` (Adam's return to its best iterate): refused on the
+/// trust region and with a zero patience or a factor outside (0, 1], each
+/// naming its key; a patience beyond the run leaves it bitwise unchanged. A
+/// binding one (rates ×10 so that Adam overshoots, patience 2) returns only
+/// after 2 iterations without a new best, the first trial after a return
+/// starts from the best iterate (a reset Adam's first step moves each
+/// coordinate by at most its halved rate), and a run resumed from the
+/// checkpoint of any iteration is bitwise the uninterrupted one.
+#[test]
+fn adam_plateau_is_validated_and_wired() {
+    use sdrs::optimize::task::{Method, Plateau};
+    use sdrs::optimize::{RunOptions, optimize_with};
+    let (path, spec) = adam_task();
+    let refused = |edit: &dyn Fn(&mut sdrs::optimize::task::OptimizerSpec), key: &str| {
+        let mut s = spec.clone();
+        edit(&mut s.optimizer);
+        let err = Problem::from_spec(&path, s, true)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains(key), "{key}: {err}");
+    };
+    let plateau = |patience, factor| Some(Plateau { patience, factor });
+    refused(
+        &|o| {
+            o.method = Method::TrustRegion;
+            o.plateau = plateau(5, 0.5);
+        },
+        "optimizer.plateau",
+    );
+    refused(
+        &|o| o.plateau = plateau(0, 0.5),
+        "optimizer.plateau.patience",
+    );
+    for f in [0.0, 1.5, f64::NAN] {
+        refused(&|o| o.plateau = plateau(5, f), "optimizer.plateau.factor");
+    }
+    let free = loss_bits(&path, &spec, 8, |_| {});
+    assert_eq!(
+        loss_bits(&path, &spec, 8, |o| o.plateau = plateau(100, 0.5)),
+        free
+    );
+
+    let mut s = spec.clone();
+    s.optimizer.step_design *= 10.0;
+    s.optimizer.step_controller *= 10.0;
+    s.optimizer.plateau = plateau(2, 0.5);
+    let p = Problem::from_spec(&path, s, true).unwrap();
+    let iters = 16;
+    let mut designs = Vec::new();
+    let mut states = Vec::new();
+    let opts = RunOptions {
+        seed: 0,
+        resume: None,
+    };
+    let out = optimize_with(
+        &p,
+        iters,
+        &opts,
+        |_, d| designs.push(d.clone()),
+        |st| {
+            states.push(st.clone());
+            Ok::<(), sdrs::optimize::OptimizeError>(())
+        },
+    )
+    .unwrap();
+    let returns = out.plateau_returns.clone();
+    println!("returns after iterations {returns:?}");
+    assert!(!returns.is_empty(), "the overshooting walk never returned");
+    let losses: Vec<f64> = out.history.iter().map(|r| r.loss).collect();
+    let lr = p.task.optimizer.step_design;
+    for (n, &r) in returns.iter().enumerate() {
+        // Iterations r−1 and r found no new best: the best of 0..=r is the
+        // best of 0..=r−2.
+        let best = |k: usize| losses[..=k].iter().cloned().fold(f64::INFINITY, f64::min);
+        assert!(
+            r >= 2 && best(r) == best(r - 2),
+            "return after {r}: {losses:?}"
+        );
+        let b = (0..=r)
+            .min_by(|&i, &j| losses[i].total_cmp(&losses[j]))
+            .unwrap();
+        if r < iters {
+            let step = (&designs[r + 1] - &designs[b]).amax();
+            let rate = lr * 0.5f64.powi(n as i32 + 1);
+            assert!(
+                step <= rate * (1.0 + 1e-9),
+                "first step after the return {step} > {rate}"
+            );
+        }
+    }
+    let bits =
+        |h: &[sdrs::optimize::IterRecord]| h.iter().map(|r| r.loss.to_bits()).collect::<Vec<_>>();
+    for k in [returns[0], returns[0] + 1, iters / 2] {
+        let opts = RunOptions {
+            seed: 0,
+            resume: Some(states[k].clone()),
+        };
+        let resumed = optimize_with(
+            &p,
+            iters,
+            &opts,
+            |_, _| {},
+            |_| Ok::<(), sdrs::optimize::OptimizeError>(()),
+        )
+        .unwrap();
+        assert_eq!(
+            bits(&resumed.history),
+            bits(&out.history),
+            "resumed after iteration {k}"
+        );
+        assert_eq!(resumed.plateau_returns, returns);
+    }
+}
+
 /// `optimizer.design_norm: max` on chain reaching (trust region): the first
 /// trial moves every design coordinate whose gradient is non-zero by exactly
 /// the radius `step_design` (0.05; the bounds, ±0.3, do not bind), where the

@@ -254,6 +254,9 @@ fn write_summary(
             // A trust-region run that ended early at a converged iterate
             // (no later trial could move it), else null.
             "converged": outcome.converged,
+            // `optimizer.plateau`: the iterations after which the run
+            // returned to its best iterate (empty without the option).
+            "plateau_returns": outcome.plateau_returns,
             // Trial points that could not be simulated (this session's;
             // each counted as a rejected trust-region step).
             "failed_trials": outcome.failed_trials,

@@ -277,8 +277,10 @@ impl PyTask {
     /// sizes and bounds) for `iters` iterations (default: the task's) from
     /// the start for `seed`, GIL released. Returns `{loss, initial_loss,
     /// history (loss per iteration), design, controller, stopped,
-    /// converged}` (`converged`: why a trust-region run ended early at a
-    /// converged iterate, else None) — the same numbers
+    /// converged, plateau_returns}` (`converged`: why a trust-region run
+    /// ended early at a converged iterate, else None; `plateau_returns`: the
+    /// iterations after which `optimizer.plateau` returned to the best
+    /// iterate) — the same numbers
     /// as `sdrs optimize TASK --seed SEED --iters ITERS`: `design`,
     /// `controller` and `loss` are the iterate `optimizer.result` selects
     /// (default `best`, the lowest loss seen).
@@ -314,6 +316,7 @@ impl PyTask {
         // simulated), else None.
         out.set_item("stopped", o.stopped)?;
         out.set_item("converged", o.converged)?;
+        out.set_item("plateau_returns", o.plateau_returns)?;
         Ok(out)
     }
 

@@ -71,6 +71,13 @@ pub struct State {
     /// `optimizer.result` existed: then the current iterate).
     #[serde(default)]
     pub best: Option<super::BestIterate>,
+    /// `optimizer.plateau`: iterations since the best loss last improved,
+    /// and the iterations at which the run returned to its best iterate
+    /// (absent in checkpoints written before the option existed: 0, none).
+    #[serde(default)]
+    pub since_best: usize,
+    #[serde(default)]
+    pub plateau_returns: Vec<usize>,
 }
 
 /// What a checkpoint must agree with to be resumed.

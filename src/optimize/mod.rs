@@ -391,6 +391,9 @@ pub struct Outcome {
     /// skips would have been the same rejected trial, so the result is the
     /// one the full run returns. `None` otherwise.
     pub converged: Option<String>,
+    /// `optimizer.plateau`: the iterations after which the run returned to
+    /// its best iterate (empty without the option).
+    pub plateau_returns: Vec<usize>,
     /// Trial points of this session that could not be simulated (a failed
     /// Newton or contact solve, an interpenetrating start): the trust region
     /// counts each as a rejected step, so many of them shrink its radii to
@@ -519,6 +522,7 @@ pub fn optimize_with<E: Into<OptimizeError>>(
     }
     let (mut stopped, mut converged) = (None, None);
     for it in run.first..=iters {
+        run.return_to_best_on_plateau(p, it, &mut ev)?;
         let (d_new, c_new) = run.propose(p, it, &ev);
         let final_no_op = p.task.optimizer.method == Method::TrustRegion
             && method::no_op_is_final(d_new == run.d && c_new == run.c, run.radii.phase);
@@ -606,6 +610,10 @@ struct Run {
     adam: (Adam, Adam),
     history: Vec<IterRecord>,
     best: Option<BestIterate>,
+    /// `optimizer.plateau`: iterations since the best loss last improved,
+    /// and the iterations after which the run returned to the best iterate.
+    since_best: usize,
+    plateau_returns: Vec<usize>,
     /// The first iteration this session runs, and the run's last.
     first: usize,
     iters: usize,
@@ -634,6 +642,8 @@ impl Run {
             radii: Radii::new(&radius_settings(p)),
             history: Vec::with_capacity(iters + 1),
             best: None,
+            since_best: 0,
+            plateau_returns: Vec::new(),
             first: 1,
             iters,
             wall0: 0.0,
@@ -660,6 +670,8 @@ impl Run {
             run.adam = (s.adam_design.clone(), s.adam_controller.clone());
             run.history = s.history.clone();
             run.best = s.best.clone();
+            run.since_best = s.since_best;
+            run.plateau_returns = s.plateau_returns.clone();
             run.first = s.iter + 1;
             run.wall0 = run.history.last().map_or(0.0, |r| r.wall_seconds);
         }
@@ -722,7 +734,39 @@ impl Run {
             initial_loss: self.initial_loss,
             history: self.history.clone(),
             best: self.best.clone(),
+            since_best: self.since_best,
+            plateau_returns: self.plateau_returns.clone(),
         }
+    }
+
+    /// `optimizer.plateau` ([`task::Plateau`]), before iteration `it`'s
+    /// trial: after `patience` iterations without a new best loss, the
+    /// iterate becomes the best one again and `ev` its evaluation (the same
+    /// evaluation a resume from a checkpoint makes), Adam's moments are reset
+    /// and both rates scaled by `factor`.
+    fn return_to_best_on_plateau(
+        &mut self,
+        p: &Problem,
+        it: usize,
+        ev: &mut Evaluation,
+    ) -> Result<(), OptimizeError> {
+        let Some(pl) = p.task.optimizer.plateau else {
+            return Ok(());
+        };
+        let Some(best) = self
+            .best
+            .as_ref()
+            .filter(|_| self.since_best >= pl.patience)
+        else {
+            return Ok(());
+        };
+        (self.d, self.c) = (best.design.clone(), best.controller.clone());
+        *ev = p.evaluate(&self.d, &self.c)?;
+        let (lr_d, lr_c) = (self.adam.0.lr * pl.factor, self.adam.1.lr * pl.factor);
+        self.adam = (Adam::new(self.d.len(), lr_d), Adam::new(self.c.len(), lr_c));
+        self.since_best = 0;
+        self.plateau_returns.push(it - 1);
+        Ok(())
     }
 
     /// The trial point of the next iteration from the gradients of `ev`:
@@ -829,6 +873,8 @@ impl Run {
         on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
     ) {
         (self.d, self.c, *ev) = (d, c, e);
+        let improved = self.best.as_ref().is_none_or(|b| ev.loss < b.loss);
+        self.since_best = if improved { 0 } else { self.since_best + 1 };
         self.keep(it, ev.loss);
         let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
         let d = self.d.clone();
@@ -856,6 +902,7 @@ impl Run {
                 iter: b.iter,
                 stopped: None,
                 converged: None,
+                plateau_returns: self.plateau_returns,
                 failed_trials: self.failed,
             },
             _ => Outcome {
@@ -867,6 +914,7 @@ impl Run {
                 iter: last_iter,
                 stopped: None,
                 converged: None,
+                plateau_returns: self.plateau_returns,
                 failed_trials: self.failed,
             },
         }

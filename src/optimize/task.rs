@@ -23,6 +23,7 @@
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
 //!   init_noise: 0.0              # uniform ± perturbation of the initial controller (seeded by --seed)
 //!   step_decay: 0.01             # Adam: cosine decay of the rates to this fraction (default: constant)
+//!   plateau: {patience: 20, factor: 0.5}  # Adam: back to the best iterate after 20 iterations without a new best, rates × 0.5 (default: off)
 //!   design_norm: euclidean       # trust region: norm of the design step's bound (or max)
 //! metrics:                       # optional task metrics in summary.json (see optimize::metrics)
 //!   robot: spider                # whose COM is tracked
@@ -311,6 +312,25 @@ pub enum DesignNorm {
     Max,
 }
 
+/// `optimizer.plateau` (Adam only): when the best loss has not improved
+/// for `patience` consecutive iterations, the next iteration starts from the
+/// best iterate (evaluated there again), with Adam's moments reset and both
+/// learning rates multiplied by `factor` (cumulatively, and on top of
+/// `step_decay`'s schedule). The count restarts after each return. Why: on a
+/// loss that is a staircase of contact regimes (a grasp held or not), Adam's
+/// walk passes through a good regime and leaves it without any memory of it,
+/// and on a regime where nothing touches the gradient is 0 and the walk
+/// stops there (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a
+/// resumed run is bitwise the uninterrupted one.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Plateau {
+    /// Iterations without a new best loss before a return (≥ 1).
+    pub patience: usize,
+    /// Factor on both learning rates at each return, in (0, 1].
+    pub factor: f64,
+}
+
 /// Optimizer settings (defaults documented on each field).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
@@ -358,6 +378,9 @@ pub struct OptimizerSpec {
     /// jumps between regimes ends wherever its last step lands). Default
     /// none (constant rates, the paper's Adam).
     pub step_decay: Option<f64>,
+    /// Adam only: return to the best iterate on a plateau (see [`Plateau`]).
+    /// Default none (Adam walks on from wherever its last step landed).
+    pub plateau: Option<Plateau>,
     /// Trust region only: how the radii change after a trial. Default
     /// `adaptive` (see [`RadiusRule`]).
     pub radius: RadiusRule,
@@ -388,6 +411,7 @@ impl Default for OptimizerSpec {
             clip_controller: None,
             clip_trajectory: None,
             step_decay: None,
+            plateau: None,
             radius: RadiusRule::Adaptive,
             design_norm: DesignNorm::Euclidean,
             newton_tol: None,

@@ -100,6 +100,27 @@ fn check_optimizer(path: &Path, task: &TaskSpec) -> Result<(), TaskError> {
             format!("must be a fraction in (0, 1], got {f}"),
         ));
     }
+    if let Some(pl) = &o.plateau {
+        if o.method != super::task::Method::Adam {
+            return Err(invalid(
+                "optimizer.plateau",
+                "applies to `method: adam` only (the trust region never leaves its best iterate)"
+                    .into(),
+            ));
+        }
+        if pl.patience == 0 {
+            return Err(invalid(
+                "optimizer.plateau.patience",
+                "must be at least 1 iteration, got 0".into(),
+            ));
+        }
+        if !(pl.factor > 0.0 && pl.factor <= 1.0) {
+            return Err(invalid(
+                "optimizer.plateau.factor",
+                format!("must be a fraction in (0, 1], got {}", pl.factor),
+            ));
+        }
+    }
     if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
         return Err(invalid(
             "optimizer.init_noise",
