@@ -550,6 +550,63 @@ fn parallel_jaw_stand_co_designed_jaws_hold_three_of_four() {
     assert!(l1 < 0.01 * l0, "loss {l0} → {l1}");
 }
 
+/// How robust a co-designed grasp is to its design (ignored: a probe, run by
+/// hand; `notes/adam-plateau-restarts.md`). `PROBE_TASK` (path under
+/// `robots/`, default `three_finger_hand/task.yaml`) and `PROBE_CHECKPOINT`
+/// (an `sdrs optimize` output's `checkpoint.json`): the checkpoint's best
+/// iterate, then that design with every coordinate moved by ±ε (signs from
+/// a fixed splitmix64 stream, 8 draws per ε, projected onto the bounds) for
+/// ε in `PROBE_EPS` (default 1e-12,1e-10,1e-8,1e-6,1e-4): the loss and the
+/// grasp count of each.
+/// `PROBE_CHECKPOINT=… cargo test --release --test integration -- --ignored grasp_robustness_probe --nocapture`
+#[test]
+#[ignore]
+fn grasp_robustness_probe() {
+    let task = std::env::var("PROBE_TASK").unwrap_or("three_finger_hand/task.yaml".into());
+    let ckpt = std::env::var("PROBE_CHECKPOINT").expect("PROBE_CHECKPOINT");
+    let eps: Vec<f64> = std::env::var("PROBE_EPS")
+        .unwrap_or("1e-12,1e-10,1e-8,1e-6,1e-4".into())
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let p = sdrs::optimize::Problem::load(&robots(&task), true).unwrap();
+    let ck: sdrs::optimize::checkpoint::Checkpoint =
+        serde_json::from_str(&std::fs::read_to_string(&ckpt).unwrap()).unwrap();
+    let best = ck.state.best.unwrap();
+    let c = best.controller.clone();
+    let count = |d: &DVector<f64>| {
+        let loss = p.evaluate(d, &c).map(|e| e.loss).unwrap_or(f64::NAN);
+        let g = sdrs::optimize::grasp::measure(&p, d, &c).unwrap_or_default();
+        (loss, g.iter().filter(|g| g.grasped).count(), g.len())
+    };
+    let (l, n, m) = count(&best.design);
+    println!(
+        "best iterate {} (loss {:.6e}): loss {l:.6e}, {n}/{m} grasped",
+        best.iter, best.loss
+    );
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut sign = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        if (z ^ (z >> 31)) & 1 == 0 { 1.0 } else { -1.0 }
+    };
+    for &e in &eps {
+        let mut counts = Vec::new();
+        let mut losses = Vec::new();
+        for _ in 0..8 {
+            let mut d = best.design.clone();
+            d.iter_mut().for_each(|x| *x += e * sign());
+            p.design.project(&mut d);
+            let (l, n, _) = count(&d);
+            counts.push(n);
+            losses.push(format!("{l:.3e}"));
+        }
+        println!("eps {e:e}: grasped {counts:?} of {m}; losses {losses:?}");
+    }
+}
+
 /// The hand's six finger links (4 V-HACD hulls each; only a few coincident
 /// vertices per link are tied), horizon 60 of 200 (the fingers closing on
 /// the object; the loss is final-time, so at step 60).
