@@ -47,29 +47,31 @@ def write(path, scene, header):
     print("wrote", path.relative_to(ROOT) if path.is_relative_to(ROOT) else path)
 
 
-def parallel_jaw(blocks, tmp):
-    d = ROOT / "robots" / "parallel_jaw_gripper"
-    g = sdrs_import(d / "parallel_jaw_gripper.urdf", Path(tmp) / "pj.yaml", "--decomposer", "grid",
+def jaw_scenes(blocks, tmp, out_dir, lift0, bottom, header, obstacles=(), digits=None):
+    """The four parallel-jaw scenes (cube, cylinder, ball, plus) in `out_dir`:
+    the gripper imported as 140 blocks per jaw, the palm starting at lift
+    `lift0` (relative to the URDF pose), each object's lowest point at
+    `bottom` (m), the static `obstacles`, each file's comment `header(name,
+    rise)`; `digits` rounds the lift target and the object's height."""
+    first = ROOT / "robots" / "parallel_jaw_gripper"
+    g = sdrs_import(first / "parallel_jaw_gripper.urdf", Path(tmp) / "pj.yaml", "--decomposer", "grid",
                     "--max-hulls", str(blocks), "--designable", "jaw_left,jaw_right")
     robot = g["robots"][0]
     robot["name"] = "gripper"
     g["contact"]["exclude"] = [[a.replace("parallel_jaw_gripper/", "gripper/") for a in pair]
                                for pair in g["contact"]["exclude"]]
-    # Lift: the palm starts 0.215 m below the URDF pose (jaw feet beside the
-    # object's centre), holds while the jaws close, then rises by `rise`.
-    lift0 = -0.215
+    rnd = (lambda x: x) if digits is None else (lambda x: round(x, digits))
     rng = random.Random(12)  # the paper's "random target position", drawn once
-    objects = [("cube", True), ("cylinder", True), ("ball", True), ("plus", False)]
-    for name, convex in objects:
+    for name, convex in [("cube", True), ("cylinder", True), ("ball", True), ("plus", False)]:
         rise = round(rng.uniform(0.10, 0.20), 3)
-        hulls = object_hulls(d / "objects" / f"{name}.obj", tmp, convex)
+        hulls = object_hulls(first / "objects" / f"{name}.obj", tmp, convex)
         zmin = min(v[2] for h in hulls for v in h["vertices"])
         r = dict(robot)
         r["controller"] = {
             "kp": 0.3, "kd": 0.003,
             "gains": {"lift": {"kp": 3000.0, "kd": 30.0}},
             "targets": {
-                "lift": {"type": "table", "times": [0.0, 0.6, 1.4], "values": [lift0, lift0, lift0 + rise]},
+                "lift": {"type": "table", "times": [0.0, 0.6, 1.4], "values": [lift0, lift0, rnd(lift0 + rise)]},
                 # closed pose θ⋆: each jaw turned 0.3 rad inwards about y.
                 "jaw_left_pivot_x+jaw_left_pivot_y": [{"type": "constant", "value": 0.0},
                                                       {"type": "constant", "value": -0.3}],
@@ -83,13 +85,23 @@ def parallel_jaw(blocks, tmp):
             "solver": {"tol": 1e-6, "max_iters": 100, "predictor": "extrapolate"},
             "robots": [r],
             "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
-                         "initial": {"q": [0.0, 0.0, -zmin + 0.001, 0.0, 0.0, 0.0]}}],
-            "ground": {"height": 0.0},
-            "contact": {**g["contact"], "s": 0.003, "mu": 0.05},
+                         "initial": {"q": [0.0, 0.0, rnd(bottom - zmin), 0.0, 0.0, 0.0]}}],
         }
-        write(d / f"scene_{name}.yaml", scene,
-              f"# Parallel-jaw gripper grasping the {name} (written by tools/gen/make_grasp_scenes.py;\n"
-              f"# see task.yaml for the settings). Lift rise {rise} m.\n")
+        if obstacles:
+            scene["obstacles"] = list(obstacles)
+        scene["ground"] = {"height": 0.0}
+        scene["contact"] = {**g["contact"], "s": 0.003, "mu": 0.05}
+        write(out_dir / f"scene_{name}.yaml", scene, header(name, rise))
+
+
+def parallel_jaw(blocks, tmp):
+    # Lift: the palm starts 0.215 m below the URDF pose (jaw feet beside the
+    # object's centre), holds while the jaws close, then rises by `rise`;
+    # the objects on the ground (1 mm clearance).
+    jaw_scenes(blocks, tmp, ROOT / "robots" / "parallel_jaw_gripper", -0.215, 0.001,
+               lambda name, rise:
+               f"# Parallel-jaw gripper grasping the {name} (written by tools/gen/make_grasp_scenes.py;\n"
+               f"# see task.yaml for the settings). Lift rise {rise} m.\n")
 
 
 # Parallel jaw, second task (robots/parallel_jaw_stand/task.yaml;
@@ -104,50 +116,17 @@ PALM_URDF_Z = 0.4            # the palm frame's height at lift = 0 (m)
 
 
 def parallel_jaw_stand(blocks, tmp, c, out_dir):
-    first = ROOT / "robots" / "parallel_jaw_gripper"
-    g = sdrs_import(first / "parallel_jaw_gripper.urdf", Path(tmp) / "pj.yaml", "--decomposer", "grid",
-                    "--max-hulls", str(blocks), "--designable", "jaw_left,jaw_right")
-    robot = g["robots"][0]
-    robot["name"] = "gripper"
-    g["contact"]["exclude"] = [[a.replace("parallel_jaw_gripper/", "gripper/") for a in pair]
-                               for pair in g["contact"]["exclude"]]
     bottom = STAND_TOP + 0.001  # every object's lowest point (1 mm above the post)
     lift0 = round(bottom + c + JAW_FOOT_BELOW_PALM - PALM_URDF_Z, 6)
     h = STAND_HALF
     post = {"name": "stand", "hulls": [{"vertices": [[x, y, z] for x in (-h, h) for y in (-h, h)
                                                      for z in (0.0, STAND_TOP)]}]}
-    rng = random.Random(12)  # the first task's rises, drawn in the same order
-    for name, convex in [("cube", True), ("cylinder", True), ("ball", True), ("plus", False)]:
-        rise = round(rng.uniform(0.10, 0.20), 3)
-        hulls = object_hulls(first / "objects" / f"{name}.obj", tmp, convex)
-        zmin = min(v[2] for hh in hulls for v in hh["vertices"])
-        r = dict(robot)
-        r["controller"] = {
-            "kp": 0.3, "kd": 0.003,
-            "gains": {"lift": {"kp": 3000.0, "kd": 30.0}},
-            "targets": {
-                "lift": {"type": "table", "times": [0.0, 0.6, 1.4], "values": [lift0, lift0, round(lift0 + rise, 6)]},
-                "jaw_left_pivot_x+jaw_left_pivot_y": [{"type": "constant", "value": 0.0},
-                                                      {"type": "constant", "value": -0.3}],
-                "jaw_right_pivot_x+jaw_right_pivot_y": [{"type": "constant", "value": 0.0},
-                                                        {"type": "constant", "value": 0.3}],
-            },
-        }
-        r["initial"] = {"lift": {"q": [lift0]}}
-        scene = {
-            "version": 1, "dt": 0.01, "steps": 180,
-            "solver": {"tol": 1e-6, "max_iters": 100, "predictor": "extrapolate"},
-            "robots": [r],
-            "objects": [{"name": name, "mass": 0.05, "hulls": hulls,
-                         "initial": {"q": [0.0, 0.0, round(bottom - zmin, 6), 0.0, 0.0, 0.0]}}],
-            "obstacles": [post],
-            "ground": {"height": 0.0},
-            "contact": {**g["contact"], "s": 0.003, "mu": 0.05},
-        }
-        write(out_dir / f"scene_{name}.yaml", scene,
-              f"# Parallel-jaw gripper, the {name} on a stand (written by tools/gen/make_grasp_scenes.py\n"
-              f"# --which parallel_jaw_stand; see task.yaml). Jaw feet {c} m above the object's lowest\n"
-              f"# point; lift rise {rise} m.\n")
+    jaw_scenes(blocks, tmp, out_dir, lift0, bottom,
+               lambda name, rise:
+               f"# Parallel-jaw gripper, the {name} on a stand (written by tools/gen/make_grasp_scenes.py\n"
+               f"# --which parallel_jaw_stand; see task.yaml). Jaw feet {c} m above the object's lowest\n"
+               f"# point; lift rise {rise} m.\n",
+               obstacles=[post], digits=6)
 
 
 # Single-jaw path (task.yaml header): four stages of 1.2 s (H = 480, dt = 0.01):
