@@ -294,28 +294,41 @@ fn adam_plateau_is_validated_and_wired() {
             );
         }
     }
+    for k in [returns[0], returns[0] + 1, iters / 2] {
+        assert_resumes_bitwise(&p, iters, &states[k], &out);
+    }
+}
+
+/// Resuming `p` from `state` (a checkpoint of the run `out`, `iters`
+/// iterations) reproduces `out`'s history bit for bit and its plateau returns.
+fn assert_resumes_bitwise(
+    p: &Problem,
+    iters: usize,
+    state: &sdrs::optimize::checkpoint::State,
+    out: &sdrs::optimize::Outcome,
+) {
+    use sdrs::optimize::{RunOptions, optimize_with};
     let bits =
         |h: &[sdrs::optimize::IterRecord]| h.iter().map(|r| r.loss.to_bits()).collect::<Vec<_>>();
-    for k in [returns[0], returns[0] + 1, iters / 2] {
-        let opts = RunOptions {
-            seed: 0,
-            resume: Some(states[k].clone()),
-        };
-        let resumed = optimize_with(
-            &p,
-            iters,
-            &opts,
-            |_, _| {},
-            |_| Ok::<(), sdrs::optimize::OptimizeError>(()),
-        )
-        .unwrap();
-        assert_eq!(
-            bits(&resumed.history),
-            bits(&out.history),
-            "resumed after iteration {k}"
-        );
-        assert_eq!(resumed.plateau_returns, returns);
-    }
+    let opts = RunOptions {
+        seed: 0,
+        resume: Some(state.clone()),
+    };
+    let resumed = optimize_with(
+        p,
+        iters,
+        &opts,
+        |_, _| {},
+        |_| Ok::<(), sdrs::optimize::OptimizeError>(()),
+    )
+    .unwrap();
+    assert_eq!(
+        bits(&resumed.history),
+        bits(&out.history),
+        "resumed after iteration {}",
+        state.iter
+    );
+    assert_eq!(resumed.plateau_returns, out.plateau_returns);
 }
 
 /// `optimizer.design_norm: max` on chain reaching (trust region): the first
