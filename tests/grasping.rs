@@ -555,7 +555,7 @@ fn parallel_jaw_stand_co_designed_jaws_hold_three_of_four() {
 /// `robots/`, default `three_finger_hand/task.yaml`) and `PROBE_CHECKPOINT`
 /// (an `sdrs optimize` output's `checkpoint.json`): the checkpoint's best
 /// iterate, then that design with every coordinate moved by ±ε (signs from
-/// a fixed splitmix64 stream, 8 draws per ε, projected onto the bounds) for
+/// ChaCha8 seeded with 0, 8 draws per ε, projected onto the bounds) for
 /// ε in `PROBE_EPS` (default 1e-12,1e-10,1e-8,1e-6,1e-4): the loss and the
 /// grasp count of each.
 /// `PROBE_CHECKPOINT=… cargo test --release --test integration -- --ignored grasp_robustness_probe --nocapture`
@@ -584,14 +584,9 @@ fn grasp_robustness_probe() {
         "best iterate {} (loss {:.6e}): loss {l:.6e}, {n}/{m} grasped",
         best.iter, best.loss
     );
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut sign = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        if (z ^ (z >> 31)) & 1 == 0 { 1.0 } else { -1.0 }
-    };
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let mut sign = || if rng.random_bool(0.5) { 1.0 } else { -1.0 };
     for &e in &eps {
         let mut counts = Vec::new();
         let mut losses = Vec::new();

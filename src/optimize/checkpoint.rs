@@ -71,11 +71,10 @@ pub struct State {
     /// `optimizer.result` existed: then the current iterate).
     #[serde(default)]
     pub best: Option<super::BestIterate>,
-    /// `optimizer.plateau`: iterations since the best loss last improved,
-    /// and the iterations at which the run returned to its best iterate
-    /// (absent in checkpoints written before the option existed: 0, none).
-    #[serde(default)]
-    pub since_best: usize,
+    /// `optimizer.plateau`: the iterations after which the run returned to
+    /// its best iterate (absent in checkpoints written before the option
+    /// existed: none). With `best.iter` it gives the iterations since the
+    /// last improvement or return.
     #[serde(default)]
     pub plateau_returns: Vec<usize>,
 }

@@ -610,9 +610,8 @@ struct Run {
     adam: (Adam, Adam),
     history: Vec<IterRecord>,
     best: Option<BestIterate>,
-    /// `optimizer.plateau`: iterations since the best loss last improved,
-    /// and the iterations after which the run returned to the best iterate.
-    since_best: usize,
+    /// `optimizer.plateau`: the iterations after which the run returned to
+    /// the best iterate.
     plateau_returns: Vec<usize>,
     /// The first iteration this session runs, and the run's last.
     first: usize,
@@ -642,7 +641,6 @@ impl Run {
             radii: Radii::new(&radius_settings(p)),
             history: Vec::with_capacity(iters + 1),
             best: None,
-            since_best: 0,
             plateau_returns: Vec::new(),
             first: 1,
             iters,
@@ -670,7 +668,6 @@ impl Run {
             run.adam = (s.adam_design.clone(), s.adam_controller.clone());
             run.history = s.history.clone();
             run.best = s.best.clone();
-            run.since_best = s.since_best;
             run.plateau_returns = s.plateau_returns.clone();
             run.first = s.iter + 1;
             run.wall0 = run.history.last().map_or(0.0, |r| r.wall_seconds);
@@ -734,14 +731,14 @@ impl Run {
             initial_loss: self.initial_loss,
             history: self.history.clone(),
             best: self.best.clone(),
-            since_best: self.since_best,
             plateau_returns: self.plateau_returns.clone(),
         }
     }
 
     /// `optimizer.plateau` ([`task::Plateau`]), before iteration `it`'s
-    /// trial: after `patience` iterations without a new best loss, the
-    /// iterate becomes the best one again and `ev` its evaluation (the same
+    /// trial: after `patience` iterations without a new best loss (counted
+    /// from the best iterate's iteration or the last return, whichever is
+    /// later), the iterate becomes the best one again and `ev` its evaluation (the same
     /// evaluation a resume from a checkpoint makes), Adam's moments are reset
     /// and both rates scaled by `factor`.
     fn return_to_best_on_plateau(
@@ -753,18 +750,20 @@ impl Run {
         let Some(pl) = p.task.optimizer.plateau else {
             return Ok(());
         };
-        let Some(best) = self
-            .best
-            .as_ref()
-            .filter(|_| self.since_best >= pl.patience)
-        else {
+        let Some(best) = self.best.as_ref() else {
             return Ok(());
         };
+        let since = self
+            .plateau_returns
+            .last()
+            .map_or(best.iter, |&r| r.max(best.iter));
+        if it - 1 - since < pl.patience {
+            return Ok(());
+        }
         (self.d, self.c) = (best.design.clone(), best.controller.clone());
         *ev = p.evaluate(&self.d, &self.c)?;
         let (lr_d, lr_c) = (self.adam.0.lr * pl.factor, self.adam.1.lr * pl.factor);
         self.adam = (Adam::new(self.d.len(), lr_d), Adam::new(self.c.len(), lr_c));
-        self.since_best = 0;
         self.plateau_returns.push(it - 1);
         Ok(())
     }
@@ -873,8 +872,6 @@ impl Run {
         on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
     ) {
         (self.d, self.c, *ev) = (d, c, e);
-        let improved = self.best.as_ref().is_none_or(|b| ev.loss < b.loss);
-        self.since_best = if improved { 0 } else { self.since_best + 1 };
         self.keep(it, ev.loss);
         let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
         let d = self.d.clone();
