@@ -407,3 +407,61 @@ fn trust_region_run_ends_when_its_trials_round_to_the_iterate() {
     assert!(out.converged.is_none());
     assert_eq!(out.history.len(), 4);
 }
+
+/// `optimizer.design_init_noise` (several starts of one task): a negative
+/// or non-finite half-width is refused naming its key; 0 leaves the start
+/// the task's design; η > 0 moves every variable by at most η, the same
+/// seed gives bitwise the same start and another seed another one, the
+/// controller's `init_noise` draws are unchanged by it, and an η far
+/// beyond the bounds leaves every variable inside `D` (clamped, many at a
+/// bound).
+#[test]
+fn design_init_noise_is_validated_seeded_and_bounded() {
+    use sdrs::optimize::start;
+    let (path, spec) = adam_task();
+    for bad in [-1e-3, f64::NAN, f64::INFINITY] {
+        let mut s = spec.clone();
+        s.optimizer.design_init_noise = bad;
+        let err = Problem::from_spec(&path, s, true)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("optimizer.design_init_noise"), "{err}");
+    }
+    let problem = |eta: f64, ctrl: f64| {
+        let mut s = spec.clone();
+        s.optimizer.design_init_noise = eta;
+        s.optimizer.init_noise = ctrl;
+        Problem::from_spec(&path, s, true).unwrap()
+    };
+    let p0 = problem(0.0, 0.0);
+    let d_task = p0.design.values(&p0.first().model);
+    assert!(d_task.len() >= 10, "the test needs design variables");
+    assert_eq!(start(&p0, 7).0, d_task);
+
+    let eta = 1e-3;
+    let p = problem(eta, 0.0);
+    let (d1, _) = start(&p, 1);
+    let moved = (&d1 - &d_task).abs();
+    assert!(moved.max() <= eta && moved.min() >= 0.0, "{moved}");
+    assert!(moved.iter().filter(|&&m| m > 0.0).count() > d_task.len() / 2);
+    let bits = |d: &nalgebra::DVector<f64>| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&start(&p, 1).0), bits(&d1), "same seed, same start");
+    assert_ne!(bits(&start(&p, 2).0), bits(&d1), "another seed, another start");
+
+    let c_alone = start(&problem(0.0, 0.01), 3).1;
+    let (d_both, c_both) = start(&problem(eta, 0.01), 3);
+    assert_eq!(bits(&c_both), bits(&c_alone), "controller draws come first");
+    assert_ne!(bits(&d_both), bits(&d_task));
+
+    let wide = problem(1e3, 0.0);
+    let (dw, _) = start(&wide, 5);
+    let (lo, hi) = (wide.design.lower(), wide.design.upper());
+    let at_bound = (0..dw.len())
+        .filter(|&i| {
+            assert!(lo[i] <= dw[i] && dw[i] <= hi[i], "variable {i} outside D");
+            dw[i] == lo[i] || dw[i] == hi[i]
+        })
+        .count();
+    assert!(at_bound > dw.len() / 2, "{at_bound} of {} at a bound", dw.len());
+}

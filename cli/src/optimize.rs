@@ -24,7 +24,7 @@ pub struct OptimizeArgs {
     /// --seed as the interrupted run (checked).
     #[arg(long, conflicts_with = "out")]
     pub resume: Option<PathBuf>,
-    /// Seed of the run's randomness (`optimizer.init_noise`).
+    /// Seed of the run's randomness (`optimizer.init_noise`, `optimizer.design_init_noise`).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Iterations in total (default: the task's `optimizer.iters`); a trust-region run ends earlier, at the same result, once its trials round to the iterate (summary.json `converged`).

@@ -179,7 +179,7 @@ impl PyTask {
     }
 
     /// The optimizer's starting point `(design, controller)` for `seed`
-    /// (the controller perturbed by `optimizer.init_noise`).
+    /// (perturbed by `optimizer.init_noise` and `optimizer.design_init_noise`).
     #[pyo3(signature = (seed=0))]
     fn start<'py>(
         &self,

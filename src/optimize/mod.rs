@@ -467,26 +467,34 @@ pub fn optimize(
 /// Options of [`optimize_with`].
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
-    /// Seed of the run's randomness (the `optimizer.init_noise`
-    /// perturbation of the initial controller). Default 0.
+    /// Seed of the run's randomness (the `optimizer.init_noise` and
+    /// `optimizer.design_init_noise` perturbations of the start). Default 0.
     pub seed: u64,
     /// Continue from this state (a checkpoint) instead of the task's start.
     pub resume: Option<checkpoint::State>,
 }
 
 /// The run's starting point `(d, c)`: the task's design and controller,
-/// with the controller perturbed by `optimizer.init_noise` (uniform in
-/// `±init_noise`, ChaCha8 seeded by `seed`) when that is positive.
+/// the controller perturbed by `optimizer.init_noise` (uniform in
+/// `±init_noise`) and then the design by `optimizer.design_init_noise`
+/// (uniform in `±design_init_noise` m, clamped to the bounds `D`), both
+/// from one ChaCha8 stream seeded by `seed`, when they are positive.
 pub fn start(p: &Problem, seed: u64) -> (DVector<f64>, DVector<f64>) {
-    let d = p.design.values(&p.first().model);
+    use rand::{RngExt, SeedableRng};
+    let mut d = p.design.values(&p.first().model);
     let mut c = p.controls.values(&p.first().controller);
-    let noise = p.task.optimizer.init_noise;
-    if noise > 0.0 {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let o = &p.task.optimizer;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    if o.init_noise > 0.0 {
         for x in c.iter_mut() {
-            *x += noise * rng.random_range(-1.0..1.0);
+            *x += o.init_noise * rng.random_range(-1.0..1.0);
         }
+    }
+    if o.design_init_noise > 0.0 {
+        for x in d.iter_mut() {
+            *x += o.design_init_noise * rng.random_range(-1.0..1.0);
+        }
+        p.design.project(&mut d);
     }
     (d, c)
 }

@@ -22,6 +22,7 @@
 //!   step_design: 0.05            # trust-region radius ᾱ_d (m) / Adam learning rate
 //!   step_controller: 0.2         # ᾱ_c / Adam learning rate
 //!   init_noise: 0.0              # uniform ± perturbation of the initial controller (seeded by --seed)
+//!   design_init_noise: 0.0       # uniform ± perturbation (m) of the initial design, clamped to its bounds
 //!   step_decay: 0.01             # Adam: cosine decay of the rates to this fraction (default: constant)
 //!   plateau: {patience: 20, factor: 0.5}  # Adam: back to the best iterate after 20 iterations without a new best, rates × 0.5 (default: off)
 //!   design_norm: euclidean       # trust region: norm of the design step's bound (or max)
@@ -347,6 +348,13 @@ pub struct OptimizerSpec {
     /// controller parameter, drawn from ChaCha8 seeded by `--seed`.
     /// Default 0 (no randomness).
     pub init_noise: f64,
+    /// Half-width (m) of a uniform random perturbation of every initial
+    /// design variable, each then clamped to its bounds; drawn from the
+    /// same ChaCha8 stream as `init_noise`, after the controller's draws.
+    /// For several starts of one task on a loss with many contact regimes
+    /// (`--seed 1`, `--seed 2`, …; notes/multistart-design-noise.md).
+    /// Default 0 (the task's design as imported).
+    pub design_init_noise: f64,
     /// The iterate returned, exported and measured (`design.yaml`,
     /// `summary.json`'s final loss and task metrics): `best` (default) or
     /// `last`. `history.csv` lists every iterate either way.
@@ -406,6 +414,7 @@ impl Default for OptimizerSpec {
             step_design: 0.05,
             step_controller: 0.2,
             init_noise: 0.0,
+            design_init_noise: 0.0,
             result: ResultIterate::Best,
             clip_design: None,
             clip_controller: None,

@@ -121,11 +121,16 @@ fn check_optimizer(path: &Path, task: &TaskSpec) -> Result<(), TaskError> {
             ));
         }
     }
-    if !(o.init_noise >= 0.0 && o.init_noise.is_finite()) {
-        return Err(invalid(
-            "optimizer.init_noise",
-            format!("must be finite and non-negative, got {}", o.init_noise),
-        ));
+    for (key, v) in [
+        ("optimizer.init_noise", o.init_noise),
+        ("optimizer.design_init_noise", o.design_init_noise),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(invalid(
+                key,
+                format!("must be finite and non-negative, got {v}"),
+            ));
+        }
     }
     Ok(())
 }
