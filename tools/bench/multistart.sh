@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Several perturbed starts of one co-design task (notes/multistart-design-noise.md):
+# the task copied with `optimizer.design_init_noise: ETA` (metres), then
+# `sdrs optimize --seed S` for every seed, co-design and (MODES="on off")
+# its `--design off` twin from the same perturbed start; every start is
+# checked first with `--iters 0`. Picks the seed with the lowest best loss
+# per mode (the loss chooses, never a task metric) and prints one row per
+# run plus the pick.
+#
+#   TASK=robots/parallel_jaw_stand/task.yaml ETA=0.002 SEEDS="1 2 3 4 5 6 7 8" \
+#     OUT=out/multistart bash tools/bench/multistart.sh
+#
+# Options (environment): MODES ("on" by default; "on off" adds the twins),
+# ITERS (the task's count unless set), JOBS (runs side by side, default 1),
+# SDRS_BIN (a fixed copy of the binary; else target/release/sdrs, built
+# unless SKIP_BUILD=1), PY (.venv/bin/python).
+# Outputs: $OUT/task.yaml (the copy), $OUT/start_S/ (the `--iters 0` check),
+# $OUT/<mode>_S/ (each run), $OUT/table.md and $OUT/pick.json.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+: "${TASK:?set TASK=path/to/task.yaml}" "${ETA:?set ETA (metres)}" "${SEEDS:?set SEEDS}"
+OUT=${OUT:-out/multistart}
+MODES=${MODES:-on}
+JOBS=${JOBS:-1}
+PY=${PY:-.venv/bin/python}
+[ -n "${SKIP_BUILD:-}${SDRS_BIN:-}" ] || cargo build --release -q
+BIN=${SDRS_BIN:-target/release/sdrs}
+mkdir -p "$OUT"
+# The task copy: scene paths made absolute, the one key set.
+"$PY" - "$TASK" "$ETA" "$OUT/task.yaml" <<'PY'
+import sys, yaml
+from pathlib import Path
+src, eta, dst = Path(sys.argv[1]).resolve(), float(sys.argv[2]), Path(sys.argv[3])
+t = yaml.safe_load(src.read_text())
+if "scene" in t:
+    t["scene"] = str(src.parent / t["scene"])
+for tr in t.get("trajectories", []):
+    tr["scene"] = str(src.parent / tr["scene"])
+t.setdefault("optimizer", {})["design_init_noise"] = eta
+head = f"# {src} with optimizer.design_init_noise: {eta} (tools/bench/multistart.sh)\n"
+dst.write_text(head + yaml.safe_dump(t, sort_keys=False))
+PY
+run() {  # mode seed [iters]
+  local dir=$OUT/$1_$2 start=$SECONDS
+  [ "$1" = start ] && dir=$OUT/start_$2
+  rm -rf "$dir"
+  local design=$1; [ "$1" = start ] && design=on
+  nice -n 5 "$BIN" optimize "$OUT/task.yaml" --out "$dir" --design "$design" --seed "$2" -q \
+    ${3:+--iters $3} > "$dir.log" 2>&1 || echo "exit $?" >> "$dir.log"
+  echo $((SECONDS - start)) > "$dir.wall"
+}
+for s in $SEEDS; do run start "$s" 0; done
+pids=()
+for m in $MODES; do
+  for s in $SEEDS; do
+    run "$m" "$s" ${ITERS:-} &
+    pids+=($!)
+    if [ "${#pids[@]}" -ge "$JOBS" ]; then wait "${pids[0]}"; pids=("${pids[@]:1}"); fi
+  done
+done
+wait
+"$PY" tools/bench/multistart_table.py "$OUT" $MODES -- $SEEDS | tee "$OUT/table.md"

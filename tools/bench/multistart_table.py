@@ -1,0 +1,75 @@
+"""The table of `tools/bench/multistart.sh`: one row per run, and the pick.
+
+    python tools/bench/multistart_table.py OUT MODE [MODE ...] -- SEED [SEED ...]
+
+Reads OUT/start_S/summary.json (the perturbed start, `--iters 0`) and
+OUT/<mode>_S/summary.json + history.csv. The pick per mode is the seed with
+the lowest best loss (the loss chooses; a task metric never does). Grasping
+tasks get their grasp count and the designed links' topology, locomotion
+tasks their distance and whether the robot is upright at the horizon.
+Writes OUT/pick.json; prints a markdown table.
+"""
+import json
+import sys
+from pathlib import Path
+
+
+def best_loss(d):
+    s = json.loads((d / "summary.json").read_text())
+    best, it = s["initial_loss"], 0
+    hist = d / "history.csv"
+    if hist.exists():
+        for row in hist.read_text().splitlines()[1:]:
+            cols = row.split(",")
+            if float(cols[2]) < best:
+                best, it = float(cols[2]), int(cols[0])
+    return s, best, it
+
+
+def outcome(s, key):
+    """The task metric of the returned iterate (`after`) or the start (`before`)."""
+    m = s.get("extra", {}).get("metrics", {})
+    parts = []
+    if "grasp" in m:
+        g = m["grasp"]
+        n = g["grasped_before"] if key == "before" else g["grasped_after"]
+        parts.append(f"{n}/{g['trajectories']} grasped")
+    if "topology" in m:
+        betti = lambda x: f"({x['components']},{x['holes']},{x['cavities']})"
+        parts.append(" ".join(f"{k.split('/')[-1]} {betti(v)}" for k, v in m["topology"][key].items()))
+    loco = m.get("initial" if key == "before" else "final")
+    if isinstance(loco, dict) and "distance" in loco:
+        up = "upright" if loco["upright_at_horizon"] else f"falls at {loco['first_fall_time']:.2f} s"
+        parts.append(f"{loco['distance']:.3f} m, {up}")
+    return "; ".join(parts) or "—"
+
+
+def main():
+    args = sys.argv[1:]
+    out, rest = Path(args[0]), args[1:]
+    cut = rest.index("--")
+    modes, seeds = rest[:cut], rest[cut + 1 :]
+    print("| seed | start (`--iters 0`) | mode | loss initial → best (iteration) | outcome of the returned iterate | wall (s) |")
+    print("|---|---|---|---|---|---|")
+    picks = {}
+    for m in modes:
+        for sd in seeds:
+            st = out / f"start_{sd}"
+            start = outcome(json.loads((st / "summary.json").read_text()), "before") if (st / "summary.json").exists() else "missing"
+            d = out / f"{m}_{sd}"
+            if not (d / "summary.json").exists():
+                print(f"| {sd} | {start} | {m} | failed: see {d}.log | | |")
+                continue
+            s, best, it = best_loss(d)
+            wall = (out / f"{m}_{sd}.wall").read_text().strip()
+            print(f"| {sd} | {start} | {m} | {s['initial_loss']:.4e} → {best:.4e} ({it}) | {outcome(s, 'after')} | {wall} |")
+            if m not in picks or best < picks[m]["best_loss"]:
+                picks[m] = {"seed": int(sd), "best_loss": best, "iteration": it, "outcome": outcome(s, "after")}
+    print()
+    for m, p in picks.items():
+        print(f"pick ({m}): seed {p['seed']}, best loss {p['best_loss']:.4e} at iteration {p['iteration']}: {p['outcome']}")
+    (out / "pick.json").write_text(json.dumps(picks, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
