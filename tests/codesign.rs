@@ -447,7 +447,11 @@ fn design_init_noise_is_validated_seeded_and_bounded() {
     assert!(moved.iter().filter(|&&m| m > 0.0).count() > d_task.len() / 2);
     let bits = |d: &nalgebra::DVector<f64>| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&start(&p, 1).0), bits(&d1), "same seed, same start");
-    assert_ne!(bits(&start(&p, 2).0), bits(&d1), "another seed, another start");
+    assert_ne!(
+        bits(&start(&p, 2).0),
+        bits(&d1),
+        "another seed, another start"
+    );
 
     let c_alone = start(&problem(0.0, 0.01), 3).1;
     let (d_both, c_both) = start(&problem(eta, 0.01), 3);
@@ -463,5 +467,9 @@ fn design_init_noise_is_validated_seeded_and_bounded() {
             dw[i] == lo[i] || dw[i] == hi[i]
         })
         .count();
-    assert!(at_bound > dw.len() / 2, "{at_bound} of {} at a bound", dw.len());
+    assert!(
+        at_bound > dw.len() / 2,
+        "{at_bound} of {} at a bound",
+        dw.len()
+    );
 }

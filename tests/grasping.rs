@@ -550,6 +550,84 @@ fn parallel_jaw_stand_co_designed_jaws_hold_three_of_four() {
     assert!(l1 < 0.01 * l0, "loss {l0} → {l1}");
 }
 
+/// The parallel jaw on a stand from several perturbed starts (issue 30;
+/// `notes/multistart-design-noise.md`, registered before the runs): the pick
+/// of seeds 1–8 with `optimizer.design_init_noise` 2 mm (the lowest best
+/// loss, seed 1), physics only. The fixture
+/// (`tests/data/parallel_jaw_stand_multistart_design.json`) holds the
+/// coordinates the run moved away from its start. Asserted: the start
+/// rebuilt by [`sdrs::optimize::start`] is bitwise the run's (the fixture's
+/// start values), lies within 2 mm of the task's design and grasps none of
+/// the four objects (the paper's premise, as the task's own design); the
+/// co-designed jaws stay inside the 12 mm bound with their ties intact
+/// (`DesignSpace::check`) and hold all four objects (drift ≤ 2 cm, rise ≥
+/// 5 cm over the lift), and the loss falls more than 100× from the start.
+#[test]
+fn parallel_jaw_stand_multistart_pick_holds_four_of_four() {
+    let path = robots("parallel_jaw_stand/task.yaml");
+    let fixture: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            common::root().join("tests/data/parallel_jaw_stand_multistart_design.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let eta = fixture["design_init_noise"].as_f64().unwrap();
+    let seed = fixture["seed"].as_u64().unwrap();
+    let mut task: TaskSpec =
+        serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    task.optimizer.design_init_noise = eta;
+    let p = multi::load(&path, task, true).unwrap();
+    let d_task = p.design.values(&p.first().model);
+    let (d0, c) = sdrs::optimize::start(&p, seed);
+    assert_eq!(fixture["variables"].as_u64(), Some(d0.len() as u64));
+    assert!(
+        (&d0 - &d_task).abs().max() <= eta,
+        "the start lies within η of the task's design"
+    );
+    let mut d1 = d0.clone();
+    for m in fixture["moved"].as_array().unwrap() {
+        let i = m[0].as_u64().unwrap() as usize;
+        let (was, now) = (m[1].as_f64().unwrap(), m[2].as_f64().unwrap());
+        assert_eq!(
+            d0[i].to_bits(),
+            was.to_bits(),
+            "variable {i}: the start changed"
+        );
+        d1[i] = now;
+    }
+    let (lo, hi) = (p.design.lower(), p.design.upper());
+    for i in 0..d1.len() {
+        assert!(
+            lo[i] <= d1[i] && d1[i] <= hi[i],
+            "variable {i} leaves its bound"
+        );
+    }
+    let mut model = p.first().model.clone();
+    p.design.apply(&mut model, &d1);
+    p.design.check(&model).unwrap();
+    let outcome = |d: &DVector<f64>| {
+        let loss = p.evaluate(d, &c).unwrap().loss;
+        (loss, sdrs::optimize::grasp::measure(&p, d, &c).unwrap())
+    };
+    let (l0, g0) = outcome(&d0);
+    let (l1, g1) = outcome(&d1);
+    println!("start: loss {l0:.4e}, {g0:?}\nco-designed: loss {l1:.4e}, {g1:?}");
+    assert!(
+        g0.iter().all(|g| !g.grasped),
+        "the start grasps none: {g0:?}"
+    );
+    let task_grasps = sdrs::optimize::grasp::measure(&p, &d_task, &c).unwrap();
+    assert!(
+        task_grasps.iter().all(|g| !g.grasped),
+        "the task's design grasps none"
+    );
+    for (g, name) in g1.iter().zip(["cube", "cylinder", "ball", "plus"]) {
+        assert!(g.grasped, "the co-designed jaws hold the {name}: {g:?}");
+    }
+    assert!(l1 < 0.01 * l0, "loss {l0} → {l1}");
+}
+
 /// How robust a co-designed grasp is to its design (ignored: a probe, run by
 /// hand; `notes/adam-plateau-restarts.md`). `PROBE_TASK` (path under
 /// `robots/`, default `three_finger_hand/task.yaml`) and `PROBE_CHECKPOINT`

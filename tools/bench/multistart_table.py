@@ -20,9 +20,9 @@ def best_loss(d):
     hist = d / "history.csv"
     if hist.exists():
         for row in hist.read_text().splitlines()[1:]:
-            cols = row.split(",")
-            if float(cols[2]) < best:
-                best, it = float(cols[2]), int(cols[0])
+            cols = row.split(",")  # iteration, loss, best_loss, ...
+            if float(cols[1]) < best:
+                best, it = float(cols[1]), int(cols[0])
     return s, best, it
 
 
