@@ -12,6 +12,8 @@
 #
 # Options (environment): MODES ("on" by default; "on off" adds the twins),
 # ITERS (the task's count unless set), JOBS (runs side by side, default 1),
+# EXCLUDE (grasp|upright: seeds whose start already meets the goal are run
+# but never picked, the paper's premise; see multistart_table.py),
 # SDRS_BIN (a fixed copy of the binary; else target/release/sdrs, built
 # unless SKIP_BUILD=1), PY (.venv/bin/python).
 # Outputs: $OUT/task.yaml (the copy), $OUT/start_S/ (the `--iters 0` check),
@@ -59,4 +61,4 @@ for m in $MODES; do
   done
 done
 wait
-"$PY" tools/bench/multistart_table.py "$OUT" $MODES -- $SEEDS | tee "$OUT/table.md"
+"$PY" tools/bench/multistart_table.py "$OUT" $MODES -- $SEEDS ${EXCLUDE:+--exclude $EXCLUDE} | tee "$OUT/table.md"
