@@ -473,3 +473,59 @@ fn design_init_noise_is_validated_seeded_and_bounded() {
         dw.len()
     );
 }
+
+/// `--design off` of a task with `optimizer.design_init_noise` is the
+/// controller-only twin of the co-design run with the same seed on the same
+/// robot: [`Problem::load_for_seed`] holds the start's perturbed design
+/// fixed, so the twin's loss at its start is bitwise the co-design run's at
+/// its start, the twin has no design variables and the same controller
+/// start, and another seed gives another robot. Without the noise the twin
+/// is [`Problem::load`]`(path, false)` bit for bit.
+#[test]
+fn design_off_twin_starts_from_the_same_perturbed_robot() {
+    let (path, mut spec) = adam_task();
+    let dir = common::scratch_dir("design-off-twin");
+    spec.scene = path
+        .parent()
+        .unwrap()
+        .join(&spec.scene)
+        .display()
+        .to_string();
+    spec.optimizer.design_init_noise = 0.01;
+    spec.optimizer.init_noise = 0.01;
+    let noisy = dir.join("task.yaml");
+    std::fs::write(&noisy, serde_yaml::to_string(&spec).unwrap()).unwrap();
+    let on = Problem::load_for_seed(&noisy, true, 4).unwrap();
+    let off = Problem::load_for_seed(&noisy, false, 4).unwrap();
+    let (d_on, c_on) = sdrs::optimize::start(&on, 4);
+    let (d_off, c_off) = sdrs::optimize::start(&off, 4);
+    assert!(d_on.len() >= 8 && d_off.is_empty());
+    assert_eq!(c_on, c_off, "the same controller start");
+    let l_on = on.loss_value(&d_on, &c_on).unwrap();
+    let l_off = off.loss_value(&d_off, &c_off).unwrap();
+    assert_eq!(l_on.to_bits(), l_off.to_bits(), "{l_on} vs {l_off}");
+    let other = Problem::load_for_seed(&noisy, false, 5).unwrap();
+    let l_other = other.loss_value(&d_off, &sdrs::optimize::start(&other, 5).1);
+    assert_ne!(
+        l_other.unwrap().to_bits(),
+        l_off.to_bits(),
+        "another seed, another robot"
+    );
+    let task_robot = on
+        .loss_value(&on.design.values(&on.first().model), &c_on)
+        .unwrap();
+    assert_ne!(
+        task_robot.to_bits(),
+        l_off.to_bits(),
+        "the twin's robot is the perturbed one"
+    );
+
+    let plain = Problem::load_for_seed(&path, false, 4).unwrap();
+    let reference = Problem::load(&path, false).unwrap();
+    let c = sdrs::optimize::start(&reference, 4).1;
+    let empty = nalgebra::DVector::zeros(0);
+    assert_eq!(
+        plain.loss_value(&empty, &c).unwrap().to_bits(),
+        reference.loss_value(&empty, &c).unwrap().to_bits()
+    );
+}

@@ -24,7 +24,7 @@ pub struct OptimizeArgs {
     /// --seed as the interrupted run (checked).
     #[arg(long, conflicts_with = "out")]
     pub resume: Option<PathBuf>,
-    /// Seed of the run's randomness (`optimizer.init_noise`, `optimizer.design_init_noise`).
+    /// Seed of the run's randomness (`optimizer.init_noise`, `optimizer.design_init_noise`; with `--design off` the latter perturbs the fixed robot as the co-design run with this seed starts).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Iterations in total (default: the task's `optimizer.iters`); a trust-region run ends earlier, at the same result, once its trials round to the iterate (summary.json `converged`).
@@ -126,7 +126,7 @@ struct Prepared {
 /// iteration count).
 fn prepare(a: &OptimizeArgs, out: &std::path::Path) -> Result<Prepared> {
     let design_on = a.design == "on";
-    let mut problem = sdrs::optimize::Problem::load(&a.task, design_on)?;
+    let mut problem = sdrs::optimize::Problem::load_for_seed(&a.task, design_on, a.seed)?;
     crate::contact_model::configure_problem(
         &mut problem,
         &a.contact,

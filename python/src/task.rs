@@ -93,12 +93,16 @@ fn grads_dict<'py>(
 #[pymethods]
 impl PyTask {
     /// Loads a task YAML and its scene (`design=False`: the controller
-    /// alone, as `sdrs optimize --design off`). Raises `SdrsError` naming
+    /// alone, as `sdrs optimize --design off`; with
+    /// `optimizer.design_init_noise` its fixed robot is the co-design start
+    /// for `seed`, as `--design off --seed SEED`). Raises `SdrsError` naming
     /// the file and element of a problem.
     #[staticmethod]
-    #[pyo3(signature = (path, design=true))]
-    fn load(py: Python<'_>, path: PathBuf, design: bool) -> PyResult<PyTask> {
-        let problem = py.detach(|| Problem::load(&path, design)).map_err(err)?;
+    #[pyo3(signature = (path, design=true, seed=0))]
+    fn load(py: Python<'_>, path: PathBuf, design: bool, seed: u64) -> PyResult<PyTask> {
+        let problem = py
+            .detach(|| Problem::load_for_seed(&path, design, seed))
+            .map_err(err)?;
         Ok(PyTask { problem })
     }
 

@@ -88,6 +88,36 @@ impl Problem {
         Self::from_spec(path, task, design)
     }
 
+    /// [`Problem::load`] for a run with `seed`. The same, except for a
+    /// controller-only run (`design = false`) of a task with
+    /// `optimizer.design_init_noise > 0` and a `design:` section: that run
+    /// starts from the co-design run's perturbed robot for the same seed,
+    /// held fixed — the task is loaded with its design space, the design of
+    /// [`start`]`(seed)` is applied to every trajectory's model
+    /// ([`Problem::fix_design`]), and the design space is dropped. So
+    /// `--design off --seed S` is the controller-only twin of `--seed S`
+    /// on the same robot. (Without the noise the design space is never
+    /// built, as before, so those runs are unchanged bit for bit.)
+    pub fn load_for_seed(path: &Path, design: bool, seed: u64) -> Result<Problem, TaskError> {
+        let p = Self::load(path, design)?;
+        if design || p.task.optimizer.design_init_noise <= 0.0 || p.task.design.is_none() {
+            return Ok(p);
+        }
+        let mut with_design = Self::load(path, true)?;
+        let (d, _) = start(&with_design, seed);
+        with_design.fix_design(&d);
+        Ok(with_design)
+    }
+
+    /// Applies design `d` to every trajectory's model and drops the design
+    /// space: the problem then optimizes the controller alone on that robot.
+    pub fn fix_design(&mut self, d: &DVector<f64>) {
+        for t in &mut self.trajectories {
+            self.design.apply(&mut t.model, d);
+        }
+        self.design = DesignSpace::default();
+    }
+
     /// A problem from a parsed single-scene task (`path` names the task file
     /// in errors and anchors relative scene paths).
     pub fn from_spec(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
