@@ -34,7 +34,7 @@ def outcome(s, key):
     """The task metric of the returned iterate (`after`) or the start (`before`)."""
     m = s.get("extra", {}).get("metrics", {})
     parts = []
-    if "grasp" in m:
+    if m.get("grasp", {}).get("trajectories"):
         g = m["grasp"]
         n = g["grasped_before"] if key == "before" else g["grasped_after"]
         parts.append(f"{n}/{g['trajectories']} grasped")
@@ -52,7 +52,7 @@ def premise_fails(start, rule):
     """Whether a start already meets the goal that `rule` names."""
     m = start.get("extra", {}).get("metrics", {})
     if rule == "grasp":
-        return m["grasp"]["grasped_before"] > 0
+        return m.get("grasp", {}).get("grasped_before", 0) > 0
     if rule == "upright":
         return bool(m["initial"]["upright_at_horizon"])
     return False
