@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Several perturbed starts of one co-design task (notes/multistart-design-noise.md):
-# the task copied with `optimizer.design_init_noise: ETA` (metres), then
+# the task copied with `optimizer.design_init_noise: ETA` (metres; KEY=init_noise
+# perturbs the initial controller by ±ETA instead), then
 # `sdrs optimize --seed S` for every seed, co-design and (MODES="on off")
 # its `--design off` twin from the same perturbed start; every start is
 # checked first with `--iters 0`. Picks the seed with the lowest best loss
@@ -29,17 +30,19 @@ PY=${PY:-.venv/bin/python}
 BIN=${SDRS_BIN:-target/release/sdrs}
 mkdir -p "$OUT"
 # The task copy: scene paths made absolute, the one key set.
-"$PY" - "$TASK" "$ETA" "$OUT/task.yaml" <<'PY'
+KEY=${KEY:-design_init_noise}
+case $KEY in design_init_noise|init_noise) ;; *) echo "KEY: design_init_noise or init_noise, got $KEY" >&2; exit 2;; esac
+"$PY" - "$TASK" "$ETA" "$OUT/task.yaml" "$KEY" <<'PY'
 import sys, yaml
 from pathlib import Path
-src, eta, dst = Path(sys.argv[1]).resolve(), float(sys.argv[2]), Path(sys.argv[3])
+src, eta, dst, key = Path(sys.argv[1]).resolve(), float(sys.argv[2]), Path(sys.argv[3]), sys.argv[4]
 t = yaml.safe_load(src.read_text())
 if "scene" in t:
     t["scene"] = str(src.parent / t["scene"])
 for tr in t.get("trajectories", []):
     tr["scene"] = str(src.parent / tr["scene"])
-t.setdefault("optimizer", {})["design_init_noise"] = eta
-head = f"# {src} with optimizer.design_init_noise: {eta} (tools/bench/multistart.sh)\n"
+t.setdefault("optimizer", {})[key] = eta
+head = f"# {src} with optimizer.{key}: {eta} (tools/bench/multistart.sh)\n"
 dst.write_text(head + yaml.safe_dump(t, sort_keys=False))
 PY
 run() {  # mode seed [iters]
