@@ -74,18 +74,7 @@ pub struct Problem {
 impl Problem {
     /// Loads a task and its scene. `design = false` optimizes the controller only.
     pub fn load(path: &Path, design: bool) -> Result<Problem, TaskError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TaskError::Io {
-            path: path.into(),
-            source,
-        })?;
-        let task: TaskSpec = serde_yaml::from_str(&text).map_err(|e| TaskError::Parse {
-            path: path.into(),
-            msg: e.to_string(),
-        })?;
-        if !task.trajectories.is_empty() || task.scene.is_empty() {
-            return multi::load(path, task, design);
-        }
-        Self::from_spec(path, task, design)
+        Self::from_parsed(path, read_task(path)?, design)
     }
 
     /// [`Problem::load`] for a run with `seed`. The same, except for a
@@ -99,14 +88,23 @@ impl Problem {
     /// on the same robot. (Without the noise the design space is never
     /// built, as before, so those runs are unchanged bit for bit.)
     pub fn load_for_seed(path: &Path, design: bool, seed: u64) -> Result<Problem, TaskError> {
-        let p = Self::load(path, design)?;
-        if design || p.task.optimizer.design_init_noise <= 0.0 || p.task.design.is_none() {
-            return Ok(p);
+        let task = read_task(path)?;
+        let noisy_twin = !design && task.optimizer.design_init_noise > 0.0 && task.design.is_some();
+        let mut p = Self::from_parsed(path, task, design || noisy_twin)?;
+        if noisy_twin {
+            let (d, _) = start(&p, seed);
+            p.fix_design(&d);
         }
-        let mut with_design = Self::load(path, true)?;
-        let (d, _) = start(&with_design, seed);
-        with_design.fix_design(&d);
-        Ok(with_design)
+        Ok(p)
+    }
+
+    /// A problem from a parsed task of either form (`scene:` or
+    /// `trajectories:`).
+    fn from_parsed(path: &Path, task: TaskSpec, design: bool) -> Result<Problem, TaskError> {
+        if !task.trajectories.is_empty() || task.scene.is_empty() {
+            return multi::load(path, task, design);
+        }
+        Self::from_spec(path, task, design)
     }
 
     /// Applies design `d` to every trajectory's model and drops the design
@@ -491,6 +489,18 @@ pub fn optimize(
 ) -> Result<Outcome, OptimizeError> {
     optimize_with(p, iters, &RunOptions::default(), on_iter, |_| {
         Ok::<(), OptimizeError>(())
+    })
+}
+
+/// Reads and parses a task file (errors name the file).
+fn read_task(path: &Path) -> Result<TaskSpec, TaskError> {
+    let text = std::fs::read_to_string(path).map_err(|source| TaskError::Io {
+        path: path.into(),
+        source,
+    })?;
+    serde_yaml::from_str(&text).map_err(|e| TaskError::Parse {
+        path: path.into(),
+        msg: e.to_string(),
     })
 }
 
