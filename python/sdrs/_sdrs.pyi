@@ -106,8 +106,10 @@ class Task:
     """A co-design task file, as ``sdrs optimize`` loads it."""
 
     @staticmethod
-    def load(path: _Path, design: bool = True) -> Task:
-        """Loads a task and its scene (``design=False``: the controller alone)."""
+    def load(path: _Path, design: bool = True, seed: int = 0) -> Task:
+        """Loads a task and its scene (``design=False``: the controller alone,
+        on the co-design start's robot for ``seed`` when the task sets
+        ``optimizer.design_init_noise``)."""
     @property
     def path(self) -> str: ...
     @property

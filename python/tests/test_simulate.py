@@ -151,3 +151,25 @@ def test_rayon_pool_is_configurable_and_results_do_not_depend_on_it(root):
         assert threads == n
         out[n] = q
     assert out["1"] == out["2"]
+
+
+def test_design_off_twin_keeps_the_co_design_starts_robot(root, tmp_path):
+    """``Task.load(…, design=False, seed=S)`` of a task with
+    ``optimizer.design_init_noise``: the controller-only twin's robot is the
+    co-design start's for the same seed (the same loss at the start, bitwise),
+    and another seed gives another robot (as ``sdrs optimize --design off``)."""
+    import yaml
+
+    src = root / "examples/python/chain_reach_adam.yaml"
+    spec = yaml.safe_load(src.read_text())
+    spec["scene"] = str((src.parent / spec["scene"]).resolve())
+    spec["optimizer"]["design_init_noise"] = 0.01
+    path = tmp_path / "task.yaml"
+    path.write_text(yaml.safe_dump(spec))
+    on = sdrs.Task.load(path)
+    d, c = on.start(seed=3)
+    twin = sdrs.Task.load(path, design=False, seed=3)
+    assert len(twin.design) == 0
+    assert twin.evaluate(controller=c)["loss"] == on.evaluate(design=d, controller=c)["loss"]
+    other = sdrs.Task.load(path, design=False, seed=4)
+    assert other.evaluate(controller=c)["loss"] != twin.evaluate(controller=c)["loss"]
