@@ -22,6 +22,7 @@ mod ipc;
 mod ipc_source_surface;
 mod mjcf;
 mod mjcf_roundtrip;
+mod multistart;
 mod optimize;
 mod optimize_ipc;
 mod optimize_resume;
