@@ -4,7 +4,8 @@
 //! what the script promises, not only that it runs: each seed's start is
 //! another robot, every twin starts on its co-design seed's robot (the same
 //! start loss, bitwise), the pick is the seed with the lowest best loss over
-//! the runs' histories, and a wrong `KEY` or `--exclude` is refused.
+//! the runs' histories, each pick's replay passes python-fcl, and a wrong
+//! `KEY` or `--exclude` is refused.
 
 use crate::support;
 
@@ -73,6 +74,16 @@ fn multistart_twins_share_their_start_and_the_pick_is_the_lowest_loss() {
         assert_eq!(pick[mode]["best_loss"].as_f64(), Some(best.0));
     }
     assert!(stdout.contains("pick (on): seed"), "{stdout}");
+    for mode in ["on", "off"] {
+        let seed = pick[mode]["seed"].as_u64().unwrap();
+        let sep =
+            std::fs::read_to_string(out.join(format!("{mode}_{seed}/separation.txt"))).unwrap();
+        assert!(
+            !sep.is_empty() && sep.lines().all(|l| l.ends_with(": separated")),
+            "{mode}: {sep}"
+        );
+    }
+    assert!(stdout.contains("pick (on), python-fcl:"), "{stdout}");
 
     let bad = script(&out, "seed").output().unwrap();
     assert!(!bad.status.success());

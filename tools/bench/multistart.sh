@@ -18,7 +18,9 @@
 # SDRS_BIN (a fixed copy of the binary; else target/release/sdrs, built
 # unless SKIP_BUILD=1), PY (.venv/bin/python).
 # Outputs: $OUT/task.yaml (the copy), $OUT/start_S/ (the `--iters 0` check),
-# $OUT/<mode>_S/ (each run), $OUT/table.md and $OUT/pick.json.
+# $OUT/<mode>_S/ (each run), $OUT/table.md and $OUT/pick.json; each pick's
+# optimized scenes are replayed and checked by python-fcl
+# ($OUT/<mode>_S/separation.txt, one line per scene, in the table too).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 : "${TASK:?set TASK=path/to/task.yaml}" "${ETA:?set ETA (metres)}" "${SEEDS:?set SEEDS}"
@@ -65,3 +67,22 @@ for m in $MODES; do
 done
 wait
 "$PY" tools/bench/multistart_table.py "$OUT" $MODES -- $SEEDS ${EXCLUDE:+--exclude $EXCLUDE} | tee "$OUT/table.md"
+# The independent check of each pick (python-fcl, as bench_grasping.sh):
+# every optimized scene of the picked run replayed over the horizon.
+for m in $MODES; do
+  s=$("$PY" -c "import json,sys; p=json.load(open(sys.argv[1])); print(p.get(sys.argv[2], {}).get('seed', ''))" "$OUT/pick.json" "$m")
+  [ -n "$s" ] || continue
+  dir=$OUT/${m}_$s
+  h=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['horizon'])" "$dir/summary.json")
+  : > "$dir/separation.txt"
+  for sc in "$dir"/scenes/*.yaml; do
+    ex=$dir/export/$(basename "$sc" .yaml)
+    nice -n 5 "$BIN" simulate "$sc" --steps "$h" --export "$ex" -q --out "$ex.csv"
+    if "$PY" tools/check/check_separation.py "$ex" > "$ex.separation.json"; then
+      echo "$(basename "$sc"): separated" >> "$dir/separation.txt"
+    else
+      echo "$(basename "$sc"): INTERPENETRATION (see $ex.separation.json)" >> "$dir/separation.txt"
+    fi
+  done
+  echo "pick ($m), python-fcl: $(tr '\n' ' ' < "$dir/separation.txt")" | tee -a "$OUT/table.md"
+done
