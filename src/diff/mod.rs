@@ -20,6 +20,7 @@
 
 pub mod backward;
 pub mod central;
+pub mod descending;
 pub mod effects;
 pub mod loss;
 pub mod tape;

@@ -3,10 +3,11 @@
 //! wall time, the final design's minimum hull distance, and a
 //! central-difference check of one design-gradient component.
 
-use super::results::{CodesignPart, CodesignRun, FdCheck};
+use super::results::{CodesignPart, CodesignRun, Descended, FdCheck};
 use super::suite::CodesignSpec;
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
+use sdrs::diff::descending::{Descent, check_component_descending};
 use sdrs::optimize::{Problem, checkpoint};
 use sdrs::output::Summary;
 use std::path::Path;
@@ -336,7 +337,11 @@ pub const FD_NEWTON_TOL: f64 = 1e-10;
 /// adjoint component is largest, at the initial design, every solve at
 /// [`FD_NEWTON_TOL`], with the loss's noise measured along it
 /// ([`sdrs::diff::central::check_component`], criterion 1e-4): 14 loss
-/// evaluations.
+/// evaluations. When that check does not pass resolved, the step halves
+/// down to `1e-12 · max(1, |d_k|)` until two consecutive estimates agree
+/// ([`sdrs::diff::descending`]: a loss smooth only below the first step,
+/// e.g. a walk that falls; at most 52 evaluations), and the agreeing step
+/// is reported with the first one.
 fn fd_check(p: &Problem) -> Result<FdCheck> {
     let mut tight = p.clone();
     for t in &mut tight.trajectories {
@@ -354,16 +359,27 @@ fn fd_check(p: &Problem) -> Result<FdCheck> {
         Ok(p.evaluate(&d, &c0)?.loss)
     };
     let adj = ev.grad_design[k];
-    let c = sdrs::diff::central::check_component(&mut at, ev.loss, adj, h, 1, 1e-4)?;
+    let steps = Descent {
+        h0: h,
+        h_floor: 1e-12 * d0[k].abs().max(1.0),
+    };
+    let check = check_component_descending(&mut at, ev.loss, adj, steps, 1e-4)?;
+    let c = check.standing();
+    let descended_from = check.descended.map(|d| Descended {
+        h: check.first.h,
+        relative_error: check.first.relative_error,
+        halvings: (check.first.h / d.h).log2().round() as usize,
+    });
     Ok(FdCheck {
         variable: p.design.vars[k].name.clone(),
         adjoint: adj,
         central_difference: c.central,
-        h,
+        h: c.h,
         relative_error: c.relative_error,
         estimator: Some("richardson".into()),
         difference_noise: Some(c.central_noise),
         resolved: Some(c.resolved),
         newton_tol: Some(FD_NEWTON_TOL),
+        descended_from,
     })
 }

@@ -560,6 +560,7 @@ fn fd_table(name: &str, fd: &FdCheck) -> Table {
             "Newton tolerance",
             "relative error",
             "noise of the difference",
+            "larger steps",
         ],
     );
     t.rows.push(vec![
@@ -574,6 +575,14 @@ fn fd_table(name: &str, fd: &FdCheck) -> Table {
             (Some(n), Some(true)) => format!("{n:.1e} (resolves 1e-4)"),
             (Some(n), _) => format!("{n:.1e} (does not resolve 1e-4)"),
             _ => "not measured (plain central difference)".into(),
+        },
+        match &fd.descended_from {
+            Some(d) => format!(
+                "at h = {:.1e}: relative error {:.2e}; agreement {} halvings below \
+                 (the loss is smooth only at smaller scales)",
+                d.h, d.relative_error, d.halvings
+            ),
+            None => "—".into(),
         },
     ]);
     t

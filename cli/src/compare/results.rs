@@ -170,6 +170,24 @@ pub struct FdCheck {
     /// differences' noise as much as the adjoint. Absent in older results.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub resolved: Option<bool>,
+    /// When the check at the first step did not pass resolved and a
+    /// smaller step agreed (`sdrs::diff::descending`): the first step and
+    /// its relative error, and the halvings taken; `h`, `central_difference`,
+    /// `relative_error`, `difference_noise` and `resolved` are then the
+    /// agreeing step's. Absent when there was no descent or it found no
+    /// agreement (the fields above are the first step's then).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub descended_from: Option<Descended>,
+}
+
+/// The first step of a gradient check that descended (see
+/// [`FdCheck::descended_from`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Descended {
+    pub h: f64,
+    pub relative_error: f64,
+    /// Halvings from `h` to the agreeing step.
+    pub halvings: usize,
 }
 
 /// Which way a metric improves.
