@@ -38,18 +38,22 @@ pub struct DescendingCheck {
     /// [`check_component`] at `h₀` (Richardson level 1).
     pub first: CentralCheck,
     /// The check at the step where two consecutive estimates agreed with
-    /// the adjoint, noise measured there; `None` when the first check
-    /// passed resolved (no descent) or no step in `[h_floor, h₀)` agreed.
+    /// the adjoint, noise measured there (it may still be unresolved);
+    /// `None` when the first check passed resolved (no descent) or no step
+    /// in `[h_floor, h₀)` agreed.
     pub descended: Option<CentralCheck>,
     /// `(h_j, R_j)` of every step of the descent (empty without one).
     pub sweep: Vec<(f64, f64)>,
 }
 
 impl DescendingCheck {
-    /// The check that stands: the descended one if there is one, else the
-    /// first.
+    /// The check that stands: the descended one if it passed resolved, else
+    /// the first (an unresolved descent does not replace it).
     pub fn standing(&self) -> &CentralCheck {
-        self.descended.as_ref().unwrap_or(&self.first)
+        match &self.descended {
+            Some(d) if d.pass && d.resolved => d,
+            _ => &self.first,
+        }
     }
 
     /// Whether the component passes: the first check passed resolved, or a
@@ -183,6 +187,31 @@ mod tests {
     }
 
     #[test]
+    fn only_a_resolved_passing_descent_replaces_the_first_check() {
+        let first = run(rough, ROUGH_SLOPE).first;
+        let mut descended = first;
+        descended.h = 1e-10;
+        let mut c = DescendingCheck {
+            first,
+            descended: None,
+            sweep: Vec::new(),
+        };
+        for (pass, resolved, replaces) in [
+            (true, true, true),
+            (true, false, false),
+            (false, true, false),
+            (false, false, false),
+        ] {
+            descended.pass = pass;
+            descended.resolved = resolved;
+            c.descended = Some(descended);
+            let want = if replaces { &descended } else { &c.first };
+            assert_eq!(c.standing(), want, "pass {pass}, resolved {resolved}");
+            assert_eq!(c.pass(), replaces, "pass {pass}, resolved {resolved}");
+        }
+    }
+
+    #[test]
     fn a_smooth_loss_passing_at_h0_does_not_descend() {
         let smooth = |t: f64| 1.0 + 3.0 * t + 0.5 * t * t + t.powi(3);
         let c = run(smooth, 3.0);
@@ -209,6 +238,8 @@ mod tests {
         for factor in [1.0, 1.01] {
             let c = run(noisy, ROUGH_SLOPE * factor);
             assert!(!c.pass(), "factor {factor}: {c:?}");
+            // An unresolved descent never replaces the first check.
+            assert_eq!(c.standing(), &c.first, "factor {factor}");
         }
     }
 }

@@ -364,11 +364,12 @@ fn fd_check(p: &Problem) -> Result<FdCheck> {
         h_floor: 1e-12 * d0[k].abs().max(1.0),
     };
     let check = check_component_descending(&mut at, ev.loss, adj, steps, 1e-4)?;
+    // The descended check stands only when it passed resolved.
     let c = check.standing();
-    let descended_from = check.descended.map(|d| Descended {
+    let descended_from = (c != &check.first).then(|| Descended {
         h: check.first.h,
         relative_error: check.first.relative_error,
-        halvings: (check.first.h / d.h).log2().round() as usize,
+        halvings: (check.first.h / c.h).log2().round() as usize,
     });
     Ok(FdCheck {
         variable: p.design.vars[k].name.clone(),
