@@ -578,8 +578,7 @@ fn fd_table(name: &str, fd: &FdCheck) -> Table {
         },
         match &fd.descended_from {
             Some(d) => format!(
-                "at h = {:.1e}: relative error {:.2e}; agreement {} halvings below \
-                 (the loss is smooth only at smaller scales)",
+                "at h = {:.1e}: relative error {:.2e}; agrees {} halvings below",
                 d.h, d.relative_error, d.halvings
             ),
             None => "—".into(),
