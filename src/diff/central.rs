@@ -148,6 +148,17 @@ pub fn fit_weights(steps: usize, levels: usize) -> Option<(Vec<f64>, f64)> {
     Some((weights, var.sqrt()))
 }
 
+/// `|estimate − adjoint| / max(|adjoint|, |estimate|)` (0 when both are 0):
+/// the relative error of [`CentralCheck::relative_error`].
+pub fn relative_error(estimate: f64, adjoint: f64) -> f64 {
+    let scale = adjoint.abs().max(estimate.abs());
+    if scale > 0.0 {
+        (estimate - adjoint).abs() / scale
+    } else {
+        0.0
+    }
+}
+
 /// Checks the adjoint component `adjoint` against Richardson's central
 /// difference (`levels` deep, see the module docs) at step `h` and relative
 /// criterion `crit`. `loss_at(t)` is the loss with the design variable
@@ -189,12 +200,7 @@ pub fn check_component_with<E>(
     let (levels, steps) = shape(stencil);
     let loss_noise = loss_noise(loss_at, l0, h / 10.0)?;
     let central_noise = factor * loss_noise / h;
-    let scale = adjoint.abs().max(central.abs());
-    let relative_error = if scale > 0.0 {
-        (central - adjoint).abs() / scale
-    } else {
-        0.0
-    };
+    let relative_error = relative_error(central, adjoint);
     let resolved = 2.0 * central_noise <= crit * adjoint.abs();
     let pass = if resolved {
         relative_error <= crit
@@ -353,12 +359,7 @@ pub fn check_component_adaptive<E>(
             noise_min,
         )
     };
-    let scale = adjoint.abs().max(estimate_used.abs());
-    let relative_error = if scale > 0.0 {
-        (estimate_used - adjoint).abs() / scale
-    } else {
-        0.0
-    };
+    let relative_error = relative_error(estimate_used, adjoint);
     let pass = if resolved {
         relative_error <= crit
     } else {

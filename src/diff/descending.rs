@@ -21,7 +21,9 @@
 //! then measured at `h_j` and the component passes if it is resolved there
 //! (`2 σ_c ≤ crit |g|`, `σ_c = 0.950 σ / h_j`, as [`check_component`]).
 
-use super::central::{CentralCheck, Stencil, check_component, loss_noise, noise_factor};
+use super::central::{
+    CentralCheck, Stencil, check_component, loss_noise, noise_factor, relative_error,
+};
 
 /// Step range of [`check_component_descending`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,12 +120,7 @@ fn at_step<E>(
 ) -> Result<CentralCheck, E> {
     let sigma = loss_noise(loss_at, l0, h / 10.0)?;
     let central_noise = noise_factor(Stencil::Richardson { levels: 1 }) * sigma / h;
-    let scale = adjoint.abs().max(central.abs());
-    let relative_error = if scale > 0.0 {
-        (central - adjoint).abs() / scale
-    } else {
-        0.0
-    };
+    let relative_error = relative_error(central, adjoint);
     let resolved = 2.0 * central_noise <= crit * adjoint.abs();
     Ok(CentralCheck {
         adjoint,
