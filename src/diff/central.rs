@@ -148,6 +148,22 @@ pub fn fit_weights(steps: usize, levels: usize) -> Option<(Vec<f64>, f64)> {
     Some((weights, var.sqrt()))
 }
 
+/// `loss_at(t)`, evaluated once per bit pattern of `t`: `cache` holds the
+/// `(t.to_bits(), L(t))` already evaluated (a linear search: a check
+/// evaluates a few dozen steps).
+pub fn cached_loss<E>(
+    cache: &mut Vec<(u64, f64)>,
+    loss_at: &mut dyn FnMut(f64) -> Result<f64, E>,
+    t: f64,
+) -> Result<f64, E> {
+    if let Some(&(_, v)) = cache.iter().find(|(k, _)| *k == t.to_bits()) {
+        return Ok(v);
+    }
+    let v = loss_at(t)?;
+    cache.push((t.to_bits(), v));
+    Ok(v)
+}
+
 /// `|estimate − adjoint| / max(|adjoint|, |estimate|)` (0 when both are 0):
 /// the relative error of [`CentralCheck::relative_error`].
 pub fn relative_error(estimate: f64, adjoint: f64) -> f64 {
@@ -325,15 +341,8 @@ pub fn check_component_adaptive<E>(
 ) -> Result<CentralCheck, E> {
     let loss_noise = loss_noise(loss_at, l0, opts.h_min / 10.0)?;
     // Evaluations are cached by step: Richardson's tables at h and h/2 share D(h).
-    let mut cache: Vec<(u64, f64)> = Vec::new();
-    let mut cached = |t: f64| -> Result<f64, E> {
-        if let Some(&(_, v)) = cache.iter().find(|(k, _)| *k == t.to_bits()) {
-            return Ok(v);
-        }
-        let v = loss_at(t)?;
-        cache.push((t.to_bits(), v));
-        Ok(v)
-    };
+    let mut cache = Vec::new();
+    let mut cached = |t: f64| cached_loss(&mut cache, loss_at, t);
     let factor = noise_factor(stencil);
     let want = opts.margin * factor * loss_noise / (crit * adjoint.abs());
     let h = if want.is_finite() {

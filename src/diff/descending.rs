@@ -22,7 +22,7 @@
 //! (`2 σ_c ≤ crit |g|`, `σ_c = 0.950 σ / h_j`, as [`check_component`]).
 
 use super::central::{
-    CentralCheck, Stencil, check_component, loss_noise, noise_factor, relative_error,
+    CentralCheck, Stencil, cached_loss, check_component, loss_noise, noise_factor, relative_error,
 };
 
 /// Step range of [`check_component_descending`].
@@ -70,7 +70,8 @@ impl DescendingCheck {
 /// with the variable moved by `t`; `l0 = L(0)`), descending in step size
 /// when the first check fails (see the module docs). Costs the first
 /// check's 14 loss evaluations, plus 2 per halving and 10 for the noise at
-/// the agreeing step when it descends (at most `2 log₂(h₀/h_floor) + 14`).
+/// the agreeing step when it descends (at most `2 log₂(h₀/h_floor) + 24`;
+/// `D(h₀)` comes from the first check's evaluations).
 pub fn check_component_descending<E>(
     loss_at: &mut dyn FnMut(f64) -> Result<f64, E>,
     l0: f64,
@@ -78,6 +79,10 @@ pub fn check_component_descending<E>(
     steps: Descent,
     crit: f64,
 ) -> Result<DescendingCheck, E> {
+    // Cached: the descent's D(h₀) reuses the first check's L(±h₀).
+    let mut cache = Vec::new();
+    let mut loss_at = |t: f64| cached_loss(&mut cache, loss_at, t);
+    let loss_at: &mut dyn FnMut(f64) -> Result<f64, E> = &mut loss_at;
     let first = check_component(loss_at, l0, adjoint, steps.h0, 1, crit)?;
     let mut out = DescendingCheck {
         first,

@@ -340,7 +340,7 @@ pub const FD_NEWTON_TOL: f64 = 1e-10;
 /// evaluations. When that check does not pass resolved, the step halves
 /// down to `1e-12 · max(1, |d_k|)` until two consecutive estimates agree
 /// ([`sdrs::diff::descending`]: a loss smooth only below the first step,
-/// e.g. a walk that falls; at most 52 evaluations), and the agreeing step
+/// e.g. a walk that falls; at most 62 evaluations), and the agreeing step
 /// is reported with the first one.
 fn fd_check(p: &Problem) -> Result<FdCheck> {
     let mut tight = p.clone();
