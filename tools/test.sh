@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite, on a fresh clone: installs what the tests need
 # (Debian packages such as chromium, then the Python helpers' packages into
-# .venv/), then runs every Rust test, then installs the `sdrs` Python
-# package built from python/ and runs its pytest suite (python/tests/;
+# .venv/, and the `sdrs` Python package built from python/), then runs
+# every Rust test, then the Python package's pytest suite (python/tests/;
 # torch and ray are required there: a missing one fails, never skips).
 # `.ci/run` calls exactly this.
 set -euo pipefail
@@ -12,19 +12,13 @@ cd "$(dirname "$0")/.."
 start=$SECONDS
 phase() { echo "test.sh: $1 done at $((SECONDS - start)) s"; }
 bash tools/setup/setup_system.sh
-# The pinned packages now, the `sdrs` Python package after the Rust tests:
-# one cargo build of the whole workspace, in which the core's release build
-# and its unit-test build (independent of each other) run on the two cores
-# side by side; built first by maturin, the core's compile had a core to
-# itself (notes/ci-time.md, 2026-12-02). No Rust test imports the package.
-bash tools/setup/setup_python.sh --no-package
-phase "setup (Python packages)"
+bash tools/setup/setup_python.sh
+phase "setup (Python packages, the sdrs Python package)"
 # The release profile: the same build as the README's main command
 # (`cargo run --release`), so a fresh clone compiles the project once.
 # The workspace includes the Python package's crate (python/): give cargo
-# the environment maturin gives it in setup_python.sh, so the PyO3 crates
-# built here are reused by maturin instead of rebuilt (pyo3 rebuilds when
-# these change).
+# the environment maturin gave it in setup_python.sh, so the PyO3 crates
+# built there are reused instead of rebuilt (pyo3 rebuilds when these change).
 export PYO3_PYTHON="$PWD/.venv/bin/python" PYTHON_SYS_EXECUTABLE="$PWD/.venv/bin/python"
 export PYO3_BUILD_EXTENSION_MODULE=1
 PYO3_ENVIRONMENT_SIGNATURE="$("$PYO3_PYTHON" -c 'import platform, sys; v = sys.version_info; print(f"{sys.implementation.name}-{v[0]}.{v[1]}-{platform.architecture()[0]}")')"
@@ -43,9 +37,6 @@ else
   cargo test --release --workspace --all-targets
 fi
 phase "Rust build and tests"
-# The `sdrs` Python package from the build above (maturin finds it built).
-bash tools/setup/setup_python.sh
-phase "the sdrs Python package"
 # The Python package (PyO3): simulate vs the CLI, gradients, the torch
 # operator (gradcheck), errors, Ray sweeps on a local 2-CPU cluster.
 # The Rust tests above built the CLI the Python tests compare against.

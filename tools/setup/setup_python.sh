@@ -7,19 +7,7 @@
 # once). Idempotent: the pip step is skipped when the requirements are
 # installed; the package build is incremental (cargo) and always runs, so
 # .venv has the current sources.
-#
-#   bash tools/setup/setup_python.sh [--no-package]
-#
-# --no-package: the pinned packages only, not the `sdrs` package (tools/test.sh
-# builds the workspace first and installs the package after it, so that the
-# core's release build and its unit-test build share the two cores).
 set -euo pipefail
-package=1
-case "${1:-}" in
-  "") ;;
-  --no-package) package=0 ;;
-  *) echo "setup_python: unknown argument '$1' (usage: setup_python.sh [--no-package])" >&2; exit 2 ;;
-esac
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 venv="$root/.venv"
 req="$root/tools/setup/requirements.txt"
@@ -50,10 +38,6 @@ else
   [ -n "${PIP_CERT:-}" ] && export SSL_CERT_FILE="$PIP_CERT"
   "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" -r "$req"
   echo "$want" > "$stamp"
-fi
-if [ "$package" = 0 ]; then
-  echo "setup_python: done ($("$venv/bin/python" --version); the sdrs package not built: --no-package)"
-  exit 0
 fi
 # The `sdrs` Python package: `maturin develop` builds python/ (release
 # profile, the workspace's target/) and installs it into .venv.
