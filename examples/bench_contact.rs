@@ -87,10 +87,150 @@ fn make_case(rng: &mut ChaCha8Rng, m: usize, gap: f64, params: &ContactParams) -
     }
 }
 
+/// Timings and counts of one hull size, one entry per random pair.
+#[derive(Default)]
+struct SizeSamples {
+    /// µs of `U_c` with value, gradient and Hessian.
+    contact_us: Vec<f64>,
+    /// µs of `U_f` with value, gradient and Hessian.
+    friction_us: Vec<f64>,
+    /// µs of `U_f` with the mixed derivative as well.
+    friction_mixed_us: Vec<f64>,
+    contact_iters: Vec<f64>,
+    friction_iters: Vec<f64>,
+    /// Vertices inside the barrier band (those that carry a force).
+    active: Vec<f64>,
+    /// µs of the separation test alone: ours, and parry's hull + distance.
+    separation_ours_us: Vec<f64>,
+    separation_parry_us: Vec<f64>,
+}
+
+/// Pose `p` after a small rigid motion (1 mrad about a random axis, then a
+/// fixed ~1 mm translation): step t+1 of the friction evaluation.
+fn small_step(p: &Matrix3x4<f64>, rng: &mut ChaCha8Rng) -> Matrix3x4<f64> {
+    let r = Rotation3::from_axis_angle(
+        &Unit::new_normalize(Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )),
+        1e-3,
+    );
+    let mut q = r.matrix() * p;
+    let t = q.column(3) + Vector3::new(1e-3, -5e-4, 2e-4);
+    q.set_column(3, &t);
+    q
+}
+
+/// Contact at the case's poses, then friction after a small motion of both
+/// hulls (lagged from that contact), into `out`.
+fn measure_pair(
+    case: &Case,
+    reps: usize,
+    params: &ContactParams,
+    fparams: &FrictionParams,
+    rng: &mut ChaCha8Rng,
+    out: &mut SizeSamples,
+) {
+    let kappa = 1.0;
+    let ha = HullPose {
+        pose: &case.pa,
+        x_local: &case.la,
+    };
+    let hb = HullPose {
+        pose: &case.pb,
+        x_local: &case.lb,
+    };
+    let mut sc = ContactScratch::new();
+    let mut last = None;
+    out.contact_us.push(median_us(reps, || {
+        last = Some(black_box(
+            contact_pair(ha, hb, params, None, Need::Hessian, &mut sc).expect("contact"),
+        ));
+    }));
+    let PairOutcome::Separated(pair) = last.unwrap() else {
+        panic!("not separated")
+    };
+    out.contact_iters.push(pair.iterations as f64);
+    let lag = LaggedContact::from_contact(&pair, ha, hb, params, kappa);
+    out.active.push(
+        lag.normal_force_a
+            .iter()
+            .chain(&lag.normal_force_b)
+            .filter(|f| **f > 0.0)
+            .count() as f64,
+    );
+    let pa1 = small_step(&case.pa, rng);
+    let pb1 = small_step(&case.pb, rng);
+    let fa = HullPose {
+        pose: &pa1,
+        x_local: &case.la,
+    };
+    let fb = HullPose {
+        pose: &pb1,
+        x_local: &case.lb,
+    };
+    let mut fsc = FrictionScratch::new();
+    let frame = lag.frame();
+    let mut fit = 0;
+    out.friction_us.push(median_us(reps, || {
+        let o = friction_pair(&frame, fa, fb, fparams, FrictionNeed::Hessian, &mut fsc)
+            .expect("friction");
+        fit = o.iterations;
+        black_box(o);
+    }));
+    let mixed = FrictionNeed::HessianAndMixed;
+    out.friction_mixed_us.push(median_us(reps, || {
+        black_box(friction_pair(&frame, fa, fb, fparams, mixed, &mut fsc).expect("friction"));
+    }));
+    out.friction_iters.push(fit as f64);
+}
+
+/// The separation test alone on a far-apart copy of the pair (OutOfRange
+/// after GJK): ours on the raw vertex slices, and parry building both
+/// `ConvexPolyhedron`s and calling `query::distance`.
+fn measure_separation(case: &Case, reps: usize, params: &ContactParams, out: &mut SizeSamples) {
+    let ha = HullPose {
+        pose: &case.pa,
+        x_local: &case.la,
+    };
+    let mut pfar = case.pb;
+    let tfar = case.pb.column(3) * 1.5;
+    pfar.set_column(3, &tfar);
+    let hfar = HullPose {
+        pose: &pfar,
+        x_local: &case.lb,
+    };
+    let mut sc = ContactScratch::new();
+    out.separation_ours_us.push(median_us(reps, || {
+        black_box(contact_pair(ha, hfar, params, None, Need::Value, &mut sc).expect("gjk"));
+    }));
+    let to_p = |v: &Vector3<f64>| PVec::new(v.x, v.y, v.z);
+    let world = |x: &[Vector3<f64>], p: &Matrix3x4<f64>| -> Vec<PVec> {
+        x.iter()
+            .map(|x| to_p(&(p.fixed_columns::<3>(0) * x + p.column(3))))
+            .collect()
+    };
+    let (wa, wb) = (world(&case.la, &case.pa), world(&case.lb, &pfar));
+    out.separation_parry_us.push(median_us(reps.min(200), || {
+        let ca = ConvexPolyhedron::from_convex_hull(&wa).expect("hull a");
+        let cb = ConvexPolyhedron::from_convex_hull(&wb).expect("hull b");
+        black_box(
+            parry3d_f64::query::distance(&PPose::IDENTITY, &ca, &PPose::IDENTITY, &cb)
+                .expect("distance"),
+        );
+    }));
+}
+
+/// Median of the samples (mean of the two middle ones for an even count).
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    0.5 * (v[(v.len() - 1) / 2] + v[v.len() / 2])
+}
+
 fn main() {
     let params = ContactParams::default();
     let fparams = FrictionParams::new(0.5, 0.01);
-    let kappa = 1.0;
     let gap = 0.5 * params.support_distance();
     let mut rng = ChaCha8Rng::seed_from_u64(2024);
     println!(
@@ -109,140 +249,27 @@ fn main() {
     let mut gjk_rows = vec![];
     for &m in &sizes {
         let reps = (20_000 / m).clamp(50, 1000);
-        let mut tc = vec![];
-        let mut tf = vec![];
-        let mut tfm = vec![];
-        let mut iters_c = vec![];
-        let mut iters_f = vec![];
-        let mut active = vec![];
-        let mut tg_ours = vec![];
-        let mut tg_parry = vec![];
+        let mut s = SizeSamples::default();
         for _ in 0..4 {
             let case = make_case(&mut rng, m, gap, &params);
-            let ha = HullPose {
-                pose: &case.pa,
-                x_local: &case.la,
-            };
-            let hb = HullPose {
-                pose: &case.pb,
-                x_local: &case.lb,
-            };
-            let mut sc = ContactScratch::new();
-            let mut last = None;
-            tc.push(median_us(reps, || {
-                last = Some(black_box(
-                    contact_pair(ha, hb, &params, None, Need::Hessian, &mut sc).expect("contact"),
-                ));
-            }));
-            let PairOutcome::Separated(pair) = last.unwrap() else {
-                panic!("not separated")
-            };
-            iters_c.push(pair.iterations as f64);
-            // Vertices inside the barrier band (those that carry a force).
-            let lag = LaggedContact::from_contact(&pair, ha, hb, &params, kappa);
-            active.push(
-                lag.normal_force_a
-                    .iter()
-                    .chain(&lag.normal_force_b)
-                    .filter(|f| **f > 0.0)
-                    .count() as f64,
-            );
-            // Step t+1: small rigid motions of both hulls.
-            let step = |p: &Matrix3x4<f64>, rng: &mut ChaCha8Rng| {
-                let r = Rotation3::from_axis_angle(
-                    &Unit::new_normalize(Vector3::new(
-                        rng.random_range(-1.0..1.0),
-                        rng.random_range(-1.0..1.0),
-                        rng.random_range(-1.0..1.0),
-                    )),
-                    1e-3,
-                );
-                let mut q = r.matrix() * p;
-                let t = q.column(3) + Vector3::new(1e-3, -5e-4, 2e-4);
-                q.set_column(3, &t);
-                q
-            };
-            let pa1 = step(&case.pa, &mut rng);
-            let pb1 = step(&case.pb, &mut rng);
-            let fa = HullPose {
-                pose: &pa1,
-                x_local: &case.la,
-            };
-            let fb = HullPose {
-                pose: &pb1,
-                x_local: &case.lb,
-            };
-            let mut fsc = FrictionScratch::new();
-            let frame = lag.frame();
-            let mut fit = 0;
-            tf.push(median_us(reps, || {
-                let o = friction_pair(&frame, fa, fb, &fparams, FrictionNeed::Hessian, &mut fsc)
-                    .expect("friction");
-                fit = o.iterations;
-                black_box(o);
-            }));
-            tfm.push(median_us(reps, || {
-                black_box(
-                    friction_pair(
-                        &frame,
-                        fa,
-                        fb,
-                        &fparams,
-                        FrictionNeed::HessianAndMixed,
-                        &mut fsc,
-                    )
-                    .expect("friction"),
-                );
-            }));
-            iters_f.push(fit as f64);
-            // Separation test alone: a far-apart copy of the pair (OutOfRange after GJK).
-            let mut pfar = case.pb;
-            let tfar = case.pb.column(3) * 1.5;
-            pfar.set_column(3, &tfar);
-            let hfar = HullPose {
-                pose: &pfar,
-                x_local: &case.lb,
-            };
-            tg_ours.push(median_us(reps, || {
-                black_box(
-                    contact_pair(ha, hfar, &params, None, Need::Value, &mut sc).expect("gjk"),
-                );
-            }));
-            let to_p = |v: &Vector3<f64>| PVec::new(v.x, v.y, v.z);
-            let wa: Vec<PVec> = case
-                .la
-                .iter()
-                .map(|x| to_p(&(case.pa.fixed_columns::<3>(0) * x)))
-                .collect();
-            let wb: Vec<PVec> = case
-                .lb
-                .iter()
-                .map(|x| to_p(&(pfar.fixed_columns::<3>(0) * x + pfar.column(3))))
-                .collect();
-            tg_parry.push(median_us(reps.min(200), || {
-                let ca = ConvexPolyhedron::from_convex_hull(&wa).expect("hull a");
-                let cb = ConvexPolyhedron::from_convex_hull(&wb).expect("hull b");
-                black_box(
-                    parry3d_f64::query::distance(&PPose::IDENTITY, &ca, &PPose::IDENTITY, &cb)
-                        .expect("distance"),
-                );
-            }));
+            measure_pair(&case, reps, &params, &fparams, &mut rng, &mut s);
+            measure_separation(&case, reps, &params, &mut s);
         }
-        let med = |v: &mut Vec<f64>| {
-            v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            0.5 * (v[(v.len() - 1) / 2] + v[v.len() / 2])
-        };
         println!(
             "{:>9} | {:>12.2} {:>8.1} {:>7.1} | {:>12.2} {:>14.2} {:>8.1}",
             m,
-            med(&mut tc),
-            med(&mut iters_c),
-            med(&mut active),
-            med(&mut tf),
-            med(&mut tfm),
-            med(&mut iters_f)
+            median(&mut s.contact_us),
+            median(&mut s.contact_iters),
+            median(&mut s.active),
+            median(&mut s.friction_us),
+            median(&mut s.friction_mixed_us),
+            median(&mut s.friction_iters)
         );
-        gjk_rows.push((m, med(&mut tg_ours), med(&mut tg_parry)));
+        gjk_rows.push((
+            m,
+            median(&mut s.separation_ours_us),
+            median(&mut s.separation_parry_us),
+        ));
     }
     println!("\nseparation test only (far pair, outcome OutOfRange), µs:");
     println!(

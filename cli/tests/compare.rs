@@ -58,7 +58,28 @@ fn quick_suite_report_browser_gate_and_resume() {
     }
     let r = json(&out.join("results.json"));
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    tables_are_filled_from_the_run(&r, &md);
+    codesign_rows_are_from_the_run(&r, &md);
+    report_renders_in_chromium(&dir, &out);
+    resume_runs_nothing(&out, &r);
+    let spider_resumed = resume_in_the_middle_of_a_benchmark(&out, &r);
+    report_only_names_what_did_not_finish(&dir, &out, &spider_resumed);
+    gate_fails_on_a_degraded_run(&dir, &out, &baseline);
+}
 
+/// The `spider` entry of a results file's co-design benchmarks.
+fn spider_entry(r: &serde_json::Value) -> serde_json::Value {
+    r["codesign"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "spider")
+        .unwrap()
+        .clone()
+}
+
+/// The potential and chain tables hold this run's figures.
+fn tables_are_filled_from_the_run(r: &serde_json::Value, md: &str) {
     // Tables are filled from this run: every potential row's figures, the
     // chain rows and the co-design losses appear as measured.
     let pot = r["potential"]["rows"].as_array().unwrap();
@@ -92,6 +113,11 @@ fn quick_suite_report_browser_gate_and_resume() {
         contact_runs >= 3,
         "the chains barely touched: {contact_runs} runs in contact"
     );
+}
+
+/// The co-design rows (chain reaching's methods and gradient check, the
+/// spider's mesh baseline) hold this run's figures.
+fn codesign_rows_are_from_the_run(r: &serde_json::Value, md: &str) {
     let cd = &r["codesign"][0];
     assert_eq!(cd["name"], "chain_reach");
     let runs = cd["runs"].as_array().unwrap();
@@ -150,7 +176,9 @@ fn quick_suite_report_browser_gate_and_resume() {
     assert!(l1 < l0, "mesh baseline: loss {l0} -> {l1}");
     assert!(mesh["min_distance"].as_f64().unwrap() > 0.0);
     assert!(md.contains("| mesh baseline, coarse cage | 312 |"));
+}
 
+fn report_renders_in_chromium(dir: &Path, out: &Path) {
     // The browser: every plot drawn, no console message, a screenshot.
     let page = out.join("report.html");
     let (dom, log) = chromium(&file_url(&page, ""), &dir.join("chrome1"), &["--dump-dom"]);
@@ -181,7 +209,9 @@ fn quick_suite_report_browser_gate_and_resume() {
         "a near-empty screenshot ({} bytes)",
         png.len()
     );
+}
 
+fn resume_runs_nothing(out: &Path, r: &serde_json::Value) {
     // Resume: nothing re-runs.
     let t0 = std::time::Instant::now();
     let o = run_compare(&["--suite", "quick"], &out);
@@ -192,8 +222,11 @@ fn quick_suite_report_browser_gate_and_resume() {
         t0.elapsed().as_secs_f64() < 10.0,
         "resume re-ran benchmarks"
     );
-    assert_eq!(json(&out.join("results.json")), r);
+    assert_eq!(&json(&out.join("results.json")), r);
+}
 
+/// Returns the spider's entry after its re-run method.
+fn resume_in_the_middle_of_a_benchmark(out: &Path, r: &serde_json::Value) -> serde_json::Value {
     // Resume in the middle of a benchmark: the spider's finished methods and
     // its gradient check are kept, only the method that "was interrupted"
     // (its part removed) runs again.
@@ -216,16 +249,7 @@ fn quick_suite_report_browser_gate_and_resume() {
     );
     assert!(!stderr.contains("coarse cage finished earlier"), "{stderr}");
     let r2 = json(&out.join("results.json"));
-    let spider = |r: &serde_json::Value| {
-        r["codesign"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|c| c["name"] == "spider")
-            .unwrap()
-            .clone()
-    };
-    let (s1, s2) = (spider(&r), spider(&r2));
+    let (s1, s2) = (spider_entry(r), spider_entry(&r2));
     // Kept runs are the stored ones (their wall times included); the re-run
     // reaches the same loss (the optimization is deterministic) in a wall
     // time of its own.
@@ -235,7 +259,10 @@ fn quick_suite_report_browser_gate_and_resume() {
     assert_eq!(s1["runs"][2]["final_loss"], s2["runs"][2]["final_loss"]);
     assert_ne!(s1["runs"][2]["wall_seconds"], s2["runs"][2]["wall_seconds"]);
     assert_eq!(s1["shapes_svg"], s2["shapes_svg"]);
+    s2
+}
 
+fn report_only_names_what_did_not_finish(dir: &Path, out: &Path, s2: &serde_json::Value) {
     // --report-only on a copy of the run with the spider unfinished (its
     // coarse-cage method missing) and no chains: nothing runs, the report
     // holds what finished and names what did not.
@@ -266,7 +293,7 @@ fn quick_suite_report_browser_gate_and_resume() {
     );
     let rp = json(&partial.join("results.json"));
     assert!(rp["chains"].is_null());
-    let sp = spider(&rp);
+    let sp = spider_entry(&rp);
     assert_eq!(sp["runs"].as_array().unwrap().len(), 2);
     assert_eq!(sp["runs"][0], s2["runs"][0]);
     assert_eq!(sp["fd"], s2["fd"]);
@@ -281,7 +308,9 @@ fn quick_suite_report_browser_gate_and_resume() {
     let o = run_compare(&["--suite", "quick", "--report-only"], &dir.join("none"));
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--report-only needs"));
+}
 
+fn gate_fails_on_a_degraded_run(dir: &Path, out: &Path, baseline: &Path) {
     // A degraded run: the same suite with the co-design stopped after one
     // iteration (a worse design). Its other benchmarks resume from the
     // parts of the run above (same suite entries, same relative paths).
