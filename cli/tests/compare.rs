@@ -214,7 +214,7 @@ fn report_renders_in_chromium(dir: &Path, out: &Path) {
 fn resume_runs_nothing(out: &Path, r: &serde_json::Value) {
     // Resume: nothing re-runs.
     let t0 = std::time::Instant::now();
-    let o = run_compare(&["--suite", "quick"], &out);
+    let o = run_compare(&["--suite", "quick"], out);
     assert!(o.status.success());
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("finished earlier, kept"), "{stderr}");
@@ -239,7 +239,7 @@ fn resume_in_the_middle_of_a_benchmark(out: &Path, r: &serde_json::Value) -> ser
         out.join("parts/codesign_spider/mesh_baseline__coarse_cage.checkpoint.json"),
     )
     .unwrap();
-    let o = run_compare(&["--suite", "quick"], &out);
+    let o = run_compare(&["--suite", "quick"], out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(
