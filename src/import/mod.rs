@@ -27,6 +27,7 @@ pub mod guard;
 pub mod interior;
 pub mod job;
 pub mod limits;
+mod link_geometry;
 pub mod mass;
 pub mod mesh;
 pub mod mjcf;
@@ -49,12 +50,11 @@ pub use report::ImportReport;
 
 use crate::progress::Progress;
 use crate::scene::schema::*;
-use connectivity::DesignHull;
-use mesh::{MeshContext, TriMesh};
+use link_geometry::{LinkGeometry, link_geometry};
+use mesh::TriMesh;
 use nalgebra::Vector3;
-use polytope::convex_hull;
 use rayon::prelude::*;
-use source::{SourceRobot, SourceShape};
+use source::SourceRobot;
 use std::path::Path;
 use std::time::Instant;
 
@@ -289,164 +289,6 @@ fn add_mjcf_scene(
         msg: e.to_string(),
     })?;
     Ok(())
-}
-
-struct LinkGeometry {
-    /// What was repaired or worked around, for the report.
-    notes: Vec<String>,
-    hulls: Vec<DesignHull>,
-    sources: Vec<TriMesh>,
-    source_volume: Option<f64>,
-    seconds: f64,
-}
-
-fn link_geometry(
-    src: &SourceRobot,
-    li: usize,
-    opts: &ImportOptions,
-    memo: &decompose::Memo,
-) -> Result<LinkGeometry, ImportError> {
-    let t0 = Instant::now();
-    let link = &src.links[li];
-    // `grid` divides the designable links only; the others keep one hull
-    // per mesh (a fixed palm needs no blocks).
-    let grid_opts;
-    let opts = match &opts.designable {
-        Some(d) if opts.decomposer == decompose::Decomposer::Grid && !d.contains(&link.name) => {
-            grid_opts = ImportOptions {
-                decomposer: decompose::Decomposer::Hull,
-                ..opts.clone()
-            };
-            &grid_opts
-        }
-        _ => opts,
-    };
-    let nmesh = link
-        .geometry
-        .iter()
-        .filter(|g| matches!(g.shape, SourceShape::Mesh { .. }))
-        .count()
-        .max(1);
-    let per_mesh = (opts.max_hulls / nmesh).max(1);
-    let mut hulls = Vec::new();
-    let mut sources = Vec::new();
-    let mut notes = Vec::new();
-    let mut volume = Some(0.0);
-    for g in &link.geometry {
-        let geom_err = |msg: String| ImportError::Geometry {
-            path: src.file.clone(),
-            element: g.element.clone(),
-            msg,
-        };
-        limits::check_coordinates(
-            "origin",
-            g.rotation
-                .iter()
-                .chain(g.translation.iter())
-                .copied()
-                .collect::<Vec<_>>()
-                .as_slice(),
-        )
-        .map_err(geom_err)?;
-        let place = |v: &Vector3<f64>| g.rotation * v + g.translation;
-        let prim = match &g.shape {
-            SourceShape::Box { size } => Some(primitives::box_hull(*size)),
-            SourceShape::Cylinder { radius, length } => {
-                Some(primitives::cylinder_hull(*radius, *length))
-            }
-            SourceShape::Sphere { radius } => Some(primitives::sphere_hull(*radius)),
-            SourceShape::Capsule { radius, length } => {
-                Some(primitives::capsule_hull(*radius, *length))
-            }
-            SourceShape::Ellipsoid { radii } => Some(primitives::ellipsoid_hull(*radii)),
-            SourceShape::Tiny { edge } => Some(primitives::box_hull([*edge; 3])),
-            SourceShape::Mesh { .. } | SourceShape::ConvexMesh { .. } => None,
-        };
-        if let Some(prim) = prim {
-            let prim = prim.map_err(geom_err)?;
-            let pts: Vec<_> = prim.hull.iter().map(place).collect();
-            hulls.push(DesignHull::new(convex_hull(&pts).map_err(geom_err)?));
-            sources.push(
-                prim.source
-                    .transformed([1.0; 3], &g.rotation, &g.translation),
-            );
-            volume = volume.map(|v| v + prim.volume);
-            continue;
-        }
-        if let SourceShape::ConvexMesh { mesh } = &g.shape {
-            let m = mesh.transformed([1.0; 3], &g.rotation, &g.translation);
-            hulls.push(DesignHull::new(
-                convex_hull(&m.vertices).map_err(|e| geom_err(e.to_string()))?,
-            ));
-            volume = match (volume, m.volume()) {
-                (Some(a), Some(b)) => Some(a + b),
-                _ => None,
-            };
-            sources.push(m);
-            continue;
-        }
-        let SourceShape::Mesh { path, scale } = &g.shape else {
-            unreachable!()
-        };
-        if scale.iter().any(|s| *s == 0.0 || !s.is_finite()) {
-            return Err(geom_err(format!(
-                "mesh scale must be finite and non-zero, got {scale:?}"
-            )));
-        }
-        let ctx = MeshContext {
-            file: src.file.clone(),
-            element: g.element.clone(),
-        };
-        let (m, note) = mesh::load_mesh(path, &ctx)?;
-        notes.extend(note);
-        let m = m.transformed(*scale, &g.rotation, &g.translation);
-        limits::check_coordinates(
-            &format!("mesh {} placed with scale {scale:?}", path.display()),
-            m.vertices
-                .iter()
-                .flat_map(|v| v.iter().copied())
-                .collect::<Vec<_>>()
-                .as_slice(),
-        )
-        .map_err(geom_err)?;
-        notes.extend(units_hint(&m, &g.element, path));
-        volume = match (volume, m.volume()) {
-            (Some(a), Some(b)) => Some(a + b),
-            _ => None,
-        };
-        let non_manifold = m.non_manifold_edges();
-        let parts = if non_manifold > 0 {
-            notes.push(format!(
-                "{}: mesh {} is not manifold ({non_manifold} edge(s) shared by more than two triangles); decomposed as a surface",
-                g.element,
-                path.display()
-            ));
-            match memo.decompose(&m, opts, per_mesh, &ctx) {
-                Ok(p) => p,
-                Err(e) if opts.decomposer != decompose::Decomposer::None => {
-                    notes.push(format!(
-                        "{}: {e}; used the convex hull of the mesh's points instead",
-                        g.element
-                    ));
-                    vec![polytope::convex_hull(&m.vertices).map_err(geom_err)?]
-                }
-                Err(e) => return Err(e),
-            }
-        } else {
-            memo.decompose(&m, opts, per_mesh, &ctx)?
-        };
-        for p in parts {
-            hulls.push(DesignHull::new(p));
-        }
-        sources.push(m);
-    }
-    Ok(LinkGeometry {
-        notes,
-        hulls,
-        sources,
-        source_volume: volume,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
 }
 
 /// Bounding-box diagonal (m) above which a placed mesh is reported as
