@@ -13,6 +13,9 @@ use sdrs::output::Summary;
 use std::path::Path;
 use std::time::Instant;
 
+/// One co-design benchmark: the gradient check, then each method of
+/// [`variants`] (kept from an earlier run when its part is there, resumed
+/// from its checkpoint otherwise), measured on its final design.
 pub fn run(
     spec: &CodesignSpec,
     base_dir: &Path,
@@ -28,36 +31,19 @@ pub fn run(
     std::fs::create_dir_all(&parts)
         .with_context(|| format!("{}: cannot create the output directory", parts.display()))?;
     let task = base_dir.join(&spec.task);
-    let load = |design: bool| -> Result<Problem> {
-        let mut p = Problem::load(&task, design)?;
-        if let Some(h) = spec.horizon {
-            for t in &mut p.trajectories {
-                t.horizon = h;
-            }
-        }
-        Ok(p)
-    };
-    let p = load(true)?;
+    let p = load_problem(spec, &task, true)?;
     let iters = spec.iters.unwrap_or(p.task.optimizer.iters);
     let methods = 2 + spec.cages.len() as u64;
     pb.set_length(methods * (iters as u64 + 1) + u64::from(spec.fd_check));
-    let fd = if spec.fd_check && !p.design.is_empty() {
-        pb.set_message(format!("{}: gradient check", spec.name));
-        let file = parts.join("fd_check.json");
-        let r = match super::load_part(&file, spec)?.filter(|_| !force) {
-            Some(r) => r,
-            None => {
-                let r = fd_check(&p).with_context(|| format!("{}: gradient check", spec.name))?;
-                super::store_part(&file, spec, &r)?;
-                r
-            }
-        };
-        pb.inc(1);
-        Some(r)
-    } else {
-        None
-    };
+    let fd = gradient_check_part(spec, &p, &parts, force, pb)?;
     let metrics = sdrs::optimize::metrics::Metrics::from_problem(&p)?;
+    let row = Row {
+        spec,
+        task: &task,
+        iters,
+        force,
+        pb,
+    };
     let mut runs = Vec::new();
     let mut shapes_svg = None;
     for (method, design, cage) in variants(spec) {
@@ -72,32 +58,13 @@ pub fn run(
             runs.push(run);
             continue;
         }
-        let p = match cage {
-            None if design => p.clone(),
-            None => load(false)?,
-            Some(c) => {
-                let mut q = load(true)?;
-                let ipc = crate::contact_model::ContactArgs {
-                    contact: Some("ipc".into()),
-                    ..Default::default()
-                };
-                crate::contact_model::configure_problem(&mut q, &ipc, Some(c), true)
-                    .with_context(|| format!("{}: {method}", spec.name))?;
-                q
-            }
-        };
+        let q = method_problem(spec, &task, &p, design, cage)
+            .with_context(|| format!("{}: {method}", spec.name))?;
         pb.set_message(format!("{}: {method}", spec.name));
         let t0 = Instant::now();
         let ckpt = parts.join(format!("{}.checkpoint.json", slug(&method)));
-        let row = Row {
-            spec,
-            task: &task,
-            iters,
-            force,
-            pb,
-        };
         let (out, resumed) = row
-            .optimize(&p, design, &ckpt)
+            .optimize(&q, design, &ckpt)
             .with_context(|| format!("{}: {method}", spec.name))?;
         // A resumed run's wall time is the sessions' sum (the history's
         // cumulative clock).
@@ -108,40 +75,10 @@ pub fn run(
         if let Some(why) = &out.stopped {
             pb.suspend(|| eprintln!("warning: {}: {method}: the run {why}", spec.name));
         }
-        let n = out.history.len().max(1) as f64;
-        let grasps = sdrs::optimize::grasp::measure(&p, &out.design, &out.controller)?;
-        let m = match &metrics {
-            Some(m) => Some(m.measure(&p, &out.design, &out.controller)?),
-            None => None,
-        };
-        if design && cage.is_none() {
-            let (d0, _) = sdrs::optimize::start(&p, 0);
-            if let Some(svg) =
-                sdrs::output::codesign::initial_vs_optimized_svg(&p, &d0, &out.design)
-            {
-                std::fs::create_dir_all(out_dir.join("plots"))?;
-                sdrs::output::write_atomic(&out_dir.join(&shapes_rel), svg.as_bytes())?;
-                shapes_svg = Some(shapes_rel);
-            }
+        if design && cage.is_none() && write_shapes(&q, &out.design, out_dir, &shapes_rel)? {
+            shapes_svg = Some(shapes_rel);
         }
-        let run = CodesignRun {
-            method: method.clone(),
-            design_variables: p.design.len(),
-            controller_variables: p.controls.len(),
-            initial_loss: out.initial_loss,
-            final_loss: out.loss,
-            history: out.history.iter().map(|h| h.best_loss).collect(),
-            wall_seconds: wall,
-            forward_seconds_mean: out.history.iter().map(|h| h.forward_seconds).sum::<f64>() / n,
-            backward_seconds_mean: out.history.iter().map(|h| h.backward_seconds).sum::<f64>() / n,
-            min_distance: min_distance(&p, &out.design, &out.controller)?,
-            distance: m.as_ref().map(|m| m.distance),
-            upright_at_horizon: m.as_ref().map(|m| m.upright_at_horizon),
-            first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
-            grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
-            grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
-            stopped: out.stopped.clone(),
-        };
+        let run = measure_run(&q, &method, &out, wall, metrics.as_ref())?;
         super::store_part(&file, spec, &run)?;
         runs.push(run);
     }
@@ -154,6 +91,122 @@ pub fn run(
         fd,
         shapes_svg,
         unfinished: Vec::new(),
+    })
+}
+
+/// The task at `task` with the design on or off, every trajectory's horizon
+/// replaced by the suite entry's when it has one.
+fn load_problem(spec: &CodesignSpec, task: &Path, design: bool) -> Result<Problem> {
+    let mut p = Problem::load(task, design)?;
+    if let Some(h) = spec.horizon {
+        for t in &mut p.trajectories {
+            t.horizon = h;
+        }
+    }
+    Ok(p)
+}
+
+/// The problem a method optimizes: `p` itself (co-design), the task with
+/// the design off (controller-only), or the task under IPC contact with
+/// the design replaced by `cage`'s vertices (the mesh baseline).
+fn method_problem(
+    spec: &CodesignSpec,
+    task: &Path,
+    p: &Problem,
+    design: bool,
+    cage: Option<&str>,
+) -> Result<Problem> {
+    match cage {
+        None if design => Ok(p.clone()),
+        None => load_problem(spec, task, false),
+        Some(c) => {
+            let mut q = load_problem(spec, task, true)?;
+            let ipc = crate::contact_model::ContactArgs {
+                contact: Some("ipc".into()),
+                ..Default::default()
+            };
+            crate::contact_model::configure_problem(&mut q, &ipc, Some(c), true)?;
+            Ok(q)
+        }
+    }
+}
+
+/// The gradient check of a benchmark with a design (`spec.fd_check`): kept
+/// from an earlier run's part, computed and stored otherwise.
+fn gradient_check_part(
+    spec: &CodesignSpec,
+    p: &Problem,
+    parts: &Path,
+    force: bool,
+    pb: &ProgressBar,
+) -> Result<Option<FdCheck>> {
+    if !spec.fd_check || p.design.is_empty() {
+        return Ok(None);
+    }
+    pb.set_message(format!("{}: gradient check", spec.name));
+    let file = parts.join("fd_check.json");
+    let r = match super::load_part(&file, spec)?.filter(|_| !force) {
+        Some(r) => r,
+        None => {
+            let r = fd_check(p).with_context(|| format!("{}: gradient check", spec.name))?;
+            super::store_part(&file, spec, &r)?;
+            r
+        }
+    };
+    pb.inc(1);
+    Ok(Some(r))
+}
+
+/// The initial and the optimized shapes side by side at `out_dir/rel`;
+/// whether there was a picture to write.
+fn write_shapes(
+    p: &Problem,
+    design: &nalgebra::DVector<f64>,
+    out_dir: &Path,
+    rel: &str,
+) -> Result<bool> {
+    let (d0, _) = sdrs::optimize::start(p, 0);
+    let Some(svg) = sdrs::output::codesign::initial_vs_optimized_svg(p, &d0, design) else {
+        return Ok(false);
+    };
+    std::fs::create_dir_all(out_dir.join("plots"))?;
+    sdrs::output::write_atomic(&out_dir.join(rel), svg.as_bytes())?;
+    Ok(true)
+}
+
+/// A method's row: its losses and times from the optimizer's history, and
+/// the final design measured (minimum hull distance, the task's metrics,
+/// grasps).
+fn measure_run(
+    p: &Problem,
+    method: &str,
+    out: &sdrs::optimize::Outcome,
+    wall: f64,
+    metrics: Option<&sdrs::optimize::metrics::Metrics>,
+) -> Result<CodesignRun> {
+    let n = out.history.len().max(1) as f64;
+    let grasps = sdrs::optimize::grasp::measure(p, &out.design, &out.controller)?;
+    let m = match metrics {
+        Some(m) => Some(m.measure(p, &out.design, &out.controller)?),
+        None => None,
+    };
+    Ok(CodesignRun {
+        method: method.to_string(),
+        design_variables: p.design.len(),
+        controller_variables: p.controls.len(),
+        initial_loss: out.initial_loss,
+        final_loss: out.loss,
+        history: out.history.iter().map(|h| h.best_loss).collect(),
+        wall_seconds: wall,
+        forward_seconds_mean: out.history.iter().map(|h| h.forward_seconds).sum::<f64>() / n,
+        backward_seconds_mean: out.history.iter().map(|h| h.backward_seconds).sum::<f64>() / n,
+        min_distance: min_distance(p, &out.design, &out.controller)?,
+        distance: m.as_ref().map(|m| m.distance),
+        upright_at_horizon: m.as_ref().map(|m| m.upright_at_horizon),
+        first_fall_time: m.as_ref().and_then(|m| m.first_fall_time),
+        grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
+        grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
+        stopped: out.stopped.clone(),
     })
 }
 
@@ -214,7 +267,6 @@ pub fn finished(
     ))
 }
 
-/// A file name for a method ("mesh baseline, fine cage" → `mesh_baseline__fine_cage`).
 /// What every method of one co-design row shares.
 #[derive(Clone, Copy)]
 struct Row<'a> {
@@ -297,6 +349,7 @@ impl Row<'_> {
     }
 }
 
+/// A file name for a method ("mesh baseline, fine cage" → `mesh_baseline__fine_cage`).
 fn slug(method: &str) -> String {
     method
         .chars()
