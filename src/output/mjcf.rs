@@ -144,13 +144,20 @@ pub fn scene_to_mjcf_with(scene: &Scene, model_name: &str, actuators: bool) -> S
     }
     let _ = writeln!(x, "  </asset>");
     let _ = writeln!(x, "  <worldbody>");
-    let mut key_qpos: Vec<f64> = Vec::new();
     let roots: Vec<usize> = (0..model.links.len())
         .filter(|&i| model.links[i].parent.is_none())
         .collect();
+    let mut bodies = BodyWriter {
+        scene,
+        mu,
+        joint_effect: &joint_effect,
+        key_qpos: Vec::new(),
+        x,
+    };
     for r in roots {
-        write_body(scene, r, 2, mu, &joint_effect, &mut key_qpos, &mut x);
+        bodies.body(r, 2);
     }
+    let (key_qpos, mut x) = (bodies.key_qpos, bodies.x);
     let _ = writeln!(x, "  </worldbody>");
     if let Some(c) = &scene.contact {
         let pairs: Vec<_> = c
@@ -332,39 +339,55 @@ fn scoped(scene: &Scene, i: usize, name: &str) -> String {
     }
 }
 
-// Arguments kept separate: recursive private writer: the scene, the body's index and depth, and the two accumulators it appends to.
-#[allow(clippy::too_many_arguments)]
-fn write_body(
-    scene: &Scene,
-    i: usize,
-    depth: usize,
+/// The `<worldbody>` writer: each body with its joints, inertial and geoms,
+/// its children nested inside; the joints' initial values collected for
+/// the `<key>`.
+struct BodyWriter<'a> {
+    scene: &'a Scene,
+    /// Ground friction written on every geom.
     mu: f64,
-    joint_effect: &[[f64; 5]],
-    key_qpos: &mut Vec<f64>,
-    x: &mut String,
-) {
-    let model = &scene.model;
-    let l = &model.links[i];
-    let pad = "  ".repeat(depth);
-    let o = l.dof_offset;
-    let q0 = &scene.q0;
-    // A free body's frame is its world pose at θ⁰.
-    let frame = if matches!(l.joint, JointKind::Free) {
-        let c = scene.charts[l.chart.expect("free joints have a chart")];
-        let j = l.joint.transform(&c, &q0.as_slice()[o..o + 6]);
-        crate::math::compose(&l.attach, &j)
-    } else {
-        l.attach
-    };
-    let _ = writeln!(
-        x,
-        "{pad}<body name=\"{}\" {}>",
-        body_name(scene, i),
-        pose_attrs(&frame)
-    );
-    let jn = joint_name(scene, i);
-    let extras = |k: usize| {
-        let [d, a, fl, sk, skr] = joint_effect[k];
+    /// Per coordinate: damping, armature, friction loss, stiffness and
+    /// stiffness × reference (the fitted joint effects).
+    joint_effect: &'a [[f64; 5]],
+    /// `qpos` of the `<key>`, in MuJoCo's order.
+    key_qpos: Vec<f64>,
+    x: String,
+}
+
+impl BodyWriter<'_> {
+    /// Link `i` and its subtree, indented by `depth`.
+    fn body(&mut self, i: usize, depth: usize) {
+        let scene = self.scene;
+        let l = &scene.model.links[i];
+        let pad = "  ".repeat(depth);
+        // A free body's frame is its world pose at θ⁰.
+        let frame = if matches!(l.joint, JointKind::Free) {
+            let c = scene.charts[l.chart.expect("free joints have a chart")];
+            let o = l.dof_offset;
+            let j = l.joint.transform(&c, &scene.q0.as_slice()[o..o + 6]);
+            crate::math::compose(&l.attach, &j)
+        } else {
+            l.attach
+        };
+        let _ = writeln!(
+            self.x,
+            "{pad}<body name=\"{}\" {}>",
+            body_name(scene, i),
+            pose_attrs(&frame)
+        );
+        self.joints(i, &pad, &frame);
+        self.inertial(i, &pad);
+        self.geoms(i, &pad);
+        let model = &scene.model;
+        for c in (0..model.links.len()).filter(|&c| model.links[c].parent == Some(i)) {
+            self.body(c, depth + 1);
+        }
+        let _ = writeln!(self.x, "{pad}</body>");
+    }
+
+    /// The fitted joint effects of coordinate `k` as joint attributes.
+    fn extras(&self, k: usize) -> String {
+        let [d, a, fl, sk, skr] = self.joint_effect[k];
         let mut s = String::new();
         if d > 0.0 {
             let _ = write!(s, " damping=\"{d}\"");
@@ -379,96 +402,113 @@ fn write_body(
             let _ = write!(s, " stiffness=\"{sk}\" springref=\"{}\"", skr / sk);
         }
         s
-    };
-    let range = || {
-        l.limit
-            .as_ref()
-            .map(|lim| format!(" range=\"{} {}\"", lim.lower, lim.upper))
-            .unwrap_or_default()
-    };
-    match &l.joint {
-        JointKind::Fixed => {}
-        JointKind::Revolute { axis } | JointKind::Prismatic { axis } => {
-            let t = if matches!(l.joint, JointKind::Revolute { .. }) {
-                "hinge"
-            } else {
-                "slide"
-            };
-            let _ = writeln!(
-                x,
-                "{pad}  <joint name=\"{jn}\" type=\"{t}\" axis=\"{}\"{}{}/>",
-                v3(axis),
-                range(),
-                extras(o)
-            );
-            key_qpos.push(q0[o]);
-        }
-        JointKind::Ball { axes } => {
-            for (k, a) in axes.iter().enumerate() {
+    }
+
+    /// Link `i`'s joint (a ball joint as three hinges on its axes) and its
+    /// initial value in the key (`frame`: the body's frame, for a free joint).
+    fn joints(&mut self, i: usize, pad: &str, frame: &Pose) {
+        let scene = self.scene;
+        let l = &scene.model.links[i];
+        let (o, q0) = (l.dof_offset, &scene.q0);
+        let jn = joint_name(scene, i);
+        match &l.joint {
+            JointKind::Fixed => {}
+            JointKind::Revolute { axis } | JointKind::Prismatic { axis } => {
+                let t = if matches!(l.joint, JointKind::Revolute { .. }) {
+                    "hinge"
+                } else {
+                    "slide"
+                };
+                let range = l
+                    .limit
+                    .as_ref()
+                    .map(|lim| format!(" range=\"{} {}\"", lim.lower, lim.upper))
+                    .unwrap_or_default();
+                let extras = self.extras(o);
                 let _ = writeln!(
-                    x,
-                    "{pad}  <joint name=\"{jn}_{k}\" type=\"hinge\" axis=\"{}\"{}/>",
-                    v3(a),
-                    extras(o + k)
+                    self.x,
+                    "{pad}  <joint name=\"{jn}\" type=\"{t}\" axis=\"{}\"{range}{extras}/>",
+                    v3(axis),
                 );
-                key_qpos.push(q0[o + k]);
+                self.key_qpos.push(q0[o]);
+            }
+            JointKind::Ball { axes } => {
+                for (k, a) in axes.iter().enumerate() {
+                    let extras = self.extras(o + k);
+                    let _ = writeln!(
+                        self.x,
+                        "{pad}  <joint name=\"{jn}_{k}\" type=\"hinge\" axis=\"{}\"{extras}/>",
+                        v3(a),
+                    );
+                    self.key_qpos.push(q0[o + k]);
+                }
+            }
+            JointKind::Spherical => {
+                let _ = writeln!(self.x, "{pad}  <joint name=\"{jn}\" type=\"ball\"/>");
+                let c = scene.charts[l.chart.expect("spherical joints have a chart")];
+                let j = l.joint.transform(&c, &q0.as_slice()[o..o + 3]);
+                let u = UnitQuaternion::from_matrix(&rot(&j));
+                self.key_qpos.extend([u.w, u.i, u.j, u.k]);
+            }
+            JointKind::Free => {
+                let _ = writeln!(self.x, "{pad}  <freejoint name=\"{jn}\"/>");
+                let u = UnitQuaternion::from_matrix(&rot(frame));
+                self.key_qpos
+                    .extend([frame[(0, 3)], frame[(1, 3)], frame[(2, 3)]]);
+                self.key_qpos.extend([u.w, u.i, u.j, u.k]);
             }
         }
-        JointKind::Spherical => {
-            let _ = writeln!(x, "{pad}  <joint name=\"{jn}\" type=\"ball\"/>");
-            let c = scene.charts[l.chart.expect("spherical joints have a chart")];
-            let j = l.joint.transform(&c, &q0.as_slice()[o..o + 3]);
-            let u = UnitQuaternion::from_matrix(&rot(&j));
-            key_qpos.extend([u.w, u.i, u.j, u.k]);
+    }
+
+    /// Link `i`'s mass properties (with the fitted effects); a stand-in mass
+    /// on a massless moving body, which MuJoCo rejects.
+    fn inertial(&mut self, i: usize, pad: &str) {
+        let scene = self.scene;
+        let m2 = second_moment_with_effects(scene, i);
+        if m2[(3, 3)] > 0.0 {
+            let inr = Inertial::from_second_moment(&m2);
+            let t = &inr.inertia;
+            let _ = writeln!(
+                self.x,
+                "{pad}  <inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
+                v3(&inr.com),
+                inr.mass,
+                t[(0, 0)],
+                t[(1, 1)],
+                t[(2, 2)],
+                t[(0, 1)],
+                t[(0, 2)],
+                t[(1, 2)]
+            );
+        } else if !scene.model.ancestor_dofs[i].is_empty() {
+            let _ = writeln!(
+                self.x,
+                "{pad}  <!-- massless in sdrs; MuJoCo needs a mass on moving bodies -->"
+            );
+            let _ = writeln!(
+                self.x,
+                "{pad}  <inertial pos=\"0 0 0\" mass=\"{MASSLESS_STANDIN}\" diaginertia=\"{0} {0} {0}\"/>",
+                MASSLESS_STANDIN
+            );
         }
-        JointKind::Free => {
-            let _ = writeln!(x, "{pad}  <freejoint name=\"{jn}\"/>");
-            let u = UnitQuaternion::from_matrix(&rot(&frame));
-            key_qpos.extend([frame[(0, 3)], frame[(1, 3)], frame[(2, 3)]]);
-            key_qpos.extend([u.w, u.i, u.j, u.k]);
+    }
+
+    /// One mesh geom per hull of link `i`.
+    fn geoms(&mut self, i: usize, pad: &str) {
+        let scene = self.scene;
+        let l = &scene.model.links[i];
+        // A scene without `contact:` simulates none: MuJoCo must not either.
+        let (ct, ca) = if l.collides && scene.contact.is_some() {
+            (1, 1)
+        } else {
+            (0, 0)
+        };
+        let mu = self.mu;
+        for h in 0..l.hulls.len() {
+            let _ = writeln!(
+                self.x,
+                "{pad}  <geom type=\"mesh\" mesh=\"m{i}_{h}\" contype=\"{ct}\" conaffinity=\"{ca}\" friction=\"{mu} 0.005 0.0001\"/>"
+            );
         }
     }
-    let m2 = second_moment_with_effects(scene, i);
-    if m2[(3, 3)] > 0.0 {
-        let inr = Inertial::from_second_moment(&m2);
-        let t = &inr.inertia;
-        let _ = writeln!(
-            x,
-            "{pad}  <inertial pos=\"{}\" mass=\"{}\" fullinertia=\"{} {} {} {} {} {}\"/>",
-            v3(&inr.com),
-            inr.mass,
-            t[(0, 0)],
-            t[(1, 1)],
-            t[(2, 2)],
-            t[(0, 1)],
-            t[(0, 2)],
-            t[(1, 2)]
-        );
-    } else if !model.ancestor_dofs[i].is_empty() {
-        let _ = writeln!(
-            x,
-            "{pad}  <!-- massless in sdrs; MuJoCo needs a mass on moving bodies -->"
-        );
-        let _ = writeln!(
-            x,
-            "{pad}  <inertial pos=\"0 0 0\" mass=\"{MASSLESS_STANDIN}\" diaginertia=\"{0} {0} {0}\"/>",
-            MASSLESS_STANDIN
-        );
-    }
-    // A scene without `contact:` simulates none: MuJoCo must not either.
-    let (ct, ca) = if l.collides && scene.contact.is_some() {
-        (1, 1)
-    } else {
-        (0, 0)
-    };
-    for h in 0..l.hulls.len() {
-        let _ = writeln!(
-            x,
-            "{pad}  <geom type=\"mesh\" mesh=\"m{i}_{h}\" contype=\"{ct}\" conaffinity=\"{ca}\" friction=\"{mu} 0.005 0.0001\"/>"
-        );
-    }
-    for c in (0..model.links.len()).filter(|&c| model.links[c].parent == Some(i)) {
-        write_body(scene, c, depth + 1, mu, joint_effect, key_qpos, x);
-    }
-    let _ = writeln!(x, "{pad}</body>");
 }
