@@ -111,8 +111,37 @@ fn bounds<const N: usize>(v: &[[f64; N]]) -> (Vec<f64>, Vec<f64>) {
 /// The `.glb` bytes of `p` (see the module docs).
 pub fn glb(p: &Playback) -> Vec<u8> {
     let mut bin = Bin::default();
+    let (robots, materials) = materials(p);
+    let (meshes, mut nodes) = link_nodes(p, &robots, &mut bin);
+    let n = nodes.len();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    nodes.push(json!({"name": "sdrs", "rotation": [-h, 0.0, 0.0, h], "children": (0..n).collect::<Vec<_>>()}));
+    let animation = (!p.times.is_empty() && n > 0).then(|| animation(p, n, &mut bin));
+    while !bin.bytes.len().is_multiple_of(4) {
+        bin.bytes.push(0);
+    }
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": concat!("sdrs ", env!("CARGO_PKG_VERSION"))},
+        "scene": 0,
+        "scenes": [{"nodes": [n]}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "buffers": [{"byteLength": bin.bytes.len()}],
+        "bufferViews": bin.views,
+        "accessors": bin.accessors,
+    });
+    if let Some(a) = animation {
+        doc["animations"] = json!([a]);
+    }
+    container(&doc, &bin.bytes)
+}
+
+/// The robots in order of first appearance, and one material per robot
+/// (its colour; the environment's grey).
+fn materials(p: &Playback) -> (Vec<&str>, Vec<serde_json::Value>) {
     let mut robots: Vec<&str> = Vec::new();
-    let (mut meshes, mut materials, mut nodes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut materials = Vec::new();
     for l in &p.links {
         if !robots.contains(&l.robot.as_str()) {
             robots.push(&l.robot);
@@ -124,6 +153,17 @@ pub fn glb(p: &Playback) -> Vec<u8> {
             }));
         }
     }
+    (robots, materials)
+}
+
+/// One node per link (at its first pose), with a mesh of one primitive per
+/// hull when it has hulls; the vertex and index data into `bin`.
+fn link_nodes(
+    p: &Playback,
+    robots: &[&str],
+    bin: &mut Bin,
+) -> (Vec<serde_json::Value>, Vec<serde_json::Value>) {
+    let (mut meshes, mut nodes) = (Vec::new(), Vec::new());
     let first = p.poses.first();
     for (i, l) in p.links.iter().enumerate() {
         let material = robots.iter().position(|r| *r == l.robot).unwrap_or(0);
@@ -166,75 +206,63 @@ pub fn glb(p: &Playback) -> Vec<u8> {
         }
         nodes.push(node);
     }
-    let n = nodes.len();
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    nodes.push(json!({"name": "sdrs", "rotation": [-h, 0.0, 0.0, h], "children": (0..n).collect::<Vec<_>>()}));
+    (meshes, nodes)
+}
 
-    let mut animations = Vec::new();
-    if !p.times.is_empty() && n > 0 {
-        let t0 = p.times[0];
-        let times: Vec<[f64; 1]> = p.times.iter().map(|t| [t - t0]).collect();
-        let input = bin.push(
-            &f32_bytes(times.iter().map(|t| t[0])),
-            FLOAT,
-            "SCALAR",
-            times.len(),
-            Some(bounds(&times)),
-            None,
-        );
-        let (mut samplers, mut channels) = (Vec::new(), Vec::new());
-        for i in 0..n {
-            let mut tr = Vec::with_capacity(p.times.len());
-            let mut rot: Vec<[f64; 4]> = Vec::with_capacity(p.times.len());
-            for step in &p.poses {
-                let (t, mut q) = pose_trs(&step[i]);
-                if let Some(prev) = rot.last()
-                    && prev.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>() < 0.0
-                {
-                    q = q.map(|x| -x);
-                }
-                tr.push(t);
-                rot.push(q);
+/// The trajectory as one animation: per link node, a translation and a
+/// rotation channel sampled at the playback's times (from 0), each
+/// quaternion's sign chosen next to the previous one (linear interpolation
+/// takes the short way).
+fn animation(p: &Playback, n: usize, bin: &mut Bin) -> serde_json::Value {
+    let t0 = p.times[0];
+    let times: Vec<[f64; 1]> = p.times.iter().map(|t| [t - t0]).collect();
+    let input = bin.push(
+        &f32_bytes(times.iter().map(|t| t[0])),
+        FLOAT,
+        "SCALAR",
+        times.len(),
+        Some(bounds(&times)),
+        None,
+    );
+    let (mut samplers, mut channels) = (Vec::new(), Vec::new());
+    for i in 0..n {
+        let mut tr = Vec::with_capacity(p.times.len());
+        let mut rot: Vec<[f64; 4]> = Vec::with_capacity(p.times.len());
+        for step in &p.poses {
+            let (t, mut q) = pose_trs(&step[i]);
+            if let Some(prev) = rot.last()
+                && prev.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>() < 0.0
+            {
+                q = q.map(|x| -x);
             }
-            for (path, data, kind) in [
-                (
-                    "translation",
-                    f32_bytes(tr.iter().flatten().copied()),
-                    "VEC3",
-                ),
-                ("rotation", f32_bytes(rot.iter().flatten().copied()), "VEC4"),
-            ] {
-                let out = bin.push(&data, FLOAT, kind, p.times.len(), None, None);
-                samplers.push(json!({"input": input, "output": out, "interpolation": "LINEAR"}));
-                channels.push(
-                    json!({"sampler": samplers.len() - 1, "target": {"node": i, "path": path}}),
-                );
-            }
+            tr.push(t);
+            rot.push(q);
         }
-        animations.push(json!({"name": "trajectory", "samplers": samplers, "channels": channels}));
+        for (path, data, kind) in [
+            (
+                "translation",
+                f32_bytes(tr.iter().flatten().copied()),
+                "VEC3",
+            ),
+            ("rotation", f32_bytes(rot.iter().flatten().copied()), "VEC4"),
+        ] {
+            let out = bin.push(&data, FLOAT, kind, p.times.len(), None, None);
+            samplers.push(json!({"input": input, "output": out, "interpolation": "LINEAR"}));
+            channels
+                .push(json!({"sampler": samplers.len() - 1, "target": {"node": i, "path": path}}));
+        }
     }
-    while !bin.bytes.len().is_multiple_of(4) {
-        bin.bytes.push(0);
-    }
-    let mut doc = json!({
-        "asset": {"version": "2.0", "generator": concat!("sdrs ", env!("CARGO_PKG_VERSION"))},
-        "scene": 0,
-        "scenes": [{"nodes": [n]}],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "buffers": [{"byteLength": bin.bytes.len()}],
-        "bufferViews": bin.views,
-        "accessors": bin.accessors,
-    });
-    if !animations.is_empty() {
-        doc["animations"] = json!(animations);
-    }
-    let mut js = serde_json::to_vec(&doc).expect("plain data serializes");
+    json!({"name": "trajectory", "samplers": samplers, "channels": channels})
+}
+
+/// The binary glTF container: the 12-byte header, the JSON chunk (padded
+/// with spaces to 4 bytes) and the BIN chunk (`bin`, already 4-aligned).
+fn container(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut js = serde_json::to_vec(doc).expect("plain data serializes");
     while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
-    let total = 12 + 8 + js.len() + 8 + bin.bytes.len();
+    let total = 12 + 8 + js.len() + 8 + bin.len();
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -242,9 +270,9 @@ pub fn glb(p: &Playback) -> Vec<u8> {
     out.extend_from_slice(&(js.len() as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&js);
-    out.extend_from_slice(&(bin.bytes.len() as u32).to_le_bytes());
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
     out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin.bytes);
+    out.extend_from_slice(bin);
     out
 }
 
