@@ -21,6 +21,17 @@ pub(super) struct LinkGeometry {
     pub seconds: f64,
 }
 
+/// What every geometry element of one link is imported with.
+struct LinkContext<'a> {
+    src: &'a SourceRobot,
+    /// The import's options (with `grid` replaced by `hull` on a link not
+    /// designable).
+    opts: &'a ImportOptions,
+    /// Most hulls per mesh file: the link's `max_hulls` over its meshes.
+    per_mesh: usize,
+    memo: &'a decompose::Memo,
+}
+
 /// What one geometry element adds to its link.
 struct GeometryPart {
     hulls: Vec<DesignHull>,
@@ -68,8 +79,14 @@ pub(super) fn link_geometry(
         source_volume: Some(0.0),
         seconds: 0.0,
     };
+    let cx = LinkContext {
+        src,
+        opts,
+        per_mesh,
+        memo,
+    };
     for g in &link.geometry {
-        let part = geometry_part(src, g, opts, per_mesh, memo)?;
+        let part = geometry_part(&cx, g)?;
         out.notes.extend(part.notes);
         out.hulls.extend(part.hulls);
         out.sources.push(part.source);
@@ -93,14 +110,8 @@ fn geometry_error(src: &SourceRobot, g: &SourceGeometry) -> impl Fn(String) -> I
 }
 
 /// One geometry element: its origin checked, then its shape's hulls.
-fn geometry_part(
-    src: &SourceRobot,
-    g: &SourceGeometry,
-    opts: &ImportOptions,
-    per_mesh: usize,
-    memo: &decompose::Memo,
-) -> Result<GeometryPart, ImportError> {
-    let geom_err = geometry_error(src, g);
+fn geometry_part(cx: &LinkContext, g: &SourceGeometry) -> Result<GeometryPart, ImportError> {
+    let geom_err = geometry_error(cx.src, g);
     limits::check_coordinates(
         "origin",
         g.rotation
@@ -129,7 +140,7 @@ fn geometry_part(
                 notes: Vec::new(),
             });
         }
-        SourceShape::Mesh { .. } => return mesh_part(src, g, opts, per_mesh, memo),
+        SourceShape::Mesh { .. } => return mesh_part(cx, g),
     };
     let prim = prim.map_err(&geom_err)?;
     let pts: Vec<_> = prim.hull.iter().map(place).collect();
@@ -146,13 +157,13 @@ fn geometry_part(
 /// A mesh file: loaded, scaled and placed, checked, then decomposed into at
 /// most `per_mesh` hulls (a non-manifold mesh as a surface, falling back to
 /// the convex hull of its points when that fails).
-fn mesh_part(
-    src: &SourceRobot,
-    g: &SourceGeometry,
-    opts: &ImportOptions,
-    per_mesh: usize,
-    memo: &decompose::Memo,
-) -> Result<GeometryPart, ImportError> {
+fn mesh_part(cx: &LinkContext, g: &SourceGeometry) -> Result<GeometryPart, ImportError> {
+    let LinkContext {
+        src,
+        opts,
+        per_mesh,
+        memo,
+    } = *cx;
     let SourceShape::Mesh { path, scale } = &g.shape else {
         unreachable!("mesh_part is called for mesh files only")
     };
