@@ -200,6 +200,9 @@ fn finished_only(suite: &suite::Suite, base: &Path, out: &Path, r: &mut Results)
     Ok(())
 }
 
+/// `sdrs compare`: the suite's benchmarks (each kept from an earlier run
+/// when its part is there), `results.json`, the report, and the regression
+/// gate against `--check`.
 pub fn run(a: CompareArgs) -> Result<()> {
     if let Some(results) = &a.render {
         return render(results, &a.out);
@@ -212,16 +215,44 @@ pub fn run(a: CompareArgs) -> Result<()> {
         Some(t) => gate::Tolerances::load(t)?,
         None => gate::Tolerances::default(),
     };
-    let baseline: Option<Results> = match &a.check {
-        Some(p) => Some(
-            serde_json::from_str(
-                &std::fs::read_to_string(p)
-                    .with_context(|| format!("{}: cannot read the baseline", p.display()))?,
-            )
-            .with_context(|| format!("{}: not a results.json of `sdrs compare`", p.display()))?,
-        ),
-        None => None,
-    };
+    let baseline = a.check.as_deref().map(load_baseline).transpose()?;
+    let work = prepare_out(&a)?;
+    let r = measure(&a, &suite, &base, &work)?;
+    write_atomic(
+        &a.out.join("results.json"),
+        serde_json::to_string_pretty(&r)?.as_bytes(),
+    )?;
+    let verdicts = baseline.as_ref().map(|b| gate::check(b, &r, &tol));
+    if let Some(v) = &verdicts {
+        write_atomic(
+            &a.out.join("gate.json"),
+            serde_json::to_string_pretty(v)?.as_bytes(),
+        )?;
+    }
+    report::write(&a.out, &r, verdicts.as_deref())?;
+    eprintln!(
+        "report: {} (report.md and results.json beside it)",
+        a.out.join("report.html").display()
+    );
+    match verdicts {
+        Some(v) => gate_outcome(&v),
+        None => Ok(()),
+    }
+}
+
+/// The `--check` baseline: a `results.json` of an earlier run.
+fn load_baseline(p: &Path) -> Result<Results> {
+    serde_json::from_str(
+        &std::fs::read_to_string(p)
+            .with_context(|| format!("{}: cannot read the baseline", p.display()))?,
+    )
+    .with_context(|| format!("{}: not a results.json of `sdrs compare`", p.display()))
+}
+
+/// Checks `--out` (a directory, empty or an earlier run's; an earlier run's
+/// with `--report-only`) and creates its `parts/` and `work/`; returns
+/// `work/`.
+fn prepare_out(a: &CompareArgs) -> Result<PathBuf> {
     if a.out.is_file() {
         bail!("{}: the output must be a directory", a.out.display());
     }
@@ -250,88 +281,85 @@ pub fn run(a: CompareArgs) -> Result<()> {
         std::fs::create_dir_all(d)
             .with_context(|| format!("{}: cannot create the output directory", a.out.display()))?;
     }
+    Ok(work)
+}
+
+/// Every benchmark of the suite (with `--report-only`, what an earlier run
+/// finished), and what the suite does not measure.
+fn measure(a: &CompareArgs, suite: &suite::Suite, base: &Path, work: &Path) -> Result<Results> {
     let mut r = Results {
         suite: suite.suite.clone(),
         threads: rayon::current_num_threads(),
         ..Default::default()
     };
     if a.report_only {
-        finished_only(&suite, &base, &a.out, &mut r)?;
-    } else if let Some(s) = &suite.potential {
-        r.potential = Some(resumable(&a.out, "potential", s, a.force, a.quiet, |pb| {
-            potential::run(s, &work, pb)
-        })?);
+        finished_only(suite, base, &a.out, &mut r)?;
     } else {
-        r.not_measured
-            .push("contact potential cost (not in this suite)".into());
-    }
-    if a.report_only {
-        // (filled by `finished_only` above)
-    } else if let Some(s) = &suite.chains {
-        r.chains = Some(resumable(&a.out, "chains", s, a.force, a.quiet, |pb| {
-            chains::run(s, &base, &work, pb)
-        })?);
-    } else {
-        r.not_measured
-            .push("four rotating chains (not in this suite)".into());
-    }
-    for s in suite.codesign.iter().filter(|_| !a.report_only) {
-        r.codesign.push(resumable(
-            &a.out,
-            &format!("codesign_{}", s.name),
-            s,
-            a.force,
-            a.quiet,
-            |pb| codesign::run(s, &base, &a.out, a.force, pb),
-        )?);
+        match &suite.potential {
+            Some(s) => {
+                r.potential = Some(resumable(&a.out, "potential", s, a.force, a.quiet, |pb| {
+                    potential::run(s, work, pb)
+                })?);
+            }
+            None => r
+                .not_measured
+                .push("contact potential cost (not in this suite)".into()),
+        }
+        match &suite.chains {
+            Some(s) => {
+                r.chains = Some(resumable(&a.out, "chains", s, a.force, a.quiet, |pb| {
+                    chains::run(s, base, work, pb)
+                })?);
+            }
+            None => r
+                .not_measured
+                .push("four rotating chains (not in this suite)".into()),
+        }
+        for s in &suite.codesign {
+            r.codesign.push(resumable(
+                &a.out,
+                &format!("codesign_{}", s.name),
+                s,
+                a.force,
+                a.quiet,
+                |pb| codesign::run(s, base, &a.out, a.force, pb),
+            )?);
+        }
     }
     if suite.codesign.iter().all(|s| s.cages.is_empty()) {
         r.not_measured.push(
             "mesh baseline with cage deformation (Xu et al. 2021): not in this suite (`cages:` of a co-design entry)".into(),
         );
     }
-    write_atomic(
-        &a.out.join("results.json"),
-        serde_json::to_string_pretty(&r)?.as_bytes(),
-    )?;
-    let verdicts = baseline.as_ref().map(|b| gate::check(b, &r, &tol));
-    if let Some(v) = &verdicts {
-        write_atomic(
-            &a.out.join("gate.json"),
-            serde_json::to_string_pretty(v)?.as_bytes(),
-        )?;
-    }
-    report::write(&a.out, &r, verdicts.as_deref())?;
-    eprintln!(
-        "report: {} (report.md and results.json beside it)",
-        a.out.join("report.html").display()
-    );
-    if let Some(v) = verdicts {
-        let bad: Vec<String> = v
-            .iter()
-            .filter(|v| v.regressed)
-            .map(|v| {
-                format!(
-                    "{}: baseline {}, now {}, limit {} ({})",
-                    v.metric,
-                    v.baseline.map_or("—".into(), |x| format!("{x:.4e}")),
-                    v.now.map_or("missing".into(), |x| format!("{x:.4e}")),
-                    v.limit.map_or("—".into(), |x| format!("{x:.4e}")),
-                    v.note
-                )
-            })
-            .collect();
-        if !bad.is_empty() {
-            bail!(
-                "regression gate failed: {} metric(s) regressed:\n  {}",
-                bad.len(),
-                bad.join("\n  ")
-            );
-        }
-        eprintln!(
-            "regression gate passed: {} metrics within tolerance",
-            v.len()
+    Ok(r)
+}
+
+/// The regression gate's outcome: an error listing every regressed metric.
+fn gate_outcome(v: &[gate::Verdict]) -> Result<()> {
+    let bad: Vec<String> = v
+        .iter()
+        .filter(|v| v.regressed)
+        .map(|v| {
+            format!(
+                "{}: baseline {}, now {}, limit {} ({})",
+                v.metric,
+                v.baseline.map_or("—".into(), |x| format!("{x:.4e}")),
+                v.now.map_or("missing".into(), |x| format!("{x:.4e}")),
+                v.limit.map_or("—".into(), |x| format!("{x:.4e}")),
+                v.note
+            )
+        })
+        .collect();
+    if !bad.is_empty() {
+        bail!(
+            "regression gate failed: {} metric(s) regressed:\n  {}",
+            bad.len(),
+            bad.join("\n  ")
         );
     }
+    eprintln!(
+        "regression gate passed: {} metrics within tolerance",
+        v.len()
+    );
     Ok(())
 }
