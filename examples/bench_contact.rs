@@ -46,6 +46,24 @@ struct Case {
     pb: Matrix3x4<f64>,
 }
 
+impl Case {
+    /// Hull `a` at pose `pose` (its own, or a moved copy's).
+    fn a_at<'a>(&'a self, pose: &'a Matrix3x4<f64>) -> HullPose<'a> {
+        HullPose {
+            pose,
+            x_local: &self.la,
+        }
+    }
+
+    /// Hull `b` at pose `pose` (its own, or a moved copy's).
+    fn b_at<'a>(&'a self, pose: &'a Matrix3x4<f64>) -> HullPose<'a> {
+        HullPose {
+            pose,
+            x_local: &self.lb,
+        }
+    }
+}
+
 /// A random pair at gap `gap` (bisection on the translation of `b` along a random direction).
 fn make_case(rng: &mut ChaCha8Rng, m: usize, gap: f64, params: &ContactParams) -> Case {
     let la = sphere_points(rng, m, 0.5);
@@ -133,14 +151,7 @@ fn measure_pair(
     out: &mut SizeSamples,
 ) {
     let kappa = 1.0;
-    let ha = HullPose {
-        pose: &case.pa,
-        x_local: &case.la,
-    };
-    let hb = HullPose {
-        pose: &case.pb,
-        x_local: &case.lb,
-    };
+    let (ha, hb) = (case.a_at(&case.pa), case.b_at(&case.pb));
     let mut sc = ContactScratch::new();
     let mut last = None;
     out.contact_us.push(median_us(reps, || {
@@ -162,14 +173,8 @@ fn measure_pair(
     );
     let pa1 = small_step(&case.pa, rng);
     let pb1 = small_step(&case.pb, rng);
-    let fa = HullPose {
-        pose: &pa1,
-        x_local: &case.la,
-    };
-    let fb = HullPose {
-        pose: &pb1,
-        x_local: &case.lb,
-    };
+    let fa = case.a_at(&pa1);
+    let fb = case.b_at(&pb1);
     let mut fsc = FrictionScratch::new();
     let frame = lag.frame();
     let mut fit = 0;
@@ -190,17 +195,11 @@ fn measure_pair(
 /// after GJK): ours on the raw vertex slices, and parry building both
 /// `ConvexPolyhedron`s and calling `query::distance`.
 fn measure_separation(case: &Case, reps: usize, params: &ContactParams, out: &mut SizeSamples) {
-    let ha = HullPose {
-        pose: &case.pa,
-        x_local: &case.la,
-    };
+    let ha = case.a_at(&case.pa);
     let mut pfar = case.pb;
     let tfar = case.pb.column(3) * 1.5;
     pfar.set_column(3, &tfar);
-    let hfar = HullPose {
-        pose: &pfar,
-        x_local: &case.lb,
-    };
+    let hfar = case.b_at(&pfar);
     let mut sc = ContactScratch::new();
     out.separation_ours_us.push(median_us(reps, || {
         black_box(contact_pair(ha, hfar, params, None, Need::Value, &mut sc).expect("gjk"));
