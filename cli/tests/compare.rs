@@ -627,6 +627,24 @@ fn results_page_is_rendered_from_its_results_json() {
             .find(|(a, b)| a != b)
     );
     assert!(!out.join("parts").exists() && !out.join("work").exists());
+    // A run that stopped before its last iteration says so in the text,
+    // with its reason (the hand's coarse cage under IPC, 2026-12-02).
+    let results: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(page.join("results.json")).unwrap()).unwrap();
+    let stopped: Vec<(String, String)> = results["codesign"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .flat_map(|b| b["runs"].as_array().into_iter().flatten())
+        .filter_map(|r| Some((r["method"].as_str()?.into(), r["stopped"].as_str()?.into())))
+        .collect();
+    for (method, why) in &stopped {
+        let line = format!("**{method} stopped early**");
+        assert!(
+            rendered.lines().any(|l| l.contains(&line) && l.contains(why.as_str())),
+            "{method}: its stop ({why}) is not in the report"
+        );
+    }
     // A file that is not a results.json: a clear error naming it.
     let bad = out.join("not_results.json");
     std::fs::write(&bad, "{\"suite\": 3}").unwrap();

@@ -529,6 +529,9 @@ fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
             b.unfinished.join("; ")
         ));
     }
+    for r in b.runs.iter().filter(|r| r.stopped.is_some()) {
+        text.push(stopped_text(r, b.iters));
+    }
     let cd = b.runs.iter().find(|r| r.method == "co-design");
     let co = b.runs.iter().find(|r| r.method == "controller-only");
     if let (Some(cd), Some(co)) = (cd, co) {
@@ -545,6 +548,17 @@ fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
         "The mesh-based baseline with cage deformation (Xu et al. 2021) was not run in this suite (`cages: [coarse, fine]` in its co-design entry): its rows are empty.".into()
     });
     text
+}
+
+/// A run that ended before its last iteration: which, after how many of
+/// `iters`, and why; its row holds the iterations that ran.
+fn stopped_text(r: &CodesignRun, iters: usize) -> String {
+    let ran = r.history.len().saturating_sub(1);
+    format!(
+        "**{} stopped early**, after {ran} of {iters} iterations (its row holds those): {}.",
+        r.method,
+        r.stopped.as_deref().unwrap_or_default()
+    )
 }
 
 /// The task's gradient check: the adjoint against a central difference.
