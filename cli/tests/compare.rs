@@ -641,7 +641,9 @@ fn results_page_is_rendered_from_its_results_json() {
     for (method, why) in &stopped {
         let line = format!("**{method} stopped early**");
         assert!(
-            rendered.lines().any(|l| l.contains(&line) && l.contains(why.as_str())),
+            rendered
+                .lines()
+                .any(|l| l.contains(&line) && l.contains(why.as_str())),
             "{method}: its stop ({why}) is not in the report"
         );
     }
