@@ -80,7 +80,7 @@ pub fn run(a: OptimizeArgs) -> Result<()> {
     report_end(&out, &outcome, &metrics_json);
     if let Some(why) = &outcome.stopped {
         anyhow::bail!(
-            "the run {why}; the outputs in {} are for the iterations that ran (`--resume` retries from there)",
+            "the run {why}; the outputs in {} are for the iterations that ran (`--resume` continues from there with the next iteration's step)",
             out.display()
         );
     }
