@@ -66,24 +66,27 @@ fn caged_problem(task: &std::path::Path) -> Problem {
     p
 }
 
+/// `sdrs optimize -q --contact ipc --cage coarse [extra] --out OUT TASK`.
+fn optimize_ipc_coarse(
+    task: &std::path::Path,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    sdrs()
+        .args(["optimize", "-q", "--contact", "ipc", "--cage", "coarse"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .arg(task)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn optimize_with_ipc_and_a_coarse_cage_lowers_the_loss_and_starts_from_the_fd_gradient() {
     let (dir, task) = write_task("optimize_ipc");
     let out = dir.join("run");
-    let output = sdrs()
-        .args([
-            "optimize",
-            "-q",
-            "--contact",
-            "ipc",
-            "--cage",
-            "coarse",
-            "--out",
-        ])
-        .arg(&out)
-        .arg(&task)
-        .output()
-        .unwrap();
+    let output = optimize_ipc_coarse(&task, &out, &[]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     assert!(stderr.contains("26 vertices"), "{stderr}");
@@ -245,8 +248,8 @@ fn caged_box_shaped_link_keeps_its_triangulation_and_the_gradient_matches_fd() {
     }
 }
 
-/// The scenes an `--contact ipc` run writes (`scenes/`, and the failed
-/// trials') run as the run did: `contact.model: ipc`, and the scene's SDRS
+/// The scenes an `--contact ipc` run writes (`design.yaml`, `scenes/`, and
+/// the failed trials') run as the run did: `contact.model: ipc`, and the scene's SDRS
 /// stiffness left out so that IPC chooses its adaptive `κ` again. Before,
 /// they kept `model: sdrs`, and `sdrs simulate` of a failed trial ran the
 /// other contact model (the hand's mesh baseline, 2026-12-02). At the start
@@ -265,37 +268,27 @@ fn scenes_written_by_an_ipc_run_simulate_under_ipc() {
     let task = dir.join("task.yaml");
     std::fs::write(&task, TASK).unwrap();
     let out = dir.join("run");
-    let o = sdrs()
-        .args([
-            "optimize",
-            "-q",
-            "--contact",
-            "ipc",
-            "--cage",
-            "coarse",
-            "--iters",
-            "0",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .arg(&task)
-        .output()
-        .unwrap();
+    let o = optimize_ipc_coarse(&task, &out, &["--iters", "0"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let written = out.join("scenes").join("scene.yaml");
-    let spec: serde_yaml::Value =
-        serde_yaml::from_str(&std::fs::read_to_string(&written).unwrap()).unwrap();
-    assert_eq!(
-        spec["contact"]["model"].as_str(),
-        Some("ipc"),
-        "{:?}",
-        spec["contact"]
-    );
-    assert!(
-        spec["contact"].get("kappa").is_none(),
-        "{:?}",
-        spec["contact"]
-    );
+    let design = out.join("design.yaml");
+    for file in [&written, &design] {
+        let spec: serde_yaml::Value =
+            serde_yaml::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        assert_eq!(
+            spec["contact"]["model"].as_str(),
+            Some("ipc"),
+            "{}: {:?}",
+            file.display(),
+            spec["contact"]
+        );
+        assert!(
+            spec["contact"].get("kappa").is_none(),
+            "{}: {:?}",
+            file.display(),
+            spec["contact"]
+        );
+    }
     let simulate = |scene: &std::path::Path, csv: &std::path::Path, extra: &[&str]| {
         let o = sdrs()
             .args(["simulate", "-q", "--steps", "30"])
@@ -323,16 +316,16 @@ fn scenes_written_by_an_ipc_run_simulate_under_ipc() {
         &["--contact", "ipc"],
     );
     let c = simulate(&dir.join("scene.yaml"), &dir.join("sdrs.csv"), &[]);
-    assert_eq!(a.len(), b.len());
-    let diff = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max);
-    assert!(
-        diff <= 1e-9,
-        "written scene vs original under IPC: {diff:e}"
-    );
+    let d = simulate(&design, &dir.join("design.csv"), &[]);
+    for (name, x) in [("scenes/scene.yaml", &a), ("design.yaml", &d)] {
+        assert_eq!(x.len(), b.len(), "{name}");
+        let diff = x
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(diff <= 1e-9, "{name} vs original under IPC: {diff:e}");
+    }
     // And the two contact models do differ on this push (the check can fail).
     let other = a
         .iter()

@@ -64,8 +64,7 @@ pub fn write_scenes_at(
         p.design.apply(&mut model, d);
         let mut controller = q.controller.clone();
         p.controls.apply(&mut controller, c);
-        let mut spec = output::design_scene(&q.scene.spec, &model, &controller);
-        effective_contact(&mut spec, q.scene.contact.as_ref());
+        let spec = output::scene_as_run(&q.scene, &model, &controller);
         let name = q
             .scene
             .source
@@ -82,23 +81,4 @@ pub fn write_scenes_at(
         write_atomic(&dir.join("scenes").join(name), (header + &yaml).as_bytes())?;
     }
     Ok(())
-}
-
-/// The contact section as the run used it: `--contact`, `--dhat` and
-/// `--kappa` change the loaded settings, not the specification, so without
-/// this a scene written by an `--contact ipc` run would simulate with the
-/// separating-plane model (and an SDRS stiffness as IPC's `κ`). The model,
-/// the IPC section and `κ` are taken from the settings; `κ` is left out
-/// when the run chose it (IPC's adaptive stiffness, recomputed the same way
-/// from the written scene).
-fn effective_contact(
-    spec: &mut crate::scene::schema::SceneSpec,
-    used: Option<&crate::contact::ContactSettings>,
-) {
-    let (Some(out), Some(c)) = (spec.contact.as_mut(), used) else {
-        return;
-    };
-    out.model = c.model;
-    out.ipc = c.ipc.clone();
-    out.kappa = c.kappa_given.then_some(c.kappa);
 }

@@ -6,6 +6,7 @@ use crate::control::Controller;
 use crate::files::write_atomic;
 use crate::math::{compose, rigid_inverse, rot};
 use crate::model::{JointKind, MassModel, Model};
+use crate::scene::Scene;
 use crate::scene::schema::{
     Gains, HullSpec, JointLimitSpec, JointSpec, JointType, LinkSpec, MassModelSpec, MimicSpec,
     Origin, SceneSpec, SignalList,
@@ -73,6 +74,33 @@ fn joint_type(k: &JointKind) -> JointFields {
         JointKind::Spherical => (JointType::Spherical, None, None),
         JointKind::Free => (JointType::Free, None, None),
     }
+}
+
+/// The scene as the run simulated it: [`design_scene`] of the loaded
+/// specification, with the contact section the run used
+/// ([`effective_contact`]). Every scene file an optimization writes
+/// (`design.yaml`, `scenes/`, `failed_trials/…/scenes/`) goes through this,
+/// so `sdrs simulate` of any of them reproduces the run's trajectory.
+pub fn scene_as_run(scene: &Scene, model: &Model, controller: &Controller) -> SceneSpec {
+    let mut spec = design_scene(&scene.spec, model, controller);
+    effective_contact(&mut spec, scene.contact.as_ref());
+    spec
+}
+
+/// The contact section as the run used it: `--contact`, `--dhat` and
+/// `--kappa` change the loaded settings, not the specification, so without
+/// this a scene written by an `--contact ipc` run would simulate with the
+/// separating-plane model (and an SDRS stiffness as IPC's `κ`). The model,
+/// the IPC section and `κ` are taken from the settings; `κ` is left out
+/// when the run chose it (IPC's adaptive stiffness, recomputed the same way
+/// from the written scene).
+fn effective_contact(spec: &mut SceneSpec, used: Option<&crate::contact::ContactSettings>) {
+    let (Some(out), Some(c)) = (spec.contact.as_mut(), used) else {
+        return;
+    };
+    out.model = c.model;
+    out.ipc = c.ipc.clone();
+    out.kappa = c.kappa_given.then_some(c.kappa);
 }
 
 /// The scene specification with the robots' links and controllers replaced
@@ -238,7 +266,7 @@ pub fn write_all(
         &dir.join("history.csv"),
         history_csv(&outcome.history).as_bytes(),
     )?;
-    let spec = design_scene(&first.scene.spec, &model, &controller);
+    let spec = scene_as_run(&first.scene, &model, &controller);
     let header = format!(
         "# Optimized by `sdrs optimize {}` — a complete scene: `sdrs simulate` runs it.\n",
         p.task_path.display()
