@@ -105,3 +105,75 @@ fn non_positive_dhat_is_an_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--dhat") && err.contains("positive"), "{err}");
 }
+
+/// The IPC baseline's Newton with exact per-primitive Hessians (the default,
+/// `contact.ipc.hessian`) against IPC's PSD-projected ones, on the scene that
+/// stopped the hand's mesh-baseline row: the first failed trial of
+/// `sdrs optimize robots/three_finger_hand/task.yaml --contact ipc --cage
+/// coarse` (iteration 1, the ball; gzip of the written scene,
+/// `tests/data/repro/hand_ipc_trial_ball.yaml.gz`). With the projection,
+/// step 59 takes 102 Newton iterations, each a full step that lowers
+/// ‖∇O‖∞ by ~10 % (0 CCD cuts, the gradient far above its round-off floor),
+/// and fails at the scene's cap of 100; exact, every step converges within
+/// 9 (`notes/ipc-baseline-newton-hessian.md`). Bound chosen before the
+/// test's first run: at most 15 iterations per step over the first 60.
+#[test]
+fn hand_trial_that_stalled_newton_with_projected_hessians_converges_with_exact_ones() {
+    use std::io::Read;
+    let dir = scratch_dir("ipc_hand_trial");
+    let gz = support::root().join("tests/data/repro/hand_ipc_trial_ball.yaml.gz");
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(&gz).unwrap())
+        .read_to_string(&mut text)
+        .unwrap();
+    let section = "  ipc:\n    dhat: 0.003\n";
+    assert!(
+        text.contains(section),
+        "the scene's contact.ipc section moved"
+    );
+    let exact = dir.join("exact.yaml");
+    std::fs::write(&exact, &text).unwrap();
+    let projected = dir.join("projected.yaml");
+    std::fs::write(
+        &projected,
+        text.replace(section, "  ipc:\n    dhat: 0.003\n    hessian: projected\n"),
+    )
+    .unwrap();
+    let run = |scene: &std::path::Path| {
+        let json = dir.join("summary.json");
+        let _ = std::fs::remove_file(&json);
+        let o = sdrs()
+            .args(["simulate", "-q", "--steps", "60"])
+            .arg(scene)
+            .arg("--out")
+            .arg(dir.join("run.csv"))
+            .arg("--json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        let summary = std::fs::read_to_string(&json)
+            .ok()
+            .map(|s| serde_json::from_str::<serde_json::Value>(&s).unwrap());
+        (o, summary)
+    };
+    let (o, summary) = run(&exact);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let max = summary.unwrap()["newton"]["max_iterations"]
+        .as_u64()
+        .unwrap();
+    eprintln!("exact primitive Hessians: 60 steps, at most {max} Newton iterations per step");
+    assert!(
+        max <= 15,
+        "exact Hessians: a step took {max} Newton iterations"
+    );
+    let (o, _) = run(&projected);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "projected Hessians no longer stall here"
+    );
+    assert!(
+        stderr.contains("step 59") && stderr.contains("no convergence after 100 Newton iterations"),
+        "{stderr}"
+    );
+}

@@ -1,7 +1,7 @@
-//! Newton statistics of a scene's steps under the IPC baseline, with its
-//! PSD-projected per-primitive Hessians (IPC's own choice, the default) or
-//! with exact ones (`EXACT=1`; the global solver's eigenvalue clamp then
-//! handles indefiniteness). The scene is switched to IPC as `--contact ipc`
+//! Newton statistics of a scene's steps under the IPC baseline, with the
+//! scene's `contact.ipc.hessian` (exact by default) or with
+//! `HESSIAN=projected|exact` overriding it (see
+//! `notes/ipc-baseline-newton-hessian.md`). The scene is switched to IPC as `--contact ipc`
 //! does (adaptive κ unless it is an IPC scene). `MAXIT=n` overrides the
 //! scene's Newton iteration cap. Prints every step that took more than
 //! `MIN_ITERS` iterations, then the totals and the wall time.
@@ -19,15 +19,22 @@ fn main() {
             c.kappa_given = false;
         }
         c.model = ContactModelKind::Ipc;
+        if let Ok(h) = std::env::var("HESSIAN") {
+            let mut ipc = sdrs_ipc::settings::IpcSettings::of(c).expect("contact.ipc");
+            ipc.hessian = match h.as_str() {
+                "projected" => sdrs_ipc::settings::HessianKind::Projected,
+                "exact" => sdrs_ipc::settings::HessianKind::Exact,
+                other => panic!("HESSIAN={other}: projected or exact"),
+            };
+            ipc.store(c).expect("contact.ipc");
+        }
     }
     if let Some(n) = std::env::var("MAXIT").ok().and_then(|s| s.parse().ok()) {
         scene.settings.newton.max_iters = n;
     }
-    let factory = sdrs_ipc::IpcFactory {
-        exact_hessian: std::env::var_os("EXACT").is_some(),
-        ..Default::default()
-    };
-    let mut sim = scene.simulator_with(&factory).expect("simulator");
+    let mut sim = scene
+        .simulator_with(&sdrs_ipc::IpcFactory::default())
+        .expect("simulator");
     let (mut total, mut max, mut done, mut merit) = (0usize, 0usize, 0usize, 0usize);
     let t0 = std::time::Instant::now();
     for _ in 0..steps {

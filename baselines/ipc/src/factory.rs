@@ -20,8 +20,9 @@ use sdrs::scene::{ContactModelFactory, ContactSettings, Invalid, Scene};
 pub struct IpcFactory {
     /// CCD settings (defaults documented on [`CcdOptions`]).
     pub ccd: CcdOptions,
-    /// Exact (unprojected) per-primitive Hessians (default false: IPC's PSD
-    /// projection, for Newton). The simulator a backward pass linearizes
+    /// Exact (unprojected) per-primitive Hessians whatever the scene's
+    /// `contact.ipc.hessian` says (default false: the scene's choice,
+    /// itself exact by default). The simulator a backward pass linearizes
     /// with needs the exact ones ([`IpcFactory::adjoint`]).
     pub exact_hessian: bool,
     /// Frozen surface triangulation (default `None`: each link's surface is
@@ -38,7 +39,7 @@ impl IpcFactory {
     /// The factory for the simulator of a backward pass
     /// ([`sdrs::diff::backward`]): the same terms with exact Hessians, so the
     /// step residual is linearized exactly. Trajectories are recorded with
-    /// `self` (projected Hessians, robust Newton steps); the solutions are the
+    /// `self` (the scene's `contact.ipc.hessian`); the solutions are the
     /// same stationary points either way.
     pub fn adjoint(&self) -> IpcFactory {
         IpcFactory {
@@ -203,7 +204,7 @@ impl ContactModelFactory for IpcFactory {
             ccd: self.ccd.clone(),
         };
         let mut contact = IpcContact::new(model, meshes.clone(), &c.excluded, params.clone());
-        contact.exact_hessian = self.exact_hessian;
+        contact.exact_hessian = self.exact_hessian || ipc.hessian.is_exact();
         contact.kappa_given = c.kappa_given;
         let mut kin = Kinematics::new(model);
         kin.update(model, &scene.q0, &scene.charts, KinOrder::Pose);

@@ -224,6 +224,20 @@ fn bad_inputs_name_the_file_and_the_element() {
         e.contains("bad_epsv.yaml") && e.contains("contact.ipc.eps_v"),
         "{e}"
     );
+    // A Newton Hessian the baseline does not have.
+    let e = ipc_error(
+        &TWO_BOXES_APART
+            .replace("MODEL", "ipc")
+            .replace("mu: 0.3", "mu: 0.3, ipc: {hessian: diagonal}"),
+        "bad_hessian.yaml",
+    );
+    assert!(
+        e.contains("bad_hessian.yaml")
+            && e.contains("contact.ipc")
+            && e.contains("diagonal")
+            && e.contains("projected"),
+        "{e}"
+    );
     // A key the baseline does not know, and a key moved into `ipc:`.
     let e = ipc_error(
         &TWO_BOXES_APART
