@@ -214,41 +214,32 @@ fn bad_inputs_name_the_file_and_the_element() {
         e.contains("bad_dhat.yaml") && e.contains("contact.ipc.dhat"),
         "{e}"
     );
-    let e = ipc_error(
-        &TWO_BOXES_APART
+    // A bad value, a Newton Hessian the baseline does not have, a key it
+    // does not know: `ipc` is the section, each error names the file and
+    // what is wrong.
+    for (ipc, name, needles) in [
+        ("{eps_v: -1}", "bad_epsv.yaml", &["contact.ipc.eps_v"][..]),
+        (
+            "{hessian: diagonal}",
+            "bad_hessian.yaml",
+            &["contact.ipc", "diagonal", "projected"][..],
+        ),
+        (
+            "{d_hat: 0.01}",
+            "bad_key.yaml",
+            &["contact.ipc", "d_hat"][..],
+        ),
+    ] {
+        let text = TWO_BOXES_APART
             .replace("MODEL", "ipc")
-            .replace("mu: 0.3", "mu: 0.3, ipc: {eps_v: -1}"),
-        "bad_epsv.yaml",
-    );
-    assert!(
-        e.contains("bad_epsv.yaml") && e.contains("contact.ipc.eps_v"),
-        "{e}"
-    );
-    // A Newton Hessian the baseline does not have.
-    let e = ipc_error(
-        &TWO_BOXES_APART
-            .replace("MODEL", "ipc")
-            .replace("mu: 0.3", "mu: 0.3, ipc: {hessian: diagonal}"),
-        "bad_hessian.yaml",
-    );
-    assert!(
-        e.contains("bad_hessian.yaml")
-            && e.contains("contact.ipc")
-            && e.contains("diagonal")
-            && e.contains("projected"),
-        "{e}"
-    );
-    // A key the baseline does not know, and a key moved into `ipc:`.
-    let e = ipc_error(
-        &TWO_BOXES_APART
-            .replace("MODEL", "ipc")
-            .replace("mu: 0.3", "mu: 0.3, ipc: {d_hat: 0.01}"),
-        "bad_key.yaml",
-    );
-    assert!(
-        e.contains("bad_key.yaml") && e.contains("contact.ipc") && e.contains("d_hat"),
-        "{e}"
-    );
+            .replace("mu: 0.3", &format!("mu: 0.3, ipc: {ipc}"));
+        let e = ipc_error(&text, name);
+        assert!(
+            e.contains(name) && needles.iter().all(|n| e.contains(n)),
+            "{e}"
+        );
+    }
+    // A key moved into `ipc:` but written at the top level.
     let e = Scene::from_str(
         &TWO_BOXES_APART
             .replace("MODEL", "ipc")
