@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The full paper-suite comparison (robots/compare/paper.yaml): hull sizes
 # 8…1024, chains of 2…32 links with both contact models, the co-design
-# benchmarks at their full iteration counts. About 110 minutes on a 2-core
-# machine (2026-11-25, docs/results/);
+# benchmarks at their full iteration counts. About ten hours on a 2-core
+# machine shared with other work (the run of 2026-12-01/02 behind
+# docs/results/; nine of them the mesh baseline's rows, measured with IPC's
+# projected Newton Hessians, since replaced by the exact ones);
 # resumable: run it again with the same output directory after an
 # interruption and finished benchmarks (and the finished methods of a
 # co-design benchmark) are kept. While it runs, or after it stopped,
