@@ -176,6 +176,17 @@ fn codesign_rows_are_from_the_run(r: &serde_json::Value, md: &str) {
     assert!(l1 < l0, "mesh baseline: loss {l0} -> {l1}");
     assert!(mesh["min_distance"].as_f64().unwrap() > 0.0);
     assert!(md.contains("| mesh baseline, coarse cage | 312 |"));
+    // The row records the Newton Hessians it ran with (the default), the
+    // SDRS rows none, and the report says which.
+    assert_eq!(mesh["ipc_hessian"].as_str(), Some("exact"), "{mesh}");
+    let co = spider["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["method"] == "co-design")
+        .unwrap();
+    assert!(co.get("ipc_hessian").is_none(), "{co}");
+    assert!(md.contains("Its Newton used exact per-primitive barrier Hessians"));
 }
 
 fn report_renders_in_chromium(dir: &Path, out: &Path) {
@@ -646,6 +657,32 @@ fn results_page_is_rendered_from_its_results_json() {
                 .any(|l| l.contains(&line) && l.contains(why.as_str())),
             "{method}: its stop ({why}) is not in the report"
         );
+    }
+    // Each entry's mesh-baseline rows say which Newton Hessians they ran
+    // with; rows recorded before `ipc_hessian` existed used the projected
+    // ones (the only choice before 2026-12-02).
+    for b in results["codesign"].as_array().into_iter().flatten() {
+        let mesh: Vec<&str> = b["runs"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter(|r| {
+                r["method"]
+                    .as_str()
+                    .is_some_and(|m| m.starts_with("mesh baseline"))
+            })
+            .map(|r| r["ipc_hessian"].as_str().unwrap_or("projected"))
+            .collect();
+        if let [first, rest @ ..] = mesh.as_slice()
+            && rest.iter().all(|k| k == first)
+        {
+            let sentence = format!("Its Newton used {first} per-primitive barrier Hessians");
+            let section = rendered
+                .split("## ")
+                .find(|s| s.starts_with(&format!("Co-design: {}\n", b["name"].as_str().unwrap())))
+                .unwrap_or_default();
+            assert!(section.contains(&sentence), "{}: {sentence}", b["name"]);
+        }
     }
     // A file that is not a results.json: a clear error naming it.
     let bad = out.join("not_results.json");

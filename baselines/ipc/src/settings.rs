@@ -76,6 +76,13 @@ impl HessianKind {
     pub fn is_exact(&self) -> bool {
         *self == HessianKind::Exact
     }
+    /// Name as written in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            HessianKind::Exact => "exact",
+            HessianKind::Projected => "projected",
+        }
+    }
 }
 
 /// The `contact.ipc` section as written.

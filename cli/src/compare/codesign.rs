@@ -207,7 +207,23 @@ fn measure_run(
         grasped: (!grasps.is_empty()).then(|| grasps.iter().filter(|g| g.grasped).count()),
         grasp_trajectories: (!grasps.is_empty()).then_some(grasps.len()),
         stopped: out.stopped.clone(),
+        ipc_hessian: ipc_hessian(p)?,
     })
+}
+
+/// `contact.ipc.hessian` of a mesh-baseline problem (its first trajectory's
+/// scene; every trajectory of a run gets the same overrides), `None` under
+/// SDRS contact.
+fn ipc_hessian(p: &Problem) -> Result<Option<String>> {
+    let scene = &p.first().scene;
+    let Some(c) = scene.contact.as_ref() else {
+        return Ok(None);
+    };
+    if c.model != sdrs::scene::schema::ContactModelKind::Ipc {
+        return Ok(None);
+    }
+    let ipc = sdrs_ipc::settings::IpcSettings::of(c).map_err(|e| e.at(&scene.source))?;
+    Ok(Some(ipc.hessian.name().to_string()))
 }
 
 /// (method, design on, cage resolution) of a benchmark: SDRS with and

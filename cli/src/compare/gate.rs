@@ -252,6 +252,7 @@ mod tests {
                     grasped: None,
                     grasp_trajectories: None,
                     stopped: None,
+                    ipc_hessian: None,
                 }],
                 fd: None,
                 shapes_svg: None,

@@ -543,11 +543,32 @@ fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
         ));
     }
     text.push(if caged {
-        "Mesh baseline rows: the same task under the IPC baseline with the vertices of an automatic cage around each designed link as the design (Xu et al. 2021; `sdrs optimize --contact ipc --cage`); its controller is optimized as in co-design.".into()
+        format!(
+            "Mesh baseline rows: the same task under the IPC baseline with the vertices of an automatic cage around each designed link as the design (Xu et al. 2021; `sdrs optimize --contact ipc --cage`); its controller is optimized as in co-design. {}",
+            hessian_text(&b.runs)
+        )
     } else {
         "The mesh-based baseline with cage deformation (Xu et al. 2021) was not run in this suite (`cages: [coarse, fine]` in its co-design entry): its rows are empty.".into()
     });
     text
+}
+
+/// Which per-primitive Hessians the mesh-baseline rows' Newton used
+/// (`contact.ipc.hessian`; rows recorded before the setting existed used
+/// the projected ones).
+fn hessian_text(runs: &[CodesignRun]) -> String {
+    let mut kinds: Vec<&str> = runs
+        .iter()
+        .filter(|r| r.method.starts_with("mesh baseline"))
+        .map(|r| r.ipc_hessian.as_deref().unwrap_or("projected"))
+        .collect();
+    kinds.sort_unstable();
+    kinds.dedup();
+    match kinds.as_slice() {
+        [] => String::new(),
+        [k] => format!("Its Newton used {k} per-primitive barrier Hessians (`contact.ipc.hessian`)."),
+        _ => "Its rows differ in the per-primitive barrier Hessians of Newton (`contact.ipc.hessian`): see each run in `results.json`.".into(),
+    }
 }
 
 /// A run that ended before its last iteration: which, after how many of

@@ -143,6 +143,12 @@ pub struct CodesignRun {
     /// holds the iterations that ran.
     #[serde(default)]
     pub stopped: Option<String>,
+    /// Mesh-baseline rows: the per-primitive Hessians of the IPC baseline's
+    /// Newton (`contact.ipc.hessian`: `exact` or `projected`). Rows
+    /// recorded before 2026-12-02 carry none: they used `projected`, the
+    /// only choice then. `None` for SDRS rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ipc_hessian: Option<String>,
 }
 
 /// Central differences of one design-gradient component at the initial design.
