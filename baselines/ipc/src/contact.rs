@@ -50,8 +50,10 @@ pub struct IpcContact {
     time_ccd: Duration,
     last_active: usize,
     last_min_distance: f64,
-    /// Exact per-primitive Hessians instead of PSD-projected ones (for the
-    /// simulator the backward pass linearizes with; default false).
+    /// Exact per-primitive Hessians instead of PSD-projected ones. False
+    /// as constructed; [`crate::IpcFactory`] sets it from the scene's
+    /// `contact.ipc.hessian` (exact by default) and always for the
+    /// simulator a backward pass linearizes with.
     pub exact_hessian: bool,
     /// Whether `κ` is the scene's `contact.kappa` (then `∂Φ/∂κ` goes to the
     /// physical gradient); false when this baseline chose it.
