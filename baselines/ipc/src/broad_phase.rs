@@ -54,32 +54,88 @@ impl PrimitiveBoxes {
         x1: Option<&[Vector3<f64>]>,
         m: f64,
     ) {
-        let pt = |i: u32| -> Aabb {
-            let i = i as usize;
-            let mut b = Aabb::point(&x0[i]);
-            if let Some(x1) = x1 {
-                b.lo = b.lo.inf(&x1[i]);
-                b.hi = b.hi.sup(&x1[i]);
-            }
-            b
-        };
-        let join = |a: Aabb, b: Aabb| a.union(&b);
+        self.build_vertices(x0, x1, m);
+        self.build_faces(mesh, x0, x1, m);
+    }
+
+    /// The vertex boxes and the link's box `all` only (the edge and
+    /// triangle boxes are left as they were): what [`candidates`] reads of a
+    /// link whose box meets no partner's.
+    pub fn build_vertices(&mut self, x0: &[Vector3<f64>], x1: Option<&[Vector3<f64>]>, m: f64) {
         self.vert.clear();
         self.vert
-            .extend((0..x0.len() as u32).map(|i| pt(i).padded(m)));
+            .extend((0..x0.len()).map(|i| point_box(x0, x1, i).padded(m)));
+        self.all = Some(self.vert.iter().fold(Aabb::EMPTY, |a, b| a.union(b)));
+    }
+
+    /// The edge and triangle boxes (after [`PrimitiveBoxes::build_vertices`]
+    /// with the same points and margin).
+    pub fn build_faces(
+        &mut self,
+        mesh: &crate::mesh::LinkMesh,
+        x0: &[Vector3<f64>],
+        x1: Option<&[Vector3<f64>]>,
+        m: f64,
+    ) {
+        let pt = |i: u32| point_box(x0, x1, i as usize);
         self.edge.clear();
         self.edge.extend(
             mesh.edges
                 .iter()
-                .map(|e| join(pt(e[0]), pt(e[1])).padded(m)),
+                .map(|e| pt(e[0]).union(&pt(e[1])).padded(m)),
         );
         self.tri.clear();
         self.tri.extend(
             mesh.tris
                 .iter()
-                .map(|t| join(join(pt(t[0]), pt(t[1])), pt(t[2])).padded(m)),
+                .map(|t| pt(t[0]).union(&pt(t[1])).union(&pt(t[2])).padded(m)),
         );
-        self.all = Some(self.vert.iter().fold(Aabb::EMPTY, |a, b| join(a, *b)));
+    }
+}
+
+/// The box of point `i` at `x0` (and `x1`).
+fn point_box(x0: &[Vector3<f64>], x1: Option<&[Vector3<f64>]>, i: usize) -> Aabb {
+    let mut b = Aabb::point(&x0[i]);
+    if let Some(x1) = x1 {
+        b.lo = b.lo.inf(&x1[i]);
+        b.hi = b.hi.sup(&x1[i]);
+    }
+    b
+}
+
+/// Boxes of every link's primitives for the link pairs `pairs`: every
+/// link's vertex boxes and link box, and the edge and triangle boxes only of
+/// links in a pair whose link boxes meet (the only ones [`candidates`]
+/// reads; a far link's are left stale). `points(i)` gives link `i`'s points
+/// (`x0`, and `x1` for swept boxes) and margin; empty meshes are skipped.
+pub fn build_for_pairs<'a>(
+    boxes: &mut [PrimitiveBoxes],
+    meshes: &[crate::mesh::LinkMesh],
+    pairs: &[(usize, usize)],
+    points: impl Fn(usize) -> (&'a [Vector3<f64>], Option<&'a [Vector3<f64>]>, f64),
+) {
+    for (i, m) in meshes.iter().enumerate() {
+        if !m.is_empty() {
+            let (x0, x1, margin) = points(i);
+            boxes[i].build_vertices(x0, x1, margin);
+        } else {
+            boxes[i].all = None;
+        }
+    }
+    let mut near = vec![false; meshes.len()];
+    for &(a, b) in pairs {
+        if let (Some(ba), Some(bb)) = (boxes[a].all, boxes[b].all)
+            && ba.intersects(&bb)
+        {
+            near[a] = true;
+            near[b] = true;
+        }
+    }
+    for (i, m) in meshes.iter().enumerate() {
+        if near[i] {
+            let (x0, x1, margin) = points(i);
+            boxes[i].build_faces(m, x0, x1, margin);
+        }
     }
 }
 
@@ -123,6 +179,85 @@ pub fn candidates(a: &PrimitiveBoxes, b: &PrimitiveBoxes, out: &mut Candidates) 
             if a.edge[i as usize].intersects(&b.edge[j as usize]) {
                 out.ee.push((i, j));
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::LinkMesh;
+
+    /// A tetrahedron with its first vertex at `o` (edge 0.1 m).
+    fn tet(o: [f64; 3]) -> LinkMesh {
+        let o = Vector3::from(o);
+        let v = [
+            o,
+            o + Vector3::new(0.1, 0.0, 0.0),
+            o + Vector3::new(0.0, 0.1, 0.0),
+            o + Vector3::new(0.0, 0.0, 0.1),
+        ];
+        let mut m = LinkMesh::default();
+        m.add_closed(0, &v, &[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+            .unwrap();
+        m
+    }
+
+    /// The lazy build gives every pair the candidates of a full build, on
+    /// near, touching-margin and far pairs, after a first evaluation at
+    /// other points left stale face boxes behind (swept boxes too).
+    #[test]
+    fn boxes_built_for_pairs_give_the_candidates_of_a_full_build() {
+        let meshes = vec![
+            tet([0.0, 0.0, 0.0]),
+            tet([0.1005, 0.0, 0.0]),
+            tet([5.0, 0.0, 0.0]),
+            LinkMesh::default(),
+            tet([-0.2, 0.0, 0.0]),
+        ];
+        let pairs = [(0, 1), (0, 2), (1, 2), (0, 3), (2, 4), (0, 4)];
+        let shift = |d: f64| -> Vec<Vec<Vector3<f64>>> {
+            meshes
+                .iter()
+                .map(|m| {
+                    m.x_local
+                        .iter()
+                        .map(|x| x + Vector3::new(d, 0.0, 0.0))
+                        .collect()
+                })
+                .collect()
+        };
+        let (x0, x1) = (shift(0.0), shift(0.003));
+        for swept in [false, true] {
+            let mut lazy = vec![PrimitiveBoxes::default(); meshes.len()];
+            // A first build at far-away points: stale faces for every link.
+            let far = shift(-3.0);
+            build_for_pairs(&mut lazy, &meshes, &pairs, |i| (&far[i][..], None, 1e-3));
+            build_for_pairs(&mut lazy, &meshes, &pairs, |i| {
+                (&x0[i][..], swept.then(|| &x1[i][..]), 1e-3)
+            });
+            let mut full = vec![PrimitiveBoxes::default(); meshes.len()];
+            for (i, m) in meshes.iter().enumerate() {
+                if !m.is_empty() {
+                    full[i].build(m, &x0[i], swept.then(|| &x1[i][..]), 1e-3);
+                }
+            }
+            let mut found = 0;
+            for &(a, b) in &pairs {
+                let (mut cl, mut cf) = (Candidates::default(), Candidates::default());
+                candidates(&lazy[a], &lazy[b], &mut cl);
+                candidates(&full[a], &full[b], &mut cf);
+                assert_eq!(
+                    (&cl.vt_ab, &cl.vt_ba, &cl.ee),
+                    (&cf.vt_ab, &cf.vt_ba, &cf.ee),
+                    "pair {a}-{b}, swept {swept}"
+                );
+                found += cf.len();
+            }
+            assert!(
+                found > 0,
+                "no pair had candidates: the test would not see a difference"
+            );
         }
     }
 }

@@ -117,11 +117,10 @@ impl IpcContact {
     /// Candidate primitive pairs (within `d̂`) of every link pair.
     fn broad_phase(&mut self) {
         let half = 0.5 * self.params.dhat;
-        for (i, m) in self.meshes.iter().enumerate() {
-            if !m.is_empty() {
-                self.boxes[i].build(m, &self.world[i], None, half);
-            }
-        }
+        let world = &self.world;
+        crate::broad_phase::build_for_pairs(&mut self.boxes, &self.meshes, &self.link_pairs, |i| {
+            (&world[i][..], None, half)
+        });
         for (k, &(a, b)) in self.link_pairs.iter().enumerate() {
             crate::broad_phase::candidates(&self.boxes[a], &self.boxes[b], &mut self.cands[k]);
         }

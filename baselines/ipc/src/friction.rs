@@ -205,11 +205,10 @@ impl Energy for IpcFriction {
         transform(&self.meshes, ctx.poses_prev, &mut self.world_prev);
         let p = &self.params;
         let mut boxes = vec![PrimitiveBoxes::default(); self.meshes.len()];
-        for (i, m) in self.meshes.iter().enumerate() {
-            if !m.is_empty() {
-                boxes[i].build(m, &self.world_prev[i], None, 0.5 * p.dhat);
-            }
-        }
+        let world = &self.world_prev;
+        crate::broad_phase::build_for_pairs(&mut boxes, &self.meshes, &self.link_pairs, |i| {
+            (&world[i][..], None, 0.5 * p.dhat)
+        });
         self.contacts.clear();
         let mut cand = Candidates::default();
         let mut lagged = Vec::new();

@@ -141,16 +141,14 @@ fn piece(
     // Each link's boxes are inflated by its own deviation bound δ_L: two
     // primitives are then paired when their chords' boxes are within
     // δ_a + δ_b = ξ on every axis, i.e. whenever the chords may come within ξ.
-    for (i, m) in meshes.iter().enumerate() {
-        if !m.is_empty() {
-            s.boxes[i].build(
-                m,
-                &x0[i],
-                Some(&x1[i]),
-                s.motion.chord_deviation(i, h) + 1e-12,
-            );
-        }
-    }
+    let motion = &s.motion;
+    crate::broad_phase::build_for_pairs(&mut s.boxes, meshes, link_pairs, |i| {
+        (
+            &x0[i][..],
+            Some(&x1[i][..]),
+            motion.chord_deviation(i, h) + 1e-12,
+        )
+    });
     let mut t_min: f64 = 1.0;
     let mut limited = false;
     for &(a, b) in link_pairs {
