@@ -5,9 +5,10 @@
 //! triangles whose box meets that region are paired, then pairs are tested
 //! box against box. Exact (no candidate with overlapping inflated boxes is
 //! missed), deterministic (index order). [`build_for_pairs`] builds the
-//! edge and triangle boxes only of links whose box meets a partner's: on
-//! the hand's mesh-baseline row that took 41 % off the forward pass with
-//! the same candidates (`notes/performance.md`, sixteenth session).
+//! edge and triangle boxes only of links whose box meets a partner's, and
+//! the box arithmetic is inlined here: on the hand's mesh-baseline row the
+//! two took the forward pass from 2.30 to 0.86 s per iteration with the
+//! same candidates (`notes/performance.md`, sixteenth session).
 
 use nalgebra::Vector3;
 /// The core's axis-aligned box (one box type for core and baseline).
@@ -67,8 +68,8 @@ impl PrimitiveBoxes {
     pub fn build_vertices(&mut self, x0: &[Vector3<f64>], x1: Option<&[Vector3<f64>]>, m: f64) {
         self.vert.clear();
         self.vert
-            .extend((0..x0.len()).map(|i| point_box(x0, x1, i).padded(m)));
-        self.all = Some(self.vert.iter().fold(Aabb::EMPTY, |a, b| a.union(b)));
+            .extend((0..x0.len()).map(|i| pad(point_box(x0, x1, i), m)));
+        self.all = Some(self.vert.iter().fold(Aabb::EMPTY, |a, b| join(&a, b)));
     }
 
     /// The edge and triangle boxes (after [`PrimitiveBoxes::build_vertices`]
@@ -85,18 +86,46 @@ impl PrimitiveBoxes {
         self.edge.extend(
             mesh.edges
                 .iter()
-                .map(|e| pt(e[0]).union(&pt(e[1])).padded(m)),
+                .map(|e| pad(join(&pt(e[0]), &pt(e[1])), m)),
         );
         self.tri.clear();
         self.tri.extend(
             mesh.tris
                 .iter()
-                .map(|t| pt(t[0]).union(&pt(t[1])).union(&pt(t[2])).padded(m)),
+                .map(|t| pad(join(&join(&pt(t[0]), &pt(t[1])), &pt(t[2])), m)),
         );
     }
 }
 
+/// `b` grown by `m` on every side (the core's [`Aabb::padded`], inlined
+/// here: the core's helpers cannot be inlined across crates, and the
+/// boxes are the baseline's hottest loop).
+#[inline]
+fn pad(b: Aabb, m: f64) -> Aabb {
+    let d = Vector3::repeat(m);
+    Aabb {
+        lo: b.lo - d,
+        hi: b.hi + d,
+    }
+}
+
+/// The smallest box containing both ([`Aabb::union`], inlined).
+#[inline]
+fn join(a: &Aabb, b: &Aabb) -> Aabb {
+    Aabb {
+        lo: a.lo.inf(&b.lo),
+        hi: a.hi.sup(&b.hi),
+    }
+}
+
+/// Whether the boxes intersect ([`Aabb::intersects`], inlined).
+#[inline]
+fn meets(a: &Aabb, b: &Aabb) -> bool {
+    (0..3).all(|e| a.lo[e] <= b.hi[e] && b.lo[e] <= a.hi[e])
+}
+
 /// The box of point `i` at `x0` (and `x1`).
+#[inline]
 fn point_box(x0: &[Vector3<f64>], x1: Option<&[Vector3<f64>]>, i: usize) -> Aabb {
     let mut b = Aabb::point(&x0[i]);
     if let Some(x1) = x1 {
@@ -128,7 +157,7 @@ pub fn build_for_pairs<'a>(
     let mut near = vec![false; meshes.len()];
     for &(a, b) in pairs {
         if let (Some(ba), Some(bb)) = (boxes[a].all, boxes[b].all)
-            && ba.intersects(&bb)
+            && meets(&ba, &bb)
         {
             near[a] = true;
             near[b] = true;
@@ -151,13 +180,13 @@ pub fn candidates(a: &PrimitiveBoxes, b: &PrimitiveBoxes, out: &mut Candidates) 
     let (Some(ba), Some(bb)) = (a.all, b.all) else {
         return;
     };
-    if !ba.intersects(&bb) {
+    if !meets(&ba, &bb) {
         return;
     }
     let region = ba.intersection(&bb);
     let sel = |boxes: &[Aabb]| -> Vec<u32> {
         (0..boxes.len() as u32)
-            .filter(|&i| boxes[i as usize].intersects(&region))
+            .filter(|&i| meets(&boxes[i as usize], &region))
             .collect()
     };
     let (va, vb) = (sel(&a.vert), sel(&b.vert));
@@ -165,21 +194,21 @@ pub fn candidates(a: &PrimitiveBoxes, b: &PrimitiveBoxes, out: &mut Candidates) 
     let (ea, eb) = (sel(&a.edge), sel(&b.edge));
     for &v in &va {
         for &t in &tb {
-            if a.vert[v as usize].intersects(&b.tri[t as usize]) {
+            if meets(&a.vert[v as usize], &b.tri[t as usize]) {
                 out.vt_ab.push((v, t));
             }
         }
     }
     for &v in &vb {
         for &t in &ta {
-            if b.vert[v as usize].intersects(&a.tri[t as usize]) {
+            if meets(&b.vert[v as usize], &a.tri[t as usize]) {
                 out.vt_ba.push((v, t));
             }
         }
     }
     for &i in &ea {
         for &j in &eb {
-            if a.edge[i as usize].intersects(&b.edge[j as usize]) {
+            if meets(&a.edge[i as usize], &b.edge[j as usize]) {
                 out.ee.push((i, j));
             }
         }
