@@ -162,12 +162,15 @@ fn codesign_rows_are_from_the_run(r: &serde_json::Value, md: &str) {
         .iter()
         .find(|c| c["name"] == "spider")
         .unwrap();
-    let mesh = spider["runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|x| x["method"] == "mesh baseline, coarse cage")
-        .expect("the quick suite runs the spider with a coarse cage");
+    let spider_run = |method: &str| {
+        spider["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|x| x["method"] == method)
+            .unwrap_or_else(|| panic!("the quick suite runs the spider's {method}"))
+    };
+    let mesh = spider_run("mesh baseline, coarse cage");
     assert_eq!(mesh["design_variables"], 4 * 26 * 3);
     let (l0, l1) = (
         mesh["initial_loss"].as_f64().unwrap(),
@@ -179,12 +182,7 @@ fn codesign_rows_are_from_the_run(r: &serde_json::Value, md: &str) {
     // The row records the Newton Hessians it ran with (the default), the
     // SDRS rows none, and the report says which.
     assert_eq!(mesh["ipc_hessian"].as_str(), Some("exact"), "{mesh}");
-    let co = spider["runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|x| x["method"] == "co-design")
-        .unwrap();
+    let co = spider_run("co-design");
     assert!(co.get("ipc_hessian").is_none(), "{co}");
     assert!(md.contains("Its Newton used exact per-primitive barrier Hessians"));
 }
