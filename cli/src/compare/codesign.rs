@@ -214,7 +214,7 @@ fn measure_run(
 /// `contact.ipc.hessian` of a mesh-baseline problem (its first trajectory's
 /// scene; every trajectory of a run gets the same overrides), `None` under
 /// SDRS contact.
-fn ipc_hessian(p: &Problem) -> Result<Option<String>> {
+fn ipc_hessian(p: &Problem) -> Result<Option<sdrs_ipc::settings::HessianKind>> {
     let scene = &p.first().scene;
     let Some(c) = scene.contact.as_ref() else {
         return Ok(None);
@@ -223,7 +223,7 @@ fn ipc_hessian(p: &Problem) -> Result<Option<String>> {
         return Ok(None);
     }
     let ipc = sdrs_ipc::settings::IpcSettings::of(c).map_err(|e| e.at(&scene.source))?;
-    Ok(Some(ipc.hessian.name().to_string()))
+    Ok(Some(ipc.hessian))
 }
 
 /// (method, design on, cage resolution) of a benchmark: SDRS with and

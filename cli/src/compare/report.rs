@@ -557,10 +557,11 @@ fn codesign_text(b: &CodesignPart, caged: bool) -> Vec<String> {
 /// (`contact.ipc.hessian`; rows recorded before the setting existed used
 /// the projected ones).
 fn hessian_text(runs: &[CodesignRun]) -> String {
+    use sdrs_ipc::settings::HessianKind;
     let mut kinds: Vec<&str> = runs
         .iter()
         .filter(|r| r.method.starts_with("mesh baseline"))
-        .map(|r| r.ipc_hessian.as_deref().unwrap_or("projected"))
+        .map(|r| r.ipc_hessian.unwrap_or(HessianKind::Projected).name())
         .collect();
     kinds.sort_unstable();
     kinds.dedup();

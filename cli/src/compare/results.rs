@@ -148,7 +148,7 @@ pub struct CodesignRun {
     /// recorded before 2026-12-02 carry none: they used `projected`, the
     /// only choice then. `None` for SDRS rows.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ipc_hessian: Option<String>,
+    pub ipc_hessian: Option<sdrs_ipc::settings::HessianKind>,
 }
 
 /// Central differences of one design-gradient component at the initial design.
