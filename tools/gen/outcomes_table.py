@@ -3,8 +3,9 @@
 the task, design on/off, iterations, the loss (initial → the returned
 iterate's, and which iterate that is), the task's own metrics (distance,
 upright at H and first fall for locomotion; grasped before → after and the
-links' through-holes before → after for grasping), failed trials, and the
-run's wall time. So the outcome tables of docs/paper-benchmarks.md come from
+links' through-holes before → after for grasping), failed trials, the optimizer's
+own convergence flag, the best loss's relative change over the last 100
+iterations (history.csv), and the run's wall time. So the outcome tables of docs/paper-benchmarks.md come from
 the run folders, not from figures copied by hand.
 
     tools/gen/outcomes_table.py [--label NAME=DIR ...] DIR ...
@@ -31,19 +32,32 @@ def outcome(metrics):
         up = "upright" if f.get("upright_at_horizon") else "falls"
         when = "" if fall is None else f" at {fall:.2f} s"
         parts.append(f"{i['distance']:.3f} → {f['distance']:.3f} m, {up}{when if not f.get('upright_at_horizon') else ''}")
-    if "grasp" in metrics:
+    if (metrics.get("grasp") or {}).get("trajectories"):
         g = metrics["grasp"]
         parts.append(f"grasped {g['grasped_before']}/{g['trajectories']} → {g['grasped_after']}/{g['trajectories']}")
-    if "topology" in metrics:
+    if (metrics.get("grasp") or {}).get("trajectories") and "topology" in metrics:
         t = metrics["topology"]
         parts.append(f"holes {holes(t, 'before')} → {holes(t, 'after')}")
     return "; ".join(parts) or "—"
 
 
+def last_change(folder, window=100):
+    """Relative change of the best loss over the last `window` iterations
+    (history.csv), the convergence reading of the locomotion runs."""
+    h = Path(folder) / "history.csv"
+    if not h.exists():
+        return "—"
+    best = [float(l.split(",")[2]) for l in h.read_text().splitlines()[1:] if l]
+    if len(best) <= window:
+        return "—"
+    a, b = best[-1 - window], best[-1]
+    return f"{(a - b) / abs(a) * 100:.3f} %"
+
+
 def row(label, folder):
     f = Path(folder) / "summary.json"
     if not f.exists():
-        return f"| {label} | (missing: {folder}) |||||||"
+        return f"| {label} | (missing: {folder}) ||||||||"
     s = json.loads(f.read_text())
     x = s.get("extra", {})
     res = x.get("result") or {}
@@ -54,7 +68,7 @@ def row(label, folder):
     return (
         f"| {label} | {x.get('design', '?')} | {s['iterations']} | "
         f"{s['initial_loss']:.4g} → {s['final_loss']:.4g} | {it} | "
-        f"{outcome(x.get('metrics') or {})} | {failed} | {conv} | {s['wall_seconds']:.0f} |"
+        f"{outcome(x.get('metrics') or {})} | {failed} | {conv} | {last_change(folder)} | {s['wall_seconds']:.0f} |"
     )
 
 
@@ -64,8 +78,8 @@ def main():
     ap.add_argument("dirs", nargs="*", help="run folders (labelled by their path)")
     a = ap.parse_args()
     runs = [tuple(l.split("=", 1)) for l in a.label] + [(d, d) for d in a.dirs]
-    print("| run | design | iterations | loss initial → returned | returned iterate (iteration) | outcome | failed trials | converged | wall s |")
-    print("|---|---|---:|---|---|---|---:|---|---:|")
+    print("| run | design | iterations | loss initial → returned | returned iterate (iteration) | outcome | failed trials | converged | best loss, change over the last 100 | wall s |")
+    print("|---|---|---:|---|---|---|---:|---|---:|---:|")
     for label, d in runs:
         print(row(label, d))
 
