@@ -26,6 +26,7 @@ mod multistart;
 mod optimize;
 mod optimize_ipc;
 mod optimize_resume;
+mod outcomes_table;
 mod plot;
 mod pybullet_data;
 mod schema;
