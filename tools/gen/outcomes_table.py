@@ -3,10 +3,12 @@
 the task, design on/off, iterations, the loss (initial → the returned
 iterate's, and which iterate that is), the task's own metrics (distance,
 upright at H and first fall for locomotion; grasped before → after and the
-links' through-holes before → after for grasping), failed trials, the optimizer's
-own convergence flag, the best loss's relative change over the last 100
-iterations (history.csv), and the run's wall time. So the outcome tables of docs/paper-benchmarks.md come from
-the run folders, not from figures copied by hand.
+links' through-holes before → after for grasping), failed trials, the
+optimizer's own convergence flag, the best loss's relative change over the
+last 100 iterations (history.csv), and the run's wall time. So the outcome
+tables of docs/paper-benchmarks.md come from the run folders, not from
+figures copied by hand. (tools/gen/locomotion_table.py is the locomotion
+benchmarks' own table, with the paper's figures and the ratio.)
 
     tools/gen/outcomes_table.py [--label NAME=DIR ...] DIR ...
 
@@ -26,18 +28,19 @@ def holes(topology, when):
 def outcome(metrics):
     """The task's own outcome from `extra.metrics` (locomotion or grasping)."""
     parts = []
-    if "final" in metrics and "distance" in metrics["final"]:
-        i, f = metrics["initial"], metrics["final"]
-        fall = f.get("first_fall_time")
-        up = "upright" if f.get("upright_at_horizon") else "falls"
-        when = "" if fall is None else f" at {fall:.2f} s"
-        parts.append(f"{i['distance']:.3f} → {f['distance']:.3f} m, {up}{when if not f.get('upright_at_horizon') else ''}")
-    if (metrics.get("grasp") or {}).get("trajectories"):
-        g = metrics["grasp"]
-        parts.append(f"grasped {g['grasped_before']}/{g['trajectories']} → {g['grasped_after']}/{g['trajectories']}")
-    if (metrics.get("grasp") or {}).get("trajectories") and "topology" in metrics:
-        t = metrics["topology"]
-        parts.append(f"holes {holes(t, 'before')} → {holes(t, 'after')}")
+    f = metrics.get("final") or {}
+    if "distance" in f:
+        state = "upright" if f.get("upright_at_horizon") else "falls"
+        if state == "falls" and f.get("first_fall_time") is not None:
+            state += f" at {f['first_fall_time']:.2f} s"
+        parts.append(f"{metrics['initial']['distance']:.3f} → {f['distance']:.3f} m, {state}")
+    g = metrics.get("grasp") or {}
+    if g.get("trajectories"):
+        n = g["trajectories"]
+        parts.append(f"grasped {g['grasped_before']}/{n} → {g['grasped_after']}/{n}")
+        if "topology" in metrics:
+            t = metrics["topology"]
+            parts.append(f"holes {holes(t, 'before')} → {holes(t, 'after')}")
     return "; ".join(parts) or "—"
 
 
