@@ -617,7 +617,6 @@ pub fn contact_pair(
     out.grad_a = n * k[0].transpose();
     out.grad_b = n * k[1].transpose();
     if need == Need::Hessian {
-        let mut hess = SMatrix::<f64, 24, 24>::zeros();
         let mut bmat = SMatrix::<f64, 24, 4>::zeros();
         let nnt = n * n.transpose();
         for (hi, h) in [a, b].into_iter().enumerate() {
@@ -636,17 +635,31 @@ pub fn contact_pair(
                         bmat[(row, j)] = n[r] * kk[(c, j)];
                     }
                     bmat[(row, r)] += k[hi][c];
-                    for c2 in 0..4 {
-                        for r2 in 0..3 {
-                            hess[(row, off + 3 * c2 + r2)] = sm[hi][(c, c2)] * nnt[(r, r2)];
-                        }
-                    }
                 }
             }
         }
         let hinv = plane_hessian_inverse(&sol.eval.hess);
         let w = hinv * bmat.transpose(); // 4×24
-        hess -= bmat * w;
+        // H = blockdiag(S_h ⊗ nnᵀ) − B W, written over the product B W in place: each entry is
+        // the difference the zero-initialised `H −= B W` would round to (`0 − p` off the
+        // diagonal blocks), bit for bit, without zero-filling 24×24 first.
+        let mut hess = bmat * w;
+        let entries = hess.as_mut_slice(); // column-major, 24 per column
+        for (col, column) in entries.chunks_exact_mut(24).enumerate() {
+            let (hc, c2, r2) = (col / 12, (col % 12) / 3, col % 3);
+            for (hr, rows) in column.chunks_exact_mut(12).enumerate() {
+                if hr != hc {
+                    rows.iter_mut().for_each(|e| *e = 0.0 - *e);
+                    continue;
+                }
+                for (c, rows_c) in rows.chunks_exact_mut(3).enumerate() {
+                    let s_cc = sm[hr][(c, c2)];
+                    for (r, e) in rows_c.iter_mut().enumerate() {
+                        *e = s_cc * nnt[(r, r2)] - *e;
+                    }
+                }
+            }
+        }
         out.hessian = Some(crate::math::symmetric_part_boxed(&hess));
     }
     Ok(PairOutcome::Separated(out))

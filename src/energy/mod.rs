@@ -143,12 +143,9 @@ impl EnergyAccumulator {
             self.dof_grad.fill(0.0);
         }
         if need >= Need::Hessian {
-            for (h, set) in self.link_hess.iter_mut().zip(self.link_hess_set.iter_mut()) {
-                if *set {
-                    h.fill(0.0);
-                    *set = false;
-                }
-            }
+            // The blocks themselves are not cleared: the first `add_link_hess` of an
+            // evaluation overwrites its block, and every reader checks `link_hess_set`.
+            self.link_hess_set.iter_mut().for_each(|set| *set = false);
             if self.link_moment_set {
                 self.link_moment.iter_mut().for_each(|m| m.fill(0.0));
                 self.link_moment_set = false;
@@ -159,10 +156,16 @@ impl EnergyAccumulator {
         }
     }
 
-    /// Adds to the diagonal pose Hessian block of link `i`.
+    /// Adds to the diagonal pose Hessian block of link `i`. The first write of an
+    /// evaluation stores `0 + h` (the bits a cleared block `+= h` would give, signed zeros
+    /// included), so [`EnergyAccumulator::reset`] need not zero the blocks.
     pub fn add_link_hess(&mut self, i: usize, h: &PoseHessian) {
-        self.link_hess[i] += h;
-        self.link_hess_set[i] = true;
+        if self.link_hess_set[i] {
+            self.link_hess[i] += h;
+        } else {
+            self.link_hess[i].zip_apply(h, |e, x| *e = 0.0 + x);
+            self.link_hess_set[i] = true;
+        }
     }
 }
 

@@ -133,7 +133,6 @@ pub fn friction_pair(
     if !second {
         return Ok(out);
     }
-    let mut hess = SMatrix::<f64, 24, 24>::zeros();
     let mut cmat = SMatrix::<f64, 24, 3>::zeros();
     // b_i b_jᵀ for (ij) = 00, 01 (+10), 11.
     let b0 = bm.column(0).into_owned();
@@ -143,30 +142,52 @@ pub fn friction_pair(
         b0 * b1.transpose() + b1 * b0.transpose(),
         b1 * b1.transpose(),
     ];
+    // The (c, c2) 3×3 block of hull h's diagonal block: Σ_ij b_i b_jᵀ T_ij[c, c2] / Δt².
+    let block = |h: usize, c: usize, c2: usize| {
+        (bb[0] * tacc[h][0][(c, c2)] + bb[1] * tacc[h][1][(c, c2)] + bb[2] * tacc[h][2][(c, c2)])
+            / (dt * dt)
+    };
     for h in 0..2 {
-        let off = 12 * h;
         for c in 0..4 {
-            for c2 in 0..4 {
-                let block = (bb[0] * tacc[h][0][(c, c2)]
-                    + bb[1] * tacc[h][1][(c, c2)]
-                    + bb[2] * tacc[h][2][(c, c2)])
-                    / (dt * dt);
-                hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2)
-                    .copy_from(&block);
-            }
             // C rows (c, ·) = −(1/Δt) B P_cᵀ.
             let crow = -(bm * pacc[h][c].transpose()) / dt;
-            cmat.fixed_view_mut::<3, 3>(off + 3 * c, 0).copy_from(&crow);
+            cmat.fixed_view_mut::<3, 3>(12 * h + 3 * c, 0).copy_from(&crow);
         }
     }
-    let hdiag = hess;
     let w = core.hinv * cmat.transpose(); // 3×24
-    hess -= cmat * w;
+    // H = Hdiag − C W, written over the product C W in place: each entry is the difference the
+    // zero-initialised `H = Hdiag; H −= C W` would round to (`0 − p` off the diagonal blocks),
+    // bit for bit, without zero-filling 24×24 first.
+    let mut hess = cmat * w;
+    for h in 0..2 {
+        let off = 12 * h;
+        let h_other = 12 * (1 - h);
+        for c in 0..4 {
+            for c2 in 0..4 {
+                let blk = block(h, c, c2);
+                let mut view = hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2);
+                view.zip_apply(&blk, |e, d| *e = d - *e);
+            }
+            let mut view = hess.fixed_view_mut::<3, 12>(off + 3 * c, h_other);
+            view.apply(|e| *e = 0.0 - *e);
+        }
+    }
     out.hessian = Some(crate::math::symmetric_part_boxed(&hess));
     if need == FrictionNeed::HessianAndMixed {
         let nx = cross_matrix(&frame.normal);
         let qm = Matrix3::identity() / dt + nx * core.q.z;
         // Diagonal part −Δt Hdiag (I₄ ⊗ Q).
+        // Hdiag as a 24×24 with zero off-diagonal blocks (as the Hessian's first term).
+        let mut hdiag = SMatrix::<f64, 24, 24>::zeros();
+        for h in 0..2 {
+            for c in 0..4 {
+                for c2 in 0..4 {
+                    hdiag
+                        .fixed_view_mut::<3, 3>(12 * h + 3 * c, 12 * h + 3 * c2)
+                        .copy_from(&block(h, c, c2));
+                }
+            }
+        }
         let mut mixed = SMatrix::<f64, 24, 24>::zeros();
         for bi in 0..8 {
             for bj in 0..8 {
