@@ -151,7 +151,8 @@ pub fn friction_pair(
         for c in 0..4 {
             // C rows (c, ·) = −(1/Δt) B P_cᵀ.
             let crow = -(bm * pacc[h][c].transpose()) / dt;
-            cmat.fixed_view_mut::<3, 3>(12 * h + 3 * c, 0).copy_from(&crow);
+            cmat.fixed_view_mut::<3, 3>(12 * h + 3 * c, 0)
+                .copy_from(&crow);
         }
     }
     let w = core.hinv * cmat.transpose(); // 3×24
