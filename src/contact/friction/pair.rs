@@ -95,125 +95,199 @@ pub fn friction_pair(
         return Ok(out);
     }
     let dt = params.dt;
-    let eps = params.eps_velocity;
     let bm = frame.basis;
-    let locals = [a.x_local, b.x_local];
-    // Accumulators per hull: R = Σ x̃ (wρ)ᵀ (4×2); T_k = Σ w Φ_ij x̃x̃ᵀ for (ij) = 00, 01, 11;
-    // P_c = Σ x̃_c w JᵀΦ (4 × (3×2)).
-    let mut racc = [SMatrix::<f64, 4, 2>::zeros(); 2];
-    let mut tacc = [[Matrix4::<f64>::zeros(); 3]; 2];
-    let mut pacc = [[Matrix3x2::<f64>::zeros(); 4]; 2];
     let second = need >= FrictionNeed::Hessian;
-    for act in &scratch.act {
-        let (_, _, rho, bp) = vertex_terms(act, &core.q, eps);
-        let xl = locals[act.hull][act.index];
-        let xt = Vector4::new(xl.x, xl.y, xl.z, 1.0);
-        racc[act.hull] += xt * (act.w * rho).transpose();
-        if second {
-            let outer = xt * xt.transpose();
-            tacc[act.hull][0] += outer * (act.w * bp[(0, 0)]);
-            tacc[act.hull][1] += outer * (act.w * bp[(0, 1)]);
-            tacc[act.hull][2] += outer * (act.w * bp[(1, 1)]);
-            let g = if core.spin_free {
-                Vector2::zeros()
-            } else {
-                act.g
-            };
-            let pg = bp * g;
-            let pm =
-                Matrix3x2::new(bp[(0, 0)], bp[(0, 1)], bp[(1, 0)], bp[(1, 1)], pg.x, pg.y) * act.w;
-            for c in 0..4 {
-                pacc[act.hull][c] += pm * xt[c];
-            }
-        }
-    }
+    let mut sums = PairSums::zeros();
+    sums.accumulate(&scratch.act, locals, &core, params.eps_velocity, second);
     // ∂U/∂A_h = (1/Δt) B Rᵀ.
-    out.grad_a = bm * racc[0].transpose() / dt;
-    out.grad_b = bm * racc[1].transpose() / dt;
+    out.grad_a = bm * sums.r[0].transpose() / dt;
+    out.grad_b = bm * sums.r[1].transpose() / dt;
     if !second {
         return Ok(out);
     }
-    let mut cmat = SMatrix::<f64, 24, 3>::zeros();
-    // b_i b_jᵀ for (ij) = 00, 01 (+10), 11.
-    let b0 = bm.column(0).into_owned();
-    let b1 = bm.column(1).into_owned();
-    let bb = [
-        b0 * b0.transpose(),
-        b0 * b1.transpose() + b1 * b0.transpose(),
-        b1 * b1.transpose(),
-    ];
-    // The (c, c2) 3×3 block of hull h's diagonal block: Σ_ij b_i b_jᵀ T_ij[c, c2] / Δt².
-    let block = |h: usize, c: usize, c2: usize| {
-        (bb[0] * tacc[h][0][(c, c2)] + bb[1] * tacc[h][1][(c, c2)] + bb[2] * tacc[h][2][(c, c2)])
-            / (dt * dt)
-    };
-    for h in 0..2 {
-        for c in 0..4 {
-            // C rows (c, ·) = −(1/Δt) B P_cᵀ.
-            let crow = -(bm * pacc[h][c].transpose()) / dt;
-            cmat.fixed_view_mut::<3, 3>(12 * h + 3 * c, 0)
-                .copy_from(&crow);
-        }
-    }
-    let w = core.hinv * cmat.transpose(); // 3×24
-    // H = Hdiag − C W, written over the product C W in place: each entry is the difference the
-    // zero-initialised `H = Hdiag; H −= C W` would round to (`0 − p` off the diagonal blocks),
-    // bit for bit, without zero-filling 24×24 first.
-    let mut hess = cmat * w;
-    for h in 0..2 {
-        let off = 12 * h;
-        let h_other = 12 * (1 - h);
-        for c in 0..4 {
-            for c2 in 0..4 {
-                let blk = block(h, c, c2);
-                let mut view = hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2);
-                view.zip_apply(&blk, |e, d| *e = d - *e);
-            }
-            let mut view = hess.fixed_view_mut::<3, 12>(off + 3 * c, h_other);
-            view.apply(|e| *e = 0.0 - *e);
-        }
-    }
-    out.hessian = Some(crate::math::symmetric_part_boxed(&hess));
+    let cmat = sums.c_matrix(&bm, dt);
+    out.hessian = Some(sums.hessian(&bm, &cmat, &core, dt));
     if need == FrictionNeed::HessianAndMixed {
-        let nx = cross_matrix(&frame.normal);
-        let qm = Matrix3::identity() / dt + nx * core.q.z;
-        // Diagonal part −Δt Hdiag (I₄ ⊗ Q).
-        // Hdiag as a 24×24 with zero off-diagonal blocks (as the Hessian's first term).
-        let mut hdiag = SMatrix::<f64, 24, 24>::zeros();
-        for h in 0..2 {
-            for c in 0..4 {
-                for c2 in 0..4 {
-                    hdiag
-                        .fixed_view_mut::<3, 3>(12 * h + 3 * c, 12 * h + 3 * c2)
-                        .copy_from(&block(h, c, c2));
-                }
-            }
-        }
-        let mut mixed = SMatrix::<f64, 24, 24>::zeros();
-        for bi in 0..8 {
-            for bj in 0..8 {
-                let blk = hdiag.fixed_view::<3, 3>(3 * bi, 3 * bj) * qm * (-dt);
-                mixed.fixed_view_mut::<3, 3>(3 * bi, 3 * bj).copy_from(&blk);
-            }
-        }
-        // U*_{qX} in pose columns (h, c, r): P_c BᵀQ − e₃ (B R[c])ᵀ [n̂]×.
-        let btq = bm.transpose() * qm;
-        let mut qx = SMatrix::<f64, 3, 24>::zeros();
-        for (h, (pacc_h, racc_h)) in pacc.iter().zip(&racc).enumerate() {
-            for (c, pacc_hc) in pacc_h.iter().enumerate() {
-                let mut blk = pacc_hc * btq;
-                if !core.spin_free {
-                    let brc = bm * racc_h.row(c).transpose();
-                    let row = brc.transpose() * nx;
-                    for r in 0..3 {
-                        blk[(2, r)] -= row[r];
-                    }
-                }
-                qx.fixed_view_mut::<3, 3>(0, 12 * h + 3 * c).copy_from(&blk);
-            }
-        }
-        mixed -= cmat * (core.hinv * qx);
+        let mixed = mixed_block(&frame.normal, &core, dt, &bm, &sums, &cmat);
         out.mixed = Some(Box::new(mixed));
     }
     Ok(out)
+}
+
+/// Per-hull sums over the force-carrying vertices (`x̃ = [x_local; 1]`, `w` the vertex's
+/// weight, `ρ` and `Φ` the inner solution's per-vertex gradient and Hessian terms, see
+/// `vertex_terms`), from which the gradient and both Hessians are contracted.
+struct PairSums {
+    /// `R_h = Σ x̃ (wρ)ᵀ` (4×2).
+    r: [SMatrix<f64, 4, 2>; 2],
+    /// `T_h,k = Σ w Φ_ij x̃x̃ᵀ` for `(ij)` = 00, 01, 11 (only for a Hessian).
+    t: [[Matrix4<f64>; 3]; 2],
+    /// `P_h,c = Σ x̃_c w JᵀΦ` (3×2 each; only for a Hessian).
+    p: [[Matrix3x2<f64>; 4]; 2],
+}
+
+impl PairSums {
+    /// All sums zero.
+    fn zeros() -> PairSums {
+        PairSums {
+            r: [SMatrix::<f64, 4, 2>::zeros(); 2],
+            t: [[Matrix4::<f64>::zeros(); 3]; 2],
+            p: [[Matrix3x2::<f64>::zeros(); 4]; 2],
+        }
+    }
+
+    /// Adds one pass over the active vertices; `second` adds `T` and `P`.
+    #[inline(always)]
+    fn accumulate(
+        &mut self,
+        act: &[Active],
+        locals: [&[Vector3<f64>]; 2],
+        core: &Core,
+        eps: f64,
+        second: bool,
+    ) {
+        let s = self;
+        for act in act {
+            let (_, _, rho, bp) = vertex_terms(act, &core.q, eps);
+            let xl = locals[act.hull][act.index];
+            let xt = Vector4::new(xl.x, xl.y, xl.z, 1.0);
+            s.r[act.hull] += xt * (act.w * rho).transpose();
+            if second {
+                let outer = xt * xt.transpose();
+                s.t[act.hull][0] += outer * (act.w * bp[(0, 0)]);
+                s.t[act.hull][1] += outer * (act.w * bp[(0, 1)]);
+                s.t[act.hull][2] += outer * (act.w * bp[(1, 1)]);
+                let g = if core.spin_free {
+                    Vector2::zeros()
+                } else {
+                    act.g
+                };
+                let pg = bp * g;
+                let pm = Matrix3x2::new(bp[(0, 0)], bp[(0, 1)], bp[(1, 0)], bp[(1, 1)], pg.x, pg.y)
+                    * act.w;
+                for c in 0..4 {
+                    s.p[act.hull][c] += pm * xt[c];
+                }
+            }
+        }
+    }
+
+    /// The `(c, c2)` 3×3 block of hull `h`'s diagonal block `Hdiag`:
+    /// `Σ_ij b_i b_jᵀ T_ij[c, c2] / Δt²` (`bb` = `b_i b_jᵀ` for 00, 01 + 10, 11).
+    #[inline(always)]
+    fn block(
+        &self,
+        bb: &[Matrix3<f64>; 3],
+        h: usize,
+        c: usize,
+        c2: usize,
+        dt: f64,
+    ) -> Matrix3<f64> {
+        let t = &self.t[h];
+        (bb[0] * t[0][(c, c2)] + bb[1] * t[1][(c, c2)] + bb[2] * t[2][(c, c2)]) / (dt * dt)
+    }
+
+    /// `C` (24×3): rows `(h, c, ·) = −(1/Δt) B P_h,cᵀ`.
+    fn c_matrix(&self, bm: &Matrix3x2<f64>, dt: f64) -> SMatrix<f64, 24, 3> {
+        let mut cmat = SMatrix::<f64, 24, 3>::zeros();
+        for h in 0..2 {
+            for c in 0..4 {
+                let crow = -(bm * self.p[h][c].transpose()) / dt;
+                cmat.fixed_view_mut::<3, 3>(12 * h + 3 * c, 0)
+                    .copy_from(&crow);
+            }
+        }
+        cmat
+    }
+
+    /// `∂²U_f/∂(A^{t+1})² = Hdiag − C H⁻¹ Cᵀ` (symmetrized), written over the product
+    /// `C W` (`W = H⁻¹ Cᵀ`) in place: each entry is the difference the zero-initialised
+    /// `H = Hdiag; H −= C W` would round to (`0 − p` off the diagonal blocks), bit for bit,
+    /// without zero-filling 24×24 first.
+    fn hessian(
+        &self,
+        bm: &Matrix3x2<f64>,
+        cmat: &SMatrix<f64, 24, 3>,
+        core: &Core,
+        dt: f64,
+    ) -> Box<SMatrix<f64, 24, 24>> {
+        let bb = basis_outer(bm);
+        let w = core.hinv * cmat.transpose(); // 3×24
+        let mut hess = cmat * w;
+        for h in 0..2 {
+            let off = 12 * h;
+            let h_other = 12 * (1 - h);
+            for c in 0..4 {
+                for c2 in 0..4 {
+                    let blk = self.block(&bb, h, c, c2, dt);
+                    let mut view = hess.fixed_view_mut::<3, 3>(off + 3 * c, off + 3 * c2);
+                    view.zip_apply(&blk, |e, d| *e = d - *e);
+                }
+                let mut view = hess.fixed_view_mut::<3, 12>(off + 3 * c, h_other);
+                view.apply(|e| *e = 0.0 - *e);
+            }
+        }
+        crate::math::symmetric_part_boxed(&hess)
+    }
+}
+
+/// `b_i b_jᵀ` of the basis columns for `(ij)` = 00, 01 (+ 10), 11.
+fn basis_outer(bm: &Matrix3x2<f64>) -> [Matrix3<f64>; 3] {
+    let b0 = bm.column(0).into_owned();
+    let b1 = bm.column(1).into_owned();
+    [
+        b0 * b0.transpose(),
+        b0 * b1.transpose() + b1 * b0.transpose(),
+        b1 * b1.transpose(),
+    ]
+}
+
+/// The adjoint's mixed block `∂²U_f/∂A^{t+1}∂A^t` of one pair (paper Eq.
+/// `derivativeFriction2`), for fixed lagged normal `n̂`, basis `B` and forces:
+///
+/// `−Δt Hdiag (I₄ ⊗ Q) − C H⁻¹ U*_{qX}`, with `Q = I/Δt + ω* [n̂]×` and `U*_{qX}` in pose
+/// columns `(h, c, r)`: `P_c BᵀQ − e₃ (B R[c])ᵀ [n̂]×` (the second term only when the spin
+/// `ω*` is kept). `Hdiag`'s blocks between the two hulls are zero; those blocks of the
+/// diagonal part are computed as `0 · Q · (−Δt)`, the bits of a zero-padded product.
+fn mixed_block(
+    normal: &Vector3<f64>,
+    core: &Core,
+    dt: f64,
+    bm: &Matrix3x2<f64>,
+    sums: &PairSums,
+    cmat: &SMatrix<f64, 24, 3>,
+) -> SMatrix<f64, 24, 24> {
+    let bb = basis_outer(bm);
+    let nx = cross_matrix(normal);
+    let qm = Matrix3::identity() / dt + nx * core.q.z;
+    let mut mixed = SMatrix::<f64, 24, 24>::zeros();
+    for bi in 0..8 {
+        for bj in 0..8 {
+            let d = if bi / 4 == bj / 4 {
+                sums.block(&bb, bi / 4, bi % 4, bj % 4, dt)
+            } else {
+                Matrix3::zeros()
+            };
+            mixed
+                .fixed_view_mut::<3, 3>(3 * bi, 3 * bj)
+                .copy_from(&(d * qm * (-dt)));
+        }
+    }
+    let btq = bm.transpose() * qm;
+    let mut qx = SMatrix::<f64, 3, 24>::zeros();
+    for (h, (p_h, r_h)) in sums.p.iter().zip(&sums.r).enumerate() {
+        for (c, p_hc) in p_h.iter().enumerate() {
+            let mut blk = p_hc * btq;
+            if !core.spin_free {
+                let brc = bm * r_h.row(c).transpose();
+                let row = brc.transpose() * nx;
+                for r in 0..3 {
+                    blk[(2, r)] -= row[r];
+                }
+            }
+            qx.fixed_view_mut::<3, 3>(0, 12 * h + 3 * c).copy_from(&blk);
+        }
+    }
+    mixed -= cmat * (core.hinv * qx);
+    mixed
 }
