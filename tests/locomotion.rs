@@ -481,6 +481,47 @@ fn split_radius_backtracks_the_design_and_the_controller_separately() {
     assert_eq!(losses(RadiusRule::Split), losses(RadiusRule::Reset));
 }
 
+/// `optimizer.radius: fixed` (the paper's update as written) on the spider
+/// (horizon 60, 10 iterations): every trial is taken at the radii
+/// `(ᾱ_d, ᾱ_c)`, so every design step has length at most ᾱ_d (the bounds'
+/// projection can only shorten it) and the loss may rise; the run's result
+/// is its best iterate and every row's best loss is the running minimum.
+#[test]
+fn fixed_radius_takes_every_trial_at_the_paper_step() {
+    use sdrs::optimize::task::RadiusRule;
+    let mut p = Problem::load(&task("spider"), true).unwrap();
+    p.first_mut().horizon = 60;
+    p.task.optimizer.radius = RadiusRule::Fixed;
+    let o = p.task.optimizer.clone();
+    let mut rows: Vec<(sdrs::optimize::IterRecord, DVector<f64>)> = Vec::new();
+    let out = optimize(&p, 10, |r, d| rows.push((r.clone(), d.clone()))).unwrap();
+    assert_eq!(rows.len(), 11);
+    let mut best = f64::INFINITY;
+    for w in rows.windows(2) {
+        let ((_, d0), (r, d1)) = (&w[0], &w[1]);
+        assert!(r.accepted, "iteration {}: every trial is taken", r.iter);
+        assert_eq!(
+            (r.radius_design, r.radius_controller),
+            (o.step_design, o.step_controller),
+            "iteration {}",
+            r.iter
+        );
+        let step = (d1 - d0).norm();
+        assert!(
+            step <= o.step_design * (1.0 + 1e-12) && step > 0.0,
+            "iteration {}: design step {step:e}",
+            r.iter
+        );
+    }
+    for (r, _) in &rows {
+        best = best.min(r.loss);
+        assert_eq!(r.best_loss, best, "iteration {}", r.iter);
+    }
+    assert_eq!(out.loss, best);
+    let at = rows.iter().find(|(r, _)| r.loss == best).unwrap();
+    assert_eq!(out.design, at.1, "the result is the best iterate's design");
+}
+
 /// The biped's committed initial gait is the family of
 /// `tools/gen/make_locomotion_scenes.py::biped_gait` (the scene is written
 /// from it, `--biped-gait-only`; this catches a hand edit or a drift): at

@@ -30,7 +30,7 @@ use method::{Adam, Radii, RadiusSettings};
 use nalgebra::{DVector, Vector3};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use task::{LossSpec, Method};
+use task::{LossSpec, Method, RadiusRule};
 
 /// A problem with a task file.
 #[derive(Debug, thiserror::Error)]
@@ -410,8 +410,9 @@ pub struct Outcome {
     /// The iteration whose iterate this is (0 = the start).
     pub iter: usize,
     /// Why the run stopped before its last iteration, with the error's
-    /// causes (an Adam step that could not be simulated at any of its
-    /// [`ADAM_RETRIES`] shortenings); `None` when it ran every iteration.
+    /// causes (an Adam or `radius: fixed` step that could not be simulated
+    /// at any of its [`ADAM_RETRIES`] shortenings); `None` when it ran every
+    /// iteration.
     pub stopped: Option<String>,
     /// Why a trust-region run ended before its last iteration at a
     /// converged iterate: a trial rounded to the iterate where no later
@@ -425,8 +426,8 @@ pub struct Outcome {
     /// Trial points of this session that could not be simulated (a failed
     /// Newton or contact solve, an interpenetrating start): the trust region
     /// counts each as a rejected step, so many of them shrink its radii to
-    /// nothing without any loss being compared; Adam retries the step at
-    /// half length (each such iteration counts once).
+    /// nothing without any loss being compared; Adam and `radius: fixed`
+    /// retry the step at half length (each such iteration counts once).
     pub failed_trials: FailedTrials,
 }
 
@@ -850,12 +851,13 @@ impl Run {
     }
 
     /// Takes or rejects the trial `(d_new, c_new)` of iteration `it`: Adam
-    /// always moves (a trial that cannot be simulated is retried shorter,
-    /// [`shorten_until_simulated`]; if none can be, the iterate stays and
-    /// the error is returned as `Some`: the run stops there); the trust
-    /// region moves on a lower loss and grows its radii, else keeps the
-    /// iterate, shrinks them and records the trial (a trial that cannot be
-    /// simulated is a rejected step).
+    /// and the trust region under `radius: fixed` always move (a trial that
+    /// cannot be simulated is retried shorter, [`Self::move_shorter`]; if
+    /// none can be, the iterate stays and the error is returned as `Some`:
+    /// the run stops there); the other trust-region rules move on a lower
+    /// loss and grow their radii, else keep the iterate, shrink them and
+    /// record the trial (a trial that cannot be simulated is a rejected
+    /// step).
     fn settle(
         &mut self,
         p: &Problem,
@@ -871,23 +873,14 @@ impl Run {
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => self.adam_move(it, ev, (d_new, c_new, e), on_iter),
             (Method::Adam, Err(first)) => {
-                // Counted once per iteration: the full step's failure (its
-                // shortened retries are not trial points of their own).
-                self.failed.push(it, &first, (&d_new, &c_new));
-                let step = shorten_until_simulated(
-                    (&self.d, &self.c),
-                    (d_new.clone(), c_new),
-                    first,
-                    |d, c| p.evaluate(d, c),
-                );
-                match step {
-                    Ok(trial) => self.adam_move(it, ev, trial, on_iter),
-                    Err(e) => {
-                        let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
-                        self.record(it, ev, &d_new, best_loss, false, on_iter);
-                        return Ok(Some(e));
-                    }
-                }
+                return Ok(self.move_shorter(p, it, ev, (d_new, c_new), first, on_iter));
+            }
+            (Method::TrustRegion, Ok(e)) if rs.rule == RadiusRule::Fixed => {
+                self.radii = self.radii.after(&rs, moved, true);
+                self.adam_move(it, ev, (d_new, c_new, e), on_iter);
+            }
+            (Method::TrustRegion, Err(first)) if rs.rule == RadiusRule::Fixed => {
+                return Ok(self.move_shorter(p, it, ev, (d_new, c_new), first, on_iter));
             }
             (Method::TrustRegion, Ok(e)) if e.loss < ev.loss => {
                 (self.d, self.c, *ev) = (d_new, c_new, e);
@@ -909,6 +902,39 @@ impl Run {
             }
         }
         Ok(None)
+    }
+
+    /// A move that is always taken (Adam, the trust region's `radius: fixed`)
+    /// whose full trial `(d_new, c_new)` could not be simulated (`first`):
+    /// counted once as a failed trial (its shortened retries are not trial
+    /// points of their own), then retried at half length from the iterate
+    /// ([`shorten_until_simulated`]). `Some(error)` when no retry simulates:
+    /// the iterate stays and the run stops there.
+    fn move_shorter(
+        &mut self,
+        p: &Problem,
+        it: usize,
+        ev: &mut Evaluation,
+        (d_new, c_new): (DVector<f64>, DVector<f64>),
+        first: OptimizeError,
+        on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
+    ) -> Option<OptimizeError> {
+        self.failed.push(it, &first, (&d_new, &c_new));
+        let step =
+            shorten_until_simulated((&self.d, &self.c), (d_new.clone(), c_new), first, |d, c| {
+                p.evaluate(d, c)
+            });
+        match step {
+            Ok(trial) => {
+                self.adam_move(it, ev, trial, on_iter);
+                None
+            }
+            Err(e) => {
+                let best_loss = self.history.iter().map(|h| h.loss).fold(ev.loss, f64::min);
+                self.record(it, ev, &d_new, best_loss, false, on_iter);
+                Some(e)
+            }
+        }
     }
 
     /// Adam's move to the simulated trial `(d, c, e)` of iteration `it`.

@@ -281,6 +281,16 @@ pub enum RadiusRule {
     /// per accepted controller step than without a design block (the joint
     /// and the design trial); `--design off` is bitwise the `reset` run.
     Split,
+    /// The paper's update as written ("Implementation": each iteration
+    /// takes `argmin ∇Lᵀ[Δd; Δc]` subject to the bounds and `‖Δd‖ ≤ ᾱ_d`,
+    /// `‖Δc‖ ≤ ᾱ_c`, with no acceptance test): every trial is taken, the
+    /// loss rising or falling, and the radii stay at `(ᾱ_d, ᾱ_c)`. The walk
+    /// is not monotone, so a run returns its best iterate (`result: best`,
+    /// the default) unless told otherwise. A trial that cannot be simulated
+    /// is retried at half length from the same iterate, as Adam's (at most
+    /// four times; then the run stops there and says so). `adaptive`,
+    /// `reset` and `split` accept only a lower loss.
+    Fixed,
 }
 
 impl RadiusRule {
@@ -290,6 +300,7 @@ impl RadiusRule {
     /// that follow `reset`).
     pub fn next(self, r: f64, step: f64, accepted: bool) -> f64 {
         match (self, accepted) {
+            (RadiusRule::Fixed, _) => step,
             (_, false) => 0.5 * r,
             (RadiusRule::Adaptive, true) => (r * 1.25).min(4.0 * step),
             (RadiusRule::Reset | RadiusRule::Split, true) => step,
