@@ -23,7 +23,7 @@ TASK=robots/single_jaw_cross/task.yaml
 mkdir -p "$OUT"
 cp robots/single_jaw_cross/scene.yaml "$OUT/scene.yaml"
 sed 's/^  joints: \[gripper\/base\]/  joints: []/' "$TASK" > "$OUT/task_design_alone.yaml"
-sed -e 's/method: trust_region/method: adam/' -e '/radius: reset/d' "$OUT/task_design_alone.yaml" > "$OUT/task_design_alone_adam.yaml"
+sed -e 's/method: trust_region/method: adam/' -e '/radius: /d' "$OUT/task_design_alone.yaml" > "$OUT/task_design_alone_adam.yaml"
 run() {  # name task [args]
   local name=$1 task=$2; shift 2
   nice -n 5 "$BIN" optimize "$task" --out "$OUT/$name" --force -q "$@" || echo "$name: run failed"
