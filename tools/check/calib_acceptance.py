@@ -57,7 +57,8 @@ from scene_signals import signal  # noqa: E402
 
 ASSETS = os.path.join(os.path.dirname(mujoco.__file__), "..", "gymnasium", "envs", "mujoco", "assets")
 
-# Robot: joints to excite (sine amplitude rad or m, frequency Hz), the SDRS
+# Robot: joints to excite (sine amplitude rad or m, frequency Hz[, offset rad
+# or m, also the joint's initial coordinate in both engines]), the SDRS
 # step, and hidden effects per case: (sdrs key, true value, mujoco setter).
 ROBOTS = {
     # Planar arm; the MJCF's own damping 1 and armature 1 per joint come in
@@ -82,6 +83,29 @@ ROBOTS = {
         "dt": 1e-3,
         "gain_scale": 0.05,
         "hidden": {"damping": 5.0, "friction": 5.0, "armature": 0.5, "delay": 0.02, "drag": 2.0},
+        "pair": ("damping", "armature"),
+    },
+    # 7-DOF arm nobody here tuned on (session 19, registered before any
+    # calibration). All seven arm joints are excited (a hidden effect on
+    # `all` is added to the excited joints only, and SDRS's `all` covers
+    # every joint); the object's and goal's slide joints are left alone:
+    # separate roots, no force, no contact, no gravity, at rest in both
+    # engines. The elbow and wrist flex ranges end at 0 (the import drops
+    # those limits, MuJoCo keeps them): excited about offsets inside them.
+    # Imported gains kept (PD damping 0.6–2.8 N·m·s/rad does not hide a
+    # damping of 0.1: signature 2.8e-2 RMS with MuJoCo alone). Pair
+    # damping + armature: the links' inertia (≈ 1 kg·m² at the shoulder,
+    # ≤ 2e-3 at the wrist) against the armature 0.04 breaks the reacher's
+    # gain degeneracy.
+    "pusher": {
+        "file": "pusher.xml",
+        "excite": {"r_shoulder_pan_joint": (0.5, 0.61), "r_shoulder_lift_joint": (0.3, 0.83, 0.3),
+                   "r_upper_arm_roll_joint": (0.5, 0.97), "r_elbow_flex_joint": (0.5, 1.13, -1.1),
+                   "r_forearm_roll_joint": (0.5, 1.31), "r_wrist_flex_joint": (0.3, 1.49, -0.55),
+                   "r_wrist_roll_joint": (0.5, 1.73)},
+        "dt": 1e-3,
+        "gain_scale": 1.0,
+        "hidden": {"damping": 0.1, "friction": 0.5, "armature": 0.01, "delay": 0.02, "drag": 0.03},
         "pair": ("damping", "armature"),
     },
 }
@@ -153,8 +177,13 @@ def make_scene(args, robot, spec, case_dir, initial=None, name="scene.yaml"):
     rob = sc["robots"][0]
     ctrl = rob["controller"]
     targets = {}
-    for j, (amp, freq) in spec["excite"].items():
+    for j, (amp, freq, *off) in spec["excite"].items():
         targets[j] = {"type": "sine", "terms": [{"amplitude": amp, "frequency": freq}]}
+        if off:
+            # A joint whose range excludes 0 is excited about an offset inside
+            # it, and both engines start there (the target's value at t = 0).
+            targets[j]["offset"] = off[0]
+            rob.setdefault("initial", {})[j] = {"q": [off[0]], "qdot": [0.0]}
     ctrl["targets"] = targets
     for g in ctrl.get("gains", {}).values():
         g["kp"] *= spec["gain_scale"]
