@@ -283,6 +283,9 @@ fn print_summary(r: &ImportReport, args: &ImportArgs) {
                 ready.excluded_pairs.len()
             );
         }
+        for w in &ready.warnings {
+            eprintln!("  warning: {w}");
+        }
         if let Some(lift) = ready.ground_lift {
             eprintln!("  ground: robot lifted by {lift:.4} m onto the plane z = 0");
         }

@@ -24,10 +24,14 @@
 //!   prismatic joints (rad or m); the PD targets hold this pose (a joint
 //!   driven by an MJCF servo keeps the servo's target, see **Gains**).
 //! - **Contact** (on by default): `s = 0.01`, `κ = 1`, `μ = 0.5`; every pair
-//!   of links whose hulls intersect or lie within `1.5 × 2s/(1−s)` of each
-//!   other in the initial pose is excluded (listed in the report): the
-//!   barrier could never start from such a state, and a designed overlap is
-//!   not a collision.
+//!   of the robot's links whose hulls intersect or lie within
+//!   `1.5 × 2s/(1−s)` of each other in the initial pose is excluded (listed
+//!   in the report): the barrier could never start from such a state, and a
+//!   designed overlap is not a collision. A link and the input's environment
+//!   (an MJCF ground plane or obstacle) are excluded only when they
+//!   intersect, with a warning in the report (the link will pass through):
+//!   resting near the ground is the contact the scene is for. A pair whose
+//!   separation cannot be computed is excluded with a warning naming it.
 //! - **Ground** (by default when the base floats and the input has no
 //!   ground of its own; `--ground` adds it whatever the base, `--no-ground`
 //!   never): a plane at height 0; the robot is lifted so that its lowest
@@ -131,9 +135,13 @@ pub const HOLD_ERROR: f64 = 0.02;
 pub struct ReadyReport {
     /// `fixed` or `floating`, and why.
     pub base: String,
-    /// Link pairs excluded from contact because they overlap (or nearly) in
-    /// the initial pose, as `robot/link` names.
+    /// Link pairs excluded from contact because they overlap (or, within
+    /// the robot, nearly) in the initial pose, as `robot/link` names.
     pub excluded_pairs: Vec<[String; 2]>,
+    /// Exclusions the user must look at, in words: a moving link that
+    /// intersects the ground or an obstacle in the initial pose (it will
+    /// pass through it), a pair whose separation could not be computed.
+    pub warnings: Vec<String>,
     /// Height by which the robot was lifted onto the ground (m), if any.
     pub ground_lift: Option<f64>,
     /// PD gains the hold wrote, per joint: `[k_p, k_d]`. Joints the input
@@ -167,6 +175,7 @@ pub fn make_ready(
     let mut report = ReadyReport {
         base,
         excluded_pairs: Vec::new(),
+        warnings: Vec::new(),
         ground_lift: None,
         gains: BTreeMap::new(),
     };
@@ -188,17 +197,7 @@ pub fn make_ready(
     .poses;
     hulls.update(model, &poses);
     if opts.contact {
-        // Pairs the input already excludes (MJCF's contact filter and
-        // `<contact><exclude>`) are not reported again as overlaps.
-        let given = scene.contact.as_ref().map(|c| c.exclude.clone());
-        report.excluded_pairs = rest_pose_exclusions(model, &hulls, range)
-            .into_iter()
-            .filter(|[a, b]| {
-                !given.as_ref().is_some_and(|g| {
-                    g.contains(&[a.clone(), b.clone()]) || g.contains(&[b.clone(), a.clone()])
-                })
-            })
-            .collect();
+        (report.excluded_pairs, report.warnings) = new_exclusions(scene, model, &hulls, range);
         add_contact(scene, &report.excluded_pairs, contact);
     }
     let ground = opts.ground.unwrap_or(floating && scene.ground.is_none());
@@ -316,38 +315,139 @@ fn apply_pose(
     Ok(())
 }
 
-/// Link pairs (`robot/link` names) whose hulls intersect or lie within
-/// `1.5 × range` of each other in the initial pose.
-fn rest_pose_exclusions(
+/// The rest-pose exclusions ([`rest_pose_exclusions`]) and their warnings,
+/// without the pairs the input already excludes (MJCF's contact filter and
+/// `<contact><exclude>`), which are not reported again as overlaps.
+fn new_exclusions(
+    scene: &SceneSpec,
     model: &crate::model::Model,
     hulls: &WorldHulls,
     range: f64,
-) -> Vec<[String; 2]> {
-    let mut close = BTreeSet::new();
-    let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
-    for a in 0..hulls.ids.len() {
-        for b in a + 1..hulls.ids.len() {
-            let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
-            if la == lb || close.contains(&(la.min(lb), la.max(lb))) {
-                continue;
-            }
-            let near = match separate(hulls.hull(a), hulls.hull(b), None, &mut simplex) {
-                Ok(Separation::Separated { distance, .. }) => distance < 1.5 * range,
-                _ => true,
-            };
-            if near {
-                close.insert((la.min(lb), la.max(lb)));
-            }
-        }
-    }
+) -> (Vec<[String; 2]>, Vec<String>) {
+    let input_pairs = scene
+        .contact
+        .as_ref()
+        .map(|c| c.exclude.clone())
+        .unwrap_or_default();
+    let given = |[a, b]: &[String; 2]| {
+        input_pairs.contains(&[a.clone(), b.clone()])
+            || input_pairs.contains(&[b.clone(), a.clone()])
+    };
+    let rest = rest_pose_exclusions(model, hulls, range);
+    let pairs = rest.excluded.into_iter().filter(|p| !given(p)).collect();
+    let warnings = rest
+        .warnings
+        .into_iter()
+        .filter(|(p, _)| !given(p))
+        .map(|(_, w)| w)
+        .collect();
+    (pairs, warnings)
+}
+
+/// Link pairs excluded by the rest-pose check, and what the report must say about them.
+#[derive(Debug, Default)]
+struct RestPose {
+    /// `robot/link` name pairs, each once.
+    excluded: Vec<[String; 2]>,
+    /// Excluded pairs the user must see, with the reason: a moving link
+    /// that intersects the environment at rest (it will pass through it), a
+    /// pair whose separation failed.
+    warnings: BTreeMap<[String; 2], String>,
+}
+
+/// How the rest-pose check treats one hull pair.
+enum Verdict {
+    /// Contact stays on.
+    Keep,
+    /// Excluded, listed in the report only.
+    Exclude,
+    /// Excluded, with a warning for the report.
+    Warn(String),
+}
+
+/// The rest-pose exclusions: pairs of links whose hulls, in the initial pose,
+///
+/// - within the robot (two links outside the environment): intersect or lie
+///   within `1.5 × range` of each other (a designed overlap or near-touch,
+///   e.g. links meeting at a joint, which the barrier would otherwise push
+///   apart at every step);
+/// - against the environment (the ground, an obstacle: links of the
+///   [`ENVIRONMENT`](crate::scene::environment::ENVIRONMENT) robot):
+///   intersect. A link resting within the barrier's range `range` (m) of the
+///   ground is the contact the scene is for, and the barrier starts from any
+///   positive distance; excluding it would let the link fall through. (The
+///   ground placement of [`place_on_ground`] starts the lowest vertex at
+///   `range`, inside the `1.5 × range` margin.) An intersecting moving link
+///   is excluded with a warning: it will pass through.
+///
+/// A pair whose separation fails is excluded with a warning naming it.
+fn rest_pose_exclusions(model: &crate::model::Model, hulls: &WorldHulls, range: f64) -> RestPose {
     let name = |l: usize| {
         let link = &model.links[l];
         format!("{}/{}", model.robots[link.robot].name, link.name)
     };
-    close
-        .into_iter()
-        .map(|(la, lb)| [name(la), name(lb)])
-        .collect()
+    let mut close = BTreeSet::new();
+    let mut warned = BTreeMap::new();
+    let mut simplex = parry3d_f64::query::gjk::VoronoiSimplex::new();
+    for a in 0..hulls.ids.len() {
+        for b in a + 1..hulls.ids.len() {
+            let (la, lb) = (hulls.ids[a].link, hulls.ids[b].link);
+            let pair = (la.min(lb), la.max(lb));
+            if la == lb || close.contains(&pair) {
+                continue;
+            }
+            let names = [name(pair.0), name(pair.1)];
+            let separation = separate(hulls.hull(a), hulls.hull(b), None, &mut simplex);
+            match pair_verdict(model, pair, &names, separation, range) {
+                Verdict::Keep => continue,
+                Verdict::Exclude => {}
+                Verdict::Warn(w) => {
+                    warned.insert(names, w);
+                }
+            }
+            close.insert(pair);
+        }
+    }
+    RestPose {
+        excluded: close.iter().map(|&(la, lb)| [name(la), name(lb)]).collect(),
+        warnings: warned,
+    }
+}
+
+/// The rest-pose rule of [`rest_pose_exclusions`] for one hull pair of the
+/// links `pair` (named `names`), whose hulls `separate` gave `separation`.
+fn pair_verdict(
+    model: &crate::model::Model,
+    pair: (usize, usize),
+    names: &[String; 2],
+    separation: Result<Separation, crate::contact::ContactError>,
+    range: f64,
+) -> Verdict {
+    let env = |l: usize| {
+        model.robots[model.links[l].robot].name == crate::scene::environment::ENVIRONMENT
+    };
+    let moves = |l: usize| !model.ancestor_dofs[l].is_empty();
+    let [a, b] = names;
+    match separation {
+        Ok(Separation::Separated { distance, .. }) => {
+            if env(pair.0) || env(pair.1) || distance >= 1.5 * range {
+                Verdict::Keep
+            } else {
+                Verdict::Exclude
+            }
+        }
+        Ok(Separation::Intersecting)
+            if (env(pair.0) || env(pair.1)) && (moves(pair.0) || moves(pair.1)) =>
+        {
+            Verdict::Warn(format!(
+                "{a} and {b} intersect in the initial pose: contact between them is excluded, so nothing stops one passing through the other (start the link clear of it in the input to keep the contact)"
+            ))
+        }
+        Ok(Separation::Intersecting) => Verdict::Exclude,
+        Err(e) => Verdict::Warn(format!(
+            "{a} and {b}: their separation in the initial pose could not be computed ({e}); the pair is excluded from contact, check it"
+        )),
+    }
 }
 
 /// Turns contact on with `exclude` added to the exclusions the input gave
@@ -536,4 +636,68 @@ fn hold_gains(
         gains.insert(link.joint_name.clone(), [kp, kd]);
     }
     Ok(gains)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::ContactError;
+    use nalgebra::Vector3;
+
+    /// [`pair_verdict`] on two free boxes and the ground, with the barrier's
+    /// range `2s/(1−s) = 0.0202 m` at `s = 0.01`: between the boxes, a gap
+    /// below `1.5 × range` excludes and one above keeps; a box 0.025 m above
+    /// the ground (inside the margin, outside the range) keeps its contact,
+    /// an intersection with the ground is excluded with a warning, and so is
+    /// a failed separation, naming the pair.
+    #[test]
+    fn rest_pose_rule_keeps_the_ground_and_warns_on_failures() {
+        let yaml = "version: 1\ndt: 0.002\nsteps: 1\nground: {height: 0}\nobjects:\n  - {name: a, mass: 1, hulls: [{box: {size: [0.1, 0.1, 0.1]}}], initial: {q: [0, 0, 1, 0, 0, 0]}}\n  - {name: b, mass: 1, hulls: [{box: {size: [0.1, 0.1, 0.1]}}], initial: {q: [1, 0, 1, 0, 0, 0]}}\n";
+        let scene = Scene::from_str(yaml, Path::new("rule.yaml")).unwrap();
+        let model = &scene.model;
+        let link = |n: &str| model.links.iter().position(|l| l.name == n).unwrap();
+        let (a, b, ground) = (link("a"), link("b"), link("ground"));
+        let range = ContactParams::with_width(0.01).support_distance();
+        let apart = |distance: f64| {
+            Ok(Separation::Separated {
+                dir: Vector3::z(),
+                max_a: 0.0,
+                min_b: distance,
+                distance,
+            })
+        };
+        let verdict = |pair: (usize, usize), sep: Result<Separation, ContactError>| {
+            let names = ["x/one".to_string(), "x/two".to_string()];
+            pair_verdict(
+                model,
+                (pair.0.min(pair.1), pair.0.max(pair.1)),
+                &names,
+                sep,
+                range,
+            )
+        };
+        assert!(matches!(
+            verdict((a, b), apart(1.4 * range)),
+            Verdict::Exclude
+        ));
+        assert!(matches!(verdict((a, b), apart(1.6 * range)), Verdict::Keep));
+        assert!(matches!(verdict((a, ground), apart(0.025)), Verdict::Keep));
+        assert!(matches!(verdict((a, ground), apart(1e-9)), Verdict::Keep));
+        let warned = |v: Verdict| match v {
+            Verdict::Warn(w) => w,
+            _ => panic!("no warning"),
+        };
+        let w = warned(verdict((a, ground), Ok(Separation::Intersecting)));
+        assert!(w.contains("x/one and x/two intersect"), "{w}");
+        assert!(matches!(
+            verdict((a, b), Ok(Separation::Intersecting)),
+            Verdict::Exclude
+        ));
+        let failed = Err(ContactError::GjkFailed { len_a: 8, len_b: 8 });
+        let w = warned(verdict((a, b), failed));
+        assert!(
+            w.contains("x/one and x/two") && w.contains("could not be computed"),
+            "{w}"
+        );
+    }
 }
