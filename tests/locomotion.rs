@@ -202,6 +202,102 @@ fn biped_design_gradient_matches_central_differences_short_horizon() {
     );
 }
 
+/// `design.rest_on_ground` on the biped (H = 60, Newton tolerance 1e-10):
+/// one sole vertex, the lowest at the initial design, is lowered along the
+/// ground's normal by `drop` (2 mm, and 0.1 mm: close to the tie with the
+/// rest of the flat sole), so it alone sets the robot's height; the design
+/// gradient, which now carries the placement's term on that vertex
+/// (`src/optimize/rest.rs`), matches Richardson's central difference on
+/// that vertex's three coordinates and the 9 other foot vertices with the
+/// largest |∂L/∂d|, as `fd_check_short` judges them; and the placement's
+/// term is not zero (the gradient on that vertex differs from the task's
+/// without the option at the same design).
+#[test]
+fn biped_rest_on_ground_gradient_matches_central_differences() {
+    use sdrs::optimize::task::TaskSpec;
+    let path = task("biped");
+    let load = |rest: bool| {
+        let mut spec: TaskSpec =
+            serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        spec.design.as_mut().unwrap().rest_on_ground = rest;
+        let mut p = Problem::from_spec(&path, spec, true).unwrap();
+        p.first_mut().horizon = 60;
+        p.first_mut().scene.settings.newton.tol = 1e-10;
+        p
+    };
+    let p = load(true);
+    let plain = load(false);
+    let r = &p.first().rest[0];
+    let low = r.lowest(&p.first().model).unwrap();
+    let pose = r.poses.iter().find(|(l, _)| *l == low.link).unwrap().1;
+    let down = -(pose.fixed_view::<3, 3>(0, 0).transpose() * r.normal);
+    let var = |axis: usize| {
+        (0..p.design.len())
+            .find(|&i| {
+                p.design.vars[i].targets.iter().any(|t| {
+                    *t == Target::Vertex {
+                        link: low.link,
+                        hull: low.hull,
+                        vertex: low.vertex,
+                        axis,
+                    }
+                })
+            })
+            .unwrap()
+    };
+    let own = [var(0), var(1), var(2)];
+    let c0 = p.controls.values(&p.first().controller);
+    for drop in [2e-3, 1e-4] {
+        let mut d = p.design.values(&p.first().model);
+        for (k, &i) in own.iter().enumerate() {
+            d[i] += drop * down[k];
+        }
+        let ev = p.evaluate(&d, &c0).unwrap();
+        let ev_plain = plain.evaluate(&d, &c0).unwrap();
+        let term = own
+            .iter()
+            .map(|&i| (ev.grad_design[i] - ev_plain.grad_design[i]).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            term > 1e-3 * ev.grad_design.amax(),
+            "placement term {term:e}"
+        );
+        let mut idx: Vec<usize> = (0..p.design.len())
+            .filter(|i| !own.contains(i))
+            .filter(|&i| matches!(p.design.vars[i].targets[0], Target::Vertex { .. }))
+            .collect();
+        idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
+        let mut picked = own.to_vec();
+        let mut seen = vec![(low.link, low.hull, low.vertex)];
+        for i in idx {
+            if let Target::Vertex {
+                link, hull, vertex, ..
+            } = p.design.vars[i].targets[0]
+                && !seen.contains(&(link, hull, vertex))
+            {
+                seen.push((link, hull, vertex));
+                picked.push(i);
+            }
+            if picked.len() == 12 {
+                break;
+            }
+        }
+        let label = format!("biped rest_on_ground drop={drop:.0e} H=60");
+        let stencil = common::fd::Stencil::Richardson { levels: 2 };
+        let steps = common::fd::Steps::Adaptive(common::fd::Adaptive {
+            h_min: 1e-6,
+            h_max: 8e-6,
+            margin: 4.0,
+        });
+        let (agree, all) =
+            common::fd::check_problem_sample(&label, &p, &d, &c0, &ev, &picked, steps, stencil);
+        assert!(
+            agree >= 10 && all,
+            "{label}: resolved and agreeing {agree}, all pass {all}"
+        );
+    }
+}
+
 /// The full-horizon check (H = 550 / 400, Newton tolerance 1e-12):
 /// `cargo test --release --test locomotion -- --ignored full_horizon --nocapture`
 /// (`SDRS_FD_TASKS=spider`, `SDRS_FD_H=h`). Each task needs at least 10

@@ -14,6 +14,7 @@ pub mod multi;
 pub mod names;
 pub mod output;
 pub mod report;
+pub mod rest;
 pub mod task;
 pub mod trajectory;
 
@@ -166,6 +167,9 @@ impl Problem {
     pub fn scene_at(&self, t: &Trajectory, d: &DVector<f64>, c: &DVector<f64>) -> Scene {
         let mut model = t.model.clone();
         self.design.apply(&mut model, d);
+        for r in &t.rest {
+            r.place(&mut model);
+        }
         let mut controller = t.controller.clone();
         self.controls.apply(&mut controller, c);
         let mut scene = t.scene.clone();
@@ -212,10 +216,13 @@ impl Problem {
         let t0 = Instant::now();
         let tape = record(&mut sim, t.horizon)?;
         let forward = t0.elapsed().as_secs_f64();
-        let grads = match t.factory_for(&scene)? {
+        let mut grads = match t.factory_for(&scene)? {
             None => backward(&mut sim, &tape, &t.loss)?,
             Some(f) => backward(&mut scene.adjoint_simulator_with(f)?, &tape, &t.loss)?,
         };
+        for r in &t.rest {
+            r.add_gradient(&model, &mut grads);
+        }
         if !grads.unavailable.is_empty() {
             return Err(OptimizeError::Unavailable {
                 terms: grads.unavailable.iter().map(|t| t.to_string()).collect(),

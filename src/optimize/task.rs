@@ -200,6 +200,14 @@ pub struct DesignTaskSpec {
     /// Box bound: each design variable stays within this distance (m) of its initial value. Default 0.5.
     #[serde(default = "DesignTaskSpec::default_bound")]
     pub bound: f64,
+    /// Each free-floating robot with designed links starts at the clearance
+    /// above the ground its initial design has: the robot is moved along the
+    /// ground's normal so that its lowest hull vertex at `θ^0` keeps that
+    /// height, whatever the design (the move is part of the gradient;
+    /// `src/optimize/rest.rs`). Needs a `ground:`. Default false (the
+    /// scene's pose whatever the design).
+    #[serde(default)]
+    pub rest_on_ground: bool,
 }
 
 impl DesignTaskSpec {

@@ -31,6 +31,9 @@ pub struct Trajectory {
     /// core does not implement (`ipc`: the baseline's factory, set by the
     /// CLI); `None` runs SDRS scenes only.
     pub contact_factory: Option<crate::scene::SharedContactFactory>,
+    /// `design.rest_on_ground`: the placement of each designed free-floating
+    /// robot (empty without the option).
+    pub rest: Vec<super::rest::RestOnGround>,
 }
 
 impl Trajectory {
@@ -178,6 +181,7 @@ pub fn build(
         return Err(invalid("design/controller", "nothing to optimize".into()));
     }
     let loss = super::build_loss(path, &model, &task.loss, horizon)?;
+    let rest = rest_on_ground(path, task, &scene, &model)?;
     let t = Trajectory {
         controller: scene.controller.clone(),
         scene,
@@ -186,8 +190,37 @@ pub fn build(
         horizon,
         grasp: task.grasp.clone(),
         contact_factory: None,
+        rest,
     };
     Ok((t, design_space, controls))
+}
+
+/// The placements of `design.rest_on_ground` (empty without it): one per
+/// robot named in `design.vertices` (with or without `--design off`, so a
+/// controller-only twin starts where its co-design run does).
+fn rest_on_ground(
+    path: &Path,
+    task: &TaskSpec,
+    scene: &Scene,
+    model: &Model,
+) -> Result<Vec<super::rest::RestOnGround>, TaskError> {
+    let Some(d) = task.design.as_ref().filter(|d| d.rest_on_ground) else {
+        return Ok(Vec::new());
+    };
+    let mut robots = Vec::new();
+    for name in &d.vertices {
+        let robot = name.split('/').next().unwrap_or_default();
+        if let Some(r) = model.robots.iter().position(|r| r.name == robot)
+            && !robots.contains(&r)
+        {
+            robots.push(r);
+        }
+    }
+    super::rest::RestOnGround::build(scene, model, &robots).map_err(|msg| TaskError::Invalid {
+        path: path.into(),
+        element: "design.rest_on_ground".into(),
+        msg,
+    })
 }
 
 /// The design space (empty with `design = false` or no `design:`) and the
