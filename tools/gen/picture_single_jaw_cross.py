@@ -10,6 +10,11 @@ block of the jaw's right leg (jaw frame x ≥ 0.10 m) projected along x onto
 the y–z plane (grey; a white region inside the leg is a through-hole along
 the arm), the rod's 6 × 6 mm section at the arm's axis red, a 60 × 60 mm
 window around it. Rendered as tools/gen/picture_topology_demo.py does.
+
+`--rod SCENE=DY,DZ` (mm, repeatable) draws that panel's rod section at an
+offset from the aim instead: where an optimized path takes the arm (the
+nineteenth session's co-design threads it through a hole it drilled
+−15…−33 mm, +15…+27 mm from the aim; notes/paper-step-rule.md).
 """
 import sys
 from pathlib import Path
@@ -36,9 +41,9 @@ def leg_sections(scene_path):
     return out
 
 
-def panel(sections):
+def panel(sections, offset=(0.0, 0.0)):
     r = CROSS_ROD / 2
-    rod = np.array([[-r, -r], [r, -r], [r, r], [-r, r]])
+    rod = np.array([[-r, -r], [r, -r], [r, r], [-r, r]]) + np.array(offset)
     return render(sections, HALF, PX, 0.00008, [(rod, (220, 30, 30), 0.0002)])
 
 
@@ -49,12 +54,18 @@ def main():
         k = args.index("--out")
         out = Path(args[k + 1])
         del args[k:k + 2]
+    offsets = {}
+    while "--rod" in args:
+        k = args.index("--rod")
+        scene, dydz = args[k + 1].split("=")
+        offsets[scene] = tuple(float(v) / 1000 for v in dydz.split(","))
+        del args[k:k + 2]
     task = ROOT / "robots" / "single_jaw_cross"
     scenes = args or [task / "scene.yaml", task / "scene_hole.yaml"]
     gap = np.full((PX, 8, 3), 255.0)
     row = []
     for k, sc in enumerate(scenes):
-        row.append(panel(leg_sections(sc)))
+        row.append(panel(leg_sections(sc), offsets.get(str(sc), (0.0, 0.0))))
         if k + 1 < len(scenes):
             row.append(gap)
     write_png(out, np.concatenate(row, axis=1))
