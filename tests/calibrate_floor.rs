@@ -72,11 +72,21 @@ fn fine(scene: &str) -> String {
 }
 
 fn calibrate_on(name: &str, data: String) -> sdrs::calibrate::CalibrationResult {
+    calibrate_scene(name, &arm2(), data)
+}
+
+/// `sdrs calibrate` of `scene_text` on `data` (every effect kind, 30 %
+/// held out).
+fn calibrate_scene(
+    name: &str,
+    scene_text: &str,
+    data: String,
+) -> sdrs::calibrate::CalibrationResult {
     // One directory per case: the tests run in parallel, and a shared one
     // was emptied by one test while the other read its scene from it.
     let dir = common::scratch_dir(&format!("calibrate-floor-{name}"));
     let scene = dir.join("arm2.yaml");
-    std::fs::write(&scene, arm2()).unwrap();
+    std::fs::write(&scene, scene_text).unwrap();
     let measured = dir.join(format!("{name}.csv"));
     std::fs::write(&measured, data).unwrap();
     let opts = CalibrateOptions {
@@ -152,6 +162,30 @@ fn an_effect_above_the_floor_is_still_named() {
     assert_eq!(r.candidate.as_deref(), Some("joint_damping/all"));
     let c = r.parameters["joint_damping/all"];
     assert!((c / 0.3 - 1.0).abs() < 0.1, "damping {c}");
+    model_floor_holds_the_integrators_error(&r);
+}
+
+/// The floor of the chosen damping (the same data as
+/// [`an_effect_above_the_floor_is_still_named`]) is measured at its
+/// Δt → 0 values and holds our integrator's error (issue 33, session 19b).
+/// The damping fitted at Δt absorbs the implicit step's numerical
+/// dissipation, and the model's `E_gap = clamp(G² − G*², 0, E²)^½`
+/// measured there underestimates the integrator error in the data (on the
+/// arm2 case: 4.6e-3 of E 8.7e-3, 0.53 E; on [`PENDULUM`]: 0). At the
+/// extrapolated value the data lie at the model's Richardson limit, so
+/// most of `E` is in the gap: required `E_gap > ½ E` (threshold chosen
+/// before the first run; arm2 0.66 E, [`PENDULUM`] 0.70 E).
+fn model_floor_holds_the_integrators_error(r: &sdrs::calibrate::CalibrationResult) {
+    let f = &r.error_floor;
+    eprintln!("{}", serde_json::to_string_pretty(f).unwrap());
+    assert!(
+        f.integrator_in_gap > 0.5 * f.integrator,
+        "E_gap {} of E {}",
+        f.integrator_in_gap,
+        f.integrator
+    );
+    assert_eq!(f.floor_of, "joint_damping/all");
+    assert!(f.floor_extrapolated);
 }
 
 /// Measured data `y_c = a_c + w_c (b_c − a_c) + noise` on three channels of
@@ -228,4 +262,71 @@ fn finer_step_evidence_is_judged_per_channel() {
     }
     eprintln!("own-step channels counted: {counted} of 600");
     assert!(counted <= 18, "{counted} of 600 own-step channels counted");
+}
+
+/// One PD-held link without gravity (arm2's upper link): a damped linear
+/// oscillator, whose implicit-step error is mostly numerical dissipation —
+/// the direction a joint damping moves the trajectory in. The drive
+/// (0.4 and 0.9 Hz) stays well below the PD's natural frequency
+/// (√(2k_p/I) ≈ 17 rad/s); a first version driven at arm2's 0.7 and
+/// 1.9 Hz sat near resonance (held-out gap 0.199 rad, 5.7e-3 left by the
+/// damping: `unexplained`).
+const PENDULUM: &str = "version: 1
+dt: 0.002
+steps: 1000
+gravity: [0, 0, 0]
+solver: {tol: 1.0e-7}
+robots:
+  - name: arm
+    base: {xyz: [0, 0, 1]}
+    links:
+      - name: upper
+        joint: {name: shoulder, type: revolute, axis: [0, 1, 0]}
+        mass: 1.0
+        hulls: [{box: {size: [0.05, 0.05, 0.4], center: [0, 0, -0.2]}}]
+    controller:
+      kp: 8
+      kd: 0.0004
+      targets:
+        shoulder: {type: sine, terms: [{amplitude: 0.8, frequency: 0.4}, {amplitude: 0.3, frequency: 0.9, phase: 0.5}]}
+    initial:
+      shoulder: {q: [0.2], qdot: [0]}
+";
+
+/// Joint damping 0.3 hidden in data of [`PENDULUM`] at Δt/16, σ = 1e-3,
+/// 2 s (issue 33 session 19b; written after the arm2 case above turned
+/// out to give `E_gap` 0.53 E at the Δt-fitted value too, so that only
+/// `floor_extrapolated` told the rules apart there). Here the damping
+/// fitted at Δt absorbs most of the integrator's error, and at that value
+/// the model's `E_gap = (|e_⊥|² − |e_∥|²)^½` (`e_∥`: the part along the
+/// damping's sensitivity) is clamped to 0 — the pusher's case; at the
+/// Δt → 0 value `E_gap ≈ |e| = E`. Required: the damping named alone
+/// within 10 %, `E_gap > ½ E` (the threshold of the arm2 case, chosen
+/// before its first run).
+#[test]
+fn a_damping_that_absorbs_the_integrators_dissipation_keeps_it_in_the_floor() {
+    let s = Sampling {
+        noise: NOISE,
+        seed: 11,
+        duration: 2.0,
+        ..Default::default()
+    };
+    let hidden = with_effects(
+        &fine(PENDULUM),
+        &["{effect: joint_damping, on: all, values: [0.3]}"],
+    );
+    let r = calibrate_scene("pendulum-damping", PENDULUM, measured_csv(&hidden, &s));
+    eprintln!("{}", serde_json::to_string_pretty(&r.error_floor).unwrap());
+    eprintln!(
+        "{} {:?} {}\n{}",
+        r.verdict,
+        r.candidate,
+        serde_json::to_string(&r.parameters).unwrap(),
+        r.reason
+    );
+    assert_eq!(r.verdict, "effect", "{}", r.reason);
+    assert_eq!(r.candidate.as_deref(), Some("joint_damping/all"));
+    let c = r.parameters["joint_damping/all"];
+    assert!((c / 0.3 - 1.0).abs() < 0.1, "damping {c}");
+    model_floor_holds_the_integrators_error(&r);
 }

@@ -115,23 +115,48 @@ pub struct ErrorFloor {
     pub floor_of: String,
     /// The floor of the scene as given (= `floor` when `floor_of` is `none`).
     pub floor_baseline: f64,
+    /// `true` when the model floor (`floor_of` ≠ `none`) was measured with
+    /// the candidate's parameters extrapolated to Δt → 0 rather than as
+    /// fitted at Δt ([`with_model`]).
+    pub floor_extrapolated: bool,
 }
 
 /// The floor re-estimated for a fitted model (issue 33, item 1): the
-/// scene with the candidate's effects at their fitted values is refined
-/// (Δt/2, Δt/4) and its own `E_gap` measured as for the baseline
-/// ([`estimate`]). `E_gap` of the baseline is 0 whenever the missing effect
-/// is anti-correlated with our integrator's error (a damping against the
+/// scene with the candidate's effects `extra` (`sim`: that scene simulated
+/// at Δt over the whole data of the first recording) is refined (Δt/2,
+/// Δt/4) and its own `E_gap` measured as for the baseline ([`estimate`]).
+/// `E_gap` of the baseline is 0 whenever the missing effect is
+/// anti-correlated with our integrator's error (a damping against the
 /// implicit step's numerical dissipation: `G* > G`), although the error is
 /// in the gap once the effect is added; the model's own estimate then
-/// measures it. Returns `base` with `floor` and `integrator_in_gap`
-/// replaced by the model's when its floor is higher (`floor_of` = `label`),
-/// `base` unchanged otherwise; `None` when a refined simulation fails.
+/// measures it.
+///
+/// The values in `extra` must be the ones the calibration reports: those
+/// extrapolated to Δt → 0 when the data come from a finer step
+/// (`extrapolated = true`, [`super::select::extrapolate_to_zero_dt`]).
+/// With data `y = θ_c(p_true) + w` and our step `θ_Δt(p) = θ_c(p) + e(p)`,
+/// a fit at Δt lands at `p̂` with `θ_Δt(p̂) ≈ θ_c(p_true)`: it absorbs `e`,
+/// so at `p̂`
+///
+/// ```text
+/// G(p̂) = RMS(θ_Δt(p̂) − y) ≈ σ,   G*(p̂) = RMS(θ_c(p̂) − y) ≥ G(p̂),   E_gap(p̂) = 0
+/// ```
+///
+/// whatever `E`, while at `p* ≈ p_true` `G* ≈ σ`, `G ≈ √(σ² + E²)` and
+/// `E_gap = clamp(G² − G*², 0, E²)^½ ≈ E`: the integrator error that is in
+/// the data (issue 33 session 19: the pusher's damping fitted 0.0963 at
+/// Δt, 0.1001 at Δt → 0 for a true 0.1, `E_gap` 0 against 1.18e-3).
+///
+/// Returns `base` with `floor` and `integrator_in_gap` replaced by the
+/// model's when its floor is higher (`floor_of` = `label`,
+/// `floor_extrapolated` = `extrapolated`), `base` unchanged otherwise;
+/// `None` when a refined simulation fails.
 pub fn with_model(
     pb: &Problem,
     extra: &[crate::energy::effects::EffectSpec],
     sim: &Simulated,
     label: &str,
+    extrapolated: bool,
     base: &ErrorFloor,
 ) -> Option<ErrorFloor> {
     let sc = pb.scene_with(extra)?;
@@ -144,6 +169,7 @@ pub fn with_model(
         out.contact = m.contact;
         out.contact_in_gap = m.contact_in_gap;
         out.floor_of = label.to_string();
+        out.floor_extrapolated = extrapolated;
     }
     Some(out)
 }
@@ -383,5 +409,6 @@ pub fn estimate(pb: &Problem, base: &Simulated) -> Option<ErrorFloor> {
         suggested_dt,
         floor_of: "none".into(),
         floor_baseline: floor,
+        floor_extrapolated: false,
     })
 }

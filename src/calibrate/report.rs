@@ -5,9 +5,12 @@
 //! reason         why, in words (the floor, the share explained, where the gap sits)
 //! error_floor    {dt, noise, integrator, integrator_in_gap, order, gap, gap_half_dt,
 //!                 gap_quarter_dt, gap_extrapolated, shrink_half_dt, contact, contact_in_gap,
-//!                 contact_s, floor, suggested_dt, floor_of, floor_baseline}
+//!                 contact_s, floor, suggested_dt, floor_of, floor_baseline,
+//!                 floor_extrapolated}
 //!                the model's own error on the held-out window (calibrate::floor);
-//!                floor_of: "none", or the chosen candidate when its own floor is higher
+//!                floor_of: "none", or the chosen candidate when its own floor is higher;
+//!                floor_extrapolated: that floor measured with the candidate's values
+//!                extrapolated to Δt → 0 (else as fitted at Δt)
 //! residual_regression  {joints: [{joint, rms_force, terms: [{term, meaning, unit,
 //!                coefficient, low, high}], explained_holdout, rows}], strongest}
 //!                sparse regression of the residual generalized force (calibrate::residual)
@@ -417,8 +420,14 @@ fn floor_section(s: &mut String, f: &ErrorFloor) {
     ));
     if f.floor_of != "none" {
         s.push_str(&format!(
-            "The floor and the integrator error in the gap are those of the chosen model `{}` (re-estimated at Δt/2, Δt/4 with its fitted effects); the scene as given has floor {:.3e}.\n\n",
-            f.floor_of, f.floor_baseline
+            "The floor and the integrator error in the gap are those of the chosen model `{}` (re-estimated at Δt/2, Δt/4 with its effects at their {} values); the scene as given has floor {:.3e}.\n\n",
+            f.floor_of,
+            if f.floor_extrapolated {
+                "Δt → 0"
+            } else {
+                "fitted"
+            },
+            f.floor_baseline
         ));
     }
     if let Some(dt) = f.suggested_dt {

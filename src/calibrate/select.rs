@@ -448,10 +448,10 @@ pub fn finer_step_channels(
 
 /// The floor of the scene as given, the decision against it, then the
 /// floor re-estimated for the chosen model — for a pair, its best member
-/// alone — ([`super::floor::with_model`])
-/// and, when that floor is higher, the decision taken again against it
-/// (once: the second decision is final). Returns the floor used, the
-/// decision and the number of refined simulations run.
+/// alone — ([`model_floor`]) and, when that floor is higher, the decision
+/// taken again against it (once: the second decision is final). Returns
+/// the floor used, the decision and the number of simulations run for the
+/// floors (refined runs and the Δt/2 refit of [`model_floor`]).
 fn decide_with_model_floor(
     pb: &Problem,
     base: &Scored,
@@ -482,18 +482,50 @@ fn decide_with_model_floor(
     } else {
         i
     };
-    let c = &ranking[i];
-    let model = super::floor::with_model(
-        pb,
-        &c.candidate.specs(&c.fit.params),
-        &c.sim,
-        &c.candidate.label,
-        &floor,
-    )?;
+    let (model, sims) = model_floor(pb, &ranking[i], &floor, opts)?;
     if model.floor > floor.floor {
         let again = super::verdict::decide(base, ranking, &model, bad, opts);
-        Some((model, again, 4))
+        Some((model, again, 2 + sims))
     } else {
-        Some((floor, decision, 4))
+        Some((floor, decision, 2 + sims))
     }
+}
+
+/// The floor of the model `c` ([`super::floor::with_model`]) measured at
+/// the values the calibration reports for it: extrapolated to Δt → 0
+/// ([`extrapolate_to_zero_dt`], `p* = 2 p_{Δt/2} − p_Δt`) when the data
+/// come from a finer step, else as fitted at Δt. At the Δt-fitted values
+/// the effect has absorbed our integrator's error, and the model's
+/// `E_gap = clamp(G² − G*², 0, E²)^½` comes out 0 whatever `E` (the
+/// derivation is in [`super::floor::with_model`]'s doc). Returns the floor
+/// (`base` when the model's is not higher) and the simulations run (two
+/// refined runs, each Δt/2 run of the extrapolation counted as two, and
+/// the run at `p*`).
+fn model_floor(
+    pb: &Problem,
+    c: &Scored,
+    base: &super::floor::ErrorFloor,
+    opts: &SelectOptions,
+) -> Option<(super::floor::ErrorFloor, usize)> {
+    let (p, n) = extrapolate_to_zero_dt(pb, c, opts, base.noise);
+    let at_zero = p.and_then(|p| {
+        let specs = c.candidate.specs(&p);
+        let sim = pb.simulate(&specs, pb.measured.times.len())?;
+        Some((specs, sim))
+    });
+    let sims = 2 + 2 * n + usize::from(at_zero.is_some());
+    let model = match &at_zero {
+        Some((specs, sim)) => {
+            super::floor::with_model(pb, specs, sim, &c.candidate.label, true, base)?
+        }
+        None => super::floor::with_model(
+            pb,
+            &c.candidate.specs(&c.fit.params),
+            &c.sim,
+            &c.candidate.label,
+            false,
+            base,
+        )?,
+    };
+    Some((model, sims))
 }
