@@ -76,27 +76,42 @@ fn fd_setup(
     let d0 = p.design.values(&p.first().model);
     let c0 = p.controls.values(&p.first().controller);
     let ev = p.evaluate(&d0, &c0).unwrap();
-    let mut idx: Vec<usize> = (0..p.design.len())
-        .filter(|&i| matches!(p.design.vars[i].targets[0], Target::Vertex { .. }))
-        .collect();
-    idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
-    let mut seen = Vec::new();
-    let mut picked = Vec::new();
-    for i in idx {
-        if let Target::Vertex {
-            link, hull, vertex, ..
-        } = p.design.vars[i].targets[0]
-            && !seen.contains(&(link, hull, vertex))
-        {
-            seen.push((link, hull, vertex));
-            picked.push(i);
-        }
-        if picked.len() == vars {
-            break;
-        }
-    }
+    let picked = largest_vertex_components(&p, &ev, Vec::new(), vars);
     assert_eq!(picked.len(), vars);
     (p, d0, c0, ev, picked)
+}
+
+/// `picked` extended to `n` vertex variables by those with the largest
+/// |∂L/∂d| of `ev`, at most one per vertex (the vertices of `picked`'s
+/// first entries count as seen).
+fn largest_vertex_components(
+    p: &Problem,
+    ev: &sdrs::optimize::Evaluation,
+    mut picked: Vec<usize>,
+    n: usize,
+) -> Vec<usize> {
+    let vertex_of = |i: usize| match p.design.vars[i].targets[0] {
+        Target::Vertex {
+            link, hull, vertex, ..
+        } => Some((link, hull, vertex)),
+        _ => None,
+    };
+    let mut seen: Vec<_> = picked.iter().filter_map(|&i| vertex_of(i)).collect();
+    let mut idx: Vec<usize> = (0..p.design.len())
+        .filter(|i| !picked.contains(i) && vertex_of(*i).is_some())
+        .collect();
+    idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
+    for i in idx {
+        if picked.len() == n {
+            break;
+        }
+        let v = vertex_of(i).expect("a vertex variable");
+        if !seen.contains(&v) {
+            seen.push(v);
+            picked.push(i);
+        }
+    }
+    picked
 }
 
 /// The full-horizon check of one task: the 12 foot vertices with the
@@ -262,26 +277,7 @@ fn biped_rest_on_ground_gradient_matches_central_differences() {
             term > 1e-3 * ev.grad_design.amax(),
             "placement term {term:e}"
         );
-        let mut idx: Vec<usize> = (0..p.design.len())
-            .filter(|i| !own.contains(i))
-            .filter(|&i| matches!(p.design.vars[i].targets[0], Target::Vertex { .. }))
-            .collect();
-        idx.sort_by(|&a, &b| ev.grad_design[b].abs().total_cmp(&ev.grad_design[a].abs()));
-        let mut picked = own.to_vec();
-        let mut seen = vec![(low.link, low.hull, low.vertex)];
-        for i in idx {
-            if let Target::Vertex {
-                link, hull, vertex, ..
-            } = p.design.vars[i].targets[0]
-                && !seen.contains(&(link, hull, vertex))
-            {
-                seen.push((link, hull, vertex));
-                picked.push(i);
-            }
-            if picked.len() == 12 {
-                break;
-            }
-        }
+        let picked = largest_vertex_components(&p, &ev, own.to_vec(), 12);
         let label = format!("biped rest_on_ground drop={drop:.0e} H=60");
         let stencil = common::fd::Stencil::Richardson { levels: 2 };
         let steps = common::fd::Steps::Adaptive(common::fd::Adaptive {
