@@ -294,6 +294,27 @@ fn biped_rest_on_ground_gradient_matches_central_differences() {
     }
 }
 
+/// `design.rest_on_ground` in a scene without a ground is a load error
+/// naming the task file and the key (chain reaching has no ground).
+#[test]
+fn rest_on_ground_without_a_ground_is_a_clear_error() {
+    use sdrs::optimize::task::TaskSpec;
+    let path = robots("chain_reach/task.yaml");
+    let mut spec: TaskSpec =
+        serde_yaml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    spec.design.as_mut().unwrap().rest_on_ground = true;
+    let err = Problem::from_spec(&path, spec, true)
+        .err()
+        .expect("an error");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("chain_reach")
+            && msg.contains("design.rest_on_ground")
+            && msg.contains("ground:"),
+        "{msg}"
+    );
+}
+
 /// The full-horizon check (H = 550 / 400, Newton tolerance 1e-12):
 /// `cargo test --release --test locomotion -- --ignored full_horizon --nocapture`
 /// (`SDRS_FD_TASKS=spider`, `SDRS_FD_H=h`). Each task needs at least 10
