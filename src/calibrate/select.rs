@@ -256,6 +256,7 @@ pub fn select(
         &Default::default(),
     );
     let (mut bad, mut half_sims) = (bad, 0);
+    let mut extrapolations = Extrapolations::default();
     // The chosen model's values extrapolated to Δt → 0 are the physical
     // estimate, so they must be plausible too (a delay fitted at 0.72 ms
     // on a 0.5 ms step extrapolates to 0.19 ms: integrator timing, not a
@@ -263,7 +264,7 @@ pub fn select(
     // choice is made again without it.
     let (floor, decision, refined, extrapolated) = loop {
         let (floor, mut decision, refined) =
-            decide_with_model_floor(pb, &base, &ranking, bad.clone(), opts)?;
+            decide_with_model_floor(pb, &base, &ranking, bad.clone(), opts, &mut extrapolations)?;
         if let (Some(i), Some(r)) = (decision.chosen, &residual) {
             let sim = &ranking[i].sim;
             let own = || {
@@ -277,7 +278,7 @@ pub fn select(
         };
         let s = &mut ranking[i];
         confidence(pb, &s.candidate, &mut s.fit, &opts.fit);
-        let (p, n) = extrapolate_to_zero_dt(pb, s, opts, floor.noise);
+        let (p, n) = extrapolations.get(pb, s, opts, floor.noise);
         half_sims += 2 * n;
         let mut at_zero = s.clone();
         if let Some(p) = &p {
@@ -314,6 +315,39 @@ pub fn select(
         residual,
         identifiability,
     })
+}
+
+/// The Δt → 0 extrapolations already made in one [`select`], keyed by the
+/// candidate's label, its fitted parameters and the noise (bit for bit):
+/// the chosen model's floor ([`model_floor`]) and the reported values
+/// extrapolate the same fit, and the second asks again for the result of
+/// the first instead of refitting at Δt/2 (the same numbers; the
+/// simulations are counted once).
+#[derive(Default)]
+struct Extrapolations(Vec<(String, Vec<u64>, u64, Option<Vec<f64>>)>);
+
+impl Extrapolations {
+    /// [`extrapolate_to_zero_dt`] of `s`, or its earlier result (with 0
+    /// new simulations).
+    fn get(
+        &mut self,
+        pb: &Problem,
+        s: &Scored,
+        opts: &SelectOptions,
+        noise: f64,
+    ) -> (Option<Vec<f64>>, usize) {
+        let bits: Vec<u64> = s.fit.params.iter().map(|p| p.to_bits()).collect();
+        let key = |e: &(String, Vec<u64>, u64, Option<Vec<f64>>)| {
+            e.0 == s.candidate.label && e.1 == bits && e.2 == noise.to_bits()
+        };
+        if let Some(e) = self.0.iter().find(|e| key(e)) {
+            return (e.3.clone(), 0);
+        }
+        let (p, n) = extrapolate_to_zero_dt(pb, s, opts, noise);
+        self.0
+            .push((s.candidate.label.clone(), bits, noise.to_bits(), p.clone()));
+        (p, n)
+    }
 }
 
 /// The fitted parameters extrapolated to Δt → 0 (Richardson on the
@@ -458,6 +492,7 @@ fn decide_with_model_floor(
     ranking: &[Scored],
     bad: Vec<(String, String)>,
     opts: &SelectOptions,
+    extrapolations: &mut Extrapolations,
 ) -> Option<(super::floor::ErrorFloor, super::verdict::Decision, usize)> {
     let floor = super::floor::estimate(pb, &base.sim)?;
     let decision = super::verdict::decide(base, ranking, &floor, bad.clone(), opts);
@@ -482,7 +517,7 @@ fn decide_with_model_floor(
     } else {
         i
     };
-    let (model, sims) = model_floor(pb, &ranking[i], &floor, opts)?;
+    let (model, sims) = model_floor(pb, &ranking[i], &floor, opts, extrapolations)?;
     if model.floor > floor.floor {
         let again = super::verdict::decide(base, ranking, &model, bad, opts);
         Some((model, again, 2 + sims))
@@ -506,8 +541,9 @@ fn model_floor(
     c: &Scored,
     base: &super::floor::ErrorFloor,
     opts: &SelectOptions,
+    extrapolations: &mut Extrapolations,
 ) -> Option<(super::floor::ErrorFloor, usize)> {
-    let (p, n) = extrapolate_to_zero_dt(pb, c, opts, base.noise);
+    let (p, n) = extrapolations.get(pb, c, opts, base.noise);
     let at_zero = p.and_then(|p| {
         let specs = c.candidate.specs(&p);
         let sim = pb.simulate(&specs, pb.measured.times.len())?;
