@@ -204,7 +204,7 @@ fn adam_step_decay_is_validated_and_wired() {
 }
 
 /// `optimizer.plateau` (Adam's return to its best iterate): refused on the
-/// trust region and with a zero patience or a factor outside (0, 1], each
+/// trust region's monotone radius rules and with a zero patience or a factor outside (0, 1], each
 /// naming its key; a patience beyond the run leaves it bitwise unchanged. A
 /// binding one (rates ×10 so that Adam overshoots, patience 2) returns only
 /// after 2 iterations without a new best, the first trial after a return
@@ -229,6 +229,14 @@ fn adam_plateau_is_validated_and_wired() {
     refused(
         &|o| {
             o.method = Method::TrustRegion;
+            o.plateau = plateau(5, 0.5);
+        },
+        "optimizer.plateau",
+    );
+    refused(
+        &|o| {
+            o.method = Method::TrustRegion;
+            o.radius = sdrs::optimize::task::RadiusRule::Reset;
             o.plateau = plateau(5, 0.5);
         },
         "optimizer.plateau",

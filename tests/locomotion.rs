@@ -635,6 +635,64 @@ fn fixed_radius_takes_every_trial_at_the_paper_step() {
     assert_eq!(out.design, at.1, "the result is the best iterate's design");
 }
 
+/// `radius: fixed` with `optimizer.plateau` (spider, horizon 60, patience
+/// 2, factor 0.5; this walk returns after iterations 7 and 11): a return
+/// happens only after 2 iterations without a new best; after `n` returns
+/// every trial is taken at `0.5ⁿ (ᾱ_d, ᾱ_c)`, and the first trial after a
+/// return starts from the best iterate (its design step from the best
+/// design is at most the halved radius).
+#[test]
+fn fixed_radius_plateau_returns_to_the_best_iterate_at_a_shorter_step() {
+    use sdrs::optimize::task::{Plateau, RadiusRule};
+    let mut p = Problem::load(&task("spider"), true).unwrap();
+    p.first_mut().horizon = 60;
+    p.task.optimizer.radius = RadiusRule::Fixed;
+
+    p.task.optimizer.plateau = Some(Plateau {
+        patience: 2,
+        factor: 0.5,
+    });
+    let o = p.task.optimizer.clone();
+    let mut rows: Vec<(sdrs::optimize::IterRecord, DVector<f64>)> = Vec::new();
+    let out = optimize(&p, 12, |r, d| rows.push((r.clone(), d.clone()))).unwrap();
+    let returns = out.plateau_returns.clone();
+    let losses: Vec<f64> = rows.iter().map(|(r, _)| r.loss).collect();
+    println!("returns after iterations {returns:?}, losses {losses:?}");
+    assert!(!returns.is_empty(), "the walk never returned");
+    let best = |k: usize| losses[..=k].iter().cloned().fold(f64::INFINITY, f64::min);
+    for &r in &returns {
+        assert!(
+            r >= 2 && best(r) == best(r - 2),
+            "return after {r}: {losses:?}"
+        );
+    }
+    for (r, d) in rows.iter().skip(1) {
+        let n = returns.iter().filter(|&&x| x < r.iter).count();
+        let scale = 0.5f64.powi(n as i32);
+        assert!(r.accepted, "iteration {}: every trial is taken", r.iter);
+        assert_eq!(
+            (r.radius_design, r.radius_controller),
+            (o.step_design * scale, o.step_controller * scale),
+            "iteration {} after {n} returns",
+            r.iter
+        );
+        let from = if returns.contains(&(r.iter - 1)) {
+            let b = (0..r.iter)
+                .min_by(|&i, &j| losses[i].total_cmp(&losses[j]))
+                .unwrap();
+            &rows[b].1
+        } else {
+            &rows[r.iter - 1].1
+        };
+        let step = (d - from).norm();
+        assert!(
+            step <= o.step_design * scale * (1.0 + 1e-12),
+            "iteration {}: design step {step:e} from its start",
+            r.iter
+        );
+    }
+}
+
 /// The biped's committed initial gait is the family of
 /// `tools/gen/make_locomotion_scenes.py::biped_gait` (the scene is written
 /// from it, `--biped-gait-only`; this catches a hand edit or a drift): at

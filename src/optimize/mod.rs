@@ -645,13 +645,18 @@ fn shorten_until_simulated<T, E>(
     Err(err)
 }
 
-/// The trust region's radius settings of the task.
-fn radius_settings(p: &Problem) -> RadiusSettings {
+/// The trust region's radius settings of the task after `returns` returns
+/// to the best iterate (`optimizer.plateau`): the steps `(ᾱ_d, ᾱ_c)`
+/// scaled by `factor^returns` (1 without a plateau).
+fn radius_settings(p: &Problem, returns: usize) -> RadiusSettings {
     let o = &p.task.optimizer;
+    let scale = o.plateau.map_or(1.0, |pl| {
+        pl.factor.powi(returns.min(i32::MAX as usize) as i32)
+    });
     RadiusSettings {
         rule: o.radius,
-        step_design: o.step_design,
-        step_controller: o.step_controller,
+        step_design: o.step_design * scale,
+        step_controller: o.step_controller * scale,
     }
 }
 
@@ -694,7 +699,7 @@ impl Run {
             ),
             d,
             c,
-            radii: Radii::new(&radius_settings(p)),
+            radii: Radii::new(&radius_settings(p, 0)),
             history: Vec::with_capacity(iters + 1),
             best: None,
             plateau_returns: Vec::new(),
@@ -821,6 +826,7 @@ impl Run {
         let (lr_d, lr_c) = (self.adam.0.lr * pl.factor, self.adam.1.lr * pl.factor);
         self.adam = (Adam::new(self.d.len(), lr_d), Adam::new(self.c.len(), lr_c));
         self.plateau_returns.push(it - 1);
+        self.radii = Radii::new(&radius_settings(p, self.plateau_returns.len()));
         Ok(())
     }
 
@@ -875,7 +881,7 @@ impl Run {
         on_iter: &mut impl FnMut(&IterRecord, &DVector<f64>),
     ) -> Result<Option<OptimizeError>, OptimizeError> {
         let o = &p.task.optimizer;
-        let rs = radius_settings(p);
+        let rs = radius_settings(p, self.plateau_returns.len());
         let moved = (d_new != self.d, c_new != self.c);
         match (o.method, trial) {
             (Method::Adam, Ok(e)) => self.adam_move(it, ev, (d_new, c_new, e), on_iter),

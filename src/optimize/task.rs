@@ -332,11 +332,13 @@ pub enum DesignNorm {
     Max,
 }
 
-/// `optimizer.plateau` (Adam only): when the best loss has not improved
-/// for `patience` consecutive iterations, the next iteration starts from the
-/// best iterate (evaluated there again), with Adam's moments reset and both
-/// learning rates multiplied by `factor` (cumulatively, and on top of
-/// `step_decay`'s schedule). The count restarts after each return. Why: on a
+/// `optimizer.plateau` (Adam, and the trust region under `radius: fixed`,
+/// the two walks that leave their best iterate): when the best loss has not
+/// improved for `patience` consecutive iterations, the next iteration starts
+/// from the best iterate (evaluated there again), with Adam's moments reset
+/// and both learning rates (Adam) or both radii ᾱ_d, ᾱ_c (`fixed`: after `n`
+/// returns the step is `factorⁿ (ᾱ_d, ᾱ_c)`) multiplied by `factor`
+/// (cumulatively, and on top of `step_decay`'s schedule). The count restarts after each return. Why: on a
 /// loss that is a staircase of contact regimes (a grasp held or not), Adam's
 /// walk passes through a good regime and leaves it without any memory of it,
 /// and on a regime where nothing touches the gradient is 0 and the walk
@@ -405,7 +407,8 @@ pub struct OptimizerSpec {
     /// jumps between regimes ends wherever its last step lands). Default
     /// none (constant rates, the paper's Adam).
     pub step_decay: Option<f64>,
-    /// Adam only: return to the best iterate on a plateau (see [`Plateau`]).
+    /// Adam and `radius: fixed` only: return to the best iterate on a
+    /// plateau (see [`Plateau`]).
     /// Default none (Adam walks on from wherever its last step landed).
     pub plateau: Option<Plateau>,
     /// Trust region only: how the radii change after a trial. Default

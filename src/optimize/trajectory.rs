@@ -104,10 +104,13 @@ fn check_optimizer(path: &Path, task: &TaskSpec) -> Result<(), TaskError> {
         ));
     }
     if let Some(pl) = &o.plateau {
-        if o.method != super::task::Method::Adam {
+        let walks =
+            o.method == super::task::Method::Adam || o.radius == super::task::RadiusRule::Fixed;
+        if !walks {
             return Err(invalid(
                 "optimizer.plateau",
-                "applies to `method: adam` only (the trust region never leaves its best iterate)"
+                "applies to `method: adam` and the trust region's `radius: fixed` only (the \
+                 other radius rules never leave their best iterate)"
                     .into(),
             ));
         }
