@@ -105,7 +105,8 @@ pub fn simulator(scene: &Scene) -> Result<Simulator> {
 /// factory (SDRS scenes never use it), and with `cage` replaces the design
 /// by the cage vertices of the task's `design.vertices` links (automatic
 /// box cages, mean value coordinates; see `sdrs_ipc::cage`), bounded by the
-/// task's `design.bound`.
+/// task's `design.bound`. With IPC contact the cage deforms the meshes (the
+/// mesh baseline); with the SDRS contact it deforms the hulls.
 pub fn configure_problem(
     problem: &mut sdrs::optimize::Problem,
     args: &ContactArgs,
@@ -128,23 +129,21 @@ pub fn configure_problem(
             .as_ref()
             .is_some_and(|c| c.model == ContactModelKind::Ipc)
     };
-    let first = &problem.first().scene;
-    if !is_ipc(first) {
-        bail!(
-            "--cage {cage}: a cage deforms the IPC baseline's meshes, but {} uses contact.model: {} (add --contact ipc)",
-            first.source.display(),
-            first
-                .contact
-                .as_ref()
-                .map_or("none (no contact section)", |c| c.model.name())
-        );
-    }
+    // On the separating-plane contact the cage deforms the hulls alone (the
+    // IPC factory is never used): the cage's design space with the SDRS
+    // contact, which separates the design space from the contact model in a
+    // comparison (notes/paper-step-rule.md, the biped).
+    let contact = if is_ipc(&problem.first().scene) {
+        "IPC surfaces keep their rest triangulation"
+    } else {
+        "separating-plane contact: the cage deforms the hulls"
+    };
     if !design_on {
         bail!("--cage {cage} with --design off: the cage vertices are the design");
     }
     let summary = sdrs_ipc::cage::cage_problem(problem, res)?;
     eprintln!(
-        "--cage {cage}: {} cage(s) of {} vertices replace the design ({} variables); IPC surfaces keep their rest triangulation",
+        "--cage {cage}: {} cage(s) of {} vertices replace the design ({} variables); {contact}",
         summary.cage_vertices.len(),
         summary
             .cage_vertices

@@ -41,9 +41,10 @@ pub struct OptimizeArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub contact: crate::contact_model::ContactArgs,
-    /// Cage-based design (IPC baseline only, `--contact ipc`): the vertices
-    /// of an automatic box cage around each `design.vertices` link become
-    /// the design, the hull vertices fixed mean-value combinations of them.
+    /// Cage-based design (the mesh baseline with `--contact ipc`; with the
+    /// SDRS contact the cage deforms the hulls): the vertices of an
+    /// automatic box cage around each `design.vertices` link become the
+    /// design, the hull vertices fixed mean-value combinations of them.
     /// `coarse` (26 cage vertices), `fine` (98) or `k` segments per box
     /// edge (6k² + 2 vertices).
     #[arg(long)]
