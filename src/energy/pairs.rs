@@ -95,7 +95,9 @@ fn add_scaled_link_hess(
     if acc.link_hess_set[i] {
         scaled_into(&mut acc.link_hess[i], h, off, off, scale, |e, v| *e += v);
     } else {
-        scaled_into(&mut acc.link_hess[i], h, off, off, scale, |e, v| *e = 0.0 + v);
+        scaled_into(&mut acc.link_hess[i], h, off, off, scale, |e, v| {
+            *e = 0.0 + v
+        });
         acc.link_hess_set[i] = true;
     }
 }
@@ -209,7 +211,15 @@ mod tests {
             let mut acc = EnergyAccumulator::new(&model);
             acc.reset(Need::Hessian);
             for _ in 0..2 {
-                scatter_pair(&model, &mut acc, Need::Hessian, (la, lb), scale, (&g, &g), Some(&h));
+                scatter_pair(
+                    &model,
+                    &mut acc,
+                    Need::Hessian,
+                    (la, lb),
+                    scale,
+                    (&g, &g),
+                    Some(&h),
+                );
             }
             let view = |r, c| -> PoseHessian { h.fixed_view::<12, 12>(r, c) * scale };
             let first = |b: PoseHessian| b.map(|x| 0.0 + x);

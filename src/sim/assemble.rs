@@ -493,7 +493,11 @@ mod tests {
         let mut r = || {
             let m: f64 = rng.random_range(0.5..2.0);
             let e: i32 = rng.random_range(-6..6);
-            let s = if rng.random_range(0..2) == 0 { -1.0 } else { 1.0 };
+            let s = if rng.random_range(0..2) == 0 {
+                -1.0
+            } else {
+                1.0
+            };
             s * m * 10f64.powi(e)
         };
         for _ in 0..200 {
