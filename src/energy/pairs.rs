@@ -36,27 +36,69 @@ pub fn scatter_pair(
     }
     let Some(h) = hess else { return };
     if moves_a {
-        let block: PoseHessian = h.fixed_view::<12, 12>(0, 0) * scale;
-        acc.add_link_hess(la, &block);
+        add_scaled_link_hess(acc, la, h, 0, scale);
     }
     if moves_b {
-        let block: PoseHessian = h.fixed_view::<12, 12>(12, 12) * scale;
-        acc.add_link_hess(lb, &block);
+        add_scaled_link_hess(acc, lb, h, 12, scale);
     }
     if moves_a && moves_b {
         // Stored as ∂²E/∂A_i∂A_j with i < j.
-        let (i, j, block): (usize, usize, PoseHessian) = if la < lb {
-            (la, lb, h.fixed_view::<12, 12>(0, 12) * scale)
+        let (i, j, (r0, c0)) = if la < lb {
+            (la, lb, (0, 12))
         } else {
-            (lb, la, h.fixed_view::<12, 12>(12, 0) * scale)
+            (lb, la, (12, 0))
         };
         match acc.pair_slots.get(&(i, j)) {
-            Some(&k) => acc.pair_hess[k].2 += block,
+            Some(&k) => scaled_into(&mut acc.pair_hess[k].2, h, r0, c0, scale, |e, v| *e += v),
             None => {
                 acc.pair_slots.insert((i, j), acc.pair_hess.len());
+                let mut block = PoseHessian::zeros();
+                scaled_into(&mut block, h, r0, c0, scale, |e, v| *e = v);
                 acc.pair_hess.push((i, j, block));
             }
         }
+    }
+}
+
+/// `write(e, x · scale)` for every entry `e` of `dst` and the matching entry `x` of the 12×12
+/// block of `h` at `(r0, c0)`, column by column: a column of the block is a contiguous run of
+/// 12 entries of the column-major 24×24 `h`. Each `x · scale` is the entry of
+/// `h.fixed_view::<12, 12>(r0, c0) * scale`, bit for bit, without the strided view iterator.
+#[inline]
+fn scaled_into(
+    dst: &mut PoseHessian,
+    h: &SMatrix<f64, 24, 24>,
+    r0: usize,
+    c0: usize,
+    scale: f64,
+    write: impl Fn(&mut f64, f64),
+) {
+    let src = h.as_slice();
+    for (c, col) in dst.as_mut_slice().chunks_exact_mut(12).enumerate() {
+        let run = &src[(c0 + c) * 24 + r0..][..12];
+        for (e, &x) in col.iter_mut().zip(run) {
+            write(e, x * scale);
+        }
+    }
+}
+
+/// [`EnergyAccumulator::add_link_hess`] of `scale` times the diagonal 12×12 block of `h` at
+/// `(off, off)`: `+=` onto a block already written in this evaluation, else `0 + x · scale`
+/// (the bits of a cleared block `+=`, signed zeros included).
+fn add_scaled_link_hess(
+    acc: &mut EnergyAccumulator,
+    i: usize,
+    h: &SMatrix<f64, 24, 24>,
+    off: usize,
+    scale: f64,
+) {
+    if acc.link_hess_set[i] {
+        scaled_into(&mut acc.link_hess[i], h, off, off, scale, |e, v| *e += v);
+    } else {
+        scaled_into(&mut acc.link_hess[i], h, off, off, scale, |e, v| {
+            *e = 0.0 + v
+        });
+        acc.link_hess_set[i] = true;
     }
 }
 
@@ -146,4 +188,50 @@ pub fn vertices_and_directions(
             )
         })
         .unzip()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The column-run blocks of `scatter_pair` have the bits of the view expressions
+    /// `h.fixed_view::<12, 12>(r, c) * scale` (then `0 + ·` or `+=`), for both link orders.
+    #[test]
+    fn scaled_blocks_have_the_bits_of_the_view_products() {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let model = crate::kinematics::motion_bound::tests::every_joint_model(&mut rng);
+        let h = SMatrix::<f64, 24, 24>::from_fn(|r, c| {
+            let x = ((r * 31 + c * 17) % 29) as f64 - 14.0;
+            x * 10f64.powi(((r + 2 * c) % 9) as i32 - 4) / 3.0
+        });
+        let g = Matrix3x4::zeros();
+        let scale = 0.7;
+        for (la, lb) in [(1, 2), (2, 1)] {
+            let mut acc = EnergyAccumulator::new(&model);
+            acc.reset(Need::Hessian);
+            for _ in 0..2 {
+                scatter_pair(
+                    &model,
+                    &mut acc,
+                    Need::Hessian,
+                    (la, lb),
+                    scale,
+                    (&g, &g),
+                    Some(&h),
+                );
+            }
+            let view = |r, c| -> PoseHessian { h.fixed_view::<12, 12>(r, c) * scale };
+            let first = |b: PoseHessian| b.map(|x| 0.0 + x);
+            let want_a = first(view(0, 0)) + view(0, 0);
+            let want_b = first(view(12, 12)) + view(12, 12);
+            let off = if la < lb { view(0, 12) } else { view(12, 0) };
+            let want_pair = off + off;
+            let bits = |m: &PoseHessian| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&acc.link_hess[la]), bits(&want_a));
+            assert_eq!(bits(&acc.link_hess[lb]), bits(&want_b));
+            assert_eq!(acc.pair_hess.len(), 1);
+            assert_eq!(bits(&acc.pair_hess[0].2), bits(&want_pair));
+        }
+    }
 }

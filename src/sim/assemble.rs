@@ -163,9 +163,54 @@ fn twist_jacobian(a: &Matrix3x4<f64>) -> SMatrix<f64, 12, 6> {
 
 /// `L_aᵀ H L_b` ([`twist_jacobian`]): a pose-space block `∂²E/∂A_a∂A_b` as
 /// the 6×6 form on the two links' world twists.
+///
+/// `L`'s structural zeros are skipped: column `j < 3` of `L` (the `ω_j` part)
+/// is non-zero in rows `3c + r` with `r ≠ j` only (eight of twelve), column
+/// `j ≥ 3` in row `9 + (j − 3)` only (a 1). `H L` sums `H_{:,k} L_{kj}` over
+/// the non-zero `k` in ascending order, as nalgebra's product does over all
+/// `k`; `Lᵀ (H L)` is [`l_col_dot`], nalgebra's dot with the zero products
+/// left out. A left-out product is `±0`, and `x + (±0) = x` for `x ≠ 0`, so the
+/// entries are those of the dense `twist_jacobian(a).tr_mul(&(h * twist_jacobian(b)))`
+/// bit for bit but for the sign of an exact zero.
 fn twist_block(h: &SMatrix<f64, 12, 12>, a: &Matrix3x4<f64>, b: &Matrix3x4<f64>) -> Matrix6<f64> {
-    let hl = h * twist_jacobian(b);
-    twist_jacobian(a).tr_mul(&hl)
+    let lb = twist_jacobian(b);
+    let mut hl = SMatrix::<f64, 12, 6>::zeros();
+    for j in 0..6 {
+        let rows = l_rows(j);
+        let (k0, rest) = rows.split_first().expect("every column has a non-zero");
+        let mut y = h.column(*k0) * lb[(*k0, j)];
+        for &k in rest {
+            y += h.column(k) * lb[(k, j)];
+        }
+        hl.set_column(j, &y);
+    }
+    let la = twist_jacobian(a);
+    Matrix6::from_fn(|i, j| l_col_dot(&la, i, &hl, j))
+}
+
+/// Rows of column `j` of [`twist_jacobian`] that can be non-zero, ascending.
+fn l_rows(j: usize) -> &'static [usize] {
+    match j {
+        0 => &[1, 2, 4, 5, 7, 8, 10, 11],
+        1 => &[0, 2, 3, 5, 6, 8, 9, 11],
+        2 => &[0, 1, 3, 4, 6, 7, 9, 10],
+        3 => &[9],
+        4 => &[10],
+        _ => &[11],
+    }
+}
+
+/// `L_{:,i} · Y_{:,j}` (length 12) in the order of nalgebra's `dot` — eight
+/// lanes `p_0 … p_7`, then `((((0 + (p₀+p₄)) + (p₁+p₅)) + (p₂+p₆)) + (p₃+p₇)) + p₈ + p₉ +
+/// p₁₀ + p₁₁` — with the products of `L`'s structural zeros left out.
+fn l_col_dot(l: &SMatrix<f64, 12, 6>, i: usize, y: &SMatrix<f64, 12, 6>, j: usize) -> f64 {
+    let p = |k: usize| l[(k, i)] * y[(k, j)];
+    match i {
+        0 => 0.0 + p(4) + (p(1) + p(5)) + p(2) + p(7) + p(8) + p(10) + p(11),
+        1 => 0.0 + p(0) + p(5) + (p(2) + p(6)) + p(3) + p(8) + p(9) + p(11),
+        2 => 0.0 + (p(0) + p(4)) + p(1) + p(6) + (p(3) + p(7)) + p(9) + p(10),
+        _ => 0.0 + p(6 + i),
+    }
 }
 
 /// Subtree composites of the diagonal blocks in twist form,
@@ -430,6 +475,39 @@ fn add_pair_block(
                 std::cmp::Ordering::Less => h[k + l * n] += v,
                 std::cmp::Ordering::Greater => h[l + k * n] += v,
                 std::cmp::Ordering::Equal => h[k + k * n] += v + v,
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The sparse `L_aᵀ H L_b` has the bits of the dense nalgebra products (entries
+    /// of mixed signs and magnitudes, none zero, so no signed zero can differ).
+    #[test]
+    fn twist_block_has_the_bits_of_the_dense_products() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut r = || {
+            let m: f64 = rng.random_range(0.5..2.0);
+            let e: i32 = rng.random_range(-6..6);
+            let s = if rng.random_range(0..2) == 0 {
+                -1.0
+            } else {
+                1.0
+            };
+            s * m * 10f64.powi(e)
+        };
+        for _ in 0..200 {
+            let h = SMatrix::<f64, 12, 12>::from_fn(|_, _| r());
+            let a = Matrix3x4::from_fn(|_, _| r());
+            let b = Matrix3x4::from_fn(|_, _| r());
+            let dense = twist_jacobian(&a).tr_mul(&(h * twist_jacobian(&b)));
+            let sparse = twist_block(&h, &a, &b);
+            for (x, y) in sparse.iter().zip(dense.iter()) {
+                assert_eq!(x.to_bits(), y.to_bits());
             }
         }
     }
