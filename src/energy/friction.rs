@@ -4,9 +4,11 @@
 //! bases are computed at the step-`t` poses and frozen (lagged, as in the
 //! paper); every Newton evaluation then solves each active pair's inner
 //! problem over the plane's in-plane velocity `u` and spin `ω`.
-//! The lagged planes are recomputed here (value-only contact solves, warm
+//! The lagged planes are recomputed here (value-only contact solves, cold
 //! started) rather than borrowed from the contact term, which keeps the two
-//! terms independent; it costs one contact evaluation per step.
+//! terms independent; it costs one contact evaluation per step (sharing the
+//! contact term's planes was tried and reverted, `59bdafb`: the spider's
+//! short-horizon FD check failed on it).
 //!
 //! Normal forces include the stiffness `κ`, so `U_f` is not multiplied by
 //! `κ` again (the paper's eq. `SDRS` scales both sums by one constant; the
@@ -29,7 +31,6 @@ use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use nalgebra::{DVector, Vector4};
-use std::collections::HashMap;
 
 /// A hull pair (indices into the world hulls) in contact at step `t`, its
 /// lagged data and the step-`t` plane `p*` it came from (for the adjoint).
@@ -49,7 +50,6 @@ pub struct FrictionEnergy {
     boxes: Vec<crate::geometry::Aabb>,
     broad: BroadPhase,
     pairs: Vec<(usize, usize)>,
-    warm: HashMap<(usize, usize), Vector4<f64>>,
     /// Lagged data of the pairs in contact at step `t`, with the optimal world plane `p*`
     /// it was built from (needed by the adjoint).
     lagged: Vec<LaggedPair>,
@@ -75,7 +75,6 @@ impl FrictionEnergy {
             hulls: WorldHulls::new(model),
             broad: BroadPhase::default(),
             pairs: Vec::new(),
-            warm: HashMap::new(),
             lagged: Vec::new(),
             results: Vec::new(),
             work: PairWork::default(),
@@ -109,7 +108,7 @@ impl Energy for FrictionEnergy {
             &self.settings.excluded,
             &mut self.pairs,
         );
-        let (hulls, params, warm_planes) = (&self.hulls, &self.contact, &self.warm);
+        let (hulls, params) = (&self.hulls, &self.contact);
         let kappa = self.settings.kappa;
         let mut lagged = std::mem::take(&mut self.lagged_work);
         self.begin_work.map(
@@ -121,8 +120,7 @@ impl Energy for FrictionEnergy {
                     hulls.hull_pose(model, poses, a),
                     hulls.hull_pose(model, poses, b),
                 );
-                let warm = warm_planes.get(&(a, b)).copied();
-                match contact::contact_pair(pa, pb, params, warm, contact::Need::Value, scratch) {
+                match contact::contact_pair(pa, pb, params, None, contact::Need::Value, scratch) {
                     Ok(PairOutcome::Separated(c)) => Ok(Some((
                         (a, b),
                         LaggedContact::from_contact(&c, pa, pb, params, kappa),
@@ -134,7 +132,7 @@ impl Energy for FrictionEnergy {
                             pa,
                             pb,
                             params,
-                            warm,
+                            None,
                             contact::Need::Value,
                             &e,
                         );
@@ -149,7 +147,6 @@ impl Energy for FrictionEnergy {
             &mut lagged,
         );
         self.lagged.clear();
-        self.warm.clear();
         let mut out = Ok(());
         for item in lagged.drain(..) {
             match item {
