@@ -123,7 +123,12 @@ fn largest_vertex_components(
 /// differences' uncertainty. Returns (resolved vertices that agree,
 /// whether every component passed).
 fn fd_check_full(name: &str) -> (usize, bool) {
-    let (p, d0, c0, ev, picked) = fd_setup(name, None, 1e-12, 12);
+    // `SDRS_FD_HORIZON=H` checks the first H steps instead (where along the
+    // walk the differences stop resolving; notes/paper-step-rule.md).
+    let horizon = std::env::var("SDRS_FD_HORIZON")
+        .ok()
+        .map(|v| v.parse().expect("SDRS_FD_HORIZON: a step count"));
+    let (p, d0, c0, ev, picked) = fd_setup(name, horizon, 1e-12, 12);
     // The smaller of 1e-6 and 2e-6 at which the measured noise resolves at
     // least 10 components (a larger step buys a smaller noise σ/h, a smaller
     // one less truncation): the biped's noise resolves all 12 at 1e-6, the
@@ -317,7 +322,8 @@ fn rest_on_ground_without_a_ground_is_a_clear_error() {
 
 /// The full-horizon check (H = 550 / 400, Newton tolerance 1e-12):
 /// `cargo test --release --test locomotion -- --ignored full_horizon --nocapture`
-/// (`SDRS_FD_TASKS=spider`, `SDRS_FD_H=h`). Each task needs at least 10
+/// (`SDRS_FD_TASKS=spider`, `SDRS_FD_H=h`, `SDRS_FD_HORIZON=H` for the
+/// first H steps). Each task needs at least 10
 /// distinct foot vertices resolved by the differences and agreeing to 1e-4,
 /// and every one of its 12 components passing (`fd_check_full`).
 #[test]
