@@ -338,8 +338,8 @@ pub enum DesignNorm {
 /// from the best iterate (evaluated there again), with Adam's moments reset
 /// and both learning rates (Adam) or both radii ᾱ_d, ᾱ_c (`fixed`: after `n`
 /// returns the step is `factorⁿ (ᾱ_d, ᾱ_c)`) multiplied by `factor`
-/// (cumulatively, and on top of `step_decay`'s schedule). The count restarts after each return. Why: on a
-/// loss that is a staircase of contact regimes (a grasp held or not), Adam's
+/// (cumulatively, and on top of `step_decay`'s schedule). The count
+/// restarts after each return. Why: on a loss that is a staircase of contact regimes (a grasp held or not), Adam's
 /// walk passes through a good regime and leaves it without any memory of it,
 /// and on a regime where nothing touches the gradient is 0 and the walk
 /// stops there (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a
