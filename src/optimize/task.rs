@@ -339,10 +339,10 @@ pub enum DesignNorm {
 /// and both learning rates (Adam) or both radii ᾱ_d, ᾱ_c (`fixed`: after `n`
 /// returns the step is `factorⁿ (ᾱ_d, ᾱ_c)`) multiplied by `factor`
 /// (cumulatively, and on top of `step_decay`'s schedule). The count
-/// restarts after each return. Why: on a loss that is a staircase of contact regimes (a grasp held or not), Adam's
-/// walk passes through a good regime and leaves it without any memory of it,
-/// and on a regime where nothing touches the gradient is 0 and the walk
-/// stops there (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a
+/// restarts after each return. Why: on a loss that is a staircase of
+/// contact regimes (a grasp held or not), Adam's walk passes through a good
+/// regime and leaves it without any memory of it, and on a regime where
+/// nothing touches the gradient is 0 and the walk stops there (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a
 /// resumed run is bitwise the uninterrupted one.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
