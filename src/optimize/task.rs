@@ -342,8 +342,9 @@ pub enum DesignNorm {
 /// restarts after each return. Why: on a loss that is a staircase of
 /// contact regimes (a grasp held or not), Adam's walk passes through a good
 /// regime and leaves it without any memory of it, and on a regime where
-/// nothing touches the gradient is 0 and the walk stops there (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a
-/// resumed run is bitwise the uninterrupted one.
+/// nothing touches the gradient is 0 and the walk stops there
+/// (`notes/adam-plateau-restarts.md`). Part of the checkpoint: a resumed
+/// run is bitwise the uninterrupted one.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Plateau {
