@@ -65,6 +65,24 @@ fn quick_suite_report_browser_gate_and_resume() {
     let spider_resumed = resume_in_the_middle_of_a_benchmark(&out, &r);
     report_only_names_what_did_not_finish(&dir, &out, &spider_resumed);
     gate_fails_on_a_degraded_run(&dir, &out, &baseline);
+    a_missing_picture_is_named(&out);
+}
+
+/// A benchmark whose co-design part is kept but whose shapes picture is
+/// gone (a part stores no design to redraw it from): the run says so and
+/// the entry carries no picture, instead of dropping it without a word.
+fn a_missing_picture_is_named(out: &Path) {
+    std::fs::remove_file(out.join("parts/codesign_spider.json")).unwrap();
+    std::fs::remove_file(out.join("plots/shapes_spider.svg")).unwrap();
+    let o = run_compare(&["--suite", "quick"], out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("spider: co-design kept from an earlier run, but")
+            && stderr.contains("the report has no shapes picture"),
+        "{stderr}"
+    );
+    assert!(spider_entry(&json(&out.join("results.json")))["shapes_svg"].is_null());
 }
 
 /// The `spider` entry of a results file's co-design benchmarks.

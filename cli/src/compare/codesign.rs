@@ -50,8 +50,22 @@ pub fn run(
         let file = parts.join(format!("{}.json", slug(&method)));
         let shapes_rel = format!("plots/shapes_{}.svg", spec.name);
         if !force && let Some(run) = super::load_part::<_, CodesignRun>(&file, spec)? {
-            if design && cage.is_none() && out_dir.join(&shapes_rel).is_file() {
-                shapes_svg = Some(shapes_rel);
+            // A part stores no design, so a missing picture cannot be
+            // redrawn from it: say so instead of dropping it silently.
+            if design && cage.is_none() {
+                if out_dir.join(&shapes_rel).is_file() {
+                    shapes_svg = Some(shapes_rel);
+                } else {
+                    pb.suspend(|| {
+                        eprintln!(
+                            "warning: {}: {method} kept from an earlier run, but {} is missing: \
+                             the report has no shapes picture (delete {} to re-run it)",
+                            spec.name,
+                            out_dir.join(&shapes_rel).display(),
+                            file.display()
+                        )
+                    });
+                }
             }
             eprintln!("{}: {method} finished earlier, kept", spec.name);
             pb.inc(iters as u64 + 1);
