@@ -503,22 +503,10 @@ impl Solve<'_> {
     /// Hessian). A rejected trial costs the derivatives' share of one
     /// evaluation (and, with a Hessian, the current point's Hessian, which
     /// only the `shift` fallback reads again: see [`Solve::search`]).
-    ///
-    /// "Likely the solution" here also asks the Newton decrement of the
-    /// direction to be small, `−gᵀΔ < tol · 1` (J: the tolerance times a
-    /// unit coordinate step): with `H` the model, `−gᵀΔ = gᵀH⁻¹g`, and a
-    /// point reached by a step whose decrement is still large is seldom the
-    /// last (measured on the four chains: the gradient-first misses, each a
-    /// second evaluation of the point, fall by half at 8 links per chain;
-    /// `notes/performance.md`, twenty-first session). Only the work
-    /// depends on it: a point's value and gradient are the same bits
-    /// whichever derivatives it is evaluated with, and however often (the
-    /// contact term repeats its first solves at the same poses,
-    /// `ContactEnergy::start_planes`).
-    fn first_trial_need(&self, predicted: f64) -> Need {
+    fn first_trial_need(&self) -> Need {
         if !self.opts.derivatives_at_trial {
             Need::Value
-        } else if self.likely_solution(self.next_iter) && predicted < self.opts.tol {
+        } else if self.likely_solution(self.next_iter) {
             Need::Gradient
         } else {
             Need::Hessian
@@ -758,7 +746,7 @@ impl Solve<'_> {
         in_evals: &mut std::time::Duration,
     ) -> Result<(bool, f64), NewtonError> {
         let mut alpha = start;
-        let mut need = self.first_trial_need(at.predicted);
+        let mut need = self.first_trial_need();
         for _ in 0..=self.opts.max_backtracks {
             if alpha * at.predicted <= 10.0 * at.floor {
                 break;
