@@ -59,10 +59,6 @@ pub struct ContactEnergy {
     starts: Vec<PairStart>,
     /// Evaluations so far at the poses of `pairs_key`.
     evals_here: usize,
-    /// The derivatives and parameters `results` were computed with, while
-    /// they are those of the poses of `pairs_key` and of `starts` (`None`:
-    /// not reusable; see [`ContactEnergy::reusable`]).
-    results_key: Option<(contact::Need, ContactParams)>,
     /// Time spent in the broad phase since the last [`ContactEnergy::take_broad_phase_time`].
     broad_time: Duration,
     /// Statistics of the last evaluation.
@@ -91,7 +87,6 @@ impl ContactEnergy {
             warm: HashMap::new(),
             starts: Vec::new(),
             evals_here: 0,
-            results_key: None,
             broad_time: Duration::ZERO,
             last_active: 0,
             last_intersecting: None,
@@ -158,127 +153,24 @@ impl ContactEnergy {
     /// The planes this evaluation's pair solves start from, into `starts`.
     ///
     /// The first evaluation at new poses starts from the warm planes (the
-    /// last solves' results); every later evaluation at the same poses
-    /// starts where the first did, so it repeats the first's solves bit for
-    /// bit: an evaluation's result does not depend on how often the point
-    /// was evaluated before, nor on the derivatives asked then (Newton may
-    /// evaluate an accepted point with the gradient and then again with the
-    /// Hessian, see [`crate::sim::newton`]; each step starts with the value
-    /// at the previous step's solution). [`ContactEnergy::reusable`] then
-    /// skips the repeated solves.
+    /// last solves' results); the second from the first one's results
+    /// (typically the solution already). Every later evaluation at the same
+    /// poses starts where the second did, so it repeats the second's solves
+    /// bit for bit: an evaluation's result does not depend on how often
+    /// the point was evaluated before (Newton may evaluate an accepted
+    /// point with the gradient and then again with the Hessian, see
+    /// [`crate::sim::newton`]).
     fn start_planes(&mut self, new_poses: bool) {
         if new_poses {
             self.evals_here = 0;
-            self.results_key = None;
         }
-        if self.evals_here < 1 {
+        if self.evals_here < 2 {
             let warm = &self.warm;
             self.starts.clear();
             self.starts
                 .extend(self.pairs.iter().map(|&p| (p, warm.get(&p).copied())));
         }
         self.evals_here += 1;
-    }
-
-    /// Solves every candidate pair from its starting plane (`starts`) at
-    /// the poses of `kin`, into `results`, and records what they were
-    /// computed with (see [`ContactEnergy::reusable`]).
-    fn solve_pairs(&mut self, model: &Model, kin: &Kinematics, cneed: contact::Need) {
-        let (hulls, params) = (&self.hulls, &self.params);
-        let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
-        self.work.map(
-            &self.starts,
-            |&((a, b), _)| hulls.ranges[a].len() + hulls.ranges[b].len(),
-            ContactScratch::new,
-            |scratch, &((a, b), w)| {
-                let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
-                if let Err(e) = &res {
-                    let case =
-                        contact::capture::ContactCase::new(pose(a), pose(b), params, w, cneed, e);
-                    contact::capture::dump("contact", &case);
-                }
-                res
-            },
-            &mut self.results,
-        );
-        self.results_key = Some((cneed, self.params));
-    }
-
-    /// Adds `results` to `acc` (`κ U_c` per separated pair, its gradient
-    /// and, with `need`, Hessian) and keeps each pair's plane as its next
-    /// warm start; `+∞` for an intersecting pair, or a failed solve at a
-    /// value-only evaluation.
-    fn accumulate_results(
-        &mut self,
-        model: &Model,
-        need: Need,
-        acc: &mut EnergyAccumulator,
-    ) -> Result<(), EnergyError> {
-        self.last_intersecting = None;
-        let mut active = 0;
-        // A value-only evaluation is a line-search trial point: if a pair's
-        // inner solve fails there, the point is rejected like an infeasible
-        // one (+∞) and the search backtracks. Where derivatives are needed
-        // (accepted iterates) a failure is an error.
-        if need == Need::Value && self.results.iter().any(|r| r.is_err()) {
-            acc.value = f64::INFINITY;
-            return Ok(());
-        }
-        for (k, res) in self.results.iter().enumerate() {
-            let (a, b) = self.pairs[k];
-            let outcome = res.as_ref().map_err(|e| EnergyError::Failed {
-                term: "contact",
-                msg: format!(
-                    "{} vs {}: {e}",
-                    self.describe(model, a),
-                    self.describe(model, b)
-                ),
-            })?;
-            match outcome {
-                PairOutcome::Intersecting => {
-                    self.last_intersecting = Some((a, b));
-                    acc.value = f64::INFINITY;
-                    return Ok(());
-                }
-                PairOutcome::OutOfRange { plane, .. } => {
-                    self.warm.insert((a, b), *plane);
-                }
-                PairOutcome::Separated(c) => {
-                    active += 1;
-                    self.warm.insert((a, b), c.plane);
-                    let kappa = self.settings.kappa;
-                    acc.value += kappa * c.value;
-                    let links = (self.hulls.ids[a].link, self.hulls.ids[b].link);
-                    scatter_pair(
-                        model,
-                        acc,
-                        need,
-                        links,
-                        kappa,
-                        (&c.grad_a, &c.grad_b),
-                        c.hessian.as_deref(),
-                    );
-                }
-            }
-        }
-        self.last_active = active;
-        Ok(())
-    }
-
-    /// Whether the last evaluation's pair results are this evaluation's:
-    /// the same poses (`new_poses` false: the same candidates and, by
-    /// [`ContactEnergy::start_planes`], the same starting planes), the same
-    /// `params`, and derivatives at least those of `need`
-    /// (`Value < Gradient < Hessian`). The plane solve does not depend on
-    /// the derivatives asked, and value and gradient are computed the same
-    /// way whatever is asked ([`contact::contact_pair`]), so the results are
-    /// the bits solving again would give. (The hull geometry is fixed for
-    /// the term's life, as the broad phase's local boxes already assume.)
-    fn reusable(&self, new_poses: bool, need: contact::Need) -> bool {
-        !new_poses
-            && self
-                .results_key
-                .is_some_and(|(had, params)| had >= need && params == self.params)
     }
 
     /// The smallest GJK distance estimate over the last evaluation's
@@ -372,10 +264,73 @@ impl Energy for ContactEnergy {
             Need::Gradient => contact::Need::Gradient,
             Need::Hessian => contact::Need::Hessian,
         };
-        if !self.reusable(new_poses, cneed) {
-            self.solve_pairs(model, kin, cneed);
+        let (hulls, params) = (&self.hulls, &self.params);
+        let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
+        self.work.map(
+            &self.starts,
+            |&((a, b), _)| hulls.ranges[a].len() + hulls.ranges[b].len(),
+            ContactScratch::new,
+            |scratch, &((a, b), w)| {
+                let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
+                if let Err(e) = &res {
+                    let case =
+                        contact::capture::ContactCase::new(pose(a), pose(b), params, w, cneed, e);
+                    contact::capture::dump("contact", &case);
+                }
+                res
+            },
+            &mut self.results,
+        );
+
+        self.last_intersecting = None;
+        let mut active = 0;
+        // A value-only evaluation is a line-search trial point: if a pair's
+        // inner solve fails there, the point is rejected like an infeasible
+        // one (+∞) and the search backtracks. Where derivatives are needed
+        // (accepted iterates) a failure is an error.
+        if need == Need::Value && self.results.iter().any(|r| r.is_err()) {
+            acc.value = f64::INFINITY;
+            return Ok(());
         }
-        self.accumulate_results(model, need, acc)
+        for (k, res) in self.results.iter().enumerate() {
+            let (a, b) = self.pairs[k];
+            let outcome = res.as_ref().map_err(|e| EnergyError::Failed {
+                term: "contact",
+                msg: format!(
+                    "{} vs {}: {e}",
+                    self.describe(model, a),
+                    self.describe(model, b)
+                ),
+            })?;
+            match outcome {
+                PairOutcome::Intersecting => {
+                    self.last_intersecting = Some((a, b));
+                    acc.value = f64::INFINITY;
+                    return Ok(());
+                }
+                PairOutcome::OutOfRange { plane, .. } => {
+                    self.warm.insert((a, b), *plane);
+                }
+                PairOutcome::Separated(c) => {
+                    active += 1;
+                    self.warm.insert((a, b), c.plane);
+                    let kappa = self.settings.kappa;
+                    acc.value += kappa * c.value;
+                    let links = (self.hulls.ids[a].link, self.hulls.ids[b].link);
+                    scatter_pair(
+                        model,
+                        acc,
+                        need,
+                        links,
+                        kappa,
+                        (&c.grad_a, &c.grad_b),
+                        c.hessian.as_deref(),
+                    );
+                }
+            }
+        }
+        self.last_active = active;
+        Ok(())
     }
 
     /// Per separated pair, with `Φ = κ Σ_m ⟨∂U_c/∂X_m, δX_m⟩` (`δX_m = δA x̃_m`), from
