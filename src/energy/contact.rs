@@ -156,10 +156,13 @@ impl ContactEnergy {
     /// last solves' results); the second from the first one's results
     /// (typically the solution already). Every later evaluation at the same
     /// poses starts where the second did, so it repeats the second's solves
-    /// bit for bit: an evaluation's result does not depend on how often
-    /// the point was evaluated before (Newton may evaluate an accepted
-    /// point with the gradient and then again with the Hessian, see
-    /// [`crate::sim::newton`]).
+    /// bit for bit: from the second evaluation on, the result does not
+    /// depend on how often the point was evaluated (Newton may evaluate an
+    /// accepted point with the gradient and then again with the Hessian,
+    /// see [`crate::sim::newton`]). The first and the second evaluation can
+    /// differ by the plane solves' round-off, so evaluating a point once
+    /// instead of twice moves the iterates at round-off (measured in
+    /// notes/performance.md, 2026-12-07, twenty-first session).
     fn start_planes(&mut self, new_poses: bool) {
         if new_poses {
             self.evals_here = 0;

@@ -92,10 +92,13 @@ pub struct NewtonOptions {
     /// Default `true`.
     pub settle_blocks: bool,
     /// Evaluate an accepted point's gradient before its Hessian when the
-    /// point is likely the solution (see [`Solve::eval_accepted`]). The
-    /// iterates and the result are the same bits either way; only the
-    /// work differs. Default `true`. Not a scene key (an implementation
-    /// choice; the tests compare both).
+    /// point is likely the solution (see [`Solve::eval_accepted`]). With
+    /// `derivatives_at_trial` off the iterates and the result are the same
+    /// bits either way; only the work differs. With it on (the default) a
+    /// miss is the point's second evaluation, whose contact plane solves
+    /// start from the first's results, so the bits can differ by round-off
+    /// (the solution stays within `tol`). Default `true`. Not a scene key
+    /// (an implementation choice; the tests compare both).
     #[serde(skip)]
     #[schemars(skip)]
     pub gradient_first: bool,
@@ -448,8 +451,14 @@ impl Solve<'_> {
     /// steps are alike) — the gradient is evaluated alone, and the Hessian
     /// only if the test fails (the gradient is then evaluated again with
     /// it: a miss costs one gradient evaluation). The gradient's bits do
-    /// not depend on `need`, so the iterates and the result are the same
-    /// whichever way the point is evaluated; only the work differs
+    /// not depend on `need`. With `derivatives_at_trial` off the accepted
+    /// point was already evaluated by value in the line search, so every
+    /// evaluation here is its second or later, which the contact term
+    /// repeats bit for bit (`ContactEnergy::start_planes`): the iterates
+    /// are the same bits whichever way the point is evaluated; only the
+    /// work differs. With it on, a miss is the point's second evaluation
+    /// after a first with the gradient, and can differ from a single
+    /// evaluation by the plane solves' round-off
     /// ([`NewtonReport::gradient_first`], [`NewtonReport::gradient_first_misses`]).
     /// A Hessian that would be non-finite at the solution is then not
     /// checked here (the next step's first evaluation checks its own).
