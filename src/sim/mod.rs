@@ -22,7 +22,7 @@ pub mod trajectory;
 
 pub use crate::counters::{Stage, StageTime, StageTimers, StepDiagnostics, StepWork};
 
-pub use newton::{Indefinite, NewtonError, NewtonOptions, NewtonReport, Overrelax, Predictor};
+pub use newton::{Indefinite, NewtonError, NewtonOptions, NewtonReport, Predictor};
 pub use state::SimState;
 
 use crate::control::Controller;

@@ -22,11 +22,6 @@
 //! `‖Δθ‖∞ · max(1, L)`), the point is the solution to working precision and
 //! is accepted the same way ([`NewtonReport::at_step_floor`]).
 //!
-//! Over-relaxation: after a full step that undershot (the objective still
-//! descending at the accepted trial, as on a barrier entered too deep), the
-//! next iteration's first trial is `ωΔ` with `ω` from the secant of the
-//! directional derivative, `1 < ω ≤ 2` ([`Overrelax`]).
-//!
 //! Continuous collision detection: a segment `q → q + αΔ` the search accepts
 //! is certified by [`Objective::certify`] before it is taken (every point
 //! of it collision-free, not only its end); if only `[0, α']` can be, the
@@ -118,59 +113,6 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub derivatives_at_trial: bool,
-    /// Over-relaxed first trials after a full step that undershot (see
-    /// [`Overrelax`]). Default on (`max = 2`). Not a scene key (an
-    /// implementation choice; the solution is the same to within `tol`).
-    #[serde(skip)]
-    #[schemars(skip)]
-    pub overrelax: Overrelax,
-}
-
-/// Over-relaxation of the Newton step after an undershoot.
-///
-/// On a barrier entered too deep (the predictor carries the approach
-/// velocity into a contact), the barrier's curvature falls along the way
-/// out, the quadratic model overestimates it and every full step `q → q + Δ`
-/// undershoots: at `α = 1` the objective still descends at a fraction
-/// `r = ∇O(q + Δ)ᵀΔ / ∇O(q)ᵀΔ ≈ 0.25…0.4` of its initial slope, and the
-/// gradient falls only about ×3 per iteration (measured on the four chains,
-/// `notes/performance.md`, 2026-12-07, helper 2). The slope ratio is known
-/// for free when the accepted trial was evaluated with its gradient
-/// ([`NewtonOptions::derivatives_at_trial`]). After an iteration whose first
-/// trial `q + ωΔ` was accepted, the secant of the directional derivative
-/// vanishes at `α* = ω / (1 − r)` (in units of the Newton step); the next
-/// iteration's first trial is `q' + ω'Δ'` with `ω' = min(α*, max)` when
-/// `α* ≥ min`, else `ω' = 1`. A rejected over-relaxed trial falls back to the
-/// Newton point (`α = 1`), then halves. Near the solution a full step is
-/// exact, the over-relaxed trial ascends (`r ≈ 1 − ω < 0`) and the secant
-/// returns `ω' ≈ 1` — one iteration late: the overshoot loses the quadratic
-/// step. So `ω'` is used only while the Newton decrement `λ² = −∇Oᵀ Δ` (of
-/// the unscaled Newton step) still falls slowly, `λ²_k ≥ ρ λ²_{k−1}`: in the
-/// slow phase on the barrier the ratio is 0.25–0.38; where the quadratic
-/// phase begins it collapses (measured: 19 of 24 overshoots came right after
-/// a ratio below 0.1). Every solve starts with `ω = 1`; the stopping test is
-/// unchanged, so the solution is the same to within `tol`.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields, default)]
-pub struct Overrelax {
-    /// Largest over-relaxation `ω`. Default 2; `1` turns it off.
-    pub max: f64,
-    /// Smallest secant estimate `α*` that is used; below it the next
-    /// first trial is the Newton point. Default 1.25.
-    pub min: f64,
-    /// `ρ`: over-relax only when the Newton decrement is at least this
-    /// fraction of the previous iteration's. Default 0.15.
-    pub min_decrement_ratio: f64,
-}
-
-impl Default for Overrelax {
-    fn default() -> Self {
-        Overrelax {
-            max: 2.0,
-            min: 1.25,
-            min_decrement_ratio: 0.15,
-        }
-    }
 }
 
 /// Positive-definite Newton model of an indefinite (or nearly singular)
@@ -256,7 +198,6 @@ impl Default for NewtonOptions {
             settle_blocks: true,
             gradient_first: true,
             derivatives_at_trial: true,
-            overrelax: Overrelax::default(),
         }
     }
 }
@@ -422,9 +363,6 @@ pub fn minimize_from(
         timers,
         report: NewtonReport::default(),
         next_iter: 0,
-        omega: 1.0,
-        last_decrement: f64::NAN,
-        first_trial_taken: false,
     };
     let mut value = run.start(q, guess)?;
     for iter in 0..=opts.max_iters {
@@ -478,13 +416,6 @@ struct Solve<'a> {
     report: NewtonReport,
     /// The index the point accepted by the current line search will have.
     next_iter: usize,
-    /// Over-relaxation of the next direction's first trial ([`Overrelax`]).
-    omega: f64,
-    /// Newton decrement `−∇OᵀΔ` of the last direction (unscaled; NaN before
-    /// the first).
-    last_decrement: f64,
-    /// Whether the last line search accepted its first trial, uncut.
-    first_trial_taken: bool,
 }
 
 /// What the line search of one iteration knows about the current point.
@@ -499,9 +430,6 @@ struct SearchPoint {
     floor: f64,
     /// Whether the predicted decrease is above that floor.
     resolvable: bool,
-    /// Second trial of the Armijo search as a fraction of the first: `1/ω`
-    /// (the Newton point) after an over-relaxed first trial, else ½.
-    retry: f64,
 }
 
 impl Solve<'_> {
@@ -717,10 +645,7 @@ impl Solve<'_> {
                     &mut s.dir,
                 )
             });
-            let omega = self.relax_direction(q)?;
-            let s = &mut *self.scratch;
-            // Predicted decrease of the quadratic model, −gᵀΔ > 0 (of the
-            // over-relaxed step when ω > 1).
+            // Predicted decrease of the quadratic model, −gᵀΔ > 0.
             let predicted = -s.grad.dot(&s.dir);
             // Below ~1e-9 of the objective's magnitude, or near its absolute
             // round-off floor (from the terms' magnitudes), the value cannot
@@ -732,10 +657,8 @@ impl Solve<'_> {
                 predicted,
                 floor,
                 resolvable: predicted > 10.0 * floor,
-                retry: if omega > 1.0 { 1.0 / omega } else { 0.5 },
             };
             let accepted = self.line_search(q, &at)?;
-            self.omega = self.next_relaxation(omega, accepted, predicted);
             if accepted || mode != Mode::Shift {
                 return Ok((accepted, at.resolvable));
             }
@@ -746,47 +669,6 @@ impl Solve<'_> {
                 self.eval(q, Need::Hessian)?;
             }
         }
-    }
-
-    /// Scales the Newton direction by the over-relaxation `ω` of
-    /// [`Overrelax`] when `ω > 1`, the Newton decrement `λ² = −∇OᵀΔ` is at
-    /// least `ρ` times the last one, and the terms' step bound allows the
-    /// whole of `ωΔ`; returns the factor applied (1: none).
-    fn relax_direction(&mut self, q: &DVector<f64>) -> Result<f64, NewtonError> {
-        let omega = self.omega;
-        let decrement = -self.scratch.grad.dot(&self.scratch.dir);
-        let last = std::mem::replace(&mut self.last_decrement, decrement);
-        let slow = decrement >= self.opts.overrelax.min_decrement_ratio * last;
-        if omega <= 1.0 || !slow {
-            return Ok(1.0);
-        }
-        self.scratch.dir.scale_mut(omega);
-        if self.obj.max_step(q, &self.scratch.dir, self.timers)? >= 1.0 {
-            return Ok(omega);
-        }
-        self.scratch.dir.scale_mut(1.0 / omega);
-        Ok(1.0)
-    }
-
-    /// The over-relaxation of the next iteration ([`Overrelax`]): after a
-    /// line search that accepted its first trial `q + ωΔ` (uncut), evaluated
-    /// with its gradient, `α* = ω / (1 − r)` with the slope ratio
-    /// `r = ∇O(q + ωΔ)ᵀΔ / ∇O(q)ᵀΔ` (`predicted = −∇O(q)ᵀ(ωΔ)`), used when
-    /// `α* ≥ min` and capped at `max`; otherwise 1.
-    fn next_relaxation(&self, omega: f64, accepted: bool, predicted: f64) -> f64 {
-        let o = &self.opts.overrelax;
-        let s = &*self.scratch;
-        let with_slope = s.trial_need.is_some_and(|n| n >= Need::Gradient);
-        if o.max <= 1.0 || !accepted || !self.first_trial_taken || !with_slope || predicted <= 0.0
-        {
-            return 1.0;
-        }
-        let r = s.trial_grad.dot(&s.dir) / -predicted;
-        if !(r < 1.0) {
-            return 1.0;
-        }
-        let a = omega / (1.0 - r);
-        if a >= o.min { a.min(o.max) } else { 1.0 }
     }
 
     /// The line search along `scratch.dir`, bounded by the chart and
@@ -805,7 +687,6 @@ impl Solve<'_> {
         let mut in_evals = std::time::Duration::ZERO;
         let mut start = alpha_max;
         let mut cut = false;
-        self.first_trial_taken = false;
         let accepted = loop {
             let (mut accepted, mut alpha) = (false, start);
             if at.resolvable {
@@ -825,7 +706,6 @@ impl Solve<'_> {
             if certified >= alpha {
                 break true;
             }
-            self.first_trial_taken = false;
             self.report.ccd_cuts += 1;
             cut = true;
             start = certified.max(0.0);
@@ -863,9 +743,7 @@ impl Solve<'_> {
     }
 
     /// Backtracking from `start` with Armijo sufficient decrease on a finite
-    /// value, `O(q + αΔ) < O(q) − 10⁻⁴ α (−gᵀΔ)`, halving `α` (after an
-    /// over-relaxed first trial `ωΔ` the second is the Newton point, `α = 1/ω`
-    /// in units of the scaled direction: [`Overrelax`]); it stops
+    /// value, `O(q + αΔ) < O(q) − 10⁻⁴ α (−gᵀΔ)`, halving `α`; it stops
     /// when `α (−gᵀΔ)` falls to the value's noise (shorter steps cannot be
     /// ranked by value either; an Armijo test passed on round-off would
     /// accept a step that changes nothing). Returns (accepted, α).
@@ -878,17 +756,16 @@ impl Solve<'_> {
     ) -> Result<(bool, f64), NewtonError> {
         let mut alpha = start;
         let mut need = self.first_trial_need();
-        for k in 0..=self.opts.max_backtracks {
+        for _ in 0..=self.opts.max_backtracks {
             if alpha * at.predicted <= 10.0 * at.floor {
                 break;
             }
             let v = self.trial(q, alpha, need, in_evals)?;
             need = Need::Value;
             if v.is_finite() && v < at.value - 1e-4 * alpha * at.predicted {
-                self.first_trial_taken = k == 0;
                 return Ok((true, alpha));
             }
-            alpha *= if k == 0 { at.retry } else { 0.5 };
+            alpha *= 0.5;
             self.report.backtracks += 1;
         }
         Ok((false, alpha))
