@@ -50,22 +50,8 @@ pub fn run(
         let file = parts.join(format!("{}.json", slug(&method)));
         let shapes_rel = format!("plots/shapes_{}.svg", spec.name);
         if !force && let Some(run) = super::load_part::<_, CodesignRun>(&file, spec)? {
-            // A part stores no design, so a missing picture cannot be
-            // redrawn from it: say so instead of dropping it silently.
             if design && cage.is_none() {
-                if out_dir.join(&shapes_rel).is_file() {
-                    shapes_svg = Some(shapes_rel);
-                } else {
-                    pb.suspend(|| {
-                        eprintln!(
-                            "warning: {}: {method} kept from an earlier run, but {} is missing: \
-                             the report has no shapes picture (delete {} to re-run it)",
-                            spec.name,
-                            out_dir.join(&shapes_rel).display(),
-                            file.display()
-                        )
-                    });
-                }
+                shapes_svg = kept_picture(&spec.name, &method, out_dir, shapes_rel, &file, pb);
             }
             eprintln!("{}: {method} finished earlier, kept", spec.name);
             pb.inc(iters as u64 + 1);
@@ -106,6 +92,33 @@ pub fn run(
         shapes_svg,
         unfinished: Vec::new(),
     })
+}
+
+/// The shapes picture of a co-design run kept from an earlier part, if it
+/// is still at `out_dir/rel`. A part stores no design, so a missing
+/// picture cannot be redrawn from it: the run says so instead of dropping
+/// it silently.
+fn kept_picture(
+    name: &str,
+    method: &str,
+    out_dir: &Path,
+    rel: String,
+    part: &Path,
+    pb: &ProgressBar,
+) -> Option<String> {
+    let svg = out_dir.join(&rel);
+    if svg.is_file() {
+        return Some(rel);
+    }
+    pb.suspend(|| {
+        eprintln!(
+            "warning: {name}: {method} kept from an earlier run, but {} is missing: \
+             the report has no shapes picture (delete {} to re-run it)",
+            svg.display(),
+            part.display()
+        )
+    });
+    None
 }
 
 /// The task at `task` with the design on or off, every trajectory's horizon
