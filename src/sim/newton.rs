@@ -120,7 +120,8 @@ pub struct NewtonOptions {
     /// worst pair, checked, halved at most four times; see
     /// [`Objective::keep_gap`] and the contact term's `keep_gap` module).
     /// The guess is then accepted or rejected as before. Same solution to
-    /// within `tol`. Default `0` (off: the guess as predicted). Not a scene
+    /// within `tol`. Default `0.9` on this branch's second measurement (`0` =
+    /// off: the guess as predicted; the first measurement's default). Not a scene
     /// key (issue 31's experiment, `notes/performance.md`, twenty-first
     /// session, helper 3).
     #[serde(skip)]
@@ -211,7 +212,7 @@ impl Default for NewtonOptions {
             settle_blocks: true,
             gradient_first: true,
             derivatives_at_trial: true,
-            keep_gap: 0.0,
+            keep_gap: 0.9,
         }
     }
 }
