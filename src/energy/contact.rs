@@ -30,8 +30,6 @@ use nalgebra::{DVector, Vector4};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-mod keep_gap;
-
 /// A candidate hull pair and the plane its solve starts from.
 type PairStart = ((usize, usize), Option<Vector4<f64>>);
 
@@ -71,8 +69,6 @@ pub struct ContactEnergy {
     ccd: Ccd,
     /// Time spent in CCD since the last report.
     ccd_time: Duration,
-    /// Scratch of the start that keeps the gap ([`Energy::keep_gap`]).
-    gap: keep_gap::GapScratch,
 }
 
 impl ContactEnergy {
@@ -96,7 +92,6 @@ impl ContactEnergy {
             last_intersecting: None,
             ccd: Ccd::new(model, settings.ccd.clone()),
             ccd_time: Duration::ZERO,
-            gap: keep_gap::GapScratch::new(model),
             settings,
         }
     }
@@ -403,20 +398,6 @@ impl Energy for ContactEnergy {
 
     fn certifies(&self) -> bool {
         self.ccd.options.enabled
-    }
-
-    /// Pulls the guess back so that no pair active at `θ^t` closes its GJK
-    /// distance below `fraction` of it there (see the `keep_gap` module).
-    fn keep_gap(
-        &mut self,
-        ctx: &StepContext,
-        q0: &DVector<f64>,
-        kin: &Kinematics,
-        guess: &mut DVector<f64>,
-        fraction: f64,
-        charts: &[nalgebra::Matrix3<f64>],
-    ) -> Result<(), EnergyError> {
-        self.keep_gap_impl(ctx, q0, kin, guess, fraction, charts)
     }
 
     /// Continuous collision detection (see [`crate::contact::ccd`]) of the

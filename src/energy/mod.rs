@@ -260,24 +260,6 @@ pub trait Energy: Send + Sync {
         Ok(1.0)
     }
 
-    /// Moves the Newton solve's initial guess `guess` back towards
-    /// `q0 = θ^t` where the guess would close a gap the term keeps
-    /// ([`crate::sim::NewtonOptions::keep_gap`], `fraction` its `f`; the
-    /// contact term's rule is in its `keep_gap` module). Called right after
-    /// the solve evaluated the value at `q0`; `kin` holds the kinematics
-    /// there. Default: the guess is left as it is.
-    fn keep_gap(
-        &mut self,
-        _ctx: &StepContext,
-        _q0: &DVector<f64>,
-        _kin: &Kinematics,
-        _guess: &mut DVector<f64>,
-        _fraction: f64,
-        _charts: &[nalgebra::Matrix3<f64>],
-    ) -> Result<(), EnergyError> {
-        Ok(())
-    }
-
     /// Whether [`Energy::certify_step`] checks anything (continuous
     /// collision detection on). The simulator then certifies each step's
     /// path (see [`crate::sim::Simulator::step`]). Default false.

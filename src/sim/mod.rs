@@ -299,23 +299,6 @@ impl Objective for StepObjective<'_> {
         Ok(out)
     }
 
-    /// Every term's [`Energy::keep_gap`] in turn, with the kinematics at
-    /// `q` (evaluated just before by value: a cache hit).
-    fn keep_gap(
-        &mut self,
-        q: &DVector<f64>,
-        guess: &mut DVector<f64>,
-        fraction: f64,
-        _timers: &mut StageTimers,
-    ) -> Result<(), EnergyError> {
-        self.kin
-            .update_cached(self.ctx.model, q, self.charts, KinOrder::Pose);
-        for e in self.energies.iter_mut() {
-            e.keep_gap(&self.ctx, q, self.kin, guess, fraction, self.charts)?;
-        }
-        Ok(())
-    }
-
     fn length_scale(&self) -> f64 {
         1.0 + self
             .kin

@@ -113,20 +113,6 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub derivatives_at_trial: bool,
-    /// A start that keeps the gap: when positive (the fraction `f ∈ (0, 1)`),
-    /// the predictor's guess is pulled back along `θ^t → guess`, robot
-    /// group by robot group, until no contact pair active at `θ^t` has its
-    /// GJK distance below `f` times its distance at `θ^t` (secant of the
-    /// worst pair, checked, halved at most four times; see
-    /// [`Objective::keep_gap`] and the contact term's `keep_gap` module).
-    /// The guess is then accepted or rejected as before. Same solution to
-    /// within `tol`. Default `0.9` on this branch's second measurement (`0` =
-    /// off: the guess as predicted; the first measurement's default). Not a scene
-    /// key (issue 31's experiment, `notes/performance.md`, twenty-first
-    /// session, helper 3).
-    #[serde(skip)]
-    #[schemars(skip)]
-    pub keep_gap: f64,
 }
 
 /// Positive-definite Newton model of an indefinite (or nearly singular)
@@ -212,7 +198,6 @@ impl Default for NewtonOptions {
             settle_blocks: true,
             gradient_first: true,
             derivatives_at_trial: true,
-            keep_gap: 0.9,
         }
     }
 }
@@ -306,20 +291,6 @@ pub trait Objective {
         _timers: &mut StageTimers,
     ) -> Result<f64, EnergyError> {
         Ok(alpha)
-    }
-
-    /// Moves the initial guess `guess` of a solve starting at `q` back
-    /// towards `q` where it would close a gap the objective keeps
-    /// ([`NewtonOptions::keep_gap`], `fraction` its value). Called right
-    /// after the value at `q` was evaluated. Default: no change.
-    fn keep_gap(
-        &mut self,
-        _q: &DVector<f64>,
-        _guess: &mut DVector<f64>,
-        _fraction: f64,
-        _timers: &mut StageTimers,
-    ) -> Result<(), EnergyError> {
-        Ok(())
     }
 
     /// Rows of each column of the Hessian of the last evaluation that may
@@ -562,23 +533,8 @@ impl Solve<'_> {
         guess: Option<&DVector<f64>>,
     ) -> Result<f64, NewtonError> {
         let mut value = f64::NAN;
-        // The guess, pulled back by `keep_gap` when that is on.
-        let mut pulled = std::mem::take(&mut self.scratch.trial);
-        let guess = match guess {
-            Some(g) if self.opts.keep_gap > 0.0 => {
-                let at_q = self.eval(q, Need::Value)?;
-                pulled.clone_from(g);
-                self.obj
-                    .keep_gap(q, &mut pulled, self.opts.keep_gap, self.timers)?;
-                Some((&pulled, Some(at_q)))
-            }
-            g => g.map(|g| (g, None)),
-        };
-        if let Some((g, at_q)) = guess {
-            let at_q = match at_q {
-                Some(v) => v,
-                None => self.eval(q, Need::Value)?,
-            };
+        if let Some(g) = guess {
+            let at_q = self.eval(q, Need::Value)?;
             // The jump q → guess must pass the terms' own line-search bounds
             // (IPC's CCD filter, joint-limit approach, chart step): a guess on
             // the far side of an obstacle has a finite objective too.
@@ -601,7 +557,6 @@ impl Solve<'_> {
                 value = v;
             }
         }
-        self.scratch.trial = pulled;
         if value.is_nan() {
             value = self.eval(q, Need::Hessian)?;
         }
