@@ -256,71 +256,14 @@ pub fn result(
     let base = &sel.baseline;
     let chosen = sel.chosen.map(|i| &sel.ranking[i]);
     let after_scored = chosen.unwrap_or(base);
-    let ranking = sel
-        .ranking
-        .iter()
-        .zip(&sel.identifiability)
-        .map(|(s, id)| Ranked {
-            candidate: s.candidate.label.clone(),
-            effects: s
-                .candidate
-                .kinds()
-                .iter()
-                .map(|k| k.name().into())
-                .collect(),
-            parameters: parameters(pb, s),
-            rms_train: s.rms_train(),
-            rms_holdout: s.rms_holdout(),
-            criterion: s.criterion,
-            delta_criterion: base.criterion - s.criterion,
-            explained: 1.0 - s.fit.rss / base.fit.rss.max(1e-300),
-            unidentifiable: id.unidentifiable.clone(),
-        })
-        .collect();
-    let mut parameters_at_dt = BTreeMap::new();
-    let (parameters, confidence, effects) = match chosen {
-        Some(s) => {
-            let list = param_list(pb, s);
-            parameters_at_dt = list.iter().cloned().collect();
-            let values = sel.extrapolated.as_ref().unwrap_or(&s.fit.params);
-            let p = list
-                .iter()
-                .zip(values)
-                .map(|((k, _), v)| (k.clone(), *v))
-                .collect();
-            let conf = list
-                .iter()
-                .map(|(k, _)| k)
-                .zip(values.iter().zip(&s.fit.half_width))
-                .map(|(k, (v, hw))| {
-                    (
-                        k.clone(),
-                        Interval {
-                            value: *v,
-                            low: hw.map(|h| v - h),
-                            high: hw.map(|h| v + h),
-                        },
-                    )
-                })
-                .collect();
-            (p, conf, s.candidate.specs(&s.fit.params))
-        }
-        None => Default::default(),
-    };
+    let fitted = chosen
+        .map(|s| chosen_values(pb, sel, s))
+        .unwrap_or_default();
     let gap_before = gap(&before, pb, base);
     let gap_after = gap(&after, pb, after_scored);
     let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
     let residual_regression = sel.residual.clone();
-    let mut reason = where_it_sits(&sel.decision, &before);
-    if sel.decision.verdict == super::verdict::Verdict::Unexplained
-        && let Some(st) = residual_regression
-            .as_ref()
-            .and_then(|r| r.strongest.as_ref())
-    {
-        reason.push_str(&format!(
-            "; the residual force regression's strongest structure is `{st}` (residual_regression)"
-        ));
-    }
+    let reason = result_reason(sel, &before, residual_regression.as_ref());
     CalibrationResult {
         verdict: sel.decision.verdict.name().into(),
         reason,
@@ -344,28 +287,14 @@ pub fn result(
                 .join("+")
         }),
         candidate: chosen.map(|s| s.candidate.label.clone()),
-        parameters,
-        parameters_at_dt,
-        confidence,
+        parameters: fitted.parameters,
+        parameters_at_dt: fitted.at_dt,
+        confidence: fitted.confidence,
         gap_reduction: 1.0 - gap_after.overall / gap_before.overall.max(1e-300),
         gap_before,
         gap_after,
-        indistinguishable: match chosen {
-            Some(c) => sel
-                .ranking
-                .iter()
-                .filter(|s| {
-                    s.candidate.label != c.candidate.label
-                        && s.candidate.templates.len() == 1
-                        && ((s.criterion - c.criterion).abs() < 2.0
-                            || (s.rms_holdout() - c.rms_holdout()).abs()
-                                <= super::verdict::INDISTINGUISHABLE_RMS * c.rms_holdout())
-                })
-                .map(|s| s.candidate.label.clone())
-                .collect(),
-            None => Vec::new(),
-        },
-        ranking,
+        indistinguishable: chosen.map_or_else(Vec::new, |c| indistinguishable(sel, c)),
+        ranking: ranked(pb, sel),
         baseline: Baseline {
             rms_train: base.rms_train(),
             rms_holdout: base.rms_holdout(),
@@ -381,12 +310,113 @@ pub fn result(
             holdout: base.n_holdout,
         },
         simulations: sel.simulations,
-        recordings: super::recordings::gaps(pb, &effects),
+        recordings: super::recordings::gaps(pb, &fitted.effects),
         identifiability: sel.identifiability.clone(),
-        effects,
+        effects: fitted.effects,
         contact_resolution: None,
         seconds: 0.0,
     }
+}
+
+/// Every scored candidate, best first, with its parameters and scores
+/// against the baseline (`delta_criterion`, `explained`).
+fn ranked(pb: &Problem, sel: &Selection) -> Vec<Ranked> {
+    let base = &sel.baseline;
+    sel.ranking
+        .iter()
+        .zip(&sel.identifiability)
+        .map(|(s, id)| Ranked {
+            candidate: s.candidate.label.clone(),
+            effects: s
+                .candidate
+                .kinds()
+                .iter()
+                .map(|k| k.name().into())
+                .collect(),
+            parameters: parameters(pb, s),
+            rms_train: s.rms_train(),
+            rms_holdout: s.rms_holdout(),
+            criterion: s.criterion,
+            delta_criterion: base.criterion - s.criterion,
+            explained: 1.0 - s.fit.rss / base.fit.rss.max(1e-300),
+            unidentifiable: id.unidentifiable.clone(),
+        })
+        .collect()
+}
+
+/// The chosen candidate's reported values: the Δt → 0 extrapolation when
+/// there is one (else the fit at Δt), the values at Δt, their intervals,
+/// and the effects they make.
+#[derive(Default)]
+struct ChosenValues {
+    parameters: BTreeMap<String, f64>,
+    at_dt: BTreeMap<String, f64>,
+    confidence: BTreeMap<String, Interval>,
+    effects: Vec<EffectSpec>,
+}
+
+fn chosen_values(pb: &Problem, sel: &Selection, s: &Scored) -> ChosenValues {
+    let list = param_list(pb, s);
+    let values = sel.extrapolated.as_ref().unwrap_or(&s.fit.params);
+    let parameters = list
+        .iter()
+        .zip(values)
+        .map(|((k, _), v)| (k.clone(), *v))
+        .collect();
+    let confidence = list
+        .iter()
+        .map(|(k, _)| k)
+        .zip(values.iter().zip(&s.fit.half_width))
+        .map(|(k, (v, hw))| {
+            let interval = Interval {
+                value: *v,
+                low: hw.map(|h| v - h),
+                high: hw.map(|h| v + h),
+            };
+            (k.clone(), interval)
+        })
+        .collect();
+    ChosenValues {
+        parameters,
+        at_dt: list.iter().cloned().collect(),
+        confidence,
+        effects: s.candidate.specs(&s.fit.params),
+    }
+}
+
+/// Single candidates other than the chosen one that fit as well: within 2
+/// of its criterion, or within [`super::verdict::INDISTINGUISHABLE_RMS`]
+/// of its held-out RMS.
+fn indistinguishable(sel: &Selection, c: &Scored) -> Vec<String> {
+    sel.ranking
+        .iter()
+        .filter(|s| {
+            s.candidate.label != c.candidate.label
+                && s.candidate.templates.len() == 1
+                && ((s.criterion - c.criterion).abs() < 2.0
+                    || (s.rms_holdout() - c.rms_holdout()).abs()
+                        <= super::verdict::INDISTINGUISHABLE_RMS * c.rms_holdout())
+        })
+        .map(|s| s.candidate.label.clone())
+        .collect()
+}
+
+/// Where the discrepancy sits, and for `unexplained` the residual force
+/// regression's strongest structure.
+fn result_reason(
+    sel: &Selection,
+    before: &Analysis,
+    regression: Option<&super::residual::ResidualRegression>,
+) -> String {
+    let mut reason = where_it_sits(&sel.decision, before);
+    if sel.decision.verdict == super::verdict::Verdict::Unexplained
+        && let Some(st) = regression.and_then(|r| r.strongest.as_ref())
+    {
+        reason.push_str(&format!(
+            "; the residual force regression's strongest structure is `{st}` (residual_regression)"
+        ));
+    }
+    reason
 }
 
 /// The "model's own error" lines of `report.md`.
