@@ -324,7 +324,15 @@ pub fn select(
 /// the first instead of refitting at Δt/2 (the same numbers; the
 /// simulations are counted once).
 #[derive(Default)]
-struct Extrapolations(Vec<(String, Vec<u64>, u64, Option<Vec<f64>>)>);
+struct Extrapolations(Vec<Extrapolated>);
+
+/// One entry of [`Extrapolations`]: its key and its result.
+struct Extrapolated {
+    label: String,
+    param_bits: Vec<u64>,
+    noise_bits: u64,
+    values: Option<Vec<f64>>,
+}
 
 impl Extrapolations {
     /// [`extrapolate_to_zero_dt`] of `s`, or its earlier result (with 0
@@ -336,17 +344,21 @@ impl Extrapolations {
         opts: &SelectOptions,
         noise: f64,
     ) -> (Option<Vec<f64>>, usize) {
-        let bits: Vec<u64> = s.fit.params.iter().map(|p| p.to_bits()).collect();
-        let key = |e: &(String, Vec<u64>, u64, Option<Vec<f64>>)| {
-            e.0 == s.candidate.label && e.1 == bits && e.2 == noise.to_bits()
-        };
-        if let Some(e) = self.0.iter().find(|e| key(e)) {
-            return (e.3.clone(), 0);
+        let param_bits: Vec<u64> = s.fit.params.iter().map(|p| p.to_bits()).collect();
+        let noise_bits = noise.to_bits();
+        if let Some(e) = self.0.iter().find(|e| {
+            e.label == s.candidate.label && e.param_bits == param_bits && e.noise_bits == noise_bits
+        }) {
+            return (e.values.clone(), 0);
         }
-        let (p, n) = extrapolate_to_zero_dt(pb, s, opts, noise);
-        self.0
-            .push((s.candidate.label.clone(), bits, noise.to_bits(), p.clone()));
-        (p, n)
+        let (values, n) = extrapolate_to_zero_dt(pb, s, opts, noise);
+        self.0.push(Extrapolated {
+            label: s.candidate.label.clone(),
+            param_bits,
+            noise_bits,
+            values: values.clone(),
+        });
+        (values, n)
     }
 }
 
