@@ -72,8 +72,9 @@ pub use adjoint_friction::{FrictionVjp, friction_vjp};
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
 pub use friction::{
-    FrictionFrame, FrictionNeed, FrictionPair, FrictionParams, FrictionScratch, FrictionVertices,
-    LaggedContact, friction_pair, friction_vertices, tangent_basis,
+    FrictionFrame, FrictionMemo, FrictionNeed, FrictionPair, FrictionParams, FrictionScratch,
+    FrictionVertices, LaggedContact, friction_pair, friction_pair_memo, friction_vertices,
+    tangent_basis,
 };
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
