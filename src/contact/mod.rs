@@ -78,6 +78,6 @@ pub use friction::{
 };
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
-    VertexOutcome, contact_pair, contact_vertices,
+    VertexOutcome, contact_pair, contact_pair_world, contact_vertices,
 };
 pub use settings::{ContactModelKind, ContactSettings};
