@@ -557,6 +557,7 @@ pub fn contact_pair(
 /// bits of the internal transform: `transform_point_has_the_bits_of_world_iter`), so they are
 /// not transformed again; the poses in `a`, `b` still serve the pose-contracted derivatives.
 /// The result is bit for bit [`contact_pair`]'s when the vertices are those bits.
+#[allow(clippy::too_many_arguments)] // `contact_pair`'s six and the two vertex slices
 pub fn contact_pair_world(
     a: HullPose<'_>,
     b: HullPose<'_>,
