@@ -749,3 +749,59 @@ fn friction_solver_is_robust_on_random_frames() {
         max_iters as f64,
     );
 }
+
+/// `friction_pair_memo` returns the bits of `friction_pair` for every `need` and every order of
+/// calls: after a solve at other poses (a miss), at the same poses (a hit, whatever `need` the
+/// first call asked for), after a change of the parameters, and after `clear`.
+#[test]
+fn friction_memo_has_the_bits_of_a_fresh_solve() {
+    let needs = [
+        FrictionNeed::Value,
+        FrictionNeed::Gradient,
+        FrictionNeed::Hessian,
+        FrictionNeed::HessianAndMixed,
+    ];
+    let bits = |p: &FrictionPair| {
+        let mut v = vec![p.value, p.u.x, p.u.y, p.omega];
+        v.extend(p.grad_a.iter().chain(p.grad_b.iter()));
+        v.extend(p.hessian.iter().flat_map(|h| h.iter().copied()));
+        v.extend(p.mixed.iter().flat_map(|h| h.iter().copied()));
+        let mut b: Vec<u64> = v.iter().map(|x| x.to_bits()).collect();
+        b.extend([p.iterations as u64, u64::from(p.spin_free)]);
+        b
+    };
+    for (i, kind) in [Features::FaceFace, Features::EdgeEdge, Features::VertexFace]
+        .into_iter()
+        .enumerate()
+    {
+        let (la, pa, lb, pb, lag) = lagged(kind, 70 + i as u64);
+        let fr = lag.frame();
+        let mut r = rng(80 + i as u64);
+        let mut memo = FrictionMemo::default();
+        let mut params = fparams();
+        for round in 0..6 {
+            // Two rounds at each pose pair, the parameters changed once, a clear once.
+            let (pa1, pb1) = (moved(&pa, &mut r, 5e-3), moved(&pb, &mut r, 5e-3));
+            if round == 3 {
+                params.mu *= 1.5;
+            }
+            if round == 4 {
+                memo.clear();
+            }
+            for (k, need) in needs.iter().chain(needs.iter().rev()).enumerate() {
+                let ha = HullPose {
+                    pose: &pa1,
+                    x_local: &la,
+                };
+                let hb = HullPose {
+                    pose: &pb1,
+                    x_local: &lb,
+                };
+                let mut sc = FrictionScratch::new();
+                let want = friction_pair(&fr, ha, hb, &params, *need, &mut sc).unwrap();
+                let got = friction_pair_memo(&fr, ha, hb, &params, *need, &mut memo).unwrap();
+                assert_eq!(bits(&got), bits(&want), "{kind:?} round {round} call {k}");
+            }
+        }
+    }
+}

@@ -72,11 +72,12 @@ pub use adjoint_friction::{FrictionVjp, friction_vjp};
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
 pub use friction::{
-    FrictionFrame, FrictionNeed, FrictionPair, FrictionParams, FrictionScratch, FrictionVertices,
-    LaggedContact, friction_pair, friction_vertices, tangent_basis,
+    FrictionFrame, FrictionMemo, FrictionNeed, FrictionPair, FrictionParams, FrictionScratch,
+    FrictionVertices, LaggedContact, friction_pair, friction_pair_memo, friction_vertices,
+    tangent_basis,
 };
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
-    VertexOutcome, contact_pair, contact_vertices,
+    VertexOutcome, contact_pair, contact_pair_world, contact_vertices,
 };
 pub use settings::{ContactModelKind, ContactSettings};

@@ -549,6 +549,48 @@ pub fn contact_pair(
         params,
         warm_plane,
     )?;
+    pair_outcome(a, b, params, need, scratch, core, c0)
+}
+
+/// [`contact_pair`] with the hulls' world vertices `world_a = R_a x + t_a` (and `world_b`)
+/// already computed by the caller (e.g. by [`crate::math::transform_point`], which gives the
+/// bits of the internal transform: `transform_point_has_the_bits_of_world_iter`), so they are
+/// not transformed again; the poses in `a`, `b` still serve the pose-contracted derivatives.
+/// The result is bit for bit [`contact_pair`]'s when the vertices are those bits.
+#[allow(clippy::too_many_arguments)] // `contact_pair`'s six and the two vertex slices
+pub fn contact_pair_world(
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    world_a: &[Vector3<f64>],
+    world_b: &[Vector3<f64>],
+    params: &ContactParams,
+    warm_plane: Option<Vector4<f64>>,
+    need: Need,
+    scratch: &mut ContactScratch,
+) -> Result<PairOutcome, ContactError> {
+    params.validate()?;
+    let (core, c0) = solve_core(
+        scratch,
+        || world_a.iter().copied(),
+        || world_b.iter().copied(),
+        params,
+        warm_plane,
+    )?;
+    pair_outcome(a, b, params, need, scratch, core, c0)
+}
+
+/// The outcome of a solved pair with the derivatives `need` asks for (module docs, "Pose
+/// contraction"): `∂U_c/∂A_h = n k_hᵀ` and the 24×24 Hessian
+/// `blockdiag(S_h ⊗ nnᵀ) − B (U*_pp)⁻¹ Bᵀ`, from the shifted vertices in `scratch`.
+fn pair_outcome(
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    params: &ContactParams,
+    need: Need,
+    scratch: &ContactScratch,
+    core: Core,
+    c0: Vector3<f64>,
+) -> Result<PairOutcome, ContactError> {
     let (sol, distance) = match core {
         Core::Intersecting => return Ok(PairOutcome::Intersecting),
         Core::OutOfRange { distance, plane } => {
@@ -795,5 +837,43 @@ impl VertexContact {
         let hinv = DMatrix::from_iterator(4, 4, hinv.iter().copied());
         h -= &c * hinv * c.transpose();
         h
+    }
+}
+
+#[cfg(test)]
+mod world_tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// `contact_pair_world` relies on the caller's `transform_point` giving the bits of
+    /// `world_iter` (`R x + t` on a view of the pose and on owned copies of its blocks).
+    #[test]
+    fn transform_point_has_the_bits_of_world_iter() {
+        let mut r = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..200 {
+            let rot = nalgebra::Rotation3::from_euler_angles(
+                r.random_range(-3.0..3.0),
+                r.random_range(-1.5..1.5),
+                r.random_range(-3.0..3.0),
+            );
+            let mut pose = Matrix3x4::zeros();
+            pose.fixed_view_mut::<3, 3>(0, 0).copy_from(rot.matrix());
+            for k in 0..3 {
+                pose[(k, 3)] = r.random_range(-2.0..2.0);
+            }
+            let x: Vec<Vector3<f64>> = (0..16)
+                .map(|_| Vector3::from_fn(|_, _| r.random_range(-0.3..0.3)))
+                .collect();
+            let h = HullPose {
+                pose: &pose,
+                x_local: &x,
+            };
+            for (w, xl) in world_iter(h).zip(&x) {
+                let t = crate::math::transform_point(&pose, xl);
+                for k in 0..3 {
+                    assert_eq!(w[k].to_bits(), t[k].to_bits());
+                }
+            }
+        }
     }
 }

@@ -118,8 +118,9 @@ impl ContactEnergy {
             &self.settings.excluded,
             &mut self.pairs,
         );
-        // World vertices of the candidates only (the diagnostics and the
-        // infeasibility report read them); the contact pairs use the poses.
+        // World vertices of the candidates only: the pair evaluations take
+        // them (`contact_pair_world`), the diagnostics and the infeasibility
+        // report read them.
         self.fresh.clear();
         self.fresh.resize(self.hulls.ids.len(), false);
         for &(a, b) in &self.pairs {
@@ -274,7 +275,19 @@ impl Energy for ContactEnergy {
             |&((a, b), _)| hulls.ranges[a].len() + hulls.ranges[b].len(),
             ContactScratch::new,
             |scratch, &((a, b), w)| {
-                let res = contact::contact_pair(pose(a), pose(b), params, w, cneed, scratch);
+                // The candidates' world vertices are those of these poses
+                // (`update_pairs`), in the bits `contact_pair` would compute.
+                let (xa, xb) = (hulls.hull(a), hulls.hull(b));
+                let res = contact::contact_pair_world(
+                    pose(a),
+                    pose(b),
+                    xa,
+                    xb,
+                    params,
+                    w,
+                    cneed,
+                    scratch,
+                );
                 if let Err(e) = &res {
                     let case =
                         contact::capture::ContactCase::new(pose(a), pose(b), params, w, cneed, e);

@@ -3,7 +3,11 @@
 //! At the start of each step the contact planes, normal forces and tangent
 //! bases are computed at the step-`t` poses and frozen (lagged, as in the
 //! paper); every Newton evaluation then solves each active pair's inner
-//! problem over the plane's in-plane velocity `u` and spin `ω`.
+//! problem over the plane's in-plane velocity `u` and spin `ω` — once per
+//! distinct pair of poses: an evaluation at bit-for-bit the poses of the
+//! pair's last one (Newton's Hessian after a gradient-first evaluation of an
+//! accepted point) takes that solve's result ([`contact::friction_pair_memo`]),
+//! which is the same bits.
 //! The lagged planes are recomputed here (value-only contact solves, cold
 //! started) rather than borrowed from the contact term, which keeps the two
 //! terms independent; it costs one contact evaluation per step (sharing the
@@ -24,17 +28,25 @@ use super::pairs::{scatter_pair, scatter_vertex_products, vertices_and_direction
 use super::{Energy, EnergyAccumulator, EnergyError, Need, StepContext};
 use crate::contact::ContactSettings;
 use crate::contact::{
-    self, ContactParams, ContactScratch, FrictionNeed, FrictionParams, FrictionScratch,
-    LaggedContact, PairOutcome,
+    self, ContactParams, ContactScratch, FrictionMemo, FrictionNeed, FrictionParams,
+    FrictionScratch, LaggedContact, PairOutcome,
 };
 use crate::geometry::{BroadPhase, PairWork, WorldHulls};
 use crate::kinematics::Kinematics;
 use crate::model::Model;
 use nalgebra::{DVector, Vector4};
+use std::sync::Mutex;
 
 /// A hull pair (indices into the world hulls) in contact at step `t`, its
-/// lagged data and the step-`t` plane `p*` it came from (for the adjoint).
-type LaggedPair = ((usize, usize), LaggedContact, Vector4<f64>);
+/// lagged data, the step-`t` plane `p*` it came from (for the adjoint) and
+/// its last inner solution (see [`contact::friction_pair_memo`]; a `Mutex`
+/// because the pairs are evaluated in parallel, each by one thread).
+type LaggedPair = (
+    (usize, usize),
+    LaggedContact,
+    Vector4<f64>,
+    Mutex<FrictionMemo>,
+);
 
 /// The friction term.
 pub struct FrictionEnergy {
@@ -125,6 +137,7 @@ impl Energy for FrictionEnergy {
                         (a, b),
                         LaggedContact::from_contact(&c, pa, pb, params, kappa),
                         c.plane,
+                        Mutex::new(FrictionMemo::default()),
                     ))),
                     Ok(_) => Ok(None),
                     Err(e) => {
@@ -181,12 +194,20 @@ impl Energy for FrictionEnergy {
         let pose = |h: usize| hulls.hull_pose(model, &kin.pose, h);
         self.work.map(
             &self.lagged,
-            |((a, b), _, _)| hulls.ranges[*a].len() + hulls.ranges[*b].len(),
-            FrictionScratch::new,
-            |scratch, ((a, b), lag, _)| {
+            |((a, b), _, _, _)| hulls.ranges[*a].len() + hulls.ranges[*b].len(),
+            || (),
+            |_, ((a, b), lag, _, memo)| {
                 let frame = lag.frame();
-                let res =
-                    contact::friction_pair(&frame, pose(*a), pose(*b), friction, fneed, scratch);
+                // Each pair is evaluated by one thread: the lock is never contended.
+                let mut memo = memo.lock().unwrap_or_else(|e| e.into_inner());
+                let res = contact::friction_pair_memo(
+                    &frame,
+                    pose(*a),
+                    pose(*b),
+                    friction,
+                    fneed,
+                    &mut memo,
+                );
                 if let Err(e) = &res {
                     let case = contact::capture::FrictionCase::new(
                         &frame,
@@ -249,7 +270,7 @@ impl Energy for FrictionEnergy {
         let kappa = self.settings.kappa;
         let want_vertices = out.want_vertices;
         let mut scratch = FrictionScratch::new();
-        for ((a, b), lag, plane) in &self.lagged {
+        for ((a, b), lag, plane, _) in &self.lagged {
             let ids = [self.hulls.ids[*a], self.hulls.ids[*b]];
             let local = |h: usize| &model.links[ids[h].link].hulls[ids[h].hull].x_local;
             let (xa, dxa) =

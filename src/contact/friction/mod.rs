@@ -126,6 +126,6 @@ use inner::*;
 pub use lagged::{FrictionFrame, LaggedContact};
 use line::*;
 use pair::cross_matrix;
-pub use pair::{FrictionNeed, FrictionPair, friction_pair};
+pub use pair::{FrictionMemo, FrictionNeed, FrictionPair, friction_pair, friction_pair_memo};
 pub use params::{FrictionParams, tangent_basis};
 pub use vertices::{FrictionVertices, friction_vertices};

@@ -66,6 +66,103 @@ pub fn friction_pair(
     need: FrictionNeed,
     scratch: &mut FrictionScratch,
 ) -> Result<FrictionPair, FrictionError> {
+    let core = solve_pair(frame, a, b, params, &mut scratch.act)?;
+    Ok(assemble_pair(
+        frame,
+        a,
+        b,
+        params,
+        need,
+        &scratch.act,
+        &core,
+    ))
+}
+
+/// The inner solution of one pair kept for its next evaluation ([`friction_pair_memo`]): the
+/// active-vertex list and the inner optimum, with the bits of the two step-`t+1` poses and of
+/// the parameters they were computed at. Empty (`key: None`) until the first solve, and after
+/// [`FrictionMemo::clear`] or a failed solve.
+#[derive(Clone, Debug, Default)]
+pub struct FrictionMemo {
+    key: Option<MemoKey>,
+    act: Vec<Active>,
+    core: Option<Core>,
+}
+
+/// The bits of the inputs a memo's solution was computed at (the frame is not part of it: a
+/// memo belongs to one lagged pair and is cleared with it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct MemoKey {
+    poses: [[u64; 12]; 2],
+    params: [u64; 7],
+}
+
+impl MemoKey {
+    fn new(a: &HullPose<'_>, b: &HullPose<'_>, p: &FrictionParams) -> MemoKey {
+        let bits = |m: &Matrix3x4<f64>| std::array::from_fn(|i| m.as_slice()[i].to_bits());
+        let params = [
+            p.mu,
+            p.dt,
+            p.eps_velocity,
+            p.eps_force,
+            p.inner_tol,
+            p.inner_rtol,
+            p.inner_max_iters as f64,
+        ];
+        MemoKey {
+            poses: [bits(a.pose), bits(b.pose)],
+            params: params.map(f64::to_bits),
+        }
+    }
+}
+
+impl FrictionMemo {
+    /// Forgets the kept solution (new lagged data).
+    pub fn clear(&mut self) {
+        self.key = None;
+        self.core = None;
+    }
+}
+
+/// [`friction_pair`] for the lagged pair whose last solution `memo` keeps: when `a`, `b` and
+/// `params` have the bits of that solve's, its active vertices and inner optimum are taken
+/// instead of solving again (`prepare` and `solve_inner` are pure functions of the frame, the
+/// poses, the local vertices and the parameters, so the solve would return the same bits);
+/// the derivatives `need` asks for are assembled from them as in [`friction_pair`]. The
+/// caller must pass the same `frame` (and local vertices) for every call with one memo, and
+/// [`FrictionMemo::clear`] it when the frame changes. A Newton step evaluates an accepted
+/// point again with its Hessian at the same poses (measured in notes/performance.md,
+/// 2026-12-07, twenty-first session, helper 4: 10.8 % of the pair evaluations at N = 8).
+pub fn friction_pair_memo(
+    frame: &FrictionFrame<'_>,
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    params: &FrictionParams,
+    need: FrictionNeed,
+    memo: &mut FrictionMemo,
+) -> Result<FrictionPair, FrictionError> {
+    let key = MemoKey::new(&a, &b, params);
+    let core = match memo.core {
+        Some(core) if memo.key == Some(key) => core,
+        _ => {
+            memo.clear();
+            let core = solve_pair(frame, a, b, params, &mut memo.act)?;
+            memo.key = Some(key);
+            memo.core = Some(core);
+            core
+        }
+    };
+    Ok(assemble_pair(frame, a, b, params, need, &memo.act, &core))
+}
+
+/// The active vertices of the pair into `act` and the inner optimum over `q = (u, ω)`.
+fn solve_pair(
+    frame: &FrictionFrame<'_>,
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    params: &FrictionParams,
+    act: &mut Vec<Active>,
+) -> Result<Core, FrictionError> {
     let poses = [a.pose, b.pose];
     let locals = [a.x_local, b.x_local];
     let next = |h: usize, m: usize| {
@@ -77,9 +174,22 @@ pub fn friction_pair(
         &next,
         [a.x_local.len(), b.x_local.len()],
         params,
-        &mut scratch.act,
+        act,
     )?;
-    let core = solve_inner(&scratch.act, spin_free, params)?;
+    solve_inner(act, spin_free, params)
+}
+
+/// `U_f` and the derivatives `need` asks for from the active vertices and the inner optimum:
+/// `∂U/∂A_h = (1/Δt) B R_hᵀ`, the Hessian and the mixed block from [`PairSums`].
+fn assemble_pair(
+    frame: &FrictionFrame<'_>,
+    a: HullPose<'_>,
+    b: HullPose<'_>,
+    params: &FrictionParams,
+    need: FrictionNeed,
+    act: &[Active],
+    core: &Core,
+) -> FrictionPair {
     let mut out = FrictionPair {
         value: core.value,
         u: Vector2::new(core.q.x, core.q.y),
@@ -92,26 +202,32 @@ pub fn friction_pair(
         mixed: None,
     };
     if need == FrictionNeed::Value {
-        return Ok(out);
+        return out;
     }
     let dt = params.dt;
     let bm = frame.basis;
     let second = need >= FrictionNeed::Hessian;
     let mut sums = PairSums::zeros();
-    sums.accumulate(&scratch.act, locals, &core, params.eps_velocity, second);
+    sums.accumulate(
+        act,
+        [a.x_local, b.x_local],
+        core,
+        params.eps_velocity,
+        second,
+    );
     // ∂U/∂A_h = (1/Δt) B Rᵀ.
     out.grad_a = bm * sums.r[0].transpose() / dt;
     out.grad_b = bm * sums.r[1].transpose() / dt;
     if !second {
-        return Ok(out);
+        return out;
     }
     let cmat = sums.c_matrix(&bm, dt);
-    out.hessian = Some(sums.hessian(&bm, &cmat, &core, dt));
+    out.hessian = Some(sums.hessian(&bm, &cmat, core, dt));
     if need == FrictionNeed::HessianAndMixed {
-        let mixed = mixed_block(&frame.normal, &core, dt, &bm, &sums, &cmat);
+        let mixed = mixed_block(&frame.normal, core, dt, &bm, &sums, &cmat);
         out.mixed = Some(Box::new(mixed));
     }
-    Ok(out)
+    out
 }
 
 /// Per-hull sums over the force-carrying vertices (`x̃ = [x_local; 1]`, `w` the vertex's
