@@ -77,7 +77,7 @@ pub use friction::{
     tangent_basis,
 };
 pub use potential::{
-    ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, VertexContact,
-    VertexOutcome, contact_pair, contact_pair_world, contact_vertices,
+    ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, PlacedHull,
+    VertexContact, VertexOutcome, contact_pair, contact_pair_world, contact_vertices,
 };
 pub use settings::{ContactModelKind, ContactSettings};

@@ -552,17 +552,24 @@ pub fn contact_pair(
     pair_outcome(a, b, params, need, scratch, core, c0)
 }
 
-/// [`contact_pair`] with the hulls' world vertices `world_a = R_a x + t_a` (and `world_b`)
-/// already computed by the caller (e.g. by [`crate::math::transform_point`], which gives the
-/// bits of the internal transform: `transform_point_has_the_bits_of_world_iter`), so they are
-/// not transformed again; the poses in `a`, `b` still serve the pose-contracted derivatives.
-/// The result is bit for bit [`contact_pair`]'s when the vertices are those bits.
-#[allow(clippy::too_many_arguments)] // `contact_pair`'s six and the two vertex slices
+/// A hull with its world vertices already computed: `world[i] = R x_local[i] + t` in the
+/// bits of the internal transform (e.g. by [`crate::math::transform_point`]:
+/// `transform_point_has_the_bits_of_world_iter`). `hull` still carries the link pose and the
+/// link-frame vertices for the pose-contracted derivatives.
+#[derive(Clone, Copy, Debug)]
+pub struct PlacedHull<'a> {
+    /// The link pose `A = [R | t]` and the link-frame vertices `x_local`.
+    pub hull: HullPose<'a>,
+    /// The world vertices `X = A x_local`, one per entry of `hull.x_local` (world frame, m).
+    pub world: &'a [Vector3<f64>],
+}
+
+/// [`contact_pair`] on hulls whose world vertices the caller already has ([`PlacedHull`]), so
+/// they are not transformed again. The result is bit for bit [`contact_pair`]'s when the world
+/// vertices are the bits of `R x + t`.
 pub fn contact_pair_world(
-    a: HullPose<'_>,
-    b: HullPose<'_>,
-    world_a: &[Vector3<f64>],
-    world_b: &[Vector3<f64>],
+    a: PlacedHull<'_>,
+    b: PlacedHull<'_>,
     params: &ContactParams,
     warm_plane: Option<Vector4<f64>>,
     need: Need,
@@ -571,11 +578,12 @@ pub fn contact_pair_world(
     params.validate()?;
     let (core, c0) = solve_core(
         scratch,
-        || world_a.iter().copied(),
-        || world_b.iter().copied(),
+        || a.world.iter().copied(),
+        || b.world.iter().copied(),
         params,
         warm_plane,
     )?;
+    let (a, b) = (a.hull, b.hull);
     pair_outcome(a, b, params, need, scratch, core, c0)
 }
 

@@ -278,11 +278,10 @@ impl Energy for ContactEnergy {
                 // The candidates' world vertices are those of these poses
                 // (`update_pairs`), in the bits `contact_pair` would compute.
                 let (xa, xb) = (hulls.hull(a), hulls.hull(b));
+                let placed = |hull, world| contact::PlacedHull { hull, world };
                 let res = contact::contact_pair_world(
-                    pose(a),
-                    pose(b),
-                    xa,
-                    xb,
+                    placed(pose(a), xa),
+                    placed(pose(b), xb),
                     params,
                     w,
                     cneed,
