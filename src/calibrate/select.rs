@@ -188,6 +188,56 @@ pub fn select(
     on_done: &(dyn Fn() + Sync),
 ) -> Option<Selection> {
     let base = baseline(pb)?;
+    let mut ranking = rank(pb, &base, cands, opts, on_total, on_done);
+    let identifiability = super::identifiability::assess(pb, &ranking, &base.sim);
+    let inertia = super::verdict::joint_inertia(pb.scene);
+    let bad: Vec<(String, String)> = ranking
+        .iter()
+        .filter_map(|s| {
+            super::verdict::implausible(pb, s, &inertia).map(|w| (s.candidate.label.clone(), w))
+        })
+        .collect();
+    let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
+    let residual = super::residual::regress(
+        pb.scene,
+        pb.measured,
+        &base.sim,
+        split_time,
+        &Default::default(),
+    );
+    let chosen = choose(pb, &base, &mut ranking, bad, opts, &inertia, &residual)?;
+    let (floor, mut decision, refined, extrapolated, half_sims) = chosen;
+    if let Some(i) = decision.chosen {
+        super::identifiability::flag_reason(&mut decision.reason, &identifiability[i]);
+    }
+    let chosen = decision.chosen;
+    // + the refined runs (Δt/2, Δt/4) for the floors.
+    let simulations =
+        1 + refined + half_sims + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
+    Some(Selection {
+        baseline: base,
+        ranking,
+        chosen,
+        simulations,
+        floor,
+        decision,
+        extrapolated,
+        residual,
+        identifiability,
+    })
+}
+
+/// The candidates fitted and ranked by criterion: every single, then the
+/// pairs of the best `pair_from` singles that beat the baseline (different
+/// kinds), and the best single with the next `pair_with_best` such singles.
+fn rank(
+    pb: &Problem,
+    base: &Scored,
+    cands: Vec<Candidate>,
+    opts: &SelectOptions,
+    on_total: &dyn Fn(usize),
+    on_done: &(dyn Fn() + Sync),
+) -> Vec<Scored> {
     let npairs = opts.pair_from * opts.pair_from.saturating_sub(1) / 2 + opts.pair_with_best;
     on_total(cands.len() + npairs);
     let mut singles = fit_all(pb, cands, opts, on_done);
@@ -239,33 +289,42 @@ pub fn select(
         on_done();
     }
     sort(&mut ranking);
-    let identifiability = super::identifiability::assess(pb, &ranking, &base.sim);
-    let inertia = super::verdict::joint_inertia(pb.scene);
-    let bad: Vec<(String, String)> = ranking
-        .iter()
-        .filter_map(|s| {
-            super::verdict::implausible(pb, s, &inertia).map(|w| (s.candidate.label.clone(), w))
-        })
-        .collect();
+    ranking
+}
+
+/// What [`choose`] returns: the floor, the decision, the refined runs made
+/// for the floor, the chosen model's values extrapolated to Δt → 0, and the
+/// Δt/2 simulations of the extrapolations.
+type Choice = (
+    super::floor::ErrorFloor,
+    super::verdict::Decision,
+    usize,
+    Option<Vec<f64>>,
+    usize,
+);
+
+/// The decision over `ranking` with the model's error floor; `bad` lists
+/// the implausible candidates with why. The chosen model's values
+/// extrapolated to Δt → 0 are the physical estimate, so they must be
+/// plausible too (a delay fitted at 0.72 ms on a 0.5 ms step extrapolates
+/// to 0.19 ms: integrator timing, not a delay); an implausible
+/// extrapolation removes the model and the choice is made again without it.
+fn choose(
+    pb: &Problem,
+    base: &Scored,
+    ranking: &mut [Scored],
+    mut bad: Vec<(String, String)>,
+    opts: &SelectOptions,
+    inertia: &[f64],
+    residual: &Option<super::residual::ResidualRegression>,
+) -> Option<Choice> {
     let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
-    let residual = super::residual::regress(
-        pb.scene,
-        pb.measured,
-        &base.sim,
-        split_time,
-        &Default::default(),
-    );
-    let (mut bad, mut half_sims) = (bad, 0);
+    let mut half_sims = 0;
     let mut extrapolations = Extrapolations::default();
-    // The chosen model's values extrapolated to Δt → 0 are the physical
-    // estimate, so they must be plausible too (a delay fitted at 0.72 ms
-    // on a 0.5 ms step extrapolates to 0.19 ms: integrator timing, not a
-    // delay); an implausible extrapolation removes the model and the
-    // choice is made again without it.
-    let (floor, decision, refined, extrapolated) = loop {
+    loop {
         let (floor, mut decision, refined) =
-            decide_with_model_floor(pb, &base, &ranking, bad.clone(), opts, &mut extrapolations)?;
-        if let (Some(i), Some(r)) = (decision.chosen, &residual) {
+            decide_with_model_floor(pb, base, ranking, bad.clone(), opts, &mut extrapolations)?;
+        if let (Some(i), Some(r)) = (decision.chosen, residual) {
             let sim = &ranking[i].sim;
             let own = || {
                 let data = sim.sampled_like(pb.measured);
@@ -274,7 +333,7 @@ pub fn select(
             super::verdict::check_structure(&mut decision, &ranking[i], r, own);
         }
         let Some(i) = decision.chosen else {
-            break (floor, decision, refined, None);
+            return Some((floor, decision, refined, None, half_sims));
         };
         let s = &mut ranking[i];
         confidence(pb, &s.candidate, &mut s.fit, &opts.fit);
@@ -286,35 +345,16 @@ pub fn select(
         }
         match p
             .is_some()
-            .then(|| super::verdict::implausible(pb, &at_zero, &inertia))
+            .then(|| super::verdict::implausible(pb, &at_zero, inertia))
             .flatten()
         {
             Some(w) => bad.push((
                 s.candidate.label.clone(),
                 format!("extrapolated to Δt → 0: {w}"),
             )),
-            None => break (floor, decision, refined, p),
+            None => return Some((floor, decision, refined, p, half_sims)),
         }
-    };
-    let mut decision = decision;
-    if let Some(i) = decision.chosen {
-        super::identifiability::flag_reason(&mut decision.reason, &identifiability[i]);
     }
-    let chosen = decision.chosen;
-    // + the refined runs (Δt/2, Δt/4) for the floors.
-    let simulations =
-        1 + refined + half_sims + ranking.iter().map(|s| s.fit.simulations + 1).sum::<usize>();
-    Some(Selection {
-        baseline: base,
-        ranking,
-        chosen,
-        simulations,
-        floor,
-        decision,
-        extrapolated,
-        residual,
-        identifiability,
-    })
 }
 
 /// The Δt → 0 extrapolations already made in one [`select`], keyed by the
