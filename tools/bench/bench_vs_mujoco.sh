@@ -7,10 +7,13 @@
 # rounds), Newton iterations per step, the SDRS stage shares (medians over
 # rounds; the linear solve's range over rounds at the largest N), and the
 # growth exponents over N = 8…32. The machine's load is printed before and
-# after.
+# after. SDRS runs on `--threads` threads (default 1, `RAYON_NUM_THREADS`):
+# MuJoCo's `mj_step` on one model uses one thread, so one against one is the
+# like-for-like comparison; `--threads 2` shows what the pair work and the
+# block solves gain from a second core.
 #
 #   tools/bench/bench_vs_mujoco.sh [--links 2,4,8,16,32] [--steps 600] [--rounds 1]
-#                            [--sdrs target/release/sdrs] [--out rows.jsonl]
+#                            [--threads 1] [--sdrs target/release/sdrs] [--out rows.jsonl]
 #                            [-- extra sdrs bench arguments, e.g. --contact sdrs]
 #
 # Build first: cargo build --release -p sdrs-cli (or `cargo build --release`).
@@ -20,6 +23,7 @@ root="$(dirname "$(dirname "$here")")"
 links="2,4,8,16,32"
 steps=600
 rounds=1
+threads=1
 sdrs="$root/target/release/sdrs"
 out=""
 extra=()
@@ -28,6 +32,7 @@ while [ $# -gt 0 ]; do
     --links) links="$2"; shift 2 ;;
     --steps) steps="$2"; shift 2 ;;
     --rounds) rounds="$2"; shift 2 ;;
+    --threads) threads="$2"; shift 2 ;;
     --sdrs) sdrs="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
     --) shift; extra=("$@"); break ;;
@@ -36,6 +41,7 @@ while [ $# -gt 0 ]; do
 done
 py="${PYTHON:-$root/.venv/bin/python}"
 [ -x "$py" ] || py=python3
+[[ "$threads" =~ ^[1-9][0-9]*$ ]] || { echo "--threads must be a positive integer, got '$threads'" >&2; exit 2; }
 [ -x "$sdrs" ] || { echo "no sdrs binary at $sdrs (cargo build --release)" >&2; exit 2; }
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
@@ -44,7 +50,7 @@ rows="${out:-$work/rows.jsonl}"
 echo "load before: $(uptime)"
 for r in $(seq 1 "$rounds"); do
   for n in ${links//,/ }; do
-    "$sdrs" bench --links "$n" --steps "$steps" --json "$work/s.json" "${extra[@]}" > "$work/s.txt"
+    RAYON_NUM_THREADS="$threads" "$sdrs" bench --links "$n" --steps "$steps" --json "$work/s.json" "${extra[@]}" > "$work/s.txt"
     "$py" - "$work/s.json" "$rows" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))
@@ -58,5 +64,6 @@ EOF
   done
 done
 echo "load after:  $(uptime)"
-echo "steps per run: $steps, rounds: $rounds"
+echo "steps per run: $steps, rounds: $rounds, sdrs threads: $threads (MuJoCo: one)"
+echo "sdrs: $sdrs ($("$sdrs" --version 2>/dev/null || echo unknown version))"
 "$py" "$here/bench_mujoco.py" summarize "$rows"
