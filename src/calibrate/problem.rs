@@ -172,6 +172,13 @@ pub fn encoder_offsets(sc: &Scene) -> Vec<f64> {
 }
 
 impl<'a> Problem<'a> {
+    /// Time of the first held-out sample (s; the last sample's when the
+    /// split lies past the end): training fits `t < split_time`.
+    pub fn split_time(&self) -> f64 {
+        let times = &self.measured.times;
+        times[self.split.min(times.len() - 1)]
+    }
+
     /// Steps needed to reach sample `end − 1`.
     pub fn steps_to(&self, end: usize) -> usize {
         let t = self.measured.times[end - 1];

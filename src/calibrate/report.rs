@@ -261,7 +261,7 @@ pub fn result(
         .unwrap_or_default();
     let gap_before = gap(&before, pb, base);
     let gap_after = gap(&after, pb, after_scored);
-    let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
+    let split_time = pb.split_time();
     let residual_regression = sel.residual.clone();
     let reason = result_reason(sel, &before, residual_regression.as_ref());
     CalibrationResult {

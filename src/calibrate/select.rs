@@ -197,7 +197,7 @@ pub fn select(
             super::verdict::implausible(pb, s, &inertia).map(|w| (s.candidate.label.clone(), w))
         })
         .collect();
-    let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
+    let split_time = pb.split_time();
     let residual = super::residual::regress(
         pb.scene,
         pb.measured,
@@ -318,7 +318,7 @@ fn choose(
     inertia: &[f64],
     residual: &Option<super::residual::ResidualRegression>,
 ) -> Option<Choice> {
-    let split_time = pb.measured.times[pb.split.min(pb.measured.times.len() - 1)];
+    let split_time = pb.split_time();
     let mut half_sims = 0;
     let mut extrapolations = Extrapolations::default();
     loop {
