@@ -168,7 +168,44 @@ struct Outcome {
     named: bool,
     within: bool,
     shrink: bool,
+    /// For a named mass scale or payload: whether `mass_changes` reports
+    /// the link's scene mass and the mass the fitted value adds.
+    mass: Option<bool>,
     line: String,
+}
+
+/// `r.mass_changes` against the scene (`dir/<robot>.yaml`) for a chosen
+/// `link_mass_scale/<link or all>` (`σ`: adds `(σ − 1) m`, `m` the link's
+/// mass or that of every link with mass that moves) or
+/// `payload/<link>` (adds its mass): one entry, for `key`, whose mass before
+/// is the link's own and whose added mass follows from `r.parameters[key]`
+/// (relative 1e-12).
+fn mass_change_matches(
+    dir: &std::path::Path,
+    robot: &str,
+    key: &str,
+    r: &sdrs::calibrate::CalibrationResult,
+) -> bool {
+    let scene = sdrs::scene::Scene::load(dir.join(format!("{robot}.yaml"))).unwrap();
+    let model = &scene.model;
+    let m_link = match key.split(['/', ':']).nth(1).unwrap() {
+        "all" => sdrs::energy::effects::massive_links(model)
+            .iter()
+            .map(|&i| model.links[i].mass())
+            .sum(),
+        link => model.links.iter().find(|l| l.name == link).unwrap().mass(),
+    };
+    let v = r.parameters[key];
+    let added = if key.starts_with("payload/") {
+        v
+    } else {
+        (v - 1.0) * m_link
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1e-9);
+    matches!(r.mass_changes.as_slice(), [m] if m.parameter == key
+        && close(m.before_kg, m_link)
+        && close(m.added_kg, added)
+        && close(m.after_kg, m_link + added))
 }
 
 fn run_case(
@@ -224,6 +261,8 @@ fn hidden_effects_are_named_fitted_and_close_the_gap() {
             let fitted = r.ranking.iter().find(|x| x.candidate == c.label).and_then(|x| x.parameters.get(c.key).copied());
             let within = named && fitted.is_some_and(|v| (v - c.value).abs() <= 0.1 * c.value.abs());
             let shrink = r.gap_reduction >= 0.9;
+            let mass = (named && (c.label.starts_with("link_mass_scale/") || c.label.starts_with("payload/")))
+                .then(|| mass_change_matches(&dir, c.robot, c.key, &r));
             let line = format!(
                 "{:<15} {:<26} -> {:<40} {} = {:<12.5e} (true {}) gap {:.3e} -> {:.3e} ({:.1} %) [{}] {secs:.1} s",
                 c.robot,
@@ -237,7 +276,7 @@ fn hidden_effects_are_named_fitted_and_close_the_gap() {
                 100.0 * r.gap_reduction,
                 r.ranking.iter().take(3).map(|x| format!("{} ΔC {:.0}", x.candidate, x.delta_criterion)).collect::<Vec<_>>().join("; ")
             );
-            Outcome { named, within, shrink, line }
+            Outcome { named, within, shrink, mass, line }
         })
         .collect();
     for o in &outcomes {
@@ -253,6 +292,11 @@ fn hidden_effects_are_named_fitted_and_close_the_gap() {
         t0.elapsed().as_secs_f64()
     );
     assert!(n >= 16);
+    let masses: Vec<bool> = outcomes.iter().filter_map(|o| o.mass).collect();
+    assert!(
+        !masses.is_empty() && masses.iter().all(|&ok| ok),
+        "mass_changes of the named mass scales and payloads: {masses:?}"
+    );
     assert!(
         named >= need,
         "right effect named first in {named}/{n} cases (need {need})"

@@ -219,7 +219,8 @@ fn figures(p: &mut Page, plots: &[(String, String)]) {
     }
 }
 
-/// Fitted parameters with their 95 % intervals; implausible fits.
+/// Fitted parameters with their 95 % intervals; the mass a mass scale or
+/// payload adds; implausible fits.
 fn parameters(p: &mut Page, r: &CalibrationResult) {
     if !r.parameters.is_empty() {
         p.h2("Fitted parameters");
@@ -256,6 +257,23 @@ fn parameters(p: &mut Page, r: &CalibrationResult) {
         ]
         .map(String::from);
         p.raw(&table("parameters", &header, &rows));
+    }
+    if !r.mass_changes.is_empty() {
+        let items: Vec<String> = r
+            .mass_changes
+            .iter()
+            .map(|m| {
+                format!(
+                    "mass of `{}` (`{}`): {} → {} kg ({:+.4} kg)",
+                    m.on,
+                    m.parameter,
+                    g(m.before_kg),
+                    g(m.after_kg),
+                    m.added_kg
+                )
+            })
+            .collect();
+        p.list(&items);
     }
     if !r.implausible.is_empty() {
         p.h3("Fits outside physically plausible ranges (never chosen)");

@@ -43,6 +43,8 @@
 //!                  suggestion}] each candidate's scaled Gauss–Newton matrix at its start
 //!                (calibrate::identifiability); the ranking's entries carry
 //!                `unidentifiable` too
+//! mass_changes   [{parameter, on, before_kg, after_kg, added_kg}] the mass each chosen
+//!                link_mass_scale or payload adds to its links, at `parameters`
 //! contact_resolution  {s_given, s_fitted, kappa_given, kappa_fitted, rms_train_given,
 //!                rms_train_fitted, simulations} the contact model's resolution fitted
 //!                before the selection (calibrate::nuisance, opt-in); null otherwise
@@ -87,6 +89,24 @@ pub struct Ranked {
     /// Parameters not identifiable from the data at the start
     /// ([`super::identifiability`]); empty when all are.
     pub unidentifiable: Vec<String>,
+}
+
+/// The mass a chosen `link_mass_scale` or `payload` adds, in kilograms:
+/// what a user weighs, and the part of such a fit that stays meaningful when
+/// the data cannot place the mass (a payload's position, a mass scale's
+/// inertia).
+#[derive(Clone, Debug, Serialize)]
+pub struct MassChange {
+    /// The parameter read: `link_mass_scale/<on>` (`σ`) or `payload/<on>:mass`.
+    pub parameter: String,
+    /// The effect's target as written (`all`, a link name).
+    pub on: String,
+    /// `Σ m_i` over the target links in the scene as given (kg).
+    pub before_kg: f64,
+    /// `σ Σ m_i` for a mass scale, `Σ m_i + m` for a payload (kg).
+    pub after_kg: f64,
+    /// `after_kg − before_kg` (kg).
+    pub added_kg: f64,
 }
 
 /// The baseline's scores.
@@ -154,6 +174,9 @@ pub struct CalibrationResult {
     pub effects: Vec<EffectSpec>,
     /// Each recording's gaps before and after ([`super::recordings`]).
     pub recordings: Vec<super::recordings::RecordingGap>,
+    /// The mass each chosen `link_mass_scale` or `payload` adds, at the
+    /// values of `parameters` ([`mass_changes`]); empty otherwise.
+    pub mass_changes: Vec<MassChange>,
     /// Each candidate's identifiability at its start, in the ranking's
     /// order ([`super::identifiability`]).
     pub identifiability: Vec<super::identifiability::Identifiability>,
@@ -264,6 +287,7 @@ pub fn result(
     let split_time = pb.split_time();
     let residual_regression = sel.residual.clone();
     let reason = result_reason(sel, &before, residual_regression.as_ref());
+    let mass_changes = mass_changes(pb, &fitted.effects, &fitted.parameters);
     CalibrationResult {
         verdict: sel.decision.verdict.name().into(),
         reason,
@@ -311,11 +335,53 @@ pub fn result(
         },
         simulations: sel.simulations,
         recordings: super::recordings::gaps(pb, &fitted.effects),
+        mass_changes,
         identifiability: sel.identifiability.clone(),
         effects: fitted.effects,
         contact_resolution: None,
         seconds: 0.0,
     }
+}
+
+/// The mass each `link_mass_scale` or `payload` among `chosen` adds to its
+/// target links, at `parameters` (the reported values; the effect's own
+/// value when its key is missing): `σ Σ m_i` or `Σ m_i + m` against the
+/// scene's `Σ m_i` (the links' masses as modelled, e.g. lumped vertex
+/// masses).
+pub fn mass_changes(
+    pb: &Problem,
+    chosen: &[EffectSpec],
+    parameters: &BTreeMap<String, f64>,
+) -> Vec<MassChange> {
+    use crate::energy::effects::{EffectKind, Target};
+    let model = &pb.scene.model;
+    let Ok(resolved) = effects::resolve(chosen, model, pb.scene.contact.is_some(), "effects")
+    else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for e in &resolved {
+        let (EffectKind::LinkMassScale | EffectKind::Payload, Target::Links(links)) =
+            (e.kind, &e.target)
+        else {
+            continue;
+        };
+        let parameter = effects::param_keys(e).swap_remove(0);
+        let v = parameters.get(&parameter).copied().unwrap_or(e.values[0]);
+        let before_kg: f64 = links.iter().map(|&i| model.links[i].mass()).sum();
+        let after_kg = match e.kind {
+            EffectKind::Payload => before_kg + v,
+            _ => v * before_kg,
+        };
+        out.push(MassChange {
+            parameter,
+            on: e.on.clone(),
+            before_kg,
+            after_kg,
+            added_kg: after_kg - before_kg,
+        });
+    }
+    out
 }
 
 /// Every scored candidate, best first, with its parameters and scores
@@ -571,6 +637,15 @@ fn md_findings(s: &mut String, r: &CalibrationResult) {
             );
         }
         w(s, String::new());
+    }
+    for m in &r.mass_changes {
+        w(
+            s,
+            format!(
+                "Mass of `{}` (`{}`): {:.4} → {:.4} kg ({:+.4} kg).\n",
+                m.on, m.parameter, m.before_kg, m.after_kg, m.added_kg
+            ),
+        );
     }
 }
 
