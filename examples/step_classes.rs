@@ -4,7 +4,7 @@
 //! Newton iterations, as CSV on stdout (`step,seconds,pairs,iters`).
 //! `tools/bench/step_classes.sh` pairs it with MuJoCo's steps on the same
 //! chains and splits both engines' time into steps with and without
-//! contact.
+//! contact. (`cli/tests/bench_mujoco.rs` calls [`per_step`] in-process.)
 //!
 //! `cargo run --release --example step_classes -- SCENE STEPS ROUNDS`
 //! (runs on rayon's default thread count: set `RAYON_NUM_THREADS`).
@@ -12,6 +12,51 @@
 use sdrs::scene::Scene;
 use std::process::ExitCode;
 use std::time::Instant;
+
+/// One step of [`per_step`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepRow {
+    /// The step's smallest wall time over the rounds (s).
+    pub seconds: f64,
+    /// Hull pairs with non-zero contact potential at the step's end.
+    pub pairs: usize,
+    /// Newton iterations of the step.
+    pub iters: usize,
+}
+
+/// `steps` steps of `scene` from its initial state, `rounds` times; per
+/// step the minimum wall time and (the same in every round: the run is
+/// deterministic) its pairs and iterations. Errors name the failing step.
+pub fn per_step(scene: &Scene, steps: usize, rounds: usize) -> Result<Vec<StepRow>, String> {
+    let mut rows = vec![
+        StepRow {
+            seconds: f64::INFINITY,
+            pairs: 0,
+            iters: 0,
+        };
+        steps
+    ];
+    for _ in 0..rounds {
+        let mut sim = scene.simulator();
+        for (k, row) in rows.iter_mut().enumerate() {
+            let t = Instant::now();
+            let report = sim.step().map_err(|e| format!("step {k}: {e}"))?;
+            row.seconds = row.seconds.min(t.elapsed().as_secs_f64());
+            row.pairs = report.contact_pairs;
+            row.iters = report.newton.iters;
+        }
+    }
+    Ok(rows)
+}
+
+/// The CSV `step,seconds,pairs,iters` of `rows`.
+pub fn csv(rows: &[StepRow]) -> String {
+    let mut out = String::from("step,seconds,pairs,iters\n");
+    for (k, r) in rows.iter().enumerate() {
+        out.push_str(&format!("{k},{:.9},{},{}\n", r.seconds, r.pairs, r.iters));
+    }
+    out
+}
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
@@ -31,31 +76,18 @@ fn main() -> ExitCode {
     let scene = match Scene::load(path) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("{path}: {e}");
+            eprintln!("{e}");
             return ExitCode::FAILURE;
         }
     };
-    let mut best = vec![f64::INFINITY; steps];
-    let (mut pairs, mut iters) = (vec![0usize; steps], vec![0usize; steps]);
-    for _ in 0..rounds {
-        let mut sim = scene.simulator();
-        for k in 0..steps {
-            let t = Instant::now();
-            let report = match sim.step() {
-                Ok(r) => r,
-                Err(e) => {
-                    eprintln!("{path}: step {k}: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
-            best[k] = best[k].min(t.elapsed().as_secs_f64());
-            pairs[k] = report.contact_pairs;
-            iters[k] = report.newton.iters;
+    match per_step(&scene, steps, rounds) {
+        Ok(rows) => {
+            print!("{}", csv(&rows));
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("{path}: {e}");
+            ExitCode::FAILURE
         }
     }
-    println!("step,seconds,pairs,iters");
-    for k in 0..steps {
-        println!("{k},{:.9},{},{}", best[k], pairs[k], iters[k]);
-    }
-    ExitCode::SUCCESS
 }

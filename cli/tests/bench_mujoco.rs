@@ -119,3 +119,102 @@ fn harness_is_well_formed_and_mujoco_bodies_match_sdrs_links() {
         }
     }
 }
+
+// The SDRS side of `tools/bench/step_classes.sh`, called in-process.
+#[path = "../../examples/step_classes.rs"]
+#[allow(dead_code)]
+mod step_classes;
+
+/// Smoke test of `tools/bench/step_classes.{sh,py}` at N = 8, 400 steps:
+/// the SDRS side (`examples/step_classes.rs::per_step`, two rounds) gives
+/// each step's pairs and Newton iterations of a plain run (the rounds
+/// repeat one deterministic trajectory); `step_classes.py chains` writes
+/// the scene `sdrs bench` builds (same model); the MuJoCo side runs; and
+/// the table's figures are those of the two CSVs. Physics across the two
+/// engines: the chains first touch at about the same step in both
+/// (observed on 2026-12-07 over 600 steps: SDRS at step 322, MuJoCo at
+/// 326; the tolerance, 15 steps = 0.075 s, was set after that
+/// observation).
+#[test]
+fn step_classes_split_matches_its_csvs_and_both_engines_see_the_first_touch() {
+    if support::skip_without_venv() {
+        return;
+    }
+    let dir = scratch_dir("step-classes");
+    let script = root().join("tools/bench/step_classes.py");
+    let run = |args: &[&str]| {
+        let o = python().arg(&script).args(args).output().unwrap();
+        assert!(
+            o.status.success(),
+            "step_classes.py {args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let d = |f: &str| dir.join(f).to_str().unwrap().to_owned();
+    run(&["chains", "--links", "8", "--out", &d("chains8.yaml")]);
+    let scene = sdrs::scene::Scene::load(dir.join("chains8.yaml")).unwrap();
+    assert_eq!(scene.model.ndof(), sdrs_scene(8).model.ndof());
+    let steps = 400;
+    let rows = step_classes::per_step(&scene, steps, 2).unwrap();
+    let mut sim = scene.simulator();
+    for (k, r) in rows.iter().enumerate() {
+        let d = sim.step().unwrap();
+        assert_eq!(
+            (r.pairs, r.iters),
+            (d.contact_pairs, d.newton.iters),
+            "step {k}"
+        );
+        assert!(r.seconds.is_finite() && r.seconds > 0.0);
+    }
+    std::fs::write(dir.join("sdrs8.csv"), step_classes::csv(&rows)).unwrap();
+    let (s, r) = ("400".to_string(), "1".to_string());
+    run(&[
+        "mujoco",
+        "--links",
+        "8",
+        "--steps",
+        &s,
+        "--rounds",
+        &r,
+        "--out",
+        &d("mj8.csv"),
+    ]);
+    let mj: Vec<(f64, usize)> = std::fs::read_to_string(dir.join("mj8.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[1].parse().unwrap(), c[2].parse().unwrap())
+        })
+        .collect();
+    assert_eq!(mj.len(), steps);
+    let ours = rows.iter().position(|r| r.pairs > 0).unwrap();
+    let theirs = mj.iter().position(|m| m.1 > 0).unwrap();
+    assert!(
+        ours.abs_diff(theirs) <= 15,
+        "first contact: SDRS step {ours}, MuJoCo step {theirs}"
+    );
+    // The table: its row for N = 8 from the two CSVs.
+    let table = run(&["summarize", dir.to_str().unwrap(), "8"]);
+    let row = table.lines().find(|l| l.starts_with("| 8 |")).unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    // (Summed from the CSVs' printed values, in order, as the script does.)
+    let printed: Vec<f64> = step_classes::csv(&rows)
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let ms = |v: &[f64]| v.iter().map(|x| x * 1e3).sum::<f64>() / steps as f64;
+    let ours_ms = ms(&printed);
+    let theirs_ms = ms(&mj.iter().map(|m| m.0).collect::<Vec<_>>());
+    assert_eq!(cells[2], format!("{ours_ms:.4}"), "{row}");
+    assert_eq!(cells[3], format!("{theirs_ms:.4}"), "{row}");
+    let counts = format!(
+        "{} / {}",
+        rows.iter().filter(|r| r.pairs > 0).count(),
+        mj.iter().filter(|m| m.1 > 0).count()
+    );
+    assert_eq!(cells[5], counts, "{row}");
+}
