@@ -53,6 +53,7 @@ pub mod capture;
 pub mod ccd;
 mod error;
 pub mod friction;
+pub mod line_model;
 #[cfg(test)]
 mod friction_tests;
 pub mod params;
@@ -69,6 +70,7 @@ mod test_util;
 
 pub use adjoint_contact::{ContactVjp, PlaneOptimum, barrier_d1_ds, contact_vjp};
 pub use adjoint_friction::{FrictionVjp, friction_vjp};
+pub use line_model::PlaneLine;
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
 pub use friction::{

@@ -408,6 +408,37 @@ impl Energy for ContactEnergy {
         Ok(())
     }
 
+    /// One [`contact::PlaneLine`] per separated pair of the last evaluation, scaled by `κ`,
+    /// along the vertices' first-order motion `δX = δA x̃` (see [`contact::line_model`]);
+    /// `false` when that evaluation was not at `kin`'s poses.
+    fn line_pairs(
+        &self,
+        ctx: &StepContext,
+        kin: &Kinematics,
+        dpose: &[Pose],
+        out: &mut Vec<contact::PlaneLine>,
+    ) -> bool {
+        if !self.last_at(&kin.pose) || self.results.len() != self.pairs.len() {
+            return false;
+        }
+        let model = ctx.model;
+        for (k, res) in self.results.iter().enumerate() {
+            let Ok(PairOutcome::Separated(c)) = res else {
+                continue;
+            };
+            let (a, b) = self.pairs[k];
+            let [ia, ib] = [self.hulls.ids[a], self.hulls.ids[b]];
+            let local = |id: crate::geometry::HullId| &model.links[id.link].hulls[id.hull].x_local;
+            let (xa, dxa) =
+                vertices_and_directions(local(ia), &kin.pose[ia.link], &dpose[ia.link]);
+            let (xb, dxb) =
+                vertices_and_directions(local(ib), &kin.pose[ib.link], &dpose[ib.link]);
+            let opt = contact::PlaneOptimum::new(&xa, &xb, &c.plane, self.params.s);
+            out.push(opt.line(&dxa, &dxb, self.settings.kappa));
+        }
+        true
+    }
+
     fn certifies(&self) -> bool {
         self.ccd.options.enabled
     }

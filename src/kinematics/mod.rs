@@ -196,6 +196,30 @@ impl<'a> HingeAxes<'a> {
 }
 
 impl Kinematics {
+    /// The pose-space direction of a coordinate direction `λ`:
+    /// `δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i` (world twists `S_k` at the last
+    /// evaluation, order [`KinOrder::First`] or higher), accumulated down the
+    /// tree into `dpose` (one entry per link). Returns the accumulated twists
+    /// `Σ_{k ∈ anc(i)} λ_k S_k` per link. Used by the adjoint (`λ` the
+    /// adjoint vector) and by Newton's line model (`λ` the step direction).
+    pub fn pose_direction(
+        &self,
+        model: &Model,
+        lambda: &DVector<f64>,
+        dpose: &mut [Pose],
+    ) -> Vec<Matrix3x4<f64>> {
+        let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); model.links.len()];
+        for (i, link) in model.links.iter().enumerate() {
+            let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| s_acc[p]);
+            for k in link.dof_offset..link.dof_offset + link.ndof() {
+                s += self.twist[k] * lambda[k];
+            }
+            s_acc[i] = s;
+            dpose[i] = twist_apply(&s, &self.pose[i]);
+        }
+        s_acc
+    }
+
     pub fn new(model: &Model) -> Self {
         let n = model.links.len();
         let mut twist2_offset = Vec::with_capacity(n);
