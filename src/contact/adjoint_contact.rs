@@ -89,14 +89,14 @@ pub(crate) struct PlaneVertex {
 /// implicit function theorem needs (see the module docs).
 #[derive(Clone, Debug)]
 pub struct PlaneOptimum<'a> {
-    pub(super) xa: &'a [Vector3<f64>],
-    pub(super) xb: &'a [Vector3<f64>],
-    pub(super) c0: Vector3<f64>,
+    xa: &'a [Vector3<f64>],
+    xb: &'a [Vector3<f64>],
+    c0: Vector3<f64>,
     /// `n*`.
-    pub(super) n: Vector3<f64>,
+    n: Vector3<f64>,
     /// Offset in the shifted frame: `n·(X − c0) + o`.
-    pub(super) o: f64,
-    pub(super) s: f64,
+    o: f64,
+    s: f64,
     /// `(U*_pp)⁻¹` in the shifted frame.
     hinv: Matrix4<f64>,
 }

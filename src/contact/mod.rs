@@ -53,9 +53,9 @@ pub mod capture;
 pub mod ccd;
 mod error;
 pub mod friction;
-pub mod line_model;
 #[cfg(test)]
 mod friction_tests;
+pub mod line_model;
 pub mod params;
 mod plane;
 pub mod potential;
@@ -70,7 +70,6 @@ mod test_util;
 
 pub use adjoint_contact::{ContactVjp, PlaneOptimum, barrier_d1_ds, contact_vjp};
 pub use adjoint_friction::{FrictionVjp, friction_vjp};
-pub use line_model::PlaneLine;
 pub use barrier::{BarrierDerivs, barrier, barrier_d2, barrier_derivs};
 pub use error::{ContactError, FrictionError, Hull};
 pub use friction::{
@@ -78,6 +77,7 @@ pub use friction::{
     FrictionVertices, LaggedContact, friction_pair, friction_pair_memo, friction_vertices,
     tangent_basis,
 };
+pub use line_model::PlaneLine;
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, PlacedHull,
     VertexContact, VertexOutcome, contact_pair, contact_pair_world, contact_vertices,

@@ -291,16 +291,17 @@ pub trait Energy: Send + Sync {
 
     /// The term's barrier pairs along a step, for Newton's line model
     /// ([`crate::sim::line_model`]): one [`crate::contact::PlaneLine`] per pair in range
-    /// at the term's last evaluation, along the pose-space direction `dpose` of the step
-    /// ([`Kinematics::pose_direction`]). `kin` holds the poses of the point the line starts
-    /// from; a term whose last evaluation was elsewhere returns `false` (no model for this
-    /// line search). Terms without pairs are part of the model's quadratic remainder: the
-    /// default adds nothing and returns `true`.
+    /// at the term's last evaluation, along the world twists `twists` of the links per unit
+    /// step ([`Kinematics::twist_direction`]: a point `X` of link `i` moves at
+    /// `twists[i] [X; 1]`). `kin` holds the poses of the point the line starts from; a term
+    /// whose last evaluation was elsewhere returns `false` (no model for this line search).
+    /// Terms without pairs are part of the model's quadratic remainder: the default adds
+    /// nothing and returns `true`.
     fn line_pairs(
-        &self,
+        &mut self,
         _ctx: &StepContext,
         _kin: &Kinematics,
-        _dpose: &[Pose],
+        _twists: &[Matrix3x4<f64>],
         _out: &mut Vec<crate::contact::PlaneLine>,
     ) -> bool {
         true

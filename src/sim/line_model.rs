@@ -188,9 +188,15 @@ mod tests {
                 let a = m.minimizer(hi);
                 let want = golden(|x| m_value(&m, y0, y1, k, x), hi);
                 let tol = 1e-6 * want.max(1e-3);
-                assert!((a - want).abs() <= tol, "y0 {y0} dir {dir} k {k}: {a} vs {want}");
+                assert!(
+                    (a - want).abs() <= tol,
+                    "y0 {y0} dir {dir} k {k}: {a} vs {want}"
+                );
                 if dir > 0.0 && k >= 1.0 {
-                    assert!(a > 1.0, "y0 {y0}: moving out, {a} should exceed the full step");
+                    assert!(
+                        a > 1.0,
+                        "y0 {y0}: moving out, {a} should exceed the full step"
+                    );
                 }
                 if dir < 0.0 && k >= 1.0 && y0 < 0.9 * S {
                     assert!(a < 1.0, "y0 {y0}: moving in, {a} should fall short of it");

@@ -302,7 +302,7 @@ impl Objective for StepObjective<'_> {
 
     /// Every term's barrier pairs along `q + α dir` ([`Energy::line_pairs`]), from the
     /// kinematics at `q` (the last evaluation's, first order: no work when cached) and the
-    /// pose-space direction of `dir` ([`Kinematics::pose_direction`]).
+    /// links' world twists along `dir` ([`Kinematics::twist_direction`]).
     fn line_pairs(
         &mut self,
         q: &DVector<f64>,
@@ -310,11 +310,12 @@ impl Objective for StepObjective<'_> {
         out: &mut Vec<crate::contact::PlaneLine>,
     ) -> Result<bool, EnergyError> {
         let model = self.ctx.model;
-        self.kin.update_cached(model, q, self.charts, KinOrder::First);
-        let mut dpose = vec![crate::math::Pose::zeros(); model.links.len()];
-        self.kin.pose_direction(model, dir, &mut dpose);
-        for e in self.energies.iter() {
-            if !e.line_pairs(&self.ctx, self.kin, &dpose, out) {
+        self.kin
+            .update_cached(model, q, self.charts, KinOrder::First);
+        let mut twists = Vec::new();
+        self.kin.twist_direction(model, dir, &mut twists);
+        for e in self.energies.iter_mut() {
+            if !e.line_pairs(&self.ctx, self.kin, &twists, out) {
                 return Ok(false);
             }
         }

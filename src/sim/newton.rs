@@ -31,11 +31,11 @@
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
 use super::envelope::{self, ColumnEnvelope};
+use super::line_model::LineModel;
 use super::linear_solve::{BlockSolver, Mode};
+use crate::contact::PlaneLine;
 pub use crate::counters::NewtonReport;
 use crate::counters::{Stage, StageTimers};
-use super::line_model::LineModel;
-use crate::contact::PlaneLine;
 use crate::energy::{EnergyError, Need};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -122,7 +122,7 @@ pub struct NewtonOptions {
     /// full step, on `(0, LINE_MODEL_CAP]`; if it fails the sufficient
     /// decrease test the search goes on as without it (from the full step
     /// when the model's step was longer). Lines without a pair in range
-    /// are unchanged. Same solution to within `tol`. Default `false`.
+    /// are unchanged. Same solution to within `tol`. Default `true`.
     pub line_model: bool,
 }
 
@@ -209,7 +209,7 @@ impl Default for NewtonOptions {
             settle_blocks: true,
             gradient_first: true,
             derivatives_at_trial: true,
-            line_model: false,
+            line_model: true,
         }
     }
 }
@@ -357,8 +357,9 @@ pub struct NewtonScratch {
     trial_value: f64,
     /// The barrier pairs of the line model ([`NewtonOptions::line_model`]).
     lines: Vec<PlaneLine>,
-    /// `H Δ` (the line model's curvature `ΔᵀHΔ`).
-    hess_dir: DVector<f64>,
+    /// Whether `dir` solves `H dir = −g` with the Hessian itself (no block
+    /// shifted or eigen-clamped): then `dirᵀ H dir = −gᵀ dir`.
+    dir_solves_hessian: bool,
 }
 
 /// Minimizes `obj` starting from `q` (updated in place).
@@ -436,7 +437,6 @@ impl NewtonScratch {
             self.hess = DMatrix::zeros(n, n);
             self.dir = DVector::zeros(n);
             self.trial_grad = DVector::zeros(n);
-            self.hess_dir = DVector::zeros(n);
         }
     }
 }
@@ -670,6 +670,10 @@ impl Solve<'_> {
             {
                 s.linear.bound_rows(e.row_ends());
             }
+            let modified = |st: &crate::sim::linear_solve::LinearSolveStats| {
+                (st.shifted_blocks, st.eigen_blocks)
+            };
+            let before = modified(&s.linear.stats);
             self.timers.time(Stage::LinearSolve, || {
                 s.linear.direction(
                     &s.hess,
@@ -680,6 +684,7 @@ impl Solve<'_> {
                     &mut s.dir,
                 )
             });
+            s.dir_solves_hessian = modified(&s.linear.stats) == before;
             // Predicted decrease of the quadratic model, −gᵀΔ > 0.
             let predicted = -s.grad.dot(&s.dir);
             // Below ~1e-9 of the objective's magnitude, or near its absolute
@@ -833,18 +838,24 @@ impl Solve<'_> {
         if !self.obj.line_pairs(q, &s.dir, &mut s.lines)? || s.lines.is_empty() {
             return Ok(None);
         }
-        s.hess_dir.gemv(1.0, &s.hess, &s.dir, 0.0);
-        let curvature = s.dir.dot(&s.hess_dir);
-        let Some(model) = LineModel::new(-at.predicted, curvature, &s.lines) else {
-            return Ok(None);
-        };
         let hi = if alpha_max >= 1.0 {
             let longer = &s.dir * LINE_MODEL_CAP;
             LINE_MODEL_CAP * self.obj.max_step(q, &longer, self.timers)?.clamp(0.0, 1.0)
         } else {
             alpha_max
         };
-        Ok((hi > 0.0).then(|| model.minimizer(hi)))
+        if !(hi > 0.0) {
+            return Ok(None);
+        }
+        s.lines.iter_mut().for_each(|l| l.keep_reachable(hi));
+        // φ''(0) = ΔᵀHΔ: −gᵀΔ when Δ solves H Δ = −g block by block (settled
+        // blocks have Δ_B = 0 and add nothing to either side), else summed.
+        let curvature = if s.dir_solves_hessian {
+            at.predicted
+        } else {
+            s.linear.block_quadratic_form(&s.hess, &s.dir)
+        };
+        Ok(LineModel::new(-at.predicted, curvature, &s.lines).map(|m| m.minimizer(hi)))
     }
 
     /// When the value cannot rank points (or Armijo failed), the gradient
