@@ -3,7 +3,8 @@
 //! (`solver.indefinite`), the zero step of independent blocks already
 //! below the tolerance (`solver.settle_blocks`) and the derivatives
 //! evaluated at the line search's first trial point
-//! (`NewtonOptions::derivatives_at_trial`) — do not change its solution
+//! (`NewtonOptions::derivatives_at_trial`) and the first trial's length from the
+//! barriers' line model (`solver.line_model`) — do not change its solution
 //! beyond the Newton tolerance. Along a four-chain trajectory with contact, each step is
 //! solved from the same state `θ^t` with the paper's settings (`θ^t` start,
 //! clamped eigenvalues) and with every other combination; the two solutions
@@ -35,20 +36,35 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
     let mut sim = scene.simulator();
     let tol = sim.settings.newton.tol;
     let n = sim.model.ndof();
-    // (predictor, indefinite model, settle blocks, derivatives at the trial)
+    // (predictor, indefinite model, settle blocks, derivatives at the trial, line model)
     let variants = [
-        (Predictor::Extrapolate, Indefinite::Clamp, false, true),
-        (Predictor::Previous, Indefinite::Shift, false, true),
-        (Predictor::Extrapolate, Indefinite::Shift, false, true),
-        (Predictor::Previous, Indefinite::Clamp, true, true),
-        (Predictor::Extrapolate, Indefinite::Shift, true, true),
-        (Predictor::Quadratic, Indefinite::Clamp, false, true),
-        (Predictor::Previous, Indefinite::Clamp, false, true),
-        (Predictor::Quadratic, Indefinite::Shift, true, false),
-        (Predictor::Cubic, Indefinite::Shift, true, true),
-        (Predictor::Quadratic, Indefinite::Shift, true, true),
+        (
+            Predictor::Extrapolate,
+            Indefinite::Clamp,
+            false,
+            true,
+            false,
+        ),
+        (Predictor::Previous, Indefinite::Shift, false, true, false),
+        (
+            Predictor::Extrapolate,
+            Indefinite::Shift,
+            false,
+            true,
+            false,
+        ),
+        (Predictor::Previous, Indefinite::Clamp, true, true, false),
+        (Predictor::Extrapolate, Indefinite::Shift, true, true, false),
+        (Predictor::Quadratic, Indefinite::Clamp, false, true, false),
+        (Predictor::Previous, Indefinite::Clamp, false, true, false),
+        (Predictor::Quadratic, Indefinite::Shift, true, false, false),
+        (Predictor::Cubic, Indefinite::Shift, true, true, false),
+        (Predictor::Quadratic, Indefinite::Shift, true, true, false),
+        (Predictor::Previous, Indefinite::Clamp, false, false, true),
+        (Predictor::Extrapolate, Indefinite::Shift, true, true, true),
+        (Predictor::Adaptive, Indefinite::Shift, true, true, false),
         // The defaults.
-        (Predictor::Adaptive, Indefinite::Shift, true, true),
+        (Predictor::Adaptive, Indefinite::Shift, true, true, true),
     ];
     let mut worst = vec![0.0f64; variants.len()];
     let mut contact_steps = 0;
@@ -59,6 +75,7 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         sim.settings.newton.indefinite = Indefinite::Clamp;
         sim.settings.newton.settle_blocks = false;
         sim.settings.newton.derivatives_at_trial = false;
+        sim.settings.newton.line_model = false;
         let d = sim.step().unwrap();
         contact_steps += usize::from(d.contact_pairs > 0);
         let q_ref = sim.state.q.clone();
@@ -75,19 +92,20 @@ fn predictor_and_indefinite_model_keep_every_step_solution() {
         let lmin = h.symmetric_eigen().eigenvalues.min();
         assert!(lmin > 0.0, "step {step}: solution is not a strict minimum");
         let bound = 2.0 * (n as f64).sqrt() * tol / lmin;
-        for (v, &(p, ind, settle, at_trial)) in variants.iter().enumerate() {
+        for (v, &(p, ind, settle, at_trial, line)) in variants.iter().enumerate() {
             sim.state = start.clone();
             sim.settings.newton.predictor = p;
             sim.settings.newton.indefinite = ind;
             sim.settings.newton.settle_blocks = settle;
             sim.settings.newton.derivatives_at_trial = at_trial;
+            sim.settings.newton.line_model = line;
             sim.step().unwrap();
             assert_eq!(sim.state.charts, charts_ref, "step {step}: charts differ");
             let diff = (&sim.state.q - &q_ref).amax();
             worst[v] = worst[v].max(diff / bound);
             assert!(
                 diff <= bound,
-                "step {step}, {p:?}/{ind:?}/settle {settle}/at trial {at_trial}: solutions differ by {diff:.2e} > {bound:.2e}"
+                "step {step}, {p:?}/{ind:?}/settle {settle}/at trial {at_trial}/line model {line}: solutions differ by {diff:.2e} > {bound:.2e}"
             );
         }
         sim.state = after;

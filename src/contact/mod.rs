@@ -55,6 +55,7 @@ mod error;
 pub mod friction;
 #[cfg(test)]
 mod friction_tests;
+pub mod line_model;
 pub mod params;
 mod plane;
 pub mod potential;
@@ -76,6 +77,7 @@ pub use friction::{
     FrictionVertices, LaggedContact, friction_pair, friction_pair_memo, friction_vertices,
     tangent_basis,
 };
+pub use line_model::PlaneLine;
 pub use potential::{
     ContactPair, ContactParams, ContactScratch, HullPose, Need, PairOutcome, PlacedHull,
     VertexContact, VertexOutcome, contact_pair, contact_pair_world, contact_vertices,

@@ -5,7 +5,7 @@ use super::tape::Tape;
 use super::vjp::{AdjointDirection, PhysicalGrad, VjpAccumulator};
 use crate::energy::EnergyError;
 use crate::kinematics::{KinOrder, Kinematics};
-use crate::math::{Pose, rot, twist_apply};
+use crate::math::{Pose, rot};
 use crate::model::Model;
 use crate::sim::Simulator;
 use crate::sim::assemble::contract_gradient;
@@ -142,7 +142,7 @@ pub fn backward(sim: &mut Simulator, tape: &Tape, loss: &Loss) -> Result<Gradien
         let abar = contract_gradient(&model, &kin, &pose_lvl[t + 1]) + &q_lvl[t + 1];
         add_attachment(&model, &kin, &pose_lvl[t + 1], 1.0, &mut g.attachments);
         let lambda = solve_adjoint(&mut linear, &hess, &abar, t)?;
-        let s_acc = pose_direction(&model, &kin, &lambda, &mut dpose);
+        let s_acc = kin.pose_direction(&model, &lambda, &mut dpose);
         second_order_attachment(
             &model,
             &kin,
@@ -230,27 +230,6 @@ fn solve_adjoint(
             .ok_or(BackwardError::Singular { step: t })?;
     }
     Ok(lambda)
-}
-
-/// The pose-space direction of `λ`: `δA_i = (Σ_{k ∈ anc(i)} λ_k S_k) Ã_i`,
-/// accumulated down the tree into `dpose`. Returns the accumulated twists
-/// `Σ_{k ∈ anc(i)} λ_k S_k` per link.
-fn pose_direction(
-    model: &Model,
-    kin: &Kinematics,
-    lambda: &DVector<f64>,
-    dpose: &mut [Pose],
-) -> Vec<Matrix3x4<f64>> {
-    let mut s_acc: Vec<Matrix3x4<f64>> = vec![Matrix3x4::zeros(); model.links.len()];
-    for (i, link) in model.links.iter().enumerate() {
-        let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| s_acc[p]);
-        for k in link.dof_offset..link.dof_offset + link.ndof() {
-            s += kin.twist[k] * lambda[k];
-        }
-        s_acc[i] = s;
-        dpose[i] = twist_apply(&s, &kin.pose[i]);
-    }
-    s_acc
 }
 
 /// Second-order kinematic part of the attachment gradient:

@@ -69,6 +69,8 @@ pub struct ContactEnergy {
     ccd: Ccd,
     /// Time spent in CCD since the last report.
     ccd_time: Duration,
+    /// The vertices' directions of [`Energy::line_pairs`] (scratch).
+    line_dx: Vec<nalgebra::Vector3<f64>>,
 }
 
 impl ContactEnergy {
@@ -92,6 +94,7 @@ impl ContactEnergy {
             last_intersecting: None,
             ccd: Ccd::new(model, settings.ccd.clone()),
             ccd_time: Duration::ZERO,
+            line_dx: Vec::new(),
             settings,
         }
     }
@@ -406,6 +409,50 @@ impl Energy for ContactEnergy {
             }
         }
         Ok(())
+    }
+
+    /// One [`contact::PlaneLine`] per separated pair of the last evaluation, scaled by `κ`,
+    /// along the vertices' first-order motion `δX = Ω X + v` (`[Ω | v]` the link's twist; see
+    /// [`contact::line_model`]); `false` when that evaluation was not at `kin`'s poses (the
+    /// world vertices in `hulls` are those poses' when it was).
+    fn line_pairs(
+        &mut self,
+        _ctx: &StepContext,
+        kin: &Kinematics,
+        twists: &[nalgebra::Matrix3x4<f64>],
+        out: &mut Vec<contact::PlaneLine>,
+    ) -> bool {
+        if !self.last_at(&kin.pose) || self.results.len() != self.pairs.len() {
+            return false;
+        }
+        for (k, res) in self.results.iter().enumerate() {
+            let Ok(PairOutcome::Separated(c)) = res else {
+                continue;
+            };
+            let (a, b) = self.pairs[k];
+            let moving = |h: usize| {
+                let s = &twists[self.hulls.ids[h].link];
+                let (w, v) = (s.fixed_view::<3, 3>(0, 0), s.column(3));
+                self.hulls.hull(h).iter().map(move |x| w * x + v)
+            };
+            self.line_dx.clear();
+            self.line_dx.extend(moving(a));
+            let na = self.line_dx.len();
+            self.line_dx.extend(moving(b));
+            let (xa, xb) = (self.hulls.hull(a), self.hulls.hull(b));
+            let (dxa, dxb) = self.line_dx.split_at(na);
+            let scale = self.settings.kappa;
+            out.push(contact::PlaneLine::new(
+                xa,
+                xb,
+                dxa,
+                dxb,
+                &c.plane,
+                self.params.s,
+                scale,
+            ));
+        }
+        true
     }
 
     fn certifies(&self) -> bool {

@@ -289,6 +289,24 @@ pub trait Energy: Send + Sync {
         Ok(alpha)
     }
 
+    /// The term's barrier pairs along a step, for Newton's line model
+    /// ([`crate::sim::line_model`]): one [`crate::contact::PlaneLine`] per pair in range
+    /// at the term's last evaluation, along the world twists `twists` of the links per unit
+    /// step ([`Kinematics::twist_direction`]: a point `X` of link `i` moves at
+    /// `twists[i] [X; 1]`). `kin` holds the poses of the point the line starts from; a term
+    /// whose last evaluation was elsewhere returns `false` (no model for this line search).
+    /// Terms without pairs are part of the model's quadratic remainder: the default adds
+    /// nothing and returns `true`.
+    fn line_pairs(
+        &mut self,
+        _ctx: &StepContext,
+        _kin: &Kinematics,
+        _twists: &[Matrix3x4<f64>],
+        _out: &mut Vec<crate::contact::PlaneLine>,
+    ) -> bool {
+        true
+    }
+
     /// Adds the term's value and requested derivatives at `θ^{t+1} = q`
     /// (kinematics `kin` already evaluated at `q`). A value of `+∞` marks an
     /// infeasible configuration; derivatives may then be left unset.

@@ -196,6 +196,46 @@ impl<'a> HingeAxes<'a> {
 }
 
 impl Kinematics {
+    /// The world twist of every link along a coordinate direction `λ`:
+    /// `S_i(λ) = Σ_{k ∈ anc(i)} λ_k S_k` (world twists `S_k` at the last
+    /// evaluation, order [`KinOrder::First`] or higher), accumulated down the
+    /// tree into `twists` (one 3×4 `[Ω | v]` per link: a point `X` of link `i`
+    /// moves at `Ω X + v` per unit of `λ`).
+    pub fn twist_direction(
+        &self,
+        model: &Model,
+        lambda: &DVector<f64>,
+        twists: &mut Vec<Matrix3x4<f64>>,
+    ) {
+        twists.clear();
+        twists.resize(model.links.len(), Matrix3x4::zeros());
+        for (i, link) in model.links.iter().enumerate() {
+            let mut s = link.parent.map_or_else(Matrix3x4::zeros, |p| twists[p]);
+            for k in link.dof_offset..link.dof_offset + link.ndof() {
+                s += self.twist[k] * lambda[k];
+            }
+            twists[i] = s;
+        }
+    }
+
+    /// The pose-space direction of a coordinate direction `λ`:
+    /// `δA_i = S_i(λ) Ã_i` ([`Kinematics::twist_direction`]), into `dpose`
+    /// (one entry per link). Returns the twists `S_i(λ)`. Used by the adjoint
+    /// (`λ` the adjoint vector).
+    pub fn pose_direction(
+        &self,
+        model: &Model,
+        lambda: &DVector<f64>,
+        dpose: &mut [Pose],
+    ) -> Vec<Matrix3x4<f64>> {
+        let mut s_acc = Vec::new();
+        self.twist_direction(model, lambda, &mut s_acc);
+        for (i, s) in s_acc.iter().enumerate() {
+            dpose[i] = twist_apply(s, &self.pose[i]);
+        }
+        s_acc
+    }
+
     pub fn new(model: &Model) -> Self {
         let n = model.links.len();
         let mut twist2_offset = Vec::with_capacity(n);

@@ -477,6 +477,25 @@ impl BlockSolver {
         any_eigen
     }
 
+    /// `vᵀ H v` over the blocks of the last [`BlockSolver::direction`]'s
+    /// partition of `h` (entries between blocks are exactly zero), skipping
+    /// blocks where `v` is zero (settled ones): `Σ_B v_Bᵀ H_BB v_B`.
+    pub fn block_quadratic_form(&self, h: &DMatrix<f64>, v: &DVector<f64>) -> f64 {
+        let mut sum = 0.0;
+        for b in 0..self.starts.len().saturating_sub(1) {
+            let idx = &self.order[self.starts[b]..self.starts[b + 1]];
+            if idx.iter().all(|&i| v[i] == 0.0) {
+                continue;
+            }
+            for &j in idx {
+                let col = h.column(j);
+                let hv: f64 = idx.iter().map(|&i| col[i] * v[i]).sum();
+                sum += v[j] * hv;
+            }
+        }
+        sum
+    }
+
     /// `x = H⁻¹ b` block by block with Cholesky (the adjoint's solve with
     /// the unmodified Hessian at a converged step). `false` when a block is
     /// not positive definite (`x` is then unspecified; the caller falls

@@ -10,6 +10,7 @@
 pub mod assemble;
 pub mod effects;
 pub mod envelope;
+pub mod line_model;
 pub mod linear_solve;
 pub mod mass_matrix;
 pub mod newton;
@@ -297,6 +298,28 @@ impl Objective for StepObjective<'_> {
             out = out.min(e.certify_step(&self.ctx, q, start, dir, alpha, self.charts)?);
         }
         Ok(out)
+    }
+
+    /// Every term's barrier pairs along `q + α dir` ([`Energy::line_pairs`]), from the
+    /// kinematics at `q` (the last evaluation's, first order: no work when cached) and the
+    /// links' world twists along `dir` ([`Kinematics::twist_direction`]).
+    fn line_pairs(
+        &mut self,
+        q: &DVector<f64>,
+        dir: &DVector<f64>,
+        out: &mut Vec<crate::contact::PlaneLine>,
+    ) -> Result<bool, EnergyError> {
+        let model = self.ctx.model;
+        self.kin
+            .update_cached(model, q, self.charts, KinOrder::First);
+        let mut twists = Vec::new();
+        self.kin.twist_direction(model, dir, &mut twists);
+        for e in self.energies.iter_mut() {
+            if !e.line_pairs(&self.ctx, self.kin, &twists, out) {
+                return Ok(false);
+            }
+        }
+        Ok(true)
     }
 
     fn length_scale(&self) -> f64 {

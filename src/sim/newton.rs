@@ -31,7 +31,9 @@
 //! certified after an ordinary solve (see [`crate::sim::Simulator::step`]).
 
 use super::envelope::{self, ColumnEnvelope};
+use super::line_model::LineModel;
 use super::linear_solve::{BlockSolver, Mode};
+use crate::contact::PlaneLine;
 pub use crate::counters::NewtonReport;
 use crate::counters::{Stage, StageTimers};
 use crate::energy::{EnergyError, Need};
@@ -113,6 +115,15 @@ pub struct NewtonOptions {
     #[serde(skip)]
     #[schemars(skip)]
     pub derivatives_at_trial: bool,
+    /// The first trial of each line search with a contact pair in range is
+    /// the minimizer of a one-dimensional model of the objective along the
+    /// Newton direction ([`super::line_model`]: the contact barriers'
+    /// own nonlinearity on top of Newton's quadratic model) instead of the
+    /// full step, on `(0, LINE_MODEL_CAP]`; if it fails the sufficient
+    /// decrease test the search goes on as without it (from the full step
+    /// when the model's step was longer). Lines without a pair in range
+    /// are unchanged. Same solution to within `tol`. Default `true`.
+    pub line_model: bool,
 }
 
 /// Positive-definite Newton model of an indefinite (or nearly singular)
@@ -198,6 +209,7 @@ impl Default for NewtonOptions {
             settle_blocks: true,
             gradient_first: true,
             derivatives_at_trial: true,
+            line_model: true,
         }
     }
 }
@@ -293,6 +305,19 @@ pub trait Objective {
         Ok(alpha)
     }
 
+    /// The barrier pairs along the line `q + α dir` for Newton's line model
+    /// ([`super::line_model`]), into `out`; `false` when the objective cannot give them
+    /// (no model: the search keeps its full step). `q` is the point of the last evaluation
+    /// with derivatives. Default: `false`.
+    fn line_pairs(
+        &mut self,
+        _q: &DVector<f64>,
+        _dir: &DVector<f64>,
+        _out: &mut Vec<PlaneLine>,
+    ) -> Result<bool, EnergyError> {
+        Ok(false)
+    }
+
     /// Rows of each column of the Hessian of the last evaluation that may
     /// be non-zero (every other entry is exactly zero), when the objective
     /// knows them; the solver's dense passes over `H` then skip the rest.
@@ -301,6 +326,11 @@ pub trait Objective {
         None
     }
 }
+
+/// Longest step of the line model's search, in full Newton steps
+/// ([`NewtonOptions::line_model`]). The exact line search that sized the idea
+/// searched the same range (`notes/performance.md`, twenty-second session).
+pub const LINE_MODEL_CAP: f64 = 4.0;
 
 /// Scratch buffers of the solver.
 #[derive(Clone, Debug, Default)]
@@ -325,6 +355,11 @@ pub struct NewtonScratch {
     /// [`NewtonOptions::derivatives_at_trial`]).
     trial_need: Option<Need>,
     trial_value: f64,
+    /// The barrier pairs of the line model ([`NewtonOptions::line_model`]).
+    lines: Vec<PlaneLine>,
+    /// Whether `dir` solves `H dir = −g` with the Hessian itself (no block
+    /// shifted or eigen-clamped): then `dirᵀ H dir = −gᵀ dir`.
+    dir_solves_hessian: bool,
 }
 
 /// Minimizes `obj` starting from `q` (updated in place).
@@ -635,6 +670,10 @@ impl Solve<'_> {
             {
                 s.linear.bound_rows(e.row_ends());
             }
+            let modified = |st: &crate::sim::linear_solve::LinearSolveStats| {
+                (st.shifted_blocks, st.eigen_blocks)
+            };
+            let before = modified(&s.linear.stats);
             self.timers.time(Stage::LinearSolve, || {
                 s.linear.direction(
                     &s.hess,
@@ -645,6 +684,7 @@ impl Solve<'_> {
                     &mut s.dir,
                 )
             });
+            s.dir_solves_hessian = modified(&s.linear.stats) == before;
             // Predicted decrease of the quadratic model, −gᵀΔ > 0.
             let predicted = -s.grad.dot(&s.dir);
             // Below ~1e-9 of the objective's magnitude, or near its absolute
@@ -685,12 +725,18 @@ impl Solve<'_> {
         // Clock readings only with detailed timers (`StageTimers::set_detailed`).
         let t0 = self.timers.start_laps();
         let mut in_evals = std::time::Duration::ZERO;
+        let mut model_alpha = self.model_step(q, at, alpha_max)?;
         let mut start = alpha_max;
         let mut cut = false;
         let accepted = loop {
             let (mut accepted, mut alpha) = (false, start);
             if at.resolvable {
-                (accepted, alpha) = self.armijo(q, at, start, &mut in_evals)?;
+                // The line model's step, then (when it was longer) the full step.
+                let (first, fallback) = match model_alpha.take() {
+                    Some(a) => (a, (a > start).then_some(start)),
+                    None => (start, None),
+                };
+                (accepted, alpha) = self.armijo(q, at, first, fallback, &mut in_evals)?;
             }
             if !accepted {
                 (accepted, alpha) = self.gradient_merit(q, at, start, &mut in_evals)?;
@@ -752,6 +798,7 @@ impl Solve<'_> {
         q: &DVector<f64>,
         at: &SearchPoint,
         start: f64,
+        mut fallback: Option<f64>,
         in_evals: &mut std::time::Duration,
     ) -> Result<(bool, f64), NewtonError> {
         let mut alpha = start;
@@ -765,10 +812,50 @@ impl Solve<'_> {
             if v.is_finite() && v < at.value - 1e-4 * alpha * at.predicted {
                 return Ok((true, alpha));
             }
-            alpha *= 0.5;
+            alpha = fallback.take().unwrap_or(0.5 * alpha);
             self.report.backtracks += 1;
         }
         Ok((false, alpha))
+    }
+
+    /// The line model's step length ([`NewtonOptions::line_model`]) for the
+    /// search along `scratch.dir` from `q`, whose full step is bounded by
+    /// `alpha_max ≤ 1`: the minimizer of [`LineModel`] on
+    /// `(0, LINE_MODEL_CAP · b]` (`b` the terms' bound for the longer step)
+    /// when the full step is allowed, on `(0, alpha_max]` otherwise. `None`
+    /// when off, without a pair in range, or without the current Hessian.
+    fn model_step(
+        &mut self,
+        q: &DVector<f64>,
+        at: &SearchPoint,
+        alpha_max: f64,
+    ) -> Result<Option<f64>, NewtonError> {
+        let s = &mut *self.scratch;
+        if !self.opts.line_model || !s.hess_current || alpha_max <= 0.0 {
+            return Ok(None);
+        }
+        s.lines.clear();
+        if !self.obj.line_pairs(q, &s.dir, &mut s.lines)? || s.lines.is_empty() {
+            return Ok(None);
+        }
+        let hi = if alpha_max >= 1.0 {
+            let longer = &s.dir * LINE_MODEL_CAP;
+            LINE_MODEL_CAP * self.obj.max_step(q, &longer, self.timers)?.clamp(0.0, 1.0)
+        } else {
+            alpha_max
+        };
+        if !(hi > 0.0) {
+            return Ok(None);
+        }
+        s.lines.iter_mut().for_each(|l| l.keep_reachable(hi));
+        // φ''(0) = ΔᵀHΔ: −gᵀΔ when Δ solves H Δ = −g block by block (settled
+        // blocks have Δ_B = 0 and add nothing to either side), else summed.
+        let curvature = if s.dir_solves_hessian {
+            at.predicted
+        } else {
+            s.linear.block_quadratic_form(&s.hess, &s.dir)
+        };
+        Ok(LineModel::new(-at.predicted, curvature, &s.lines).map(|m| m.minimizer(hi)))
     }
 
     /// When the value cannot rank points (or Armijo failed), the gradient
