@@ -419,7 +419,7 @@ impl Energy for ContactEnergy {
         &mut self,
         _ctx: &StepContext,
         kin: &Kinematics,
-        twists: &[nalgebra::Matrix3x4<f64>],
+        twists: &mut super::StepTwists,
         out: &mut Vec<contact::PlaneLine>,
     ) -> bool {
         if !self.last_at(&kin.pose) || self.results.len() != self.pairs.len() {
@@ -430,6 +430,7 @@ impl Energy for ContactEnergy {
                 continue;
             };
             let (a, b) = self.pairs[k];
+            let twists = twists.get();
             let moving = |h: usize| {
                 let s = &twists[self.hulls.ids[h].link];
                 let (w, v) = (s.fixed_view::<3, 3>(0, 0), s.column(3));

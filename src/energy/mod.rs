@@ -169,6 +169,38 @@ impl EnergyAccumulator {
     }
 }
 
+/// The links' world twists along a step direction `dir`
+/// ([`Kinematics::twist_direction`]), computed on first use: most line searches have no
+/// pair in range, and then no term asks.
+pub struct StepTwists<'a> {
+    model: &'a Model,
+    kin: &'a Kinematics,
+    dir: &'a DVector<f64>,
+    twists: Option<Vec<Matrix3x4<f64>>>,
+}
+
+impl<'a> StepTwists<'a> {
+    /// Twists of `dir` from the kinematics `kin` (first order or higher).
+    pub fn new(model: &'a Model, kin: &'a Kinematics, dir: &'a DVector<f64>) -> Self {
+        StepTwists {
+            model,
+            kin,
+            dir,
+            twists: None,
+        }
+    }
+
+    /// One `[Ω | v]` per link (see [`Kinematics::twist_direction`]).
+    pub fn get(&mut self) -> &[Matrix3x4<f64>] {
+        let (model, kin, dir) = (self.model, self.kin, self.dir);
+        self.twists.get_or_insert_with(|| {
+            let mut t = Vec::new();
+            kin.twist_direction(model, dir, &mut t);
+            t
+        })
+    }
+}
+
 /// What a term of the step objective is, for the step's bookkeeping (the
 /// work balance of [`crate::counters::StepWork`]) and for callers that keep
 /// or drop terms by role (calibration keeps only [`TermKind::Inertia`]).
@@ -291,17 +323,16 @@ pub trait Energy: Send + Sync {
 
     /// The term's barrier pairs along a step, for Newton's line model
     /// ([`crate::sim::line_model`]): one [`crate::contact::PlaneLine`] per pair in range
-    /// at the term's last evaluation, along the world twists `twists` of the links per unit
-    /// step ([`Kinematics::twist_direction`]: a point `X` of link `i` moves at
-    /// `twists[i] [X; 1]`). `kin` holds the poses of the point the line starts from; a term
-    /// whose last evaluation was elsewhere returns `false` (no model for this line search).
-    /// Terms without pairs are part of the model's quadratic remainder: the default adds
-    /// nothing and returns `true`.
+    /// at the term's last evaluation, along the links' world twists per unit step
+    /// ([`StepTwists`]: a point `X` of link `i` moves at `twists[i] [X; 1]`). `kin` holds the
+    /// poses of the point the line starts from; a term whose last evaluation was elsewhere
+    /// returns `false` (no model for this line search). Terms without pairs are part of the
+    /// model's quadratic remainder: the default adds nothing and returns `true`.
     fn line_pairs(
         &mut self,
         _ctx: &StepContext,
         _kin: &Kinematics,
-        _twists: &[Matrix3x4<f64>],
+        _twists: &mut StepTwists,
         _out: &mut Vec<crate::contact::PlaneLine>,
     ) -> bool {
         true

@@ -302,7 +302,8 @@ impl Objective for StepObjective<'_> {
 
     /// Every term's barrier pairs along `q + α dir` ([`Energy::line_pairs`]), from the
     /// kinematics at `q` (the last evaluation's, first order: no work when cached) and the
-    /// links' world twists along `dir` ([`Kinematics::twist_direction`]).
+    /// links' world twists along `dir` ([`crate::energy::StepTwists`], computed only when a
+    /// term has a pair).
     fn line_pairs(
         &mut self,
         q: &DVector<f64>,
@@ -312,10 +313,9 @@ impl Objective for StepObjective<'_> {
         let model = self.ctx.model;
         self.kin
             .update_cached(model, q, self.charts, KinOrder::First);
-        let mut twists = Vec::new();
-        self.kin.twist_direction(model, dir, &mut twists);
+        let mut twists = crate::energy::StepTwists::new(model, self.kin, dir);
         for e in self.energies.iter_mut() {
-            if !e.line_pairs(&self.ctx, self.kin, &twists, out) {
+            if !e.line_pairs(&self.ctx, self.kin, &mut twists, out) {
                 return Ok(false);
             }
         }
