@@ -332,18 +332,7 @@ mod tests {
 
     /// `Φ(X, s) = Σ ∂U_c/∂X·δX` by the forward solver (cold start).
     fn phi(xa: &[Vector3<f64>], xb: &[Vector3<f64>], s: f64, d: &[Vector3<f64>]) -> f64 {
-        let mut sc = ContactScratch::new();
-        match contact_vertices(xa, xb, &ContactParams::with_width(s), None, &mut sc).unwrap() {
-            VertexOutcome::Separated(c) => c
-                .grad_a
-                .iter()
-                .chain(&c.grad_b)
-                .zip(d)
-                .map(|(g, v)| g.dot(v))
-                .sum(),
-            VertexOutcome::OutOfRange { .. } => 0.0,
-            VertexOutcome::Intersecting => panic!("intersecting"),
-        }
+        directional_gradient(xa, xb, s, d)
     }
 
     fn random_direction(n: usize, r: &mut rand_chacha::ChaCha8Rng) -> Vec<Vector3<f64>> {

@@ -257,18 +257,7 @@ mod tests {
     fn phi(xa: &[Vector3<f64>], xb: &[Vector3<f64>], d: &[Vector3<f64>], a: f64) -> f64 {
         let na = xa.len();
         let (ma, mb) = (moved(xa, &d[..na], a), moved(xb, &d[na..], a));
-        let mut sc = ContactScratch::new();
-        match contact_vertices(&ma, &mb, &ContactParams::with_width(S), None, &mut sc).unwrap() {
-            VertexOutcome::Separated(c) => c
-                .grad_a
-                .iter()
-                .chain(&c.grad_b)
-                .zip(d)
-                .map(|(g, v)| g.dot(v))
-                .sum(),
-            VertexOutcome::OutOfRange { .. } => 0.0,
-            VertexOutcome::Intersecting => panic!("intersecting"),
-        }
+        directional_gradient(&ma, &mb, S, d)
     }
 
     /// `W(0) = U_c`, `W'(0) = ∇U_c·δX` and `W''(0) = δXᵀ(∂²U_c/∂X²)δX` against the forward

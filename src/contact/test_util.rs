@@ -231,3 +231,26 @@ pub fn poses_from_params(p: &DVector<f64>) -> (Matrix3x4<f64>, Matrix3x4<f64>) {
 pub fn report(name: &str, value: f64) {
     eprintln!("[fd-report] {name}: {value:.3e}");
 }
+
+/// `Φ = Σ_m ∂U_c/∂X_m · δX_m` by the forward solver (cold start, barrier width `s`): the
+/// directional derivative the adjoint and line-model tests difference.
+pub fn directional_gradient(
+    xa: &[Vector3<f64>],
+    xb: &[Vector3<f64>],
+    s: f64,
+    d: &[Vector3<f64>],
+) -> f64 {
+    use super::{ContactParams, ContactScratch, VertexOutcome, contact_vertices};
+    let mut sc = ContactScratch::new();
+    match contact_vertices(xa, xb, &ContactParams::with_width(s), None, &mut sc).unwrap() {
+        VertexOutcome::Separated(c) => c
+            .grad_a
+            .iter()
+            .chain(&c.grad_b)
+            .zip(d)
+            .map(|(g, v)| g.dot(v))
+            .sum(),
+        VertexOutcome::OutOfRange { .. } => 0.0,
+        VertexOutcome::Intersecting => panic!("intersecting"),
+    }
+}
