@@ -31,7 +31,15 @@ fn harness_is_well_formed_and_mujoco_bodies_match_sdrs_links() {
     let rows_path = dir.join("rows.jsonl");
     let o = std::process::Command::new("bash")
         .arg(root().join("tools/bench/bench_vs_mujoco.sh"))
-        .args(["--links", "2,3", "--steps", "15", "--sdrs"])
+        .args([
+            "--links",
+            "2,3",
+            "--steps",
+            "15",
+            "--repeats",
+            "2",
+            "--sdrs",
+        ])
         .arg(env!("CARGO_BIN_EXE_sdrs"))
         .arg("--out")
         .arg(&rows_path)
@@ -71,6 +79,11 @@ fn harness_is_well_formed_and_mujoco_bodies_match_sdrs_links() {
         };
         let (s, m) = (of("sdrs"), of("mujoco"));
         assert_eq!(s["dof"], m["dof"], "degrees of freedom differ at N = {n}");
+        assert_eq!(
+            (&s["repeats"], &m["repeats"]),
+            (&2.into(), &2.into()),
+            "--repeats"
+        );
         assert!(s["ms_per_step"].as_f64().unwrap() > 0.0);
         assert!(m["ms_per_step"].as_f64().unwrap() > 0.0);
         assert!(

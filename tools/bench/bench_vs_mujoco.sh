@@ -10,10 +10,14 @@
 # after. SDRS runs on `--threads` threads (default 1, `RAYON_NUM_THREADS`):
 # MuJoCo's `mj_step` on one model uses one thread, so one against one is the
 # like-for-like comparison; `--threads 2` shows what the pair work and the
-# block solves gain from a second core.
+# block solves gain from a second core. `--repeats K` (default 1) times each
+# engine's trajectory K times within a round and keeps the fastest of each:
+# a round is then robust to the machine's interruptions (one 600-step run at
+# N = 8 lasts about 60 ms, and single runs spread by ±25 % on a shared VM).
 #
 #   tools/bench/bench_vs_mujoco.sh [--links 2,4,8,16,32] [--steps 600] [--rounds 1]
-#                            [--threads 1] [--sdrs target/release/sdrs] [--out rows.jsonl]
+#                            [--repeats 1] [--threads 1] [--sdrs target/release/sdrs]
+#                            [--out rows.jsonl]
 #                            [-- extra sdrs bench arguments, e.g. --contact sdrs]
 #
 # Build first: cargo build --release -p sdrs-cli (or `cargo build --release`).
@@ -23,6 +27,7 @@ root="$(dirname "$(dirname "$here")")"
 links="2,4,8,16,32"
 steps=600
 rounds=1
+repeats=1
 threads=1
 sdrs="$root/target/release/sdrs"
 out=""
@@ -32,6 +37,7 @@ while [ $# -gt 0 ]; do
     --links) links="$2"; shift 2 ;;
     --steps) steps="$2"; shift 2 ;;
     --rounds) rounds="$2"; shift 2 ;;
+    --repeats) repeats="$2"; shift 2 ;;
     --threads) threads="$2"; shift 2 ;;
     --sdrs) sdrs="$2"; shift 2 ;;
     --out) out="$2"; shift 2 ;;
@@ -42,6 +48,7 @@ done
 py="${PYTHON:-$root/.venv/bin/python}"
 [ -x "$py" ] || py=python3
 [[ "$threads" =~ ^[1-9][0-9]*$ ]] || { echo "--threads must be a positive integer, got '$threads'" >&2; exit 2; }
+[[ "$repeats" =~ ^[1-9][0-9]*$ ]] || { echo "--repeats must be a positive integer, got '$repeats'" >&2; exit 2; }
 [ -x "$sdrs" ] || { echo "no sdrs binary at $sdrs (cargo build --release)" >&2; exit 2; }
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
@@ -50,7 +57,7 @@ rows="${out:-$work/rows.jsonl}"
 echo "load before: $(uptime)"
 for r in $(seq 1 "$rounds"); do
   for n in ${links//,/ }; do
-    RAYON_NUM_THREADS="$threads" "$sdrs" bench --links "$n" --steps "$steps" --json "$work/s.json" "${extra[@]}" > "$work/s.txt"
+    RAYON_NUM_THREADS="$threads" "$sdrs" bench --links "$n" --steps "$steps" --repeats "$repeats" --json "$work/s.json" "${extra[@]}" > "$work/s.txt"
     "$py" - "$work/s.json" "$rows" <<'EOF'
 import json, sys
 rows = json.load(open(sys.argv[1]))
@@ -59,11 +66,11 @@ with open(sys.argv[2], "a") as f:
         r["engine"] = "sdrs"
         f.write(json.dumps(r) + "\n")
 EOF
-    "$py" "$here/bench_mujoco.py" --links "$n" --steps "$steps" --json "$work/m.json" > /dev/null
+    "$py" "$here/bench_mujoco.py" --links "$n" --steps "$steps" --repeats "$repeats" --json "$work/m.json" > /dev/null
     cat "$work/m.json" >> "$rows"
   done
 done
 echo "load after:  $(uptime)"
-echo "steps per run: $steps, rounds: $rounds, sdrs threads: $threads (MuJoCo: one)"
+echo "steps per run: $steps, rounds: $rounds, fastest of $repeats run(s) per engine and round, sdrs threads: $threads (MuJoCo: one)"
 echo "sdrs: $sdrs ($("$sdrs" --version 2>/dev/null || echo unknown version))"
 "$py" "$here/bench_mujoco.py" summarize "$rows"
